@@ -1,0 +1,202 @@
+"""Command line: ``inerter run | compare | describe | build-fmu | paper``."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InerterError, SceneError
+
+PAPER_SCENES = ("lumped_mass_2d", "two_bar_2d")
+
+
+def parse_set(items) -> dict:
+    """``NAME=VALUE`` pairs; VALUE is read as a TOML value (20, 1e-3, false, [0, -9.81]) or, failing
+    that, as a bare string (a method name)."""
+    out = {}
+    for item in items or []:
+        if "=" not in item:
+            raise SceneError("--set", item, item, "NAME=VALUE, e.g. b=20 or effects.centripetal=false",
+                             "missing '='")
+        name, text = item.split("=", 1)
+        name = name.strip()
+        try:
+            value = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
+        out[name] = value
+    return out
+
+
+def _write(result, out: Path, stem: str, label: str | None = None):
+    out.mkdir(parents=True, exist_ok=True)
+    result.write_csv(out / f"{stem}.csv")
+    summary = result.summary()
+    if label:
+        summary["label"] = label
+    (out / f"{stem}.summary.json").write_text(json.dumps(summary, indent=2, default=float))
+    return summary
+
+
+def simulate(scene, overrides, model_kind, args):
+    """Run one scene through the solver, the oracle or its FMU; returns a Result."""
+    from .model import ORACLE_ATOL, ORACLE_RTOL, load
+    kw = dict(stop_time=args.stop_time, method=args.method, rtol=args.rtol)
+    if model_kind == "fmu":
+        from .fmu_run import simulate_fmu
+        return simulate_fmu(scene, overrides, stop_time=args.stop_time, step=args.step)
+    model = load(scene, **overrides)
+    if model_kind == "oracle":
+        model = model.oracle()
+        kw.update(rtol=args.rtol or ORACLE_RTOL, atol=ORACLE_ATOL, method="DOP853")
+    return model.simulate(**kw)
+
+
+def cmd_run(args):
+    overrides = parse_set(args.set)
+    t0 = time.perf_counter()
+    result = simulate(args.scene, overrides, args.model, args)
+    wall = time.perf_counter() - t0
+    out = Path(args.out)
+    stem = result.model.name
+    summary = _write(result, out, stem)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
+    from .plotting import plot_runs
+    plot_runs([(args.model, result, {})], out / f"{stem}.png", f"{stem} ({args.model})")
+    print(f"{stem}: {result.status} ({result.message}); {len(result.time)} samples to t = "
+          f"{result.time[-1]:.6g} s in {wall:.2f} s wall")
+    for k, v in summary["metrics"].items():
+        print(f"  {k} = {v}")
+    print(f"  max constraint drift = {summary['statistics']['max_constraint_drift']:.3g}")
+    print(f"wrote {out / (stem + '.csv')}, {out / 'summary.json'}, {out / (stem + '.png')}")
+    return 0 if result.status == "ok" else 3
+
+
+def cmd_compare(args):
+    """With and without the centripetal correction (and the oracle, and the FMU with --model fmu)."""
+    overrides = parse_set(args.set)
+    out = Path(args.out)
+    runs, summaries = [], {}
+    variants = [("corrected", True), ("uncorrected", False)]
+    for label, cen in variants:
+        ov = dict(overrides, **{"effects.centripetal": cen})
+        res = simulate(args.scene, ov, args.model, args)
+        runs.append((f"{label} ({args.model})", res, {"lw": 1.2}))
+        summaries[label] = _write(res, out, f"{res.model.name}_{label}", label)
+    oracle = simulate(args.scene, dict(overrides, **{"effects.centripetal": True}), "oracle", args)
+    summaries["oracle"] = _write(oracle, out, f"{oracle.model.name}_oracle", "oracle")
+    runs.append(("oracle (corrected)", oracle, {"lw": 0.8, "ls": "--", "color": "k"}))
+    name = runs[0][1].model.name
+    corrected = runs[0][1]
+    diff = max_difference(corrected, oracle)
+    summaries["max_difference_to_oracle_m"] = diff
+    (out / "summary.json").write_text(json.dumps({"scene": name, "runs": summaries}, indent=2, default=float))
+    from .plotting import plot_runs
+    png = plot_runs(runs, out / f"{name}_compare.png", f"{name}: with and without the centripetal term")
+    print(f"{name}:")
+    keys = sorted(set(summaries["corrected"]["metrics"]) | set(summaries["uncorrected"]["metrics"]))
+    print(f"  {'metric':32s} {'corrected':>16s} {'uncorrected':>16s} {'oracle':>16s}")
+    for k in keys:
+        vals = [summaries[v]["metrics"].get(k) for v in ("corrected", "uncorrected", "oracle")]
+        if any(isinstance(v, list) for v in vals):
+            continue
+        print(f"  {k:32s} " + " ".join(f"{v:16.6g}" if v is not None else f"{'-':>16s}" for v in vals))
+    print(f"  largest |{args.model} − oracle| over point positions: {diff:.3g} m")
+    print(f"wrote {png} and {out / 'summary.json'}")
+    return 0 if all(r.status == "ok" for _, r, _ in runs) else 3
+
+
+def max_difference(a, b) -> float:
+    """Largest difference of point positions between two results on the same time grid."""
+    n = min(len(a.time), len(b.time))
+    if n == 0 or not np.allclose(a.time[:n], b.time[:n], rtol=0, atol=1e-9):
+        return float("nan")
+    names = [k for k in a.names if ".r[" in k]
+    return float(max(np.max(np.abs(a[k][:n] - b[k][:n])) for k in names))
+
+
+def cmd_describe(args):
+    from .model import load
+    model = load(args.scene, **parse_set(args.set))
+    print(f"{model.name}: {model.scene.description}")
+    print("compiled terms:")
+    for line in model.terms():
+        print("  " + line)
+    print("parameters:")
+    for p in model.parameter_info():
+        print(f"  {p['name']} = {p['value']:g} {p['unit']}  {p['description']}")
+    print("inputs: " + (", ".join(i["name"] for i in model.input_info()) or "none"))
+    print("outputs: " + ", ".join(o["name"] for o in model.output_info()))
+    return 0
+
+
+def cmd_build_fmu(args):
+    from .fmu_build import main as build_main
+    return build_main(args.scenes + (["--force"] if args.force else []))
+
+
+def cmd_paper(args):
+    """The main job: both paper scenes end to end, with and without the correction."""
+    root = Path(args.scenarios)
+    status = 0
+    for name in PAPER_SCENES:
+        ns = argparse.Namespace(scene=str(root / f"{name}.toml"), set=[], out=str(Path(args.out) / name),
+                                model=args.model, stop_time=None, method=None, rtol=None, step=None)
+        status |= cmd_compare(ns)
+    return status
+
+
+def build_parser():
+    p = argparse.ArgumentParser(prog="inerter", description=__doc__)
+    sub = p.add_subparsers(dest="command", required=True)
+
+    def common(sp, out_default="out"):
+        sp.add_argument("--set", action="append", metavar="NAME=VALUE",
+                        help="override a parameter, effects.NAME or experiment.NAME (repeatable)")
+        sp.add_argument("--out", default=out_default, help="output folder")
+        sp.add_argument("--model", choices=("solver", "oracle", "fmu"), default="solver")
+        sp.add_argument("--stop-time", type=float, default=None)
+        sp.add_argument("--method", default=None)
+        sp.add_argument("--rtol", type=float, default=None)
+        sp.add_argument("--step", type=float, default=None, help="FMU communication step (s)")
+
+    r = sub.add_parser("run", help="simulate a scene: CSV, summary.json and a PNG")
+    r.add_argument("scene")
+    common(r)
+    r.set_defaults(func=cmd_run)
+    c = sub.add_parser("compare", help="with and without the centripetal correction, and the oracle")
+    c.add_argument("scene")
+    common(c)
+    c.set_defaults(func=cmd_compare)
+    d = sub.add_parser("describe", help="what a scene compiles to: terms, parameters, inputs, outputs")
+    d.add_argument("scene")
+    d.add_argument("--set", action="append", metavar="NAME=VALUE")
+    d.set_defaults(func=cmd_describe)
+    b = sub.add_parser("build-fmu", help="build FMI 2.0 co-simulation FMUs (only when stale)")
+    b.add_argument("scenes", nargs="+")
+    b.add_argument("--force", action="store_true")
+    b.set_defaults(func=cmd_build_fmu)
+    pp = sub.add_parser("paper", help="both paper scenes end to end (the main job)")
+    pp.add_argument("--out", default="out/paper")
+    pp.add_argument("--scenarios", default="scenarios")
+    pp.add_argument("--model", choices=("solver", "fmu"), default="solver")
+    pp.set_defaults(func=cmd_paper)
+    return p
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except InerterError as exc:
+        print(f"inerter: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

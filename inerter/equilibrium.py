@@ -1,0 +1,119 @@
+"""Static equilibrium and linearisation about it (paper Appendix A, generalised).
+
+Static equilibrium: Q_e(q, q̇ = 0) with the loads' static parts (constant forces, sine offsets,
+step initial values, zero inputs) balanced by the constraint forces, C(q) = 0.
+
+Linearisation: the constraint manifold is parametrised near q* by z (n − m independent
+coordinates): q(z) = q* + N z + Y w(z) with C(q(z)) = 0, N spanning the null space of C_q(q*).
+With T = ∂q/∂z, the reduced mass is Tᵀ(M + M_I)T, and the reduced stiffness is
+K = −∂(TᵀQ)/∂z (central differences of the virtual work of the applied forces, which excludes the
+constraint forces exactly). For the lumped-mass scene this is Eq. (A.6):
+m_e = m + (L_b/L_0)² b, k_e = k (L_b/L_0)².
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import eigh, null_space, orth
+from scipy.optimize import root
+
+from .errors import SimulationError
+
+
+def static_forces(mech, q):
+    """Generalised forces with every time function at its static value and zero velocities."""
+    z = np.zeros(mech.n)
+    Q = np.zeros(mech.n)
+    if mech.gravity is not None:
+        Q += mech.gravity
+    for e in mech.elements:
+        e.add_force(q, z, Q)
+    for f, point, fn in mech.applied:
+        level = {"constant": f.value, "sine": f.offset, "step": f.initial}[f.function]
+        if level:
+            mech._add_point_force(Q, point, q, level * np.asarray(f.direction))
+    return Q
+
+
+def static_equilibrium(mech, q_start=None, tol=1e-12):
+    """q* with static_forces(q*) + C_qᵀλ = 0 and C(q*) = 0, found by Newton (hybrid Powell)
+    from `q_start` (default: the initial pose)."""
+    n, m = mech.n, mech.m
+    q_start = mech.q0 if q_start is None else q_start
+    z = np.zeros(n)
+
+    def residual(x):
+        q, lam = x[:n], x[n:]
+        Q = static_forces(mech, q)
+        if not m:
+            return Q
+        C, Cq, _ = mech.constraints(q, z)
+        return np.concatenate((Q - Cq.T @ lam, C))
+
+    sol = root(residual, np.concatenate((q_start, np.zeros(m))), method="hybr", options={"xtol": 1e-14})
+    worst = float(np.max(np.abs(residual(sol.x)))) if sol.x.size else 0.0
+    scale = max(1.0, float(np.max(np.abs(static_forces(mech, q_start)))))
+    if not sol.success and worst > tol * scale * 1e3:
+        raise SimulationError(f"no static equilibrium found near the initial pose ({sol.message}; "
+                              f"residual {worst:.3g})", 0.0)
+    return sol.x[:n]
+
+
+def _tangent_chart(mech, q_star):
+    """Functions z ↦ q(z) and z ↦ T(z) parametrising the constraint manifold near q*."""
+    n, m = mech.n, mech.m
+    zero = np.zeros(n)
+    if not m:
+        eye = np.eye(n)
+        return (lambda z: q_star + z), (lambda z: eye), n
+    _, Cq, _ = mech.constraints(q_star, zero)
+    N = null_space(Cq)
+    Y = orth(Cq.T)
+
+    def q_of(zv):
+        w = np.zeros(Y.shape[1])
+        for _ in range(50):
+            q = q_star + N @ zv + Y @ w
+            C, Cq_, _ = mech.constraints(q, zero)
+            if np.max(np.abs(C)) < 1e-15:
+                break
+            w -= np.linalg.solve(Cq_ @ Y, C)
+        return q
+
+    def T_of(zv):
+        _, Cq_, _ = mech.constraints(q_of(zv), zero)
+        return N - Y @ np.linalg.solve(Cq_ @ Y, Cq_ @ N)
+
+    return q_of, T_of, N.shape[1]
+
+
+def linearize(mech, q_star=None, h=1e-6):
+    """Reduced (M_r, D_r, K_r) about the static equilibrium, in independent coordinates z."""
+    q_star = static_equilibrium(mech) if q_star is None else q_star
+    q_of, T_of, k = _tangent_chart(mech, q_star)
+    zero = np.zeros(mech.n)
+    T0 = T_of(np.zeros(k))
+    M = T0.T @ mech.mass_matrix(q_star, zero) @ T0
+    K = np.zeros((k, k))
+    for j in range(k):
+        dz = np.zeros(k)
+        dz[j] = h
+        fp = T_of(dz).T @ static_forces(mech, q_of(dz))
+        fm = T_of(-dz).T @ static_forces(mech, q_of(-dz))
+        K[:, j] = -(fp - fm) / (2 * h)
+    D = np.zeros((k, k))
+    for j in range(k):
+        dv = T0[:, j] * h
+        Qp = mech.generalized_forces(0.0, q_star, dv) - static_forces(mech, q_star)
+        Qm = mech.generalized_forces(0.0, q_star, -dv) - static_forces(mech, q_star)
+        # time-dependent loads cancel in the difference; only velocity-dependent forces remain
+        D[:, j] = -(T0.T @ (Qp - Qm)) / (2 * h)
+    return M, D, 0.5 * (K + K.T), q_star
+
+
+def natural_frequencies(mech, q_star=None):
+    """Undamped natural frequencies (Hz) of the linearisation, ascending."""
+    M, _, K, _ = linearize(mech, q_star)
+    if M.size == 0:
+        return np.zeros(0)
+    w2 = eigh(K, M, eigvals_only=True)
+    return np.sqrt(np.clip(w2, 0.0, None)) / (2 * np.pi)

@@ -1,0 +1,37 @@
+"""The project's own exceptions.
+
+Every error a user can cause names *where* (scene file or FMU variable), the field path,
+the offending value and what was expected, so that a message alone is enough to fix it.
+"""
+from __future__ import annotations
+
+
+class InerterError(Exception):
+    """Base class of all errors raised by the `inerter` package."""
+
+
+class SceneError(InerterError, ValueError):
+    """A scene file (or an override of one of its fields) is invalid.
+
+    The message reads ``<source>: <field>: <problem> (got <value>; expected <expected>)``.
+    """
+
+    def __init__(self, source: str, field: str, value, expected: str, problem: str | None = None):
+        self.source = str(source)
+        self.field = field
+        self.value = value
+        self.expected = expected
+        self.problem = problem or "invalid value"
+        super().__init__(
+            f"{self.source}: {field}: {self.problem} (got {value!r}; expected {expected})"
+        )
+
+
+class SimulationError(InerterError, RuntimeError):
+    """A simulation cannot go on: the state stays at the last good time `time`."""
+
+    def __init__(self, message: str, time: float | None = None):
+        self.time = time
+        self.message = message
+        text = message if time is None else f"t = {time:.9g} s: {message}"
+        super().__init__(text)

@@ -1,0 +1,543 @@
+"""Safe arithmetic expressions for numeric scene fields.
+
+Any numeric field of a scene file may be written either as a number or as a string
+expression over named parameters, in the spirit of Modelica parameter bindings::
+
+    [parameters]
+    La = 0.3
+    Lb = { value = "La / 2", unit = "m", description = "lower link" }
+    L  = "sqrt(La^2 + Lb^2)"
+
+Expressions are parsed with :func:`ast.parse` and evaluated by walking the syntax tree
+ourselves; user text is never handed to ``eval``, ``exec`` or ``compile``.  Only the
+following constructs are accepted:
+
+* numeric literals (integers and floats, not booleans or complex numbers),
+* names of parameters and the constants ``pi`` and ``e``,
+* unary ``+`` and ``-``,
+* binary ``+``, ``-``, ``*``, ``/`` and the power operator, written ``^`` (Modelica)
+  or ``**`` (Python), with the usual precedence,
+* parentheses,
+* calls, by plain name and with positional arguments only, of the functions in
+  :data:`FUNCTIONS`.
+
+Every problem (bad syntax, forbidden construct, unknown name, division by zero,
+overflow, an argument outside a function's domain, ...) is reported as a
+:class:`~inerter.errors.SceneError` naming the source, the field path, the offending
+text and what was expected.  Results are always finite Python floats.
+"""
+from __future__ import annotations
+
+import ast
+import difflib
+import functools
+import keyword
+import math
+import numbers
+from collections.abc import Callable, Mapping
+
+from .errors import SceneError
+
+__all__ = [
+    "CONSTANTS",
+    "FUNCTIONS",
+    "RESERVED_NAMES",
+    "evaluate",
+    "evaluate_parameters",
+    "free_names",
+    "parameter_meta",
+]
+
+
+def _min(*args: float) -> float:
+    return min(args)
+
+
+def _max(*args: float) -> float:
+    return max(args)
+
+
+#: Functions callable from expressions: name -> (implementation, least and greatest
+#: number of arguments; ``None`` means any number).  All work on floats.
+FUNCTIONS: dict[str, tuple[Callable[..., float], int, int | None]] = {
+    "sqrt": (math.sqrt, 1, 1),
+    "sin": (math.sin, 1, 1),
+    "cos": (math.cos, 1, 1),
+    "tan": (math.tan, 1, 1),
+    "asin": (math.asin, 1, 1),
+    "acos": (math.acos, 1, 1),
+    "atan": (math.atan, 1, 1),
+    "atan2": (math.atan2, 2, 2),
+    "exp": (math.exp, 1, 1),
+    "log": (math.log, 1, 1),  # natural logarithm, as in Modelica
+    "log10": (math.log10, 1, 1),
+    "abs": (abs, 1, 1),
+    "min": (_min, 1, None),
+    "max": (_max, 1, None),
+    "hypot": (math.hypot, 1, None),
+    "deg2rad": (math.radians, 1, 1),  # degrees -> radians
+    "rad": (math.radians, 1, 1),  # alias of deg2rad: rad(90) == pi/2
+}
+
+#: Named constants available in every expression.
+CONSTANTS: dict[str, float] = {"pi": math.pi, "e": math.e}
+
+#: Names a parameter may not take.
+RESERVED_NAMES: frozenset[str] = frozenset(FUNCTIONS) | frozenset(CONSTANTS)
+
+# What an expression string must look like (the "expected" part of most messages).
+_EXPECTED_EXPRESSION = (
+    "an arithmetic expression of numbers, parameters and "
+    + ", ".join(FUNCTIONS)
+    + ", "
+    + ", ".join(CONSTANTS)
+    + " (operators + - * / and ^ or ** for powers)"
+)
+_EXPECTED_VALUE = 'a number or an expression string such as "2*L"'
+_EXPECTED_FINITE = "an expression with a finite value"
+_EXPECTED_NAME = (
+    "a name of ASCII letters, digits and underscores, not starting with a digit, "
+    "not a Python keyword and not one of " + ", ".join(sorted(RESERVED_NAMES))
+)
+_TABLE_KEYS = ("value", "unit", "description")
+
+# Expressions in scene files are short; refusing very long texts bounds the work
+# done by the parser and the tree walk.
+_MAX_LENGTH = 10_000
+# How many known parameter names an "unknown name" message lists at most.
+_MAX_LISTED_NAMES = 20
+
+# Descriptions of forbidden syntax, for messages.
+_BINARY_OPERATOR_SYMBOLS = {
+    ast.Mod: "%",
+    ast.FloorDiv: "//",
+    ast.MatMult: "@",
+    ast.LShift: "<<",
+    ast.RShift: ">>",
+    ast.BitOr: "|",
+    ast.BitAnd: "&",
+}
+_NODE_DESCRIPTIONS = {
+    ast.Attribute: "attribute access",
+    ast.Subscript: "subscripting",
+    ast.Slice: "slicing",
+    ast.Compare: "a comparison",
+    ast.BoolOp: "a boolean operator (and/or)",
+    ast.IfExp: "a conditional expression",
+    ast.Lambda: "a lambda",
+    ast.NamedExpr: "an assignment expression (:=)",
+    ast.Starred: "a starred argument",
+    ast.List: "a list",
+    ast.Tuple: "a tuple",
+    ast.Set: "a set",
+    ast.Dict: "a dict",
+    ast.ListComp: "a comprehension",
+    ast.SetComp: "a comprehension",
+    ast.DictComp: "a comprehension",
+    ast.GeneratorExp: "a generator expression",
+    ast.JoinedStr: "an f-string",
+    ast.FormattedValue: "an f-string",
+    ast.Await: "await",
+    ast.Yield: "yield",
+    ast.YieldFrom: "yield",
+}
+
+
+class _Problem(Exception):
+    """Internal: what is wrong with an expression, before source and field are known."""
+
+    def __init__(self, problem: str, expected: str = _EXPECTED_EXPRESSION):
+        super().__init__(problem)
+        self.problem = problem
+        self.expected = expected
+
+
+# --------------------------------------------------------------------------- parsing
+
+
+@functools.lru_cache(maxsize=4096)
+def _compile(text: str) -> tuple[ast.expr, frozenset[str]]:
+    """Parse and check `text`; return the expression tree and the names it uses.
+
+    The tree is only ever read, so cached trees may be shared between calls.
+    Raises `_Problem` (exceptions are not cached).
+    """
+    if not text.strip():
+        raise _Problem("is empty")
+    if len(text) > _MAX_LENGTH:
+        raise _Problem(f"is too long ({len(text)} characters, at most {_MAX_LENGTH})")
+    # Modelica writes powers as "^".  Python parses "^" as exclusive-or, whose
+    # precedence is *below* "+" ("a^2+b^2" would mean "a^(2+b)^2"), so the operator is
+    # rewritten to "**" before parsing to get the usual precedence.  Outside string
+    # literals (which are rejected anyway) "^" can only be that operator.
+    source = text.replace("^", "**")
+    try:
+        tree = ast.parse(source.strip(), mode="eval")
+    except (SyntaxError, ValueError, RecursionError, MemoryError) as exc:
+        # Besides syntax errors: null bytes, integer literals beyond the digit limit,
+        # absurd nesting.  Only the first clause of the parser's message is kept.
+        text_of = exc.msg if isinstance(exc, SyntaxError) else str(exc)
+        brief = (text_of or "").split(":")[0].strip()[:80] or type(exc).__name__
+        raise _Problem(f"does not parse ({brief})") from None
+    names: set[str] = set()
+    try:
+        _check(tree.body, names)
+    except RecursionError:
+        raise _Problem("is too deeply nested") from None
+    return tree.body, frozenset(names)
+
+
+def _check(node: ast.AST, names: set[str]) -> None:
+    """Reject anything but the allowed constructs; collect parameter names into `names`."""
+    if isinstance(node, ast.Constant):
+        value = node.value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            kind = {
+                bool: "a boolean",
+                str: "a string literal",
+                bytes: "a bytes literal",
+                complex: "a complex number",
+            }.get(type(value), f"the literal {value!r}")
+            raise _Problem(f"{kind} is not allowed")
+        return
+    if isinstance(node, ast.Name):
+        if node.id in FUNCTIONS:
+            raise _Problem(f"'{node.id}' is a function; call it as {node.id}(...)")
+        if node.id not in CONSTANTS:
+            names.add(node.id)
+        return
+    if isinstance(node, ast.UnaryOp):
+        if not isinstance(node.op, (ast.UAdd, ast.USub)):
+            symbol = {ast.Not: "not", ast.Invert: "~"}.get(type(node.op), "?")
+            raise _Problem(f"the operator '{symbol}' is not allowed")
+        _check(node.operand, names)
+        return
+    if isinstance(node, ast.BinOp):
+        if not isinstance(node.op, tuple(_BINARY_OPERATORS)):
+            symbol = _BINARY_OPERATOR_SYMBOLS.get(type(node.op), "?")
+            raise _Problem(f"the operator '{symbol}' is not allowed")
+        _check(node.left, names)
+        _check(node.right, names)
+        return
+    if isinstance(node, ast.Call):
+        if not isinstance(node.func, ast.Name):
+            raise _Problem("only functions called by plain name are allowed")
+        name = node.func.id
+        if name not in FUNCTIONS:
+            raise _Problem(f"'{name}' is not an allowed function")
+        if node.keywords:
+            raise _Problem(f"keyword arguments are not allowed (in the call of {name})")
+        least, most = FUNCTIONS[name][1:]
+        count = len(node.args)
+        if count < least or (most is not None and count > most):
+            if most is None:
+                wanted = f"at least {least} argument{'s' if least != 1 else ''}"
+            elif least == most:
+                wanted = f"{least} argument{'s' if least != 1 else ''}"
+            else:
+                wanted = f"{least} to {most} arguments"
+            raise _Problem(f"{name}() takes {wanted}, got {count}")
+        for argument in node.args:
+            _check(argument, names)
+        return
+    description = _NODE_DESCRIPTIONS.get(type(node), f"the construct '{type(node).__name__}'")
+    raise _Problem(f"{description} is not allowed")
+
+
+# ------------------------------------------------------------------------ evaluation
+
+
+def _power(base: float, exponent: float) -> float:
+    """``base ** exponent`` on reals, with clear messages instead of complex results."""
+    if base == 0.0 and exponent < 0.0:
+        raise _Problem("division by zero (zero raised to a negative power)", _EXPECTED_FINITE)
+    if base < 0.0 and not exponent.is_integer():
+        raise _Problem(
+            "a negative number raised to a non-integer power has no real value",
+            _EXPECTED_FINITE,
+        )
+    return math.pow(base, exponent)
+
+
+def _divide(numerator: float, denominator: float) -> float:
+    if denominator == 0.0:
+        raise ZeroDivisionError
+    return numerator / denominator
+
+
+_BINARY_OPERATORS: dict[type, Callable[[float, float], float]] = {
+    ast.Add: lambda a, b: a + b,
+    ast.Sub: lambda a, b: a - b,
+    ast.Mult: lambda a, b: a * b,
+    ast.Div: _divide,
+    ast.Pow: _power,
+    # "^" is rewritten to "**" before parsing (see `_compile`), so exclusive-or never
+    # reaches the evaluator; should it ever, it still means power.
+    ast.BitXor: _power,
+}
+
+
+def _known_names(names) -> str:
+    """The "expected" text of an unknown-name message."""
+    known = sorted(names)
+    if not known:
+        return "a defined parameter (none are defined) or " + ", ".join(CONSTANTS)
+    listed = ", ".join(known[:_MAX_LISTED_NAMES])
+    if len(known) > _MAX_LISTED_NAMES:
+        listed += f", ... ({len(known) - _MAX_LISTED_NAMES} more)"
+    return f"one of the parameters {listed} (or {', '.join(CONSTANTS)})"
+
+
+def _unknown_name(name: str, known) -> _Problem:
+    """The problem of a name that is neither a parameter nor a constant."""
+    problem = f"unknown name '{name}'"
+    close = difflib.get_close_matches(name, [str(n) for n in known], n=1)
+    if close:
+        problem += f" (did you mean '{close[0]}'?)"
+    return _Problem(problem, _known_names(known))
+
+
+def _value(node: ast.expr, names: Mapping[str, float]) -> float:
+    """Evaluate a checked expression tree; every intermediate result is finite."""
+    if isinstance(node, ast.Constant):
+        try:
+            result = float(node.value)
+        except OverflowError:
+            raise _Problem(f"the number {node.value} is too large", _EXPECTED_FINITE) from None
+    elif isinstance(node, ast.Name):
+        # The constants take precedence (parameters may not be named like them).
+        if node.id in CONSTANTS:
+            return CONSTANTS[node.id]
+        if node.id not in names:
+            raise _unknown_name(node.id, names)
+        result = float(names[node.id])
+    elif isinstance(node, ast.UnaryOp):
+        operand = _value(node.operand, names)
+        result = -operand if isinstance(node.op, ast.USub) else operand
+    elif isinstance(node, ast.BinOp):
+        left = _value(node.left, names)
+        right = _value(node.right, names)
+        try:
+            result = _BINARY_OPERATORS[type(node.op)](left, right)
+        except ZeroDivisionError:
+            raise _Problem(f"division by zero in {ast.unparse(node)}", _EXPECTED_FINITE) from None
+        except OverflowError:
+            raise _Problem(f"overflow in {ast.unparse(node)}", _EXPECTED_FINITE) from None
+    elif isinstance(node, ast.Call):
+        name = node.func.id  # type: ignore[attr-defined]  # checked by `_check`
+        function = FUNCTIONS[name][0]
+        arguments = [_value(argument, names) for argument in node.args]
+        try:
+            result = float(function(*arguments))
+        except ZeroDivisionError:
+            raise _Problem(f"division by zero in {ast.unparse(node)}", _EXPECTED_FINITE) from None
+        except OverflowError:
+            raise _Problem(f"overflow in {ast.unparse(node)}", _EXPECTED_FINITE) from None
+        except ValueError:
+            shown = ", ".join(f"{a:.17g}" for a in arguments)
+            raise _Problem(
+                f"argument out of the domain of {name}: {name}({shown})", _EXPECTED_FINITE
+            ) from None
+    else:  # pragma: no cover - `_check` lets nothing else through
+        raise _Problem(f"the construct '{type(node).__name__}' is not allowed")
+    if not math.isfinite(result):
+        raise _Problem(f"evaluates to {result} (in {ast.unparse(node)})", _EXPECTED_FINITE)
+    return result
+
+
+def _number(value, source: str, field: str) -> float:
+    """A literal (non-string) field value as a finite float."""
+    if isinstance(value, bool):
+        raise SceneError(source, field, value, _EXPECTED_VALUE, "a boolean is not a number")
+    if not isinstance(value, numbers.Real):
+        raise SceneError(
+            source, field, value, _EXPECTED_VALUE, f"a {type(value).__name__} is not a number"
+        )
+    try:
+        result = float(value)
+    except (OverflowError, ValueError, TypeError):
+        raise SceneError(source, field, value, _EXPECTED_VALUE, "is not a usable number") from None
+    if not math.isfinite(result):
+        raise SceneError(source, field, value, "a finite number", "is not finite")
+    return result
+
+
+# ------------------------------------------------------------------------ public API
+
+
+def evaluate(expr, names: Mapping[str, float], source: str, field: str) -> float:
+    """The value of a numeric field: a number, or an expression over `names`.
+
+    `expr` is an int or float (booleans are refused) or an expression string.  `names`
+    maps parameter names to their values.  `source` and `field` (e.g. the scene file
+    and ``bodies.arm.mass``) are used in error messages.  Returns a finite float;
+    raises :class:`SceneError` for anything else.
+    """
+    if not isinstance(expr, str):
+        return _number(expr, source, field)
+    try:
+        tree, _ = _compile(expr)
+        return _value(tree, names)
+    except _Problem as problem:
+        raise SceneError(source, field, expr, problem.expected, problem.problem) from None
+    except RecursionError:
+        raise SceneError(source, field, expr, _EXPECTED_EXPRESSION, "is too deeply nested") from None
+
+
+def free_names(expr, source: str, field: str) -> set[str]:
+    """The parameter names an expression uses (constants and functions excluded).
+
+    Numbers use no names.  The expression is fully checked (syntax and allowed
+    constructs), so errors surface here with the right field path.
+    """
+    if not isinstance(expr, str):
+        _number(expr, source, field)
+        return set()
+    try:
+        return set(_compile(expr)[1])
+    except _Problem as problem:
+        raise SceneError(source, field, expr, problem.expected, problem.problem) from None
+
+
+def _check_parameter_name(name, source: str, prefix: str) -> None:
+    field = f"{prefix}.{name}"
+    if not isinstance(name, str) or not name.isascii() or not name.isidentifier():
+        raise SceneError(source, field, name, _EXPECTED_NAME, "invalid parameter name")
+    if keyword.iskeyword(name):
+        raise SceneError(source, field, name, _EXPECTED_NAME, "a Python keyword cannot be a parameter name")
+    if name in RESERVED_NAMES:
+        kind = "function" if name in FUNCTIONS else "constant"
+        raise SceneError(
+            source, field, name, _EXPECTED_NAME, f"the name of the {kind} '{name}' cannot be a parameter name"
+        )
+
+
+def _parameter_binding(name: str, spec, source: str, prefix: str) -> tuple[object, str]:
+    """The value (number or expression) of a parameter entry and its field path."""
+    field = f"{prefix}.{name}"
+    if not isinstance(spec, Mapping):
+        return spec, field
+    for key in spec:
+        if key not in _TABLE_KEYS:
+            raise SceneError(
+                source, f"{field}.{key}", spec[key], "only the keys value, unit and description",
+                f"unknown key '{key}' in a parameter table",
+            )
+    if "value" not in spec:
+        raise SceneError(
+            source, field, dict(spec), "a table with 'value' (and optionally 'unit', 'description')",
+            "missing 'value'",
+        )
+    for key in ("unit", "description"):
+        if key in spec and not isinstance(spec[key], str):
+            raise SceneError(source, f"{field}.{key}", spec[key], "a string", f"'{key}' must be a string")
+    return spec["value"], f"{field}.value"
+
+
+def evaluate_parameters(
+    raw: Mapping[str, object],
+    source: str,
+    prefix: str = "parameters",
+    fixed: Mapping[str, float] | None = None,
+) -> dict[str, float]:
+    """Evaluate a scene's parameter table.
+
+    `raw` maps each parameter name to a number, an expression string or a table
+    ``{value = ..., unit = "...", description = "..."}``.  Parameters may refer to each
+    other in any order; they are evaluated in dependency order and a circular
+    definition is an error.  `fixed` gives values (numbers) that replace those of
+    existing parameters, e.g. overrides from the command line or an FMU; the
+    expressions they replace are still checked but not evaluated.
+
+    Returns ``{name: value}`` in the order of `raw`.  Errors name the field
+    ``<prefix>.<name>`` (or ``<prefix>.<name>.value`` for tables).
+    """
+    if not isinstance(raw, Mapping):
+        raise SceneError(source, prefix, raw, "a table of name = value entries", "is not a table")
+    fixed = dict(fixed or {})
+
+    bindings: dict[str, tuple[object, str]] = {}
+    for name, spec in raw.items():
+        _check_parameter_name(name, source, prefix)
+        bindings[name] = _parameter_binding(name, spec, source, prefix)
+
+    values: dict[str, float] = {}
+    for name, value in fixed.items():
+        field = f"{prefix}.{name}"
+        if name not in bindings:
+            known = ", ".join(sorted(bindings)) or "(none)"
+            raise SceneError(
+                source, field, value, f"one of the parameters {known}", f"no parameter '{name}' to override"
+            )
+        values[name] = _number(value, source, field)
+
+    # Dependencies among the parameters still to evaluate.  Every expression is
+    # checked, including those replaced by `fixed`: they are still part of the scene.
+    order_of = {name: index for index, name in enumerate(bindings)}
+    depends: dict[str, list[str]] = {}
+    for name, (expr, field) in bindings.items():
+        used = free_names(expr, source, field)
+        unknown = sorted(used.difference(bindings))
+        if unknown:
+            problem = _unknown_name(unknown[0], bindings)
+            raise SceneError(source, field, expr, problem.expected, problem.problem)
+        depends[name] = [] if name in values else sorted(used, key=order_of.__getitem__)
+
+    for name in _dependency_order(depends, bindings, source):
+        if name not in values:
+            expr, field = bindings[name]
+            values[name] = evaluate(expr, values, source, field)
+    return {name: values[name] for name in bindings}
+
+
+def _dependency_order(
+    depends: Mapping[str, list[str]], bindings: Mapping[str, tuple[object, str]], source: str
+) -> list[str]:
+    """Names ordered so that each comes after those it depends on (depth-first)."""
+    done: set[str] = set()
+    order: list[str] = []
+    for root in depends:
+        if root in done:
+            continue
+        path = [root]  # the chain of names being visited
+        on_path = {root}
+        stack = [iter(depends[root])]
+        while stack:
+            for dependency in stack[-1]:
+                if dependency in on_path:
+                    cycle = path[path.index(dependency):] + [dependency]
+                    expr, field = bindings[cycle[0]]
+                    raise SceneError(
+                        source, field, expr, "parameters that do not depend on themselves",
+                        "circular definition " + " -> ".join(cycle),
+                    )
+                if dependency not in done:
+                    path.append(dependency)
+                    on_path.add(dependency)
+                    stack.append(iter(depends[dependency]))
+                    break
+            else:  # all dependencies of path[-1] are done
+                stack.pop()
+                name = path.pop()
+                on_path.discard(name)
+                done.add(name)
+                order.append(name)
+    return order
+
+
+def parameter_meta(raw) -> dict[str, dict]:
+    """Unit and description of each parameter: ``{name: {"unit": ..., "description": ...}}``.
+
+    The unit defaults to ``"1"`` (dimensionless) and the description to ``""``.  This
+    does not validate `raw`; :func:`evaluate_parameters` does.
+    """
+    meta: dict[str, dict] = {}
+    if not isinstance(raw, Mapping):
+        return meta
+    for name, spec in raw.items():
+        unit, description = "1", ""
+        if isinstance(spec, Mapping):
+            unit = str(spec.get("unit", "1"))
+            description = str(spec.get("description", ""))
+        meta[name] = {"unit": unit, "description": description}
+    return meta

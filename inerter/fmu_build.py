@@ -1,0 +1,361 @@
+"""Build FMI 2.0 co-simulation FMUs from scene files (``build_fmu.py``, ``inerter build-fmu``).
+
+One FMU per scene, named after the scene (``build/fmu/two_bar_2d.fmu``). Its model identifier,
+its model class and its Python module (``inerter_fmu_two_bar_2d``) are unique to the scene, so
+FMUs of several scenes can run in one process. The FMU's ``resources/`` hold
+
+- the generated model module (from ``fmu_src/model_module.py.template``),
+- the generic slave ``fmu_src/inerter_slave.py``, which does the work,
+- a copy of the ``inerter`` package, the scene file, and ``requirements.txt`` (numpy, scipy),
+- pythonfmu's own runtime, added by pythonfmu.
+
+The FMU runs inside the importing process with its Python interpreter (pythonfmu's binary does
+not link libpython), importing numpy and scipy from that environment (``pythonfmu deploy -f X.fmu``
+installs ``requirements.txt``). pythonfmu 0.7.0 cannot give units, so the model description it
+writes is completed here: ``<UnitDefinitions>`` with each unit's SI exponents, and ``unit=`` on
+every Real variable.
+
+A build is skipped when the FMU is current: ``<name>.fmu.source-hash`` next to it holds a hash of
+the scene file and of every shipped source, and a build with the same hash does nothing.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import keyword
+import math
+import os
+import re
+import shutil
+import string
+import sys
+import tempfile
+import uuid
+import zipfile
+from pathlib import Path
+from xml.etree import ElementTree as ET
+
+from .errors import InerterError
+
+PACKAGE_DIR = Path(__file__).parent
+REPO_DIR = PACKAGE_DIR.parent
+FMU_SRC = REPO_DIR / "fmu_src"
+SLAVE_FILE = "inerter_slave.py"
+TEMPLATE_FILE = "model_module.py.template"
+DEFAULT_OUT_DIR = Path("build") / "fmu"
+DEFAULT_SCENES_DIR = REPO_DIR / "scenarios"
+RUNTIME_REQUIREMENTS = ("numpy", "scipy")
+HASH_SUFFIX = ".fmu.source-hash"
+#: Bump when the layout of a built FMU changes without any shipped source changing.
+BUILD_FORMAT = "inerter-fmu-build/1"
+MODULE_PREFIX = "inerter_fmu_"
+
+
+class FmuBuildError(InerterError):
+    """An FMU cannot be built from a scene (the message names the scene and the problem)."""
+
+
+# ----------------------------------------------------------------------------------------------
+# Units: Modelica unit strings ("N.s/m", "kg.m2", "m/s2") -> SI base-unit exponents
+# ----------------------------------------------------------------------------------------------
+BASE_UNITS = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+
+#: symbol -> (base-unit exponents, factor to SI)
+UNIT_SYMBOLS: dict[str, tuple[dict[str, int], float]] = {
+    "kg": ({"kg": 1}, 1.0),
+    "g": ({"kg": 1}, 1e-3),
+    "m": ({"m": 1}, 1.0),
+    "mm": ({"m": 1}, 1e-3),
+    "s": ({"s": 1}, 1.0),
+    "A": ({"A": 1}, 1.0),
+    "K": ({"K": 1}, 1.0),
+    "mol": ({"mol": 1}, 1.0),
+    "cd": ({"cd": 1}, 1.0),
+    "rad": ({"rad": 1}, 1.0),
+    "deg": ({"rad": 1}, math.pi / 180.0),
+    "N": ({"kg": 1, "m": 1, "s": -2}, 1.0),
+    "J": ({"kg": 1, "m": 2, "s": -2}, 1.0),
+    "W": ({"kg": 1, "m": 2, "s": -3}, 1.0),
+    "Pa": ({"kg": 1, "m": -1, "s": -2}, 1.0),
+    "Hz": ({"s": -1}, 1.0),
+}
+
+_FACTOR = re.compile(r"([A-Za-z]+)(-?\d+)?")
+
+
+def si_unit(unit: str) -> tuple[dict[str, int], float]:
+    """Base-unit exponents and factor of a Modelica unit string.
+
+    The syntax is Modelica's: factors joined by ``.``, each a symbol with an optional integer
+    exponent (``m2``, ``s-2``), and at most one ``/`` followed by one factor or a parenthesised
+    product: ``N.s/m``, ``kg.m2``, ``m/s2``, ``1/s``, ``J/(kg.K)``. ``"1"`` is dimensionless.
+    Raises ValueError for anything else.
+    """
+    text = unit.strip()
+    if not text:
+        raise ValueError("empty unit")
+    numerator, slash, denominator = text.partition("/")
+    if slash and denominator.startswith("(") and denominator.endswith(")"):
+        denominator = denominator[1:-1]
+    elif slash and "." in denominator:
+        raise ValueError(f"ambiguous denominator {denominator!r}: write '/({denominator})'")
+    exponents: dict[str, int] = {}
+    factor = 1.0
+    for part, sign in ((numerator, 1), (denominator, -1)):
+        if sign < 0 and not slash:
+            break
+        if part == "1":
+            continue
+        for item in part.split("."):
+            match = _FACTOR.fullmatch(item)
+            if match is None or match.group(1) not in UNIT_SYMBOLS:
+                raise ValueError(f"unknown unit factor {item!r} (known symbols: "
+                                 f"{', '.join(UNIT_SYMBOLS)}, with an integer exponent)")
+            base, scale = UNIT_SYMBOLS[match.group(1)]
+            power = sign * int(match.group(2) or 1)
+            for b, e in base.items():
+                exponents[b] = exponents.get(b, 0) + e * power
+            factor *= scale ** power
+    return {b: exponents[b] for b in BASE_UNITS if exponents.get(b, 0) != 0}, factor
+
+
+def unit_definitions(units) -> ET.Element:
+    """A ``<UnitDefinitions>`` element for the given unit strings."""
+    root = ET.Element("UnitDefinitions")
+    for unit in sorted(set(units)):
+        exponents, factor = si_unit(unit)
+        node = ET.SubElement(root, "Unit", name=unit)
+        attrib = {b: str(e) for b, e in exponents.items()}
+        if factor != 1.0:
+            attrib["factor"] = repr(factor)
+        ET.SubElement(node, "BaseUnit", attrib)
+    return root
+
+
+# ----------------------------------------------------------------------------------------------
+# Building
+# ----------------------------------------------------------------------------------------------
+def module_name(model_name: str) -> str:
+    """The FMU's Python module for a scene: unique per scene, so FMUs can share a process."""
+    return MODULE_PREFIX + model_name
+
+
+def _shipped_package_files() -> list[Path]:
+    return sorted(p for p in PACKAGE_DIR.rglob("*")
+                  if p.is_file() and "__pycache__" not in p.parts and p.suffix not in (".pyc", ".pyo"))
+
+
+def source_hash(scene_path: Path) -> str:
+    """A hash of everything an FMU of `scene_path` is built from."""
+    import pythonfmu
+
+    h = hashlib.sha256()
+
+    def add(label: str, data: bytes):
+        h.update(label.encode() + b"\0" + len(data).to_bytes(8, "little") + data)
+
+    add("format", BUILD_FORMAT.encode())
+    add("pythonfmu", pythonfmu.__version__.encode())
+    add("requirements", "\n".join(RUNTIME_REQUIREMENTS).encode())
+    add("scene:" + scene_path.name, scene_path.read_bytes())
+    for path in (FMU_SRC / SLAVE_FILE, FMU_SRC / TEMPLATE_FILE):
+        add("fmu_src/" + path.name, path.read_bytes())
+    for path in _shipped_package_files():
+        add("inerter/" + path.relative_to(PACKAGE_DIR).as_posix(), path.read_bytes())
+    return h.hexdigest()
+
+
+def _scene_description(scene_path: Path, model) -> str:
+    try:
+        import tomllib
+        data = tomllib.loads(scene_path.read_text(encoding="utf-8"))
+        text = data.get("scene", {}).get("description")
+        if isinstance(text, str) and text.strip():
+            return " ".join(text.split())
+    except Exception:
+        pass
+    return f"inerter scene {model.name}"
+
+
+def _check_model(scene_path: Path, model) -> dict[str, str]:
+    """Check the model's names for an FMU and return the unit of each Real variable."""
+    name = model.name
+    if not (isinstance(name, str) and name.isidentifier() and not keyword.iskeyword(name)
+            and name not in ("InerterSlave", "Fmi2Slave")):
+        raise FmuBuildError(f"{scene_path}: scene name {name!r} cannot name an FMU (expected a "
+                            f"Python identifier, not a keyword)")
+    units: dict[str, str] = {}
+    seen: set[str] = set()
+
+    def add(var: str, unit: str | None, what: str):
+        if var in seen:
+            raise FmuBuildError(f"{scene_path}: {what} {var!r}: the name is used twice in the "
+                                f"FMU (parameters, effects, solver, rtol, atol, inputs, outputs)")
+        seen.add(var)
+        if unit:
+            try:
+                si_unit(unit)
+            except ValueError as exc:
+                raise FmuBuildError(f"{scene_path}: {what} {var!r}: unit {unit!r}: {exc}") from None
+            units[var] = unit
+
+    for p in model.parameter_info():
+        add(p["name"], p.get("unit"), "parameter")
+    for e in model.effect_info():
+        add(e["name"], None, "effect")
+    add("solver", None, "setting")
+    add("rtol", "1", "setting")
+    add("atol", None, "setting")
+    for i in model.input_info():
+        add(i["name"], i.get("unit"), "input")
+    for o in model.output_info():
+        add(o["name"], o.get("unit"), "output")
+    return units
+
+
+def build(scene_path, out_dir=DEFAULT_OUT_DIR, force: bool = False) -> Path:
+    """Build the FMU of one scene into `out_dir` and return its path.
+
+    Nothing is done when the FMU there is current (same scene and shipped sources), unless
+    `force`. Raises SceneError for an invalid scene, FmuBuildError when the scene cannot be
+    made into an FMU.
+    """
+    return _build(Path(scene_path), Path(out_dir), force)[0]
+
+
+def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
+    import inerter
+
+    if not scene_path.is_file():
+        raise FmuBuildError(f"{scene_path}: no such scene file")
+    model = inerter.load(scene_path)
+    units = _check_model(scene_path, model)
+    name = model.name
+    fmu_path = out_dir / f"{name}.fmu"
+    hash_path = out_dir / f"{name}{HASH_SUFFIX}"
+    digest = source_hash(scene_path)
+    if (not force and fmu_path.is_file() and hash_path.is_file()
+            and hash_path.read_text().strip() == digest):
+        return fmu_path, False
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="inerter_fmu_") as tmp:
+        stage = Path(tmp) / "stage"
+        stage.mkdir()
+        module = module_name(name)
+        template = string.Template((FMU_SRC / TEMPLATE_FILE).read_text(encoding="utf-8"))
+        version = getattr(inerter, "__version__", None)
+        (stage / f"{module}.py").write_text(template.substitute(
+            name=name, scene_file=scene_path.name, scene_file_repr=repr(scene_path.name),
+            description_repr=repr(_scene_description(scene_path, model)),
+            version_repr=repr(None if version is None else str(version))), encoding="utf-8")
+        shutil.copy2(FMU_SRC / SLAVE_FILE, stage / SLAVE_FILE)
+        shutil.copytree(PACKAGE_DIR, stage / "inerter",
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo"))
+        shutil.copy2(scene_path, stage / scene_path.name)
+        (stage / "requirements.txt").write_text("\n".join(RUNTIME_REQUIREMENTS) + "\n")
+
+        built = _run_pythonfmu(stage / f"{module}.py", Path(tmp) / "out",
+                               [stage / SLAVE_FILE, stage / "inerter", stage / scene_path.name,
+                                stage / "requirements.txt"])
+        final = Path(tmp) / f"{name}.fmu"
+        _complete_model_description(built, final, units, digest)
+        hash_path.unlink(missing_ok=True)
+        shutil.move(str(final), str(fmu_path))
+    hash_path.write_text(digest + "\n")
+    return fmu_path, True
+
+
+def _run_pythonfmu(script: Path, dest: Path, project_files: list[Path]) -> Path:
+    """pythonfmu's builder, with the imports and sys.path entries it leaves behind undone."""
+    from pythonfmu import FmuBuilder
+
+    own = {script.stem, Path(SLAVE_FILE).stem}
+    saved_path = list(sys.path)
+    saved_modules = {k: sys.modules.pop(k) for k in own if k in sys.modules}
+    before = set(sys.modules)
+    try:
+        dest.mkdir(parents=True, exist_ok=True)
+        return Path(FmuBuilder.build_FMU(script, dest=dest, project_files=project_files,
+                                         canGetAndSetFMUstate=True, canSerializeFMUstate=True))
+    finally:
+        sys.path[:] = saved_path
+        for key in set(sys.modules) - before:
+            origin = getattr(sys.modules[key], "__file__", None) or ""
+            if key in own or origin.startswith(str(script.parent.parent)):
+                del sys.modules[key]
+        sys.modules.update(saved_modules)
+
+
+def _complete_model_description(src: Path, dest: Path, units: dict[str, str], digest: str):
+    """Copy the FMU `src` to `dest` with units and a content-derived GUID in its description."""
+    with zipfile.ZipFile(src) as zin:
+        root = ET.fromstring(zin.read("modelDescription.xml"))
+        root.set("guid", "{%s}" % uuid.uuid5(uuid.NAMESPACE_URL, f"inerter-fmu:{digest}"))
+        used = set()
+        for var in root.iter("ScalarVariable"):
+            real = var.find("Real")
+            unit = units.get(var.get("name"))
+            if real is not None and unit:
+                real.set("unit", unit)
+                used.add(unit)
+        if used:
+            # Schema order: CoSimulation, UnitDefinitions, TypeDefinitions, LogCategories, ...
+            position = [child.tag for child in root].index("CoSimulation") + 1
+            root.insert(position, unit_definitions(used))
+        ET.indent(root, space="  ")
+        xml = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+        with zipfile.ZipFile(dest, "w", compression=zipfile.ZIP_DEFLATED) as zout:
+            for info in zin.infolist():
+                data = xml if info.filename == "modelDescription.xml" else zin.read(info)
+                zout.writestr(info.filename, data)
+
+
+# ----------------------------------------------------------------------------------------------
+# Command line
+# ----------------------------------------------------------------------------------------------
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The arguments of ``build_fmu.py`` and ``inerter build-fmu``."""
+    parser.add_argument("scenes", nargs="*", metavar="SCENE",
+                        help=f"scene files (default: every {DEFAULT_SCENES_DIR.name}/*.toml)")
+    parser.add_argument("-o", "--out-dir", default=str(DEFAULT_OUT_DIR),
+                        help="where the FMUs go (default: %(default)s)")
+    parser.add_argument("-f", "--force", action="store_true",
+                        help="rebuild even when an FMU is current")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Build the FMUs that `args` name; print one line per scene; return the exit status."""
+    scenes = [Path(s) for s in args.scenes] or sorted(DEFAULT_SCENES_DIR.glob("*.toml"))
+    if not scenes:
+        print(f"error: no scene given and none in {DEFAULT_SCENES_DIR}", file=sys.stderr)
+        return 2
+    status = 0
+    made: dict[Path, Path] = {}
+    for scene in scenes:
+        try:
+            path, built = _build(scene, Path(args.out_dir), args.force)
+        except InerterError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            status = 1
+            continue
+        if path in made:
+            print(f"error: {scene}: builds {path}, as {made[path]} does (two scenes with one "
+                  f"name)", file=sys.stderr)
+            status = 1
+        made[path] = scene
+        print(f"{'built' if built else 'up to date'}: {path}")
+    return status
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="build_fmu.py",
+        description="Build one FMI 2.0 co-simulation FMU per scene (rebuilt only when the "
+                    "scene or the code changed).")
+    add_arguments(parser)
+    return run(parser.parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,72 @@
+"""Time integrators, all behind scipy's `OdeSolver` interface (`step()`, `t`, `y`, `dense_output()`).
+
+* ``DOP853``: explicit Runge–Kutta of order 8(5,3), adaptive (Hairer); the default, for smooth,
+  non-stiff scenes at tight tolerance.
+* ``RK45``: explicit Runge–Kutta 5(4), adaptive (Dormand–Prince).
+* ``Radau``: implicit Runge–Kutta (Radau IIA, order 5), adaptive; for stiff scenes.
+* ``BDF``, ``LSODA``: variable-order multistep methods, adaptive; stiff / auto-switching.
+* ``RK4``: classical fixed-step Runge–Kutta of order 4, for real-time-style co-simulation;
+  its step is the experiment's ``step`` (the tolerances do not apply).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import BDF, DOP853, LSODA, RK45, DenseOutput, OdeSolver, Radau
+
+
+class _Hermite(DenseOutput):
+    """Cubic Hermite interpolation over one step (matches RK4's order 4 only at the nodes)."""
+
+    def __init__(self, t_old, t, y_old, y, f_old, f):
+        super().__init__(t_old, t)
+        self.h = t - t_old
+        self.y_old, self.y, self.f_old, self.f = y_old, y, f_old, f
+
+    def _call_impl(self, t):
+        s = (np.atleast_1d(t) - self.t_old) / self.h
+        h00 = 2 * s**3 - 3 * s**2 + 1
+        h10 = s**3 - 2 * s**2 + s
+        h01 = -2 * s**3 + 3 * s**2
+        h11 = s**3 - s**2
+        out = (np.outer(self.y_old, h00) + np.outer(self.f_old, h10 * self.h)
+               + np.outer(self.y, h01) + np.outer(self.f, h11 * self.h))
+        return out[:, 0] if np.ndim(t) == 0 else out
+
+
+class RK4(OdeSolver):
+    """Classical Runge–Kutta, order 4, fixed step `step` (the last step is shortened to land on
+    t_bound)."""
+
+    def __init__(self, fun, t0, y0, t_bound, step=1e-3, vectorized=False, **extraneous):
+        super().__init__(fun, t0, y0, t_bound, vectorized)
+        self.h = float(step)
+        self.f = self.fun(self.t, self.y)
+        self.y_old = self.f_old = None
+
+    def _step_impl(self):
+        t, y, h = self.t, self.y, min(self.h, abs(self.t_bound - self.t))
+        k1 = self.f
+        k2 = self.fun(t + h / 2, y + h / 2 * k1)
+        k3 = self.fun(t + h / 2, y + h / 2 * k2)
+        k4 = self.fun(t + h, y + h * k3)
+        self.y_old, self.f_old = y, k1
+        self.y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        self.t = t + h
+        self.f = self.fun(self.t, self.y)
+        return True, None
+
+    def _dense_output_impl(self):
+        return _Hermite(self.t_old, self.t, self.y_old, self.y, self.f_old, self.f)
+
+
+SOLVERS = {"DOP853": DOP853, "RK45": RK45, "Radau": Radau, "BDF": BDF, "LSODA": LSODA, "RK4": RK4}
+
+
+def make_solver(method, fun, t0, y0, t_bound, rtol, atol, step=1e-3, first_step=None):
+    cls = SOLVERS[method]
+    if cls is RK4:
+        return RK4(fun, t0, y0, t_bound, step=step)
+    kwargs = {}
+    if first_step is not None and first_step < abs(t_bound - t0):
+        kwargs["first_step"] = first_step
+    return cls(fun, t0, y0, t_bound, rtol=rtol, atol=atol, **kwargs)

@@ -1,0 +1,283 @@
+"""The compiled mechanism: a validated scene turned into flat arrays, index maps and term objects.
+
+Only what the scene declares is compiled in: a scene without gravity has no gravity term, a scene
+without inerters no inerter term, and so on. :meth:`Mechanism.terms` lists what was compiled.
+
+The equations of motion are the augmented form of Eq. (33),
+
+    [M + M_I  C_qᵀ] [q̈]   [Q_e + Q_Iv]
+    [C_q      0   ] [λ] = [γ − 2α Ċ − α² C]
+
+with Baumgarte stabilisation of the constraints (α in 1/s; α = 0 gives the plain Eq. 33).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import elements as el
+from .errors import SceneError, SimulationError
+from .joints import Prismatic, Revolute
+from .planar import DOF_PER_BODY, PointKinematics, PointPair
+from .scene import GROUND, Scene
+
+#: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
+ASSEMBLY_TOLERANCE = 1e-6
+
+
+class TimeFunction:
+    """A point force's magnitude as a function of time (constant, sine, step) or a held input."""
+
+    def __init__(self, force):
+        self.force = force
+
+    def __call__(self, t: float) -> float:
+        f = self.force
+        if f.function == "constant":
+            return f.value
+        if f.function == "sine":
+            return f.offset + f.amplitude * math.sin(2.0 * math.pi * f.frequency * t + f.phase)
+        if f.function == "step":
+            return f.value if t >= f.time else f.initial
+        raise AssertionError(f.function)
+
+
+class Mechanism:
+    """A scene compiled for simulation. `oracle=True` evaluates the translational elements by
+    differentiating their terminal distance L(q) (module `oracle`) instead of Eqs. (15–20)."""
+
+    def __init__(self, scene: Scene, oracle: bool = False):
+        self.scene = scene
+        self.oracle = oracle
+        self.dim = scene.dimension
+        self.body_names = list(scene.bodies)
+        self.body_index = {n: i for i, n in enumerate(self.body_names)}
+        self.n = DOF_PER_BODY * len(self.body_names)
+
+        masses = []
+        for b in scene.bodies.values():
+            masses += [b.mass, b.mass, b.inertia]
+        self.mass_diagonal = np.array(masses)
+
+        self.point_names = list(scene.points)
+        self.points = {p.name: PointKinematics(self._body(p.body), p.local) for p in scene.points.values()}
+
+        q0, v0 = [], []
+        for b in scene.bodies.values():
+            q0 += [*b.position, b.angle]
+            v0 += [*b.velocity, b.angular_velocity]
+        q0, v0 = np.array(q0), np.array(v0)
+
+        self.joints = []
+        for j in scene.joints.values():
+            pair = self._pair(j.point_a, j.point_b)
+            if j.type == "revolute":
+                self.joints.append(Revolute(j.name, pair))
+            else:
+                ia = self._angle_index(scene.points[j.point_a].body)
+                ib = self._angle_index(scene.points[j.point_b].body)
+                phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
+                self.joints.append(Prismatic(j.name, pair, j.axis, ia, ib, phi0))
+        self.m = sum(j.rows for j in self.joints)
+
+        self.elements = [self._element(e, q0) for e in scene.elements.values()]
+        self.inerters = [e for e in self.elements if e.kind == "inerter"]
+
+        self.applied = [(f, self.points[f.point], TimeFunction(f)) for f in scene.forces.values()
+                        if f.function != "input"]
+        self.input_forces = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "input"]
+        self.input_names = [f"{f.point}.f[{i + 1}]" for f, _ in self.input_forces for i in range(self.dim)]
+
+        g = scene.effects.get("gravity")
+        self.gravity = None
+        if g is not None and any(g):
+            self.gravity = np.zeros(self.n)
+            for i, b in enumerate(scene.bodies.values()):
+                self.gravity[DOF_PER_BODY * i:DOF_PER_BODY * i + 2] = b.mass * np.asarray(g)
+
+        self.q0, self.v0 = self.assemble(q0, v0)
+
+    # -- compilation helpers ---------------------------------------------------------------
+    def _body(self, name):
+        return -1 if name == GROUND else self.body_index[name]
+
+    def _angle_index(self, body_name):
+        i = self._body(body_name)
+        return DOF_PER_BODY * i + 2 if i >= 0 else -1
+
+    def _pair(self, a, b):
+        return PointPair(self.points[a], self.points[b])
+
+    def _element(self, e, q0):
+        if e.type in ("rotational_spring", "rotational_damper"):
+            ia, ib = self._angle_index(e.body_a), self._angle_index(e.body_b)
+            if e.type == "rotational_damper":
+                return el.RotationalDamper(e.name, ia, ib, e.coefficient)
+            phi0 = e.free_length
+            if phi0 is None:
+                phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
+            return el.RotationalSpring(e.name, ia, ib, e.coefficient, phi0)
+        pair = self._pair(e.point_a, e.point_b)
+        labels = (e.point_a, e.point_b)
+        L_initial = self._initial_length(e, pair, q0)
+        free = (e.free_length if e.free_length is not None else L_initial) if e.type == "spring" else None
+        if self.oracle:
+            from . import oracle
+            return oracle.OracleElement(e, pair, self.scene.centripetal, free, labels)
+        if e.type == "spring":
+            return el.Spring(e.name, pair, e.coefficient, free, labels)
+        if e.type == "damper":
+            return el.Damper(e.name, pair, e.coefficient, labels)
+        return el.Inerter(e.name, pair, e.coefficient, self.scene.centripetal, labels)
+
+    def _initial_length(self, e, pair, q0):
+        r, _, _, _ = pair.evaluate(q0, np.zeros(self.n))
+        length = math.hypot(*r)
+        if not length > el.MIN_LENGTH:
+            raise SceneError(self.scene.source, f"elements.{e.name}.between", [e.point_a, e.point_b],
+                             f"terminals at least {el.MIN_LENGTH:g} m apart at t = 0",
+                             f"coincident terminals at t = 0 (distance {length:.3g} m): the element's "
+                             "direction is undefined")
+        return length
+
+    # -- constraints -----------------------------------------------------------------------
+    def constraints(self, q, v):
+        """(C, C_q, γ) stacked over all joints."""
+        C = np.empty(self.m)
+        Cq = np.zeros((self.m, self.n))
+        gamma = np.empty(self.m)
+        row = 0
+        for j in self.joints:
+            c, jac, g = j.evaluate(q, v)
+            k = j.rows
+            C[row:row + k] = c
+            Cq[row:row + k, j.dofs] = jac
+            gamma[row:row + k] = g
+            row += k
+        return C, Cq, gamma
+
+    def constraint_residual(self, q) -> float:
+        if not self.m:
+            return 0.0
+        return float(np.max(np.abs(self.constraints(q, np.zeros(self.n))[0])))
+
+    def project(self, q, v, tol=1e-13, max_iter=20):
+        """Move (q, v) onto the constraint manifold: Newton on C(q) = 0, then C_q v = 0
+        (minimum-norm corrections)."""
+        if not self.m:
+            return q, v
+        q = q.copy()
+        z = np.zeros(self.n)
+        for _ in range(max_iter):
+            C, Cq, _ = self.constraints(q, z)
+            if np.max(np.abs(C)) <= tol:
+                break
+            q -= Cq.T @ np.linalg.solve(Cq @ Cq.T, C)
+        _, Cq, _ = self.constraints(q, z)
+        v = v - Cq.T @ np.linalg.solve(Cq @ Cq.T, Cq @ v)
+        return q, v
+
+    def assemble(self, q, v):
+        """Check the scene's initial pose against its joints; fix round-off, reject real violations."""
+        if not self.m:
+            return q, v
+        C, Cq, _ = self.constraints(q, np.zeros(self.n))
+        row = 0
+        for j in self.joints:
+            worst = float(np.max(np.abs(C[row:row + j.rows])))
+            if worst > ASSEMBLY_TOLERANCE:
+                raise SceneError(self.scene.source, f"joints.{j.name}", f"violated by {worst:.3g}",
+                                 f"an initial pose (bodies' position and angle) that satisfies the joint "
+                                 f"to {ASSEMBLY_TOLERANCE:g}", "initial pose violates the joint")
+            row += j.rows
+        if np.linalg.matrix_rank(Cq) < self.m:
+            raise SceneError(self.scene.source, "joints", [j.name for j in self.joints],
+                             "independent joint constraints", "redundant or singular constraints at t = 0")
+        q, v = self.project(q, v)
+        return q, v
+
+    # -- forces and dynamics -----------------------------------------------------------------
+    def generalized_forces(self, t, q, v, inputs=None):
+        """Q_e (+ Q_Iv): every force except the inerters' acceleration term."""
+        Q = np.zeros(self.n)
+        if self.gravity is not None:
+            Q += self.gravity
+        for e in self.elements:
+            e.add_force(q, v, Q)
+        for f, point, fn in self.applied:
+            self._add_point_force(Q, point, q, fn(t) * np.asarray(f.direction))
+        if self.input_forces and inputs is not None:
+            for k, (f, point) in enumerate(self.input_forces):
+                self._add_point_force(Q, point, q, inputs[k * self.dim:(k + 1) * self.dim])
+        return Q
+
+    def _add_point_force(self, Q, point, q, F):
+        _, _, u, u_t, _ = point.evaluate(q, np.zeros(self.n))
+        Q[point.dofs[:2]] += F
+        Q[point.dofs[2]] += float(u_t @ F)                      # virtual work through A_θ ū
+
+    def mass_matrix(self, q, v):
+        M = np.diag(self.mass_diagonal)
+        for e in self.inerters:
+            e.add_mass(q, v, M)                                # M + M_I, Eq. (33)
+        return M
+
+    def accelerations(self, t, q, v, inputs=None, alpha=0.0):
+        """Solve Eq. (33) for (q̈, λ)."""
+        M = self.mass_matrix(q, v)
+        Q = self.generalized_forces(t, q, v, inputs)
+        if not self.m:
+            return self._solve(M, Q, t), np.zeros(0)
+        C, Cq, gamma = self.constraints(q, v)
+        rhs_c = gamma - 2.0 * alpha * (Cq @ v) - alpha * alpha * C     # Baumgarte
+        K = np.zeros((self.n + self.m, self.n + self.m))
+        K[:self.n, :self.n] = M
+        K[:self.n, self.n:] = Cq.T
+        K[self.n:, :self.n] = Cq
+        x = self._solve(K, np.concatenate((Q, rhs_c)), t)
+        return x[:self.n], x[self.n:]
+
+    def _solve(self, K, rhs, t):
+        try:
+            x = np.linalg.solve(K, rhs)
+        except np.linalg.LinAlgError:
+            raise SimulationError("the mass matrix M + M_I with the joint constraints is singular: some "
+                                  "coordinate has no mass (check zero masses/inertias and the inerters)", t)
+        if not np.all(np.isfinite(x)):
+            raise SimulationError("accelerations are not finite (the system matrix is near-singular or a "
+                                  "force is unbounded)", t)
+        return x
+
+    # -- energy ----------------------------------------------------------------------------
+    def energy(self, q, v) -> float:
+        """T + V: ½q̇ᵀMq̇ + Σ ½bL̇² (inerters) + elastic and gravity potential. Conserved by the
+        corrected model without damping and forcing (the inerter adds ½bL̇² to T, Sec. 2.2)."""
+        E = 0.5 * float(v @ (self.mass_diagonal * v))
+        for e in self.elements:
+            E += e.kinetic(q, v) + e.potential(q)
+        if self.gravity is not None:
+            E -= float(self.gravity @ q)
+        return E
+
+    # -- description -----------------------------------------------------------------------
+    def terms(self) -> list[str]:
+        """What this compiled model computes: one line per term."""
+        s = self.scene
+        lines = [f"{len(self.body_names)} bodies, {self.n} coordinates, {self.m} constraint rows "
+                 f"({'oracle: element forces from d²L/dt² by automatic differentiation' if self.oracle else 'fast path: Eqs. (15-20), (33)'})"]
+        for j in self.joints:
+            lines.append(f"joint {j.name}: {j.kind}, {j.rows} rows")
+        for e in self.elements:
+            extra = ""
+            if e.kind == "inerter":
+                extra = " with centripetal term (Eq. 9)" if s.centripetal else " without centripetal term (Eq. 8)"
+            lines.append(f"element {e.name}: {e.kind}, {getattr(e, 'coefficient_name', 'k')} = {e.coefficient:g}{extra}")
+        for f, _, _ in self.applied:
+            lines.append(f"force {f.name}: {f.function} at {f.point} along {list(f.direction)}")
+        for f, _ in self.input_forces:
+            lines.append(f"force {f.name}: input at {f.point} ({', '.join(n for n in self.input_names if n.startswith(f.point + '.'))})")
+        lines.append("gravity: " + (f"{list(s.effects['gravity'])} m/s²" if self.gravity is not None else "not declared, not computed"))
+        if not self.inerters:
+            lines.append("inerters: none, no inerter term computed")
+        return lines

@@ -1,0 +1,317 @@
+"""Metrics of a simulated time history.
+
+All functions are pure: they take the sample times `t` (non-decreasing, first < last),
+the sampled coordinate `x` (same length) and, optionally, a *dense* callable
+``dense(t_array) -> x_array`` that evaluates the solver's continuous interpolant at
+any times inside ``[t[0], t[-1]]``.  When `dense` is given it is used for every
+refinement (root finding, resampling, extremum search) because it is far more
+accurate than linear interpolation between output samples.
+
+Periodic quantities are computed over a whole number of periods on a uniform grid
+that excludes the window's end point: for a periodic signal the resulting
+trapezoid/FFT quadrature of the Fourier coefficients is spectrally accurate.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+__all__ = ["crossing_times", "free_oscillation", "harmonics", "steady_state"]
+
+Dense = Callable[[np.ndarray], np.ndarray]
+
+# Relative time tolerance of the root refinement on the dense interpolant.
+_ROOT_XTOL = 1e-14
+# Relative slack allowed when a window edge falls a rounding error outside the history.
+_EDGE_SLACK = 1e-9
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _history(t, x) -> tuple[np.ndarray, np.ndarray]:
+    """Validate a time history and return it as float arrays."""
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    if t.ndim != 1 or x.ndim != 1:
+        raise ValueError(f"t and x must be 1-D arrays (got shapes {t.shape} and {x.shape})")
+    if t.size != x.size:
+        raise ValueError(f"t and x must have the same length (got {t.size} and {x.size})")
+    if t.size < 2:
+        raise ValueError(f"a time history needs at least 2 samples (got {t.size})")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+        raise ValueError("t and x must be finite (the history contains nan or inf)")
+    if np.any(np.diff(t) < 0.0) or not t[-1] > t[0]:
+        raise ValueError("t must be non-decreasing with t[-1] > t[0]")
+    return t, x
+
+
+def _dense_values(dense: Dense, tau: np.ndarray) -> np.ndarray:
+    """Evaluate the dense interpolant at the times `tau` (1-D) as a float array."""
+    values = np.asarray(dense(tau), dtype=float).reshape(-1)
+    if values.size != tau.size:
+        raise ValueError(
+            f"dense(t) returned {values.size} values for {tau.size} times; "
+            "it must return one value of x per time"
+        )
+    if not np.all(np.isfinite(values)):
+        raise ValueError("dense(t) returned nan or inf")
+    return values
+
+
+def _dense_scalar(dense: Dense, tau: float) -> float:
+    return float(_dense_values(dense, np.array([tau], dtype=float))[0])
+
+
+def _resample(t: np.ndarray, x: np.ndarray, tau: np.ndarray, dense: Dense | None) -> np.ndarray:
+    """x at the times `tau` (clipped to the history): dense interpolant or linear."""
+    tau = np.clip(tau, t[0], t[-1])
+    if dense is not None:
+        return _dense_values(dense, tau)
+    return np.interp(tau, t, x)
+
+
+def _positive_int(value, what: str, least: int = 1) -> int:
+    try:
+        valid = not isinstance(value, bool) and int(value) == value and value >= least
+    except (TypeError, ValueError, OverflowError):
+        valid = False
+    if not valid:
+        raise ValueError(f"{what} must be an integer >= {least} (got {value!r})")
+    return int(value)
+
+
+def _crossings(
+    t: np.ndarray, x: np.ndarray, level: float, direction: int, dense: Dense | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Indices i of the sample intervals [t[i], t[i+1]] holding a crossing, and its times.
+
+    A sample exactly at `level` counts as above it, so that upward and downward
+    crossings alternate (a touch from below is an upward crossing followed by a
+    downward one at the same time; a touch from above is no crossing).
+    """
+    if direction not in (1, -1):
+        raise ValueError(f"direction must be +1 (upward) or -1 (downward) (got {direction!r})")
+    y = x - level
+    above = y >= 0.0
+    if direction > 0:
+        index = np.flatnonzero(~above[:-1] & above[1:])
+    else:
+        index = np.flatnonzero(above[:-1] & ~above[1:])
+
+    # Linear interpolation between the bracketing samples (y changes sign there, so
+    # the denominator cannot vanish).
+    ya, yb = y[index], y[index + 1]
+    times = t[index] + (t[index + 1] - t[index]) * (ya / (ya - yb))
+    if dense is None:
+        return index, times
+
+    # Refine on the dense interpolant.  Should the interpolant not bracket a root where
+    # the samples do (it may differ from the samples by its own error), the linear
+    # estimate is kept.
+    xtol = _ROOT_XTOL * max(abs(t[0]), abs(t[-1]), t[-1] - t[0])
+
+    def offset(tau: float) -> float:
+        return _dense_scalar(dense, tau) - level
+
+    for k, i in enumerate(index):
+        a, b = t[i], t[i + 1]
+        if b <= a:
+            continue  # repeated sample time: the crossing is at that time
+        try:
+            times[k] = brentq(offset, a, b, xtol=xtol, maxiter=200)
+        except ValueError:
+            pass
+    return index, times
+
+
+def _fourier(values: np.ndarray, periods: int) -> tuple[float, float]:
+    """Mean and fundamental amplitude of uniform samples covering `periods` periods."""
+    n = values.size
+    mean = float(np.mean(values))
+    # The fundamental is the DFT bin `periods`; amplitude A = 2 |c_1|.
+    c1 = np.fft.rfft(values)[periods] / n
+    return mean, float(2.0 * abs(c1))
+
+
+# ------------------------------------------------------------------------ public API
+
+
+def crossing_times(t, x, level, direction=+1, dense=None) -> np.ndarray:
+    """Times at which `x` crosses `level` upward (``direction=+1``) or downward (-1).
+
+    Crossings are located as sign changes of ``x - level`` between samples, then each
+    is refined with Brent's method on `dense` (to about 1e-14 of the time scale) or, if
+    `dense` is None, by linear interpolation between the two samples.
+    """
+    t, x = _history(t, x)
+    return _crossings(t, x, float(level), direction, dense)[1]
+
+
+def harmonics(t, x, window, periods, dense=None, samples_per_period=512) -> dict:
+    """Mean and fundamental amplitude of `x` over ``window = (t0, t1)``.
+
+    The window must hold `periods` whole periods of the signal, i.e. the fundamental
+    frequency is ``periods / (t1 - t0)``.  `x` is resampled uniformly with
+    `samples_per_period` points per period (end point excluded).
+
+    Returns ``{"mean": a0, "amplitude": A}`` where ``x ~ a0 + A cos(2 pi f t + phi) + ...``.
+    """
+    t, x = _history(t, x)
+    periods = _positive_int(periods, "periods")
+    samples_per_period = _positive_int(samples_per_period, "samples_per_period", least=4)
+    t0, t1 = (float(w) for w in window)
+    if not t1 > t0:
+        raise ValueError(f"the window must have t1 > t0 (got {window!r})")
+    slack = _EDGE_SLACK * max(t[-1] - t[0], t1 - t0)
+    if t0 < t[0] - slack or t1 > t[-1] + slack:
+        raise ValueError(
+            f"the window [{t0:.9g}, {t1:.9g}] s is not inside the history "
+            f"[{t[0]:.9g}, {t[-1]:.9g}] s"
+        )
+    n = periods * samples_per_period
+    tau = t0 + (t1 - t0) * (np.arange(n) / n)
+    mean, amplitude = _fourier(_resample(t, x, tau, dense), periods)
+    return {"mean": mean, "amplitude": amplitude}
+
+
+def free_oscillation(t, x, reference, dense=None, samples_per_period=512) -> dict:
+    """Frequency, amplitude and mean of a free (periodic or nearly periodic) oscillation.
+
+    The level is the time average of `x`; the analysis window runs from the first to
+    the last upward crossing of that level (a crossing in the first sample interval is
+    skipped, as the start of a history is often a release from or a pass through the
+    level), which spans ``n >= 1`` whole periods of length ``T = (t_last - t_first)/n``.
+    Over that window the mean and the first-harmonic amplitude are taken from the
+    Fourier series at ``f = 1/T`` (see :func:`harmonics`).
+
+    Returns ``{"fundamental_frequency": f [Hz], "fundamental_amplitude": A,
+    "mean_offset": mean - reference, "mean": mean, "periods": n, "window": (t0, t1)}``.
+    Raises ValueError if fewer than two upward crossings are found.
+    """
+    t, x = _history(t, x)
+    # Time-weighted (trapezoid) average, so uneven solver steps do not bias the level.
+    level = float(np.sum(0.5 * (x[1:] + x[:-1]) * np.diff(t)) / (t[-1] - t[0]))
+    index, times = _crossings(t, x, level, +1, dense)
+    times = times[index > 0]
+    if times.size < 2:
+        raise ValueError(
+            f"free oscillation: found {times.size} upward crossing(s) of the mean level "
+            f"{level:.9g} in [{t[0]:.9g}, {t[-1]:.9g}] s, but at least 2 are needed to "
+            "cover one whole period; simulate longer or check that the coordinate oscillates"
+        )
+    periods = times.size - 1
+    t0, t1 = float(times[0]), float(times[-1])
+    period = (t1 - t0) / periods
+    fourier = harmonics(t, x, (t0, t1), periods, dense=dense, samples_per_period=samples_per_period)
+    return {
+        "fundamental_frequency": 1.0 / period,
+        "fundamental_amplitude": fourier["amplitude"],
+        "mean_offset": fourier["mean"] - float(reference),
+        "mean": fourier["mean"],
+        "periods": periods,
+        "window": (t0, t1),
+    }
+
+
+def _extreme(
+    dense: Dense | None,
+    tau: np.ndarray,
+    values: np.ndarray,
+    sign: float,
+    periods: int,
+) -> float:
+    """The largest (sign=+1) or smallest (sign=-1) value of x over the grid `tau`.
+
+    With `dense`, the best grid candidates are refined by a bounded scalar minimisation
+    over the neighbouring grid intervals.
+    """
+    w = sign * values
+    best = float(w.max())
+    if dense is None or w.size < 3:
+        return sign * best
+
+    # Grid local maxima of w (end points included one-sidedly).  All those close to the
+    # grid maximum are candidates: on a periodic signal every period holds a peak of
+    # nearly the same height, and the grid may rank them wrongly by its own error.
+    interior = np.flatnonzero((w[1:-1] >= w[:-2]) & (w[1:-1] >= w[2:])) + 1
+    ends = [k for k, j in ((0, 1), (w.size - 1, w.size - 2)) if w[k] >= w[j]]
+    candidates = np.concatenate([interior, np.array(ends, dtype=int)])
+    spread = best - float(w.min())
+    samples_per_period = (w.size - 1) / periods
+    band = spread * min(1.0, max(1e-3, 10.0 * (np.pi / samples_per_period) ** 2))
+    candidates = candidates[w[candidates] >= best - band]
+    candidates = candidates[np.argsort(-w[candidates], kind="stable")][: 2 * periods + 4]
+
+    step = tau[1] - tau[0]
+    for k in candidates:
+        centre = float(tau[k])
+        # Optimise over the offset s = tau - centre: the bounded method's tolerance has a
+        # term relative to |s|, which is then small instead of relative to |tau|.
+        lo = max(float(tau[0]), centre - step) - centre
+        hi = min(float(tau[-1]), centre + step) - centre
+        if not hi > lo:
+            continue
+        result = minimize_scalar(
+            lambda s: -sign * _dense_scalar(dense, centre + s),
+            bounds=(lo, hi),
+            method="bounded",
+            options={"xatol": 1e-12 * step, "maxiter": 500},
+        )
+        best = max(best, -float(result.fun))
+    return sign * best
+
+
+def steady_state(t, x, period, periods, reference, dense=None, samples_per_period=2048) -> dict:
+    """Peak-to-peak and mean of a forced steady state over its last whole periods.
+
+    The window is the last `periods` periods of the excitation (period `period`)
+    ending at ``t[-1]``.  `x` is resampled uniformly with `samples_per_period` points
+    per period; the peak-to-peak is max - min over that grid (plus, without `dense`,
+    the samples inside the window; with `dense`, the extrema are refined on the
+    interpolant).  The mean is the uniform-grid average over the whole periods.
+
+    Returns ``{"peak_to_peak": ..., "mean_offset": mean - reference, "mean": ...,
+    "window": (t0, t1)}``.  Raises ValueError if the history is shorter than the window.
+    """
+    t, x = _history(t, x)
+    period = float(period)
+    if not (np.isfinite(period) and period > 0.0):
+        raise ValueError(f"period must be a positive finite number (got {period!r})")
+    periods = _positive_int(periods, "periods")
+    samples_per_period = _positive_int(samples_per_period, "samples_per_period", least=4)
+
+    t1 = float(t[-1])
+    span = periods * period
+    t0 = t1 - span
+    if t0 < t[0] - _EDGE_SLACK * span:
+        raise ValueError(
+            f"steady state: the history covers {t1 - t[0]:.9g} s, shorter than the "
+            f"{periods} period(s) of {period:.9g} s ({span:.9g} s) to analyse; simulate longer "
+            "or analyse fewer periods"
+        )
+    t0 = max(t0, float(t[0]))  # absorb a rounding error at the start
+
+    n = periods * samples_per_period
+    tau = t0 + (t1 - t0) * (np.arange(n + 1) / n)  # end point included for the extrema
+    values = _resample(t, x, tau, dense)
+    mean = float(np.mean(values[:n]))  # end point excluded: periodic trapezoid rule
+
+    if dense is None:
+        # The linear interpolant attains its extrema at sample times: include the
+        # samples inside the window so none is missed between grid points.
+        inside = x[(t >= t0) & (t <= t1)]
+        pool = np.concatenate([values, inside])
+        high, low = float(pool.max()), float(pool.min())
+    else:
+        high = _extreme(dense, tau, values, +1.0, periods)
+        low = _extreme(dense, tau, values, -1.0, periods)
+
+    return {
+        "peak_to_peak": high - low,
+        "mean_offset": mean - float(reference),
+        "mean": mean,
+        "window": (t0, t1),
+    }

@@ -1,0 +1,218 @@
+"""The Python entry point: ``model = inerter.load(scene, **overrides)``, ``model.simulate(...)``.
+
+A :class:`Model` holds the validated scene and its compiled mechanism (fast path). The oracle is
+the same scene compiled with ``oracle=True`` and solved at tight tolerance.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import metrics as metric_fns
+from .equilibrium import natural_frequencies, static_equilibrium
+from .mechanism import Mechanism
+from .outputs import Signals
+from .scene import KNOWN_EFFECTS, METHODS, load_scene
+from .simulation import Settings, Stepper, integrate
+
+#: Tolerances at which the oracle is solved (DOP853).
+ORACLE_RTOL = 1e-12
+ORACLE_ATOL = 1e-14
+
+
+def load(path, **overrides) -> "Model":
+    """Load a scene file. Overrides, Modelica-modifier style: a parameter by name (``b=20``), an
+    effect (``**{"effects.centripetal": False}``) or an experiment setting (``experiment.rtol``)."""
+    return Model(path, overrides)
+
+
+class Model:
+    methods = METHODS
+
+    def __init__(self, path, overrides: dict[str, Any] | None = None, oracle: bool = False):
+        self.path = Path(path)
+        self.overrides = dict(overrides or {})
+        self.scene = load_scene(self.path, self.overrides)
+        self.mechanism = Mechanism(self.scene, oracle=oracle)
+        self.signals = Signals(self.mechanism)
+        self.is_oracle = oracle
+        self._static = None
+
+    # -- description -------------------------------------------------------------------------
+    @property
+    def name(self) -> str:
+        return self.scene.name
+
+    @property
+    def source(self) -> str:
+        return self.scene.source
+
+    @property
+    def experiment(self) -> dict:
+        x = self.scene.experiment
+        return dict(stop_time=x.stop_time, output_interval=x.output_interval, method=x.method, rtol=x.rtol,
+                    atol=x.atol, constraint=x.constraint, baumgarte=x.baumgarte,
+                    communication_step=x.communication_step, step=x.step)
+
+    def terms(self) -> list[str]:
+        return self.mechanism.terms()
+
+    def parameter_info(self):
+        return [dict(name=p.name, value=p.value, unit=p.unit, description=p.description)
+                for p in self.scene.parameters.values()]
+
+    def effect_info(self):
+        """Boolean effect switches (``effects.centripetal``), present when the scene has inerters."""
+        info = []
+        if self.mechanism.inerters or "centripetal" in self.scene.effects:
+            info.append(dict(name="effects.centripetal", value=self.scene.centripetal,
+                             description=KNOWN_EFFECTS["centripetal"]))
+        return info
+
+    def input_info(self):
+        return [dict(name=n, unit="N", description=f"force at point {n.split('.')[0]}, global axis "
+                     f"{n[n.index('[') + 1]}, held over each communication step")
+                for n in self.mechanism.input_names]
+
+    def output_info(self):
+        return self.signals.info()
+
+    def with_overrides(self, **more) -> "Model":
+        merged = dict(self.overrides)
+        merged.update(more)
+        return Model(self.path, merged, oracle=self.is_oracle)
+
+    def oracle(self) -> "Model":
+        """The same scene with element forces from the definitions (module `oracle`)."""
+        return Model(self.path, self.overrides, oracle=True)
+
+    # -- analysis ----------------------------------------------------------------------------
+    def static_equilibrium(self):
+        if self._static is None:
+            self._static = static_equilibrium(self.mechanism)
+        return self._static
+
+    def natural_frequencies(self):
+        return natural_frequencies(self.mechanism, self.static_equilibrium())
+
+    def static_value(self, signal: str) -> float:
+        q = self.static_equilibrium()
+        return self.signals.function(signal)(0.0, q, np.zeros_like(q))
+
+    # -- simulation --------------------------------------------------------------------------
+    def settings(self, **overrides) -> Settings:
+        return Settings.from_experiment(self.scene.experiment, **overrides)
+
+    def simulate(self, stop_time=None, output_interval=None, method=None, rtol=None, atol=None,
+                 constraint=None, step=None, metrics=True) -> "Result":
+        s = self.settings(stop_time=stop_time, output_interval=output_interval, method=method, rtol=rtol,
+                          atol=atol, constraint=constraint, step=step)
+        run = integrate(self.mechanism, s)
+        result = Result(self, s, run)
+        if metrics and run.status == "ok":
+            result.metrics = compute_metrics(self, result)
+        return result
+
+    def stepper(self, method=None, rtol=None, atol=None) -> Stepper:
+        return Stepper(self.mechanism, self.settings(method=method, rtol=rtol, atol=atol), self.signals)
+
+
+class Result:
+    """A time history: ``result.time``, ``result["C.r[2]"]``, ``result.metrics``."""
+
+    def __init__(self, model: Model, settings: Settings, run):
+        self.model = model
+        self.settings = settings
+        self.run = run
+        self.time = run.time
+        self.status = run.status
+        self.message = run.message
+        self.metrics: dict[str, float] = {}
+        n = model.mechanism.n
+        sig = model.signals
+        self._values = np.array([sig.evaluate(t, y[:n], y[n:], None, settings.alpha)
+                                 for t, y in zip(run.time, run.states)]) if len(run.time) else np.zeros((0, 0))
+        self.names = list(sig.names)
+
+    def __getitem__(self, name) -> np.ndarray:
+        try:
+            return self._values[:, self.model.signals.index[name]]
+        except KeyError:
+            raise KeyError(f"{name!r} is not an output of {self.model.name}; outputs: "
+                           + ", ".join(self.names)) from None
+
+    def dense(self, name):
+        """A callable t ↦ signal(t) through the integrator's dense output (vectorised over t)."""
+        fn = self.model.signals.function(name)
+        n = self.model.mechanism.n
+        sol = self.run.dense
+        alpha = self.settings.alpha
+
+        def f(t):
+            t = np.atleast_1d(np.asarray(t, dtype=float))
+            Y = sol(t)
+            return np.array([fn(ti, Y[:n, i], Y[n:, i], None, alpha) for i, ti in enumerate(t)])
+        return f
+
+    def summary(self) -> dict:
+        s = self.settings
+        return {
+            "scene": self.model.name,
+            "source": self.model.source,
+            "status": self.status,
+            "message": self.message,
+            "metrics": self.metrics,
+            "settings": {"stop_time": s.stop_time, "output_interval": s.output_interval, "method": s.method,
+                         "rtol": s.rtol, "atol": s.atol, "constraint": s.constraint, "baumgarte": s.baumgarte,
+                         "oracle": self.model.is_oracle,
+                         "parameters": {p.name: p.value for p in self.model.scene.parameters.values()},
+                         "effects": {k: (list(v) if isinstance(v, tuple) else v)
+                                     for k, v in self.model.scene.effects.items()}},
+            "statistics": {"steps": self.run.steps, "evaluations": self.run.evaluations,
+                           "cpu_time_s": self.run.cpu_time, "max_constraint_drift": self.run.max_drift,
+                           "energy_start": float(self["energy"][0]) if len(self.time) else None,
+                           "energy_end": float(self["energy"][-1]) if len(self.time) else None},
+        }
+
+    def write_csv(self, path):
+        header = ",".join(["time"] + self.names)
+        np.savetxt(path, np.column_stack((self.time, self._values)), delimiter=",", header=header,
+                   comments="", fmt="%.12g")
+
+
+def _key(prefix, name):
+    return f"{prefix}_{name}" if prefix else name
+
+
+def compute_metrics(model: Model, result: Result) -> dict:
+    """The scene's [[metrics]] from a time history (module `metrics`)."""
+    out: dict[str, Any] = {}
+    windows = {}
+    for m in model.scene.metrics:
+        if m.kind == "natural_frequency":
+            freqs = model.natural_frequencies()
+            out[_key(m.prefix, "natural_frequency")] = float(freqs[0]) if len(freqs) else float("nan")
+            out[_key(m.prefix, "natural_frequencies")] = [float(f) for f in freqs]
+            continue
+        t, x, dense = result.time, result[m.signal], result.dense(m.signal)
+        reference = m.reference if m.reference is not None else model.static_value(m.signal)
+        if m.kind == "free_oscillation":
+            r = metric_fns.free_oscillation(t, x, reference, dense=dense)
+            windows[m.signal] = (r["window"], r["periods"])
+            for key in ("fundamental_frequency", "fundamental_amplitude", "mean_offset"):
+                out[_key(m.prefix, key)] = float(r[key])
+        elif m.kind == "harmonics":
+            if m.period_of not in windows:
+                r0 = metric_fns.free_oscillation(t, result[m.period_of], 0.0, dense=result.dense(m.period_of))
+                windows[m.period_of] = (r0["window"], r0["periods"])
+            window, periods = windows[m.period_of]
+            r = metric_fns.harmonics(t, x, window, periods, dense=dense)
+            out[_key(m.prefix, "mean")] = float(r["mean"])
+            out[_key(m.prefix, "amplitude")] = float(r["amplitude"])
+        elif m.kind == "steady_state":
+            r = metric_fns.steady_state(t, x, m.period, m.periods, reference, dense=dense)
+            out[_key(m.prefix, "peak_to_peak")] = float(r["peak_to_peak"])
+            out[_key(m.prefix, "mean_offset")] = float(r["mean_offset"])
+    return out

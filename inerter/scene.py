@@ -1,0 +1,584 @@
+"""Scene files: TOML → validated, fully numeric scene description.
+
+A scene is read once, every field is checked against the schema below, every expression is
+evaluated against the scene's parameters (after command-line / FMU overrides), and the result is
+a plain, immutable :class:`Scene`. Nothing later re-reads the file.
+
+Errors name the file, the field path (``elements.inerter.b``), the value and what was expected
+(:class:`~inerter.errors.SceneError`). Unknown fields are errors, never silently ignored.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from .errors import SceneError
+from .expressions import evaluate, evaluate_parameters, parameter_meta
+
+GROUND = "ground"
+
+#: Effects a scene may declare, with their meaning (the compiled model lists which are on).
+KNOWN_EFFECTS = {
+    "centripetal": "inerter force with the centripetal term, F = b d²L/dt² (Eq. 9); "
+                   "false gives the uncorrected F = b r̈·r̂ (Eq. 8)",
+    "gravity": "uniform gravity, a vector in m/s²",
+}
+
+ELEMENT_TYPES = ("spring", "damper", "inerter", "rotational_spring", "rotational_damper")
+JOINT_TYPES = ("revolute", "prismatic")
+FORCE_FUNCTIONS = ("constant", "sine", "step", "input")
+METRIC_KINDS = ("natural_frequency", "free_oscillation", "harmonics", "steady_state")
+METHODS = ("DOP853", "RK45", "Radau", "BDF", "LSODA", "RK4")
+CONSTRAINT_TREATMENTS = ("baumgarte", "projection")
+
+
+# ----------------------------------------------------------------------------------------------
+# The validated scene
+# ----------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    value: float
+    unit: str
+    description: str
+
+
+@dataclass(frozen=True)
+class Body:
+    name: str
+    mass: float
+    inertia: float
+    position: tuple[float, ...]
+    angle: float
+    velocity: tuple[float, ...]
+    angular_velocity: float
+
+
+@dataclass(frozen=True)
+class Point:
+    name: str
+    body: str                 # a body name, or GROUND
+    local: tuple[float, ...]  # coordinates in the body frame (global for the ground)
+
+
+@dataclass(frozen=True)
+class Joint:
+    name: str
+    type: str                 # "revolute" | "prismatic"
+    point_a: str
+    point_b: str
+    axis: tuple[float, ...] | None = None   # prismatic: sliding axis in the frame of point_a's body
+
+
+@dataclass(frozen=True)
+class Element:
+    name: str
+    type: str                 # one of ELEMENT_TYPES
+    point_a: str | None = None
+    point_b: str | None = None
+    body_a: str | None = None  # rotational elements
+    body_b: str | None = None
+    coefficient: float = 0.0   # k, c or b
+    free_length: float | None = None  # spring: L0 (None: the initial distance); rotational: free angle
+
+
+@dataclass(frozen=True)
+class Force:
+    name: str
+    point: str
+    function: str                    # one of FORCE_FUNCTIONS
+    direction: tuple[float, ...] | None
+    amplitude: float = 0.0
+    frequency: float = 0.0
+    phase: float = 0.0
+    offset: float = 0.0
+    value: float = 0.0
+    time: float = 0.0
+    initial: float = 0.0
+
+
+@dataclass(frozen=True)
+class Metric:
+    kind: str
+    prefix: str
+    signal: str | None = None
+    reference: float | None = None   # None: the signal's value at static equilibrium
+    period: float | None = None
+    periods: int = 10
+    period_of: str | None = None
+
+
+@dataclass(frozen=True)
+class Experiment:
+    stop_time: float
+    output_interval: float
+    method: str
+    rtol: float
+    atol: float
+    constraint: str
+    baumgarte: float
+    communication_step: float
+    step: float
+    max_steps: int
+
+
+@dataclass(frozen=True)
+class Scene:
+    source: str
+    name: str
+    description: str
+    dimension: int
+    parameters: dict[str, Parameter]
+    effects: dict[str, Any]
+    bodies: dict[str, Body]
+    points: dict[str, Point]
+    joints: dict[str, Joint]
+    elements: dict[str, Element]
+    forces: dict[str, Force]
+    experiment: Experiment
+    metrics: tuple[Metric, ...]
+    raw: dict = field(repr=False, default_factory=dict)
+
+    @property
+    def centripetal(self) -> bool:
+        return bool(self.effects.get("centripetal", True))
+
+
+# ----------------------------------------------------------------------------------------------
+# Reading helpers: each checks one field and names it in its error
+# ----------------------------------------------------------------------------------------------
+class _Reader:
+    def __init__(self, source: str, names: Mapping[str, float]):
+        self.source = source
+        self.names = names
+
+    def error(self, fld, value, expected, problem=None):
+        return SceneError(self.source, fld, value, expected, problem)
+
+    def table(self, data, fld, allowed: Mapping[str, bool]) -> dict:
+        """Check `data` is a table whose keys are in `allowed` (value: required?)."""
+        if not isinstance(data, dict):
+            raise self.error(fld, data, "a table", "not a table")
+        for key in data:
+            if key not in allowed:
+                raise self.error(f"{fld}.{key}" if fld else key, data[key],
+                                 "one of: " + ", ".join(sorted(allowed)), "unknown field")
+        for key, required in allowed.items():
+            if required and key not in data:
+                raise self.error(f"{fld}.{key}" if fld else key, None,
+                                 f"a value for required field '{key}'", "missing field")
+        return data
+
+    def number(self, data, key, fld, default=None, minimum=None, exclusive=False, required=True):
+        path = f"{fld}.{key}"
+        if key not in data:
+            if default is not None or not required:
+                return default
+            raise self.error(path, None, "a number or expression", "missing field")
+        value = evaluate(data[key], self.names, self.source, path)
+        if minimum is not None:
+            if (exclusive and not value > minimum) or (not exclusive and not value >= minimum):
+                op = ">" if exclusive else "≥"
+                raise self.error(path, value, f"a number {op} {minimum:g}", "out of range")
+        return value
+
+    def vector(self, data, key, fld, dim, default=None, unit_length=False):
+        path = f"{fld}.{key}"
+        if key not in data:
+            if default is not None:
+                return tuple(float(v) for v in default)
+            raise self.error(path, None, f"a list of {dim} numbers", "missing field")
+        raw = data[key]
+        if not isinstance(raw, list) or len(raw) != dim:
+            raise self.error(path, raw, f"a list of {dim} numbers or expressions", "wrong shape")
+        values = tuple(evaluate(v, self.names, self.source, f"{path}[{i + 1}]")
+                       for i, v in enumerate(raw))
+        if unit_length:
+            norm = math.sqrt(sum(v * v for v in values))
+            if norm == 0.0:
+                raise self.error(path, raw, "a non-zero direction", "zero vector")
+            values = tuple(v / norm for v in values)
+        return values
+
+    def string(self, data, key, fld, choices=None, default=None):
+        path = f"{fld}.{key}"
+        if key not in data:
+            if default is not None:
+                return default
+            raise self.error(path, None, "a string" if not choices else "one of: " + ", ".join(choices),
+                             "missing field")
+        value = data[key]
+        if not isinstance(value, str):
+            raise self.error(path, value, "a string", "wrong type")
+        if choices is not None and value not in choices:
+            raise self.error(path, value, "one of: " + ", ".join(choices), "unknown value")
+        return value
+
+    def name_pair(self, data, key, fld, known: Mapping, what: str):
+        path = f"{fld}.{key}"
+        if key not in data:
+            raise self.error(path, None, f"a list of two {what} names", "missing field")
+        raw = data[key]
+        if not (isinstance(raw, list) and len(raw) == 2 and all(isinstance(v, str) for v in raw)):
+            raise self.error(path, raw, f"a list of two {what} names", "wrong shape")
+        for i, name in enumerate(raw):
+            if name not in known:
+                raise self.error(f"{path}[{i + 1}]", name,
+                                 f"a {what} of the scene: " + _listing(known), f"unknown {what}")
+        if raw[0] == raw[1]:
+            raise self.error(path, raw, f"two different {what}s", f"the same {what} twice")
+        return raw[0], raw[1]
+
+
+def _listing(names, limit=12):
+    names = sorted(names)
+    text = ", ".join(names[:limit])
+    return text + (", ..." if len(names) > limit else "") if names else "(none)"
+
+
+def _check_name(reader: _Reader, name: str, fld: str):
+    if not (isinstance(name, str) and name.isidentifier()):
+        raise reader.error(fld, name, "a name made of letters, digits and '_' (not starting with a digit)",
+                           "invalid name")
+
+
+# ----------------------------------------------------------------------------------------------
+# Loading
+# ----------------------------------------------------------------------------------------------
+EXPERIMENT_FIELDS = ("stop_time", "output_interval", "method", "rtol", "atol", "constraint", "baumgarte",
+                     "communication_step", "step", "max_steps")
+TOP_LEVEL = {"scene": False, "parameters": False, "effects": False, "ground": False, "bodies": False,
+             "joints": False, "elements": False, "forces": False, "experiment": False, "metrics": False}
+
+
+def read_toml(path) -> tuple[str, dict]:
+    path = Path(path)
+    source = str(path)
+    try:
+        text = path.read_bytes()
+    except FileNotFoundError:
+        raise SceneError(source, "(file)", source, "an existing scene file (TOML)", "file not found")
+    except OSError as exc:
+        raise SceneError(source, "(file)", source, "a readable scene file", f"cannot read: {exc.strerror}")
+    try:
+        data = tomllib.loads(text.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise SceneError(source, "(file)", "binary data", "a UTF-8 TOML text", "not UTF-8 text")
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(source, "(file)", str(exc), "valid TOML", "does not parse")
+    return source, data
+
+
+def load_scene(path, overrides: Mapping[str, Any] | None = None) -> Scene:
+    """Read, validate and evaluate a scene file; `overrides` as from ``--set`` (see split_overrides)."""
+    source, data = read_toml(path)
+    return build_scene(source, data, overrides or {})
+
+
+def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, what="--set"):
+    """Sort overrides into parameters, effects and experiment settings; unknown names are errors."""
+    params, effects, experiment = {}, {}, {}
+    for key, value in overrides.items():
+        if key.startswith("effects."):
+            name = key[len("effects."):]
+            if name not in KNOWN_EFFECTS:
+                raise SceneError(what, key, value, "an effect: " + ", ".join(f"effects.{e}" for e in KNOWN_EFFECTS),
+                                 "unknown effect")
+            effects[name] = value
+        elif key.startswith("experiment."):
+            experiment[key[len("experiment."):]] = value
+        elif key in parameter_names:
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise SceneError(what, key, value, "a number", "wrong type")
+            if not math.isfinite(float(value)):
+                raise SceneError(what, key, value, "a finite number", "not finite")
+            params[key] = float(value)
+        else:
+            raise SceneError(what, key, value,
+                             "a parameter of " + source + ": " + _listing(parameter_names)
+                             + ", or effects.NAME, or experiment.NAME", "unknown name")
+    return params, effects, experiment
+
+
+def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
+    base = _Reader(source, {})
+    base.table(data, "", TOP_LEVEL)
+
+    head = base.table(data.get("scene", {}), "scene", {"name": False, "description": False, "dimension": False})
+    name = head.get("name", Path(source).stem)
+    _check_name(base, name, "scene.name")
+    dimension = head.get("dimension", 2)
+    if dimension != 2 or isinstance(dimension, bool):
+        raise base.error("scene.dimension", dimension, "2 (3D scenes are not supported yet)", "unsupported dimension")
+    description = head.get("description", "")
+    if not isinstance(description, str):
+        raise base.error("scene.description", description, "a string", "wrong type")
+
+    raw_params = data.get("parameters", {})
+    if not isinstance(raw_params, dict):
+        raise base.error("parameters", raw_params, "a table of named values", "not a table")
+    p_over, e_over, x_over = split_overrides(source, overrides, set(raw_params))
+    values = evaluate_parameters(raw_params, source, fixed=p_over)
+    meta = parameter_meta(raw_params)
+    parameters = {n: Parameter(n, values[n], meta[n]["unit"], meta[n]["description"]) for n in values}
+    r = _Reader(source, values)
+
+    effects = _read_effects(r, data.get("effects", {}), e_over, dimension)
+    bodies, points = _read_bodies(r, data, dimension)
+    joints = _read_joints(r, data.get("joints", {}), points, dimension)
+    elements = _read_elements(r, data.get("elements", {}), points, bodies)
+    forces = _read_forces(r, data.get("forces", {}), points, dimension)
+    experiment = _read_experiment(r, data.get("experiment", {}), x_over)
+    outputs = _signal_names(points, elements, dimension)
+    metrics = _read_metrics(r, data.get("metrics", []), outputs)
+    return Scene(source, name, description, dimension, parameters, effects, bodies, points, joints,
+                 elements, forces, experiment, metrics, raw=data)
+
+
+def _read_effects(r: _Reader, raw, overrides, dimension):
+    if not isinstance(raw, dict):
+        raise r.error("effects", raw, "a table of effects", "not a table")
+    merged = dict(raw)
+    merged.update(overrides)
+    effects = {}
+    for name, value in merged.items():
+        fld = f"effects.{name}"
+        if name not in KNOWN_EFFECTS:
+            raise r.error(fld, value, "one of: " + ", ".join(KNOWN_EFFECTS), "unknown effect")
+        if name == "centripetal":
+            if not isinstance(value, bool):
+                raise r.error(fld, value, "true or false", "wrong type")
+            effects[name] = value
+        elif name == "gravity":
+            effects[name] = r.vector(merged, name, "effects", dimension)
+    return effects
+
+
+def _read_bodies(r: _Reader, data, dimension):
+    bodies, points = {}, {}
+    raw_bodies = data.get("bodies", {})
+    if not isinstance(raw_bodies, dict):
+        raise r.error("bodies", raw_bodies, "a table of bodies", "not a table")
+    zero = [0.0] * dimension
+
+    def add_points(owner, raw, fld):
+        if not isinstance(raw, dict):
+            raise r.error(fld, raw, "a table of named points", "not a table")
+        for pname in raw:
+            _check_name(r, pname, f"{fld}.{pname}")
+            if pname in points:
+                raise r.error(f"{fld}.{pname}", pname, "a point name used once in the scene",
+                              f"duplicate point name (also on {points[pname].body})")
+            points[pname] = Point(pname, owner, r.vector(raw, pname, fld, dimension))
+
+    ground = r.table(data.get("ground", {}), "ground", {"points": False})
+    add_points(GROUND, ground.get("points", {}), "ground.points")
+
+    for bname, raw in raw_bodies.items():
+        fld = f"bodies.{bname}"
+        _check_name(r, bname, fld)
+        if bname == GROUND:
+            raise r.error(fld, bname, "a body name other than 'ground'", "reserved name")
+        r.table(raw, fld, {"mass": True, "inertia": True, "position": True, "angle": False,
+                           "velocity": False, "angular_velocity": False, "points": False})
+        bodies[bname] = Body(
+            bname,
+            mass=r.number(raw, "mass", fld, minimum=0.0, exclusive=True),
+            inertia=r.number(raw, "inertia", fld, minimum=0.0),
+            position=r.vector(raw, "position", fld, dimension),
+            angle=r.number(raw, "angle", fld, default=0.0),
+            velocity=r.vector(raw, "velocity", fld, dimension, default=zero),
+            angular_velocity=r.number(raw, "angular_velocity", fld, default=0.0),
+        )
+        add_points(bname, raw.get("points", {}), f"{fld}.points")
+    if not bodies:
+        raise r.error("bodies", {}, "at least one body", "no bodies")
+    return bodies, points
+
+
+def _read_joints(r: _Reader, raw, points, dimension):
+    if not isinstance(raw, dict):
+        raise r.error("joints", raw, "a table of joints", "not a table")
+    joints = {}
+    for jname, spec in raw.items():
+        fld = f"joints.{jname}"
+        _check_name(r, jname, fld)
+        r.table(spec, fld, {"type": True, "between": True, "axis": False})
+        jtype = r.string(spec, "type", fld, JOINT_TYPES)
+        a, b = r.name_pair(spec, "between", fld, points, "point")
+        if points[a].body == points[b].body:
+            raise r.error(f"{fld}.between", [a, b], "points on two different bodies (or a body and the ground)",
+                          f"both points are on {points[a].body}")
+        axis = None
+        if jtype == "prismatic":
+            axis = r.vector(spec, "axis", fld, dimension, unit_length=True)
+        elif "axis" in spec:
+            raise r.error(f"{fld}.axis", spec["axis"], "no axis for a revolute joint in 2D", "unexpected field")
+        joints[jname] = Joint(jname, jtype, a, b, axis)
+    return joints
+
+
+def _read_elements(r: _Reader, raw, points, bodies):
+    if not isinstance(raw, dict):
+        raise r.error("elements", raw, "a table of elements", "not a table")
+    elements = {}
+    coefficient_key = {"spring": "k", "damper": "c", "inerter": "b",
+                       "rotational_spring": "k", "rotational_damper": "d"}
+    body_names = dict(bodies, **{GROUND: None})
+    for ename, spec in raw.items():
+        fld = f"elements.{ename}"
+        _check_name(r, ename, fld)
+        if ename in points:
+            raise r.error(fld, ename, "an element name that is not also a point name",
+                          "name clash with a point (outputs would collide)")
+        if not isinstance(spec, dict):
+            raise r.error(fld, spec, "a table", "not a table")
+        etype = r.string(spec, "type", fld, ELEMENT_TYPES)
+        key = coefficient_key[etype]
+        if etype.startswith("rotational"):
+            allowed = {"type": True, "bodies": True, key: True}
+            if etype == "rotational_spring":
+                allowed["angle"] = False
+            r.table(spec, fld, allowed)
+            a, b = r.name_pair(spec, "bodies", fld, body_names, "body")
+            coef = r.number(spec, key, fld, minimum=0.0)
+            free = r.number(spec, "angle", fld, required=False) if etype == "rotational_spring" else None
+            elements[ename] = Element(ename, etype, body_a=a, body_b=b, coefficient=coef, free_length=free)
+        else:
+            allowed = {"type": True, "between": True, key: True}
+            if etype == "spring":
+                allowed["length"] = False
+            r.table(spec, fld, allowed)
+            a, b = r.name_pair(spec, "between", fld, points, "point")
+            if points[a].body == points[b].body:
+                raise r.error(f"{fld}.between", [a, b], "points on two different bodies",
+                              f"both points are on {points[a].body}: the element could never act")
+            coef = r.number(spec, key, fld, minimum=0.0)
+            free = r.number(spec, "length", fld, minimum=0.0, required=False) if etype == "spring" else None
+            elements[ename] = Element(ename, etype, point_a=a, point_b=b, coefficient=coef, free_length=free)
+    return elements
+
+
+def _read_forces(r: _Reader, raw, points, dimension):
+    if not isinstance(raw, dict):
+        raise r.error("forces", raw, "a table of point forces", "not a table")
+    forces = {}
+    input_points = set()
+    fields = {"constant": ("value",), "sine": ("amplitude", "frequency", "phase", "offset"),
+              "step": ("value", "time", "initial"), "input": ()}
+    for fname, spec in raw.items():
+        fld = f"forces.{fname}"
+        _check_name(r, fname, fld)
+        if not isinstance(spec, dict):
+            raise r.error(fld, spec, "a table", "not a table")
+        function = r.string(spec, "function", fld, FORCE_FUNCTIONS)
+        allowed = {"point": True, "function": True}
+        if function != "input":
+            allowed["direction"] = True
+        allowed.update({k: k in ("value", "amplitude", "frequency") for k in fields[function]})
+        r.table(spec, fld, allowed)
+        point = r.string(spec, "point", fld)
+        if point not in points:
+            raise r.error(f"{fld}.point", point, "a point of the scene: " + _listing(points), "unknown point")
+        if points[point].body == GROUND:
+            raise r.error(f"{fld}.point", point, "a point on a body", "a force on the ground does nothing")
+        if function == "input":
+            if point in input_points:
+                raise r.error(f"{fld}.point", point, "one input force per point", "duplicate input force")
+            input_points.add(point)
+            forces[fname] = Force(fname, point, function, None)
+            continue
+        kwargs = {k: r.number(spec, k, fld, default=0.0) for k in fields[function]}
+        if function == "sine" and kwargs["frequency"] <= 0:
+            raise r.error(f"{fld}.frequency", kwargs["frequency"], "a frequency > 0 (Hz)", "out of range")
+        forces[fname] = Force(fname, point, function, r.vector(spec, "direction", fld, dimension, unit_length=True),
+                              **kwargs)
+    return forces
+
+
+def _read_experiment(r: _Reader, raw, overrides):
+    r.table(raw, "experiment", {"stop_time": False, "output_interval": False, "method": False, "rtol": False,
+                                "atol": False, "constraint": False, "baumgarte": False,
+                                "communication_step": False, "step": False, "max_steps": False})
+    merged = dict(raw)
+    for key, value in overrides.items():
+        if key not in EXPERIMENT_FIELDS:
+            raise r.error(f"experiment.{key}", value, "one of: " + ", ".join(EXPERIMENT_FIELDS), "unknown field")
+        merged[key] = value
+    fld = "experiment"
+    stop = r.number(merged, "stop_time", fld, default=10.0, minimum=0.0, exclusive=True)
+    interval = r.number(merged, "output_interval", fld, default=0.01, minimum=0.0, exclusive=True)
+    if interval > stop:
+        raise r.error("experiment.output_interval", interval, f"at most stop_time = {stop:g} s", "out of range")
+    rtol = r.number(merged, "rtol", fld, default=1e-8, minimum=1e-14)
+    if rtol > 0.1:
+        raise r.error("experiment.rtol", rtol, "a relative tolerance in [1e-14, 0.1]", "out of range")
+    return Experiment(
+        stop_time=stop, output_interval=interval,
+        method=r.string(merged, "method", fld, METHODS, default="DOP853"),
+        rtol=rtol,
+        atol=r.number(merged, "atol", fld, default=rtol * 1e-2, minimum=0.0, exclusive=True),
+        constraint=r.string(merged, "constraint", fld, CONSTRAINT_TREATMENTS, default="baumgarte"),
+        baumgarte=r.number(merged, "baumgarte", fld, default=10.0, minimum=0.0),
+        communication_step=r.number(merged, "communication_step", fld, default=interval, minimum=0.0,
+                                    exclusive=True),
+        step=r.number(merged, "step", fld, default=1e-3, minimum=0.0, exclusive=True),
+        max_steps=int(r.number(merged, "max_steps", fld, default=2_000_000, minimum=1.0)),
+    )
+
+
+def _signal_names(points, elements, dimension):
+    names = set()
+    for p in points:
+        for i in range(1, dimension + 1):
+            names.update({f"{p}.r[{i}]", f"{p}.v[{i}]"})
+    for e, el in elements.items():
+        if el.type.startswith("rotational"):
+            names.update({f"{e}.phi_rel", f"{e}.w_rel", f"{e}.tau"})
+        else:
+            names.update({f"{e}.s_rel", f"{e}.v_rel", f"{e}.f"})
+    names.update({"energy", "constraint_residual"})
+    return names
+
+
+def _read_metrics(r: _Reader, raw, signals):
+    if not isinstance(raw, list):
+        raise r.error("metrics", raw, "an array of tables ([[metrics]])", "not an array")
+    metrics = []
+    for i, spec in enumerate(raw):
+        fld = f"metrics[{i + 1}]"
+        if not isinstance(spec, dict):
+            raise r.error(fld, spec, "a table", "not a table")
+        kind = r.string(spec, "kind", fld, METRIC_KINDS)
+        allowed = {"kind": True, "prefix": False}
+        if kind != "natural_frequency":
+            allowed.update({"signal": True, "reference": False})
+        if kind == "steady_state":
+            allowed.update({"period": True, "periods": False})
+        if kind == "harmonics":
+            allowed.update({"period_of": True})
+        r.table(spec, fld, allowed)
+        prefix = r.string(spec, "prefix", fld, default="")
+        signal = None
+        if "signal" in spec:
+            signal = r.string(spec, "signal", fld)
+            if signal not in signals:
+                raise r.error(f"{fld}.signal", signal, "an output of the scene: " + _listing(signals, 20),
+                              "unknown signal")
+        period_of = None
+        if "period_of" in spec:
+            period_of = r.string(spec, "period_of", fld)
+            if period_of not in signals:
+                raise r.error(f"{fld}.period_of", period_of, "an output of the scene", "unknown signal")
+        periods = spec.get("periods", 10)
+        if isinstance(periods, bool) or not isinstance(periods, int) or periods < 1:
+            raise r.error(f"{fld}.periods", periods, "a whole number ≥ 1", "out of range")
+        metrics.append(Metric(
+            kind=kind, prefix=prefix, signal=signal,
+            reference=r.number(spec, "reference", fld, required=False),
+            period=r.number(spec, "period", fld, minimum=0.0, exclusive=True, required=False),
+            periods=periods, period_of=period_of))
+    return tuple(metrics)

@@ -1,0 +1,36 @@
+"""Shared, expensive simulations: each is computed once per test session."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import inerter
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = ROOT / "scenarios"
+LUMPED = SCENARIOS / "lumped_mass_2d.toml"
+TWO_BAR = SCENARIOS / "two_bar_2d.toml"
+
+
+def _cached(cache, key, fn):
+    if key not in cache:
+        cache[key] = fn()
+    return cache[key]
+
+
+@pytest.fixture(scope="session")
+def runs():
+    """runs(scene_path, centripetal, **simulate_kwargs) → Result, shared across the session."""
+    cache = {}
+
+    def get(scene, centripetal=True, oracle=False, **kw):
+        key = (str(scene), centripetal, oracle, tuple(sorted(kw.items())))
+
+        def compute():
+            model = inerter.load(scene, **{"effects.centripetal": centripetal})
+            if oracle:
+                model = model.oracle()
+            return model.simulate(**kw)
+        return _cached(cache, key, compute)
+    return get

@@ -54,7 +54,7 @@ class TranslationalElement:
         r, rdot, a_n, H, L, rhat = self.geometry(q, v)
         return L, float(rdot @ rhat), self.force(q, v, a, (r, rdot, a_n, H, L, rhat))
 
-    def add_mass(self, q, v, M):
+    def add_mass(self, q, v, M, geo=None):
         pass
 
     def potential(self, q):
@@ -77,8 +77,8 @@ class Spring(TranslationalElement):
         L = (geo or self.geometry(q, v))[4]
         return self.coefficient * (L - self.free_length)
 
-    def add_force(self, q, v, Q):
-        geo = self.geometry(q, v)
+    def add_force(self, q, v, Q, geo=None):
+        geo = geo or self.geometry(q, v)
         H, L, rhat = geo[3], geo[4], geo[5]
         F = self.coefficient * (L - self.free_length)
         Q[self.pair.dofs] -= F * (H.T @ rhat)                      # Eq. (29)
@@ -97,8 +97,8 @@ class Damper(TranslationalElement):
         geo = geo or self.geometry(q, v)
         return self.coefficient * float(geo[1] @ geo[5])
 
-    def add_force(self, q, v, Q):
-        geo = self.geometry(q, v)
+    def add_force(self, q, v, Q, geo=None):
+        geo = geo or self.geometry(q, v)
         H, rhat = geo[3], geo[5]
         F = self.coefficient * float(geo[1] @ rhat)
         Q[self.pair.dofs] -= F * (H.T @ rhat)                      # Eq. (29)
@@ -129,14 +129,14 @@ class Inerter(TranslationalElement):
             term += (float(rdot @ rdot) - along * along) / L     # |ṙ⊥|²/L, Eq. (9)/(20)
         return term
 
-    def add_mass(self, q, v, M):
-        geo = self.geometry(q, v)
+    def add_mass(self, q, v, M, geo=None):
+        geo = geo or self.geometry(q, v)
         g = geo[3].T @ geo[5]                                     # Hᵀ r̂
         idx = self.pair.dofs
         M[np.ix_(idx, idx)] += self.coefficient * np.outer(g, g)   # M_I, Eq. (33)
 
-    def add_force(self, q, v, Q):
-        geo = self.geometry(q, v)
+    def add_force(self, q, v, Q, geo=None):
+        geo = geo or self.geometry(q, v)
         g = geo[3].T @ geo[5]
         Q[self.pair.dofs] -= self.coefficient * self._velocity_term(geo) * g   # Q_Iv, Eq. (31)
 
@@ -166,15 +166,18 @@ class RotationalElement:
         w = (v[self.ib] if self.ib >= 0 else 0.0) - (v[self.ia] if self.ia >= 0 else 0.0)
         return phi, w
 
-    def add_force(self, q, v, Q):
+    def add_force(self, q, v, Q, geo=None):
         tau = self.torque(q, v)
         if self.ib >= 0:
             Q[self.ib] -= tau
         if self.ia >= 0:
             Q[self.ia] += tau
 
-    def add_mass(self, q, v, M):
+    def add_mass(self, q, v, M, geo=None):
         pass
+
+    def geometry(self, q, v):
+        return None
 
     def outputs(self, q, v, a):
         phi, w = self.relative(q, v)

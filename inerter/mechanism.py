@@ -83,6 +83,12 @@ class Mechanism:
 
         self.elements = [self._element(e, q0) for e in scene.elements.values()]
         self.inerters = [e for e in self.elements if e.kind == "inerter"]
+        # Elements on the same pair of terminals share one evaluation of the pair's geometry.
+        groups = {}
+        for spec, e in zip(scene.elements.values(), self.elements):
+            key = (spec.point_a, spec.point_b) if spec.point_a else ("rotational", spec.name)
+            groups.setdefault(key, []).append(e)
+        self.groups = list(groups.values())
 
         self.applied = [(f, self.points[f.point], TimeFunction(f)) for f in scene.forces.values()
                         if f.function != "input"]
@@ -96,7 +102,7 @@ class Mechanism:
             for i, b in enumerate(scene.bodies.values()):
                 self.gravity[DOF_PER_BODY * i:DOF_PER_BODY * i + 2] = b.mass * np.asarray(g)
 
-        self.q0, self.v0 = self.assemble(q0, v0)
+        self.q0, self.v0 = self.assemble_initial(q0, v0)
 
     # -- compilation helpers ---------------------------------------------------------------
     def _body(self, name):
@@ -178,7 +184,7 @@ class Mechanism:
         v = v - Cq.T @ np.linalg.solve(Cq @ Cq.T, Cq @ v)
         return q, v
 
-    def assemble(self, q, v):
+    def assemble_initial(self, q, v):
         """Check the scene's initial pose against its joints; fix round-off, reject real violations."""
         if not self.m:
             return q, v
@@ -198,19 +204,27 @@ class Mechanism:
         return q, v
 
     # -- forces and dynamics -----------------------------------------------------------------
-    def generalized_forces(self, t, q, v, inputs=None):
-        """Q_e (+ Q_Iv): every force except the inerters' acceleration term."""
+    def assemble(self, t, q, v, inputs=None, with_mass=True):
+        """M + M_I (Eq. 33) and Q_e + Q_Iv: every force except the inerters' acceleration term."""
+        M = np.diag(self.mass_diagonal) if with_mass else None
         Q = np.zeros(self.n)
         if self.gravity is not None:
             Q += self.gravity
-        for e in self.elements:
-            e.add_force(q, v, Q)
+        for group in self.groups:
+            geo = group[0].geometry(q, v)
+            for e in group:
+                e.add_force(q, v, Q, geo)
+                if with_mass:
+                    e.add_mass(q, v, M, geo)
         for f, point, fn in self.applied:
             self._add_point_force(Q, point, q, fn(t) * np.asarray(f.direction))
         if self.input_forces and inputs is not None:
             for k, (f, point) in enumerate(self.input_forces):
                 self._add_point_force(Q, point, q, inputs[k * self.dim:(k + 1) * self.dim])
-        return Q
+        return M, Q
+
+    def generalized_forces(self, t, q, v, inputs=None):
+        return self.assemble(t, q, v, inputs, with_mass=False)[1]
 
     def _add_point_force(self, Q, point, q, F):
         _, _, u, u_t, _ = point.evaluate(q, np.zeros(self.n))
@@ -225,8 +239,7 @@ class Mechanism:
 
     def accelerations(self, t, q, v, inputs=None, alpha=0.0):
         """Solve Eq. (33) for (q̈, λ)."""
-        M = self.mass_matrix(q, v)
-        Q = self.generalized_forces(t, q, v, inputs)
+        M, Q = self.assemble(t, q, v, inputs)
         if not self.m:
             return self._solve(M, Q, t), np.zeros(0)
         C, Cq, gamma = self.constraints(q, v)

@@ -152,15 +152,18 @@ class OracleElement:
             rest -= (float(rdot @ rdot) - L.d1 * L.d1) / L.v    # remove |ṙ⊥|²/L: F = b r̈·r̂ (Eq. 8)
         return b, b * rest
 
-    def add_mass(self, q, v, M):
+    def geometry(self, q, v):
+        return self.probe.evaluate(q, v)
+
+    def add_mass(self, q, v, M, geo=None):
         if self.kind != "inerter":
             return
-        L, _ = self.probe.evaluate(q, v)
+        L, _ = geo or self.probe.evaluate(q, v)
         idx = self.probe.dofs
         M[np.ix_(idx, idx)] += self.coefficient * np.outer(L.g, L.g)
 
-    def add_force(self, q, v, Q):
-        L, rdot = self.probe.evaluate(q, v)
+    def add_force(self, q, v, Q, geo=None):
+        L, rdot = geo or self.probe.evaluate(q, v)
         _, rest = self._force_parts(L, rdot)
         Q[self.probe.dofs] -= rest * L.g                        # Q = −F ∇L
 

@@ -17,11 +17,12 @@ DOF_PER_BODY = 3
 class PointKinematics:
     """Where a point sits: a body index (−1 for the ground) and its body-frame coordinates."""
 
-    __slots__ = ("body", "local", "dofs")
+    __slots__ = ("body", "local", "dofs", "_lx", "_ly")
 
     def __init__(self, body: int, local):
         self.body = body
         self.local = np.asarray(local, dtype=float)
+        self._lx, self._ly = float(self.local[0]), float(self.local[1])
         self.dofs = np.arange(DOF_PER_BODY * body, DOF_PER_BODY * body + DOF_PER_BODY) if body >= 0 else None
 
     def evaluate(self, q, v):
@@ -30,12 +31,16 @@ class PointKinematics:
             z = np.zeros(2)
             return self.local, z, z, z, 0.0
         k = DOF_PER_BODY * self.body
-        c, s = math.cos(q[k + 2]), math.sin(q[k + 2])
-        ux, uy = self.local
-        u = np.array((c * ux - s * uy, s * ux + c * uy))        # A ū
-        u_t = np.array((-u[1], u[0]))                            # A_θ ū
-        w = v[k + 2]
-        return q[k:k + 2] + u, v[k:k + 2] + w * u_t, u, u_t, w
+        th = q[k + 2]
+        c, s = math.cos(th), math.sin(th)
+        ux, uy = self._lx, self._ly
+        ax, ay = c * ux - s * uy, s * ux + c * uy               # A ū
+        w = float(v[k + 2])
+        u = np.array((ax, ay))
+        u_t = np.array((-ay, ax))                                # A_θ ū
+        r = np.array((q[k] + ax, q[k + 1] + ay))
+        rdot = np.array((v[k] - w * ay, v[k + 1] + w * ax))
+        return r, rdot, u, u_t, w
 
 
 class PointPair:

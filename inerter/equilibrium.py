@@ -28,9 +28,11 @@ def static_forces(mech, q):
     for e in mech.elements:
         e.add_force(q, z, Q)
     for f, point, fn in mech.applied:
-        level = {"constant": f.value, "sine": f.offset, "step": f.initial}[f.function]
+        level = fn.static_value()
         if level:
             mech._add_point_force(Q, point, q, level * np.asarray(f.direction))
+    for f, point in mech.feedback:
+        mech._add_point_force(Q, point, q, mech._pd_force(f, point, q, z, static=True))
     return Q
 
 

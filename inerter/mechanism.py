@@ -32,6 +32,11 @@ class TimeFunction:
     def __init__(self, force):
         self.force = force
 
+    def static_value(self) -> float:
+        """The load's static part (for the static equilibrium): constant, sine offset, step start."""
+        f = self.force
+        return {"constant": f.value, "sine": f.offset, "step": f.initial}.get(f.function, 0.0)
+
     def __call__(self, t: float) -> float:
         f = self.force
         if f.function == "constant":
@@ -91,7 +96,8 @@ class Mechanism:
         self.groups = list(groups.values())
 
         self.applied = [(f, self.points[f.point], TimeFunction(f)) for f in scene.forces.values()
-                        if f.function != "input"]
+                        if f.function not in ("input", "pd")]
+        self.feedback = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "pd"]
         self.input_forces = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "input"]
         self.input_names = [f"{f.point}.f[{i + 1}]" for f, _ in self.input_forces for i in range(self.dim)]
 
@@ -218,6 +224,8 @@ class Mechanism:
                     e.add_mass(q, v, M, geo)
         for f, point, fn in self.applied:
             self._add_point_force(Q, point, q, fn(t) * np.asarray(f.direction))
+        for f, point in self.feedback:
+            self._add_point_force(Q, point, q, self._pd_force(f, point, q, v))
         if self.input_forces and inputs is not None:
             for k, (f, point) in enumerate(self.input_forces):
                 self._add_point_force(Q, point, q, inputs[k * self.dim:(k + 1) * self.dim])
@@ -225,6 +233,15 @@ class Mechanism:
 
     def generalized_forces(self, t, q, v, inputs=None):
         return self.assemble(t, q, v, inputs, with_mass=False)[1]
+
+    @staticmethod
+    def _pd_force(f, point, q, v, static=False):
+        """A grounded actuator along the fixed direction d: F = −[kp(d·r − ref) + kd d·v] d."""
+        r, rdot, _, _, _ = point.evaluate(q, v)
+        d = np.asarray(f.direction)
+        along = float(d @ r) - f.reference
+        rate = 0.0 if static else float(d @ rdot)
+        return -(f.kp * along + f.kd * rate) * d
 
     def _add_point_force(self, Q, point, q, F):
         _, _, u, u_t, _ = point.evaluate(q, np.zeros(self.n))
@@ -288,6 +305,9 @@ class Mechanism:
             lines.append(f"element {e.name}: {e.kind}, {getattr(e, 'coefficient_name', 'k')} = {e.coefficient:g}{extra}")
         for f, _, _ in self.applied:
             lines.append(f"force {f.name}: {f.function} at {f.point} along {list(f.direction)}")
+        for f, _ in self.feedback:
+            lines.append(f"force {f.name}: pd actuator at {f.point} along {list(f.direction)}, kp = {f.kp:g}, "
+                         f"kd = {f.kd:g}")
         for f, _ in self.input_forces:
             lines.append(f"force {f.name}: input at {f.point} ({', '.join(n for n in self.input_names if n.startswith(f.point + '.'))})")
         lines.append("gravity: " + (f"{list(s.effects['gravity'])} m/s²" if self.gravity is not None else "not declared, not computed"))

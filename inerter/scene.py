@@ -29,7 +29,7 @@ KNOWN_EFFECTS = {
 
 ELEMENT_TYPES = ("spring", "damper", "inerter", "rotational_spring", "rotational_damper")
 JOINT_TYPES = ("revolute", "prismatic")
-FORCE_FUNCTIONS = ("constant", "sine", "step", "input")
+FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
 METRIC_KINDS = ("natural_frequency", "free_oscillation", "harmonics", "steady_state")
 METHODS = ("DOP853", "RK45", "Radau", "BDF", "LSODA", "RK4")
 CONSTRAINT_TREATMENTS = ("baumgarte", "projection")
@@ -98,6 +98,9 @@ class Force:
     value: float = 0.0
     time: float = 0.0
     initial: float = 0.0
+    kp: float = 0.0            # pd: F = −kp (d·r − reference) − kd d·v, along d
+    kd: float = 0.0
+    reference: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -468,7 +471,7 @@ def _read_forces(r: _Reader, raw, points, dimension):
     forces = {}
     input_points = set()
     fields = {"constant": ("value",), "sine": ("amplitude", "frequency", "phase", "offset"),
-              "step": ("value", "time", "initial"), "input": ()}
+              "step": ("value", "time", "initial"), "input": (), "pd": ("kp", "kd", "reference")}
     for fname, spec in raw.items():
         fld = f"forces.{fname}"
         _check_name(r, fname, fld)
@@ -478,7 +481,7 @@ def _read_forces(r: _Reader, raw, points, dimension):
         allowed = {"point": True, "function": True}
         if function != "input":
             allowed["direction"] = True
-        allowed.update({k: k in ("value", "amplitude", "frequency") for k in fields[function]})
+        allowed.update({k: k in ("value", "amplitude", "frequency", "kp") for k in fields[function]})
         r.table(spec, fld, allowed)
         point = r.string(spec, "point", fld)
         if point not in points:
@@ -492,6 +495,9 @@ def _read_forces(r: _Reader, raw, points, dimension):
             forces[fname] = Force(fname, point, function, None)
             continue
         kwargs = {k: r.number(spec, k, fld, default=0.0) for k in fields[function]}
+        for gain in ("kp", "kd"):
+            if gain in kwargs and kwargs[gain] < 0:
+                raise r.error(f"{fld}.{gain}", kwargs[gain], "a gain ≥ 0", "out of range")
         if function == "sine" and kwargs["frequency"] <= 0:
             raise r.error(f"{fld}.frequency", kwargs["frequency"], "a frequency > 0 (Hz)", "out of range")
         forces[fname] = Force(fname, point, function, r.vector(spec, "direction", fld, dimension, unit_length=True),

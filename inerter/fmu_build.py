@@ -24,7 +24,6 @@ import argparse
 import hashlib
 import keyword
 import math
-import os
 import re
 import shutil
 import string

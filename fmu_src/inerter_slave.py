@@ -1,0 +1,477 @@
+"""The generic FMI 2.0 co-simulation slave: one inerter scene behind the FMI interface.
+
+Every FMU built by :mod:`inerter.fmu_build` ships this file in its ``resources/`` next to a
+small generated module that subclasses :class:`InerterSlave` under the scene's name and names
+the scene file shipped beside it. The slave loads that scene with the solver package shipped in
+the same ``resources/`` and exposes it as
+
+- every scene parameter as a Real parameter (``b``, ``k``, ...), every effect switch as a
+  Boolean parameter (``effects.centripetal``), and the integrator settings ``solver`` (String),
+  ``rtol`` and ``atol`` (Real). All are *fixed*: they can be set until
+  exitInitializationMode, not after.
+- every model input as a Real input (``C.f[1]``), held constant over a communication step;
+- every model output as a Real output (``C.r[2]``, ``spring.f``, ``energy``, ...).
+
+Statuses. pythonfmu 0.7.0 turns any Python exception into fmi2Fatal and destroys the instance,
+and its setters and exitInitializationMode cannot return anything but fmi2OK. The only other
+status a Python slave can give is fmi2Discard, from doStep. So this slave never lets an exception
+escape, and reports every problem as a logged message (status error or discard) followed by
+fmi2Discard from the next doStep:
+
+- an invalid parameter, effect or solver setting: exitInitializationMode logs the solver's
+  message (file, field, value, expected) and returns fmi2OK, the outputs read NaN, and every
+  doStep returns fmi2Discard with the same message until the importer resets the FMU;
+- a non-finite input: logged when it is set; the next doStep returns fmi2Discard and leaves the
+  state unchanged, as long as the input stays non-finite;
+- setting a fixed parameter after initialisation (or an output): the value is ignored, the
+  attempt is logged, and the next doStep returns fmi2Discard without stepping;
+- a step the solver cannot complete: doStep returns fmi2Discard with the solver's message and
+  the FMU stays at the last good communication point, so the importer can retry or roll back.
+
+FMU state (fmi2GetFMUstate / SetFMUstate / Serialize / DeSerialize) holds the whole state: the
+parameter settings, the inputs, the outputs and the solver's own state (time, coordinates,
+integrator step size, held inputs), so that a step repeated after a rollback gives bit-identical
+outputs. The serialized form is JSON with the solver state in base64.
+"""
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+import math
+import traceback
+from pathlib import Path
+
+from pythonfmu import Boolean, DefaultExperiment, Fmi2Slave, Integer, Real, String
+from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability, Fmi2Initial
+
+import inerter
+from inerter.errors import InerterError, SimulationError
+
+STATE_FORMAT = "inerter-fmu-state/1"
+
+#: The FMU setting name -> the override key that ``inerter.load`` takes for it.
+SOLVER_SETTINGS = {"solver": "experiment.method", "rtol": "experiment.rtol", "atol": "experiment.atol"}
+
+# Phases of an instance, after FMI 2.0 co-simulation's states.
+INSTANTIATED = "instantiated"      # fixed parameters may be set
+INITIALIZATION = "initialization"  # between enter and exitInitializationMode: the same
+STEPPING = "stepping"              # after a successful exitInitializationMode
+FAILED = "failed"                  # initialisation failed, or an unexpected error: steps refused
+TERMINATED = "terminated"
+
+#: Communication points closer than this (relative to max(1 s, |t|)) are taken as equal.
+TIME_TOLERANCE = 1e-9
+
+
+def _same(a, b) -> bool:
+    """Exact equality of two setting values (NaN equals nothing, so it always counts as set)."""
+    return type(a) is type(b) and a == b
+
+
+class InerterSlave(Fmi2Slave):
+    """An inerter scene as an FMI 2.0 co-simulation slave.
+
+    A subclass sets :attr:`scene_file`, the scene's file name inside the FMU's ``resources/``.
+    """
+
+    #: The scene file, relative to the FMU's resources folder (set by the generated subclass).
+    scene_file: str = ""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        if not self.scene_file:
+            raise TypeError(f"{type(self).__name__} does not name its scene file (scene_file)")
+        self.scene_path = Path(self.resources or ".") / self.scene_file
+        self.scene_digest = hashlib.sha256(self.scene_path.read_bytes()).hexdigest()
+
+        model = inerter.load(self.scene_path)
+        self._models = {(): model}    # loaded models by their overrides (at most a few)
+        experiment = model.experiment
+        if getattr(self.__class__, "description", None) is None:
+            self.description = f"inerter scene {model.name}"
+        # The communication step an importer should take by default: the scene's
+        # experiment.communication_step where it has one, else its output interval.
+        step = experiment.get("communication_step") or experiment["output_interval"]
+        self.default_experiment = DefaultExperiment(
+            start_time=0.0, stop_time=float(experiment["stop_time"]), step_size=float(step),
+            tolerance=float(experiment["rtol"]))
+
+        # What the importer can set, with the scene's values as defaults.
+        self._defaults: dict[str, object] = {}
+        for p in model.parameter_info():
+            self._defaults[p["name"]] = float(p["value"])
+        for e in model.effect_info():
+            self._defaults[e["name"]] = bool(e["value"])
+        self._defaults["solver"] = str(experiment["method"])
+        self._defaults["rtol"] = float(experiment["rtol"])
+        self._defaults["atol"] = float(experiment["atol"])
+        self._settings = dict(self._defaults)
+        self._explicit: set[str] = set()          # settings the importer set
+        self._inputs = {i["name"]: 0.0 for i in model.input_info()}
+        self._output_names = [o["name"] for o in model.output_info()]
+
+        self._phase = INSTANTIATED
+        self._start_time = 0.0
+        self._tolerance: float | None = None      # from fmi2SetupExperiment
+        self._failure: str | None = None          # why the instance cannot step
+        self._rejected: list[str] = []            # rejected sets, reported at the next doStep
+        self._stepper = None
+        # Outputs before initialisation are those of the scene as written (the start values).
+        self._outputs = {k: float(v) for k, v in model.stepper().outputs().items()}
+
+        self._register(model)
+        self._warn_if_foreign_package()
+
+    # ------------------------------------------------------------------------------------------
+    # Variables
+    # ------------------------------------------------------------------------------------------
+    def _register(self, model):
+        fixed = dict(causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed)
+        methods = ", ".join(model.methods)
+        for p in model.parameter_info():
+            self.register_variable(Real(p["name"], description=p["description"], **fixed,
+                                        getter=self._setting_getter(p["name"]),
+                                        setter=self._setting_setter(p["name"], float)))
+        for e in model.effect_info():
+            self.register_variable(Boolean(e["name"], description=e["description"], **fixed,
+                                           getter=self._setting_getter(e["name"]),
+                                           setter=self._setting_setter(e["name"], bool)))
+        self.register_variable(String(
+            "solver", description=f"integration method, one of: {methods}", **fixed,
+            getter=self._setting_getter("solver"), setter=self._setting_setter("solver", str)))
+        self.register_variable(Real(
+            "rtol", description="relative tolerance of the integrator (fmi2SetupExperiment's "
+                                "tolerance is used when rtol is not set)", **fixed,
+            getter=self._setting_getter("rtol"), setter=self._setting_setter("rtol", float)))
+        self.register_variable(Real(
+            "atol", description="absolute tolerance of the integrator, in the units of each "
+                                "coordinate", **fixed,
+            getter=self._setting_getter("atol"), setter=self._setting_setter("atol", float)))
+        for i in model.input_info():
+            self.register_variable(Real(i["name"], description=i["description"],
+                                        causality=Fmi2Causality.input,
+                                        variability=Fmi2Variability.continuous, start=0.0,
+                                        getter=self._input_getter(i["name"]),
+                                        setter=self._input_setter(i["name"])))
+        for o in model.output_info():
+            self.register_variable(Real(o["name"], description=o["description"],
+                                        causality=Fmi2Causality.output,
+                                        variability=Fmi2Variability.continuous,
+                                        initial=Fmi2Initial.exact,
+                                        getter=self._output_getter(o["name"]),
+                                        setter=self._output_setter(o["name"])))
+
+    def _setting_getter(self, name):
+        return lambda: self._settings[name]
+
+    def _setting_setter(self, name, kind):
+        def setter(value):
+            value = kind(value)
+            if self._phase in (INSTANTIATED, INITIALIZATION):
+                self._settings[name] = value
+                self._explicit.add(name)
+            else:
+                self._reject(f"{name}: a fixed parameter cannot be changed after "
+                             f"initialisation (got {value!r}; it stays {self._settings[name]!r}); "
+                             f"set it before exitInitializationMode, or reset the FMU")
+        return setter
+
+    def _input_getter(self, name):
+        return lambda: self._inputs[name]
+
+    def _input_setter(self, name):
+        def setter(value):
+            value = float(value)
+            self._inputs[name] = value
+            if not math.isfinite(value):
+                self.log(f"{name}: input not finite (got {value!r}; expected a finite number); "
+                         f"doStep returns fmi2Discard until it is", Fmi2Status.error)
+        return setter
+
+    def _output_getter(self, name):
+        return lambda: self._outputs[name]
+
+    def _output_setter(self, name):
+        def setter(value):
+            self._reject(f"{name}: an output cannot be set (got {value!r})")
+        return setter
+
+    def _reject(self, message: str):
+        self._rejected.append(message)
+        self.log(f"{message}; the next doStep returns fmi2Discard", Fmi2Status.error)
+
+    # pythonfmu's get_*/set_* raise on a wrong value reference or type, which would end the
+    # instance with fmi2Fatal: these log the problem instead.
+    def _get(self, vrs, cls, kind, fallback):
+        values = []
+        for vr in vrs:
+            var = self.vars.get(vr)
+            try:
+                if not isinstance(var, cls):
+                    raise TypeError(f"valueReference {vr} is not a {cls.__name__} variable")
+                values.append(kind(var.getter()))
+            except Exception as exc:
+                self.log(f"get{cls.__name__}: {exc}", Fmi2Status.error)
+                values.append(fallback)
+        return values
+
+    def _set(self, vrs, values, cls):
+        for vr, value in zip(vrs, values):
+            var = self.vars.get(vr)
+            try:
+                if not isinstance(var, cls):
+                    raise TypeError(f"valueReference {vr} is not a {cls.__name__} variable")
+                var.setter(value)
+            except Exception as exc:
+                self._reject(f"set{cls.__name__}: {exc}")
+
+    def get_real(self, vrs):
+        return self._get(vrs, Real, float, math.nan)
+
+    def get_integer(self, vrs):
+        return self._get(vrs, Integer, int, 0)
+
+    def get_boolean(self, vrs):
+        return self._get(vrs, Boolean, bool, False)
+
+    def get_string(self, vrs):
+        return self._get(vrs, String, str, "")
+
+    def set_real(self, vrs, values):
+        self._set(vrs, values, Real)
+
+    def set_integer(self, vrs, values):
+        self._set(vrs, values, Integer)
+
+    def set_boolean(self, vrs, values):
+        self._set(vrs, values, Boolean)
+
+    def set_string(self, vrs, values):
+        self._set(vrs, values, String)
+
+    # ------------------------------------------------------------------------------------------
+    # Initialisation
+    # ------------------------------------------------------------------------------------------
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._start_time = float(start_time)
+        self._tolerance = None if tolerance is None else float(tolerance)
+
+    def enter_initialization_mode(self):
+        if self._phase == INSTANTIATED:
+            self._phase = INITIALIZATION
+
+    def exit_initialization_mode(self):
+        try:
+            self._initialise()
+        except Exception as exc:  # a bug: report it rather than end the importer with fmi2Fatal
+            self._fail(f"exitInitializationMode: unexpected error: {exc!r}\n{traceback.format_exc()}")
+
+    def _effective_settings(self) -> dict:
+        settings = dict(self._settings)
+        if "rtol" not in self._explicit and self._tolerance is not None:
+            settings["rtol"] = self._tolerance
+        return settings
+
+    def _overrides(self, settings: dict) -> dict:
+        """The `inerter.load` overrides for the settings that differ from the scene's."""
+        return {SOLVER_SETTINGS.get(name, name): value for name, value in settings.items()
+                if not _same(value, self._defaults[name])}
+
+    def _model_for(self, overrides: dict):
+        key = tuple(sorted(overrides.items(), key=lambda kv: kv[0]))
+        model = self._models.get(key)
+        if model is None:
+            model = inerter.load(self.scene_path, **overrides)
+            if len(self._models) > 8:
+                self._models = {(): self._models[()]}
+            self._models[key] = model
+        return model
+
+    def _new_stepper(self, settings: dict):
+        """Load the scene with `settings` and return a stepper at t = 0 (raises InerterError)."""
+        for name, value in settings.items():
+            if isinstance(value, float) and not math.isfinite(value):
+                raise ValueError(f"{self.scene_file}: {name}: not finite (got {value!r}; "
+                                 f"expected a finite number)")
+        model = self._model_for(self._overrides(settings))
+        experiment = model.experiment
+        return model.stepper(method=experiment["method"], rtol=experiment["rtol"],
+                             atol=experiment["atol"])
+
+    def _initialise(self):
+        if self._phase not in (INSTANTIATED, INITIALIZATION):
+            self.log(f"exitInitializationMode called in phase '{self._phase}': ignored",
+                     Fmi2Status.error)
+            return
+        if self._start_time != 0.0:
+            self._fail(f"exitInitializationMode: the scene starts at t = 0 s (got startTime = "
+                       f"{self._start_time!r} s from fmi2SetupExperiment; expected 0)")
+            return
+        settings = self._effective_settings()
+        try:
+            stepper = self._new_stepper(settings)
+            outputs = {k: float(v) for k, v in stepper.outputs().items()}
+        except (InerterError, ValueError) as exc:
+            changed = ", ".join(f"{k} = {v!r}" for k, v in settings.items()
+                                if not _same(v, self._defaults[k]))
+            origin = ("" if "rtol" in self._explicit or self._tolerance is None
+                      or _same(settings["rtol"], self._defaults["rtol"])
+                      else " (rtol from fmi2SetupExperiment's tolerance)")
+            self._fail(f"exitInitializationMode: {exc} [settings changed from the scene: "
+                       f"{changed or 'none'}{origin}]")
+            return
+        self._stepper, self._outputs, self._phase = stepper, outputs, STEPPING
+        changed = ", ".join(f"{k} = {v!r}" for k, v in settings.items()
+                            if not _same(v, self._defaults[k]))
+        self.log(f"initialised at t = 0 s with solver {settings['solver']}, "
+                 f"rtol {settings['rtol']:g}, atol {settings['atol']:g}; "
+                 f"changed from the scene: {changed or 'nothing'}", Fmi2Status.ok)
+
+    def _fail(self, message: str):
+        self._phase = FAILED
+        self._failure = message
+        self._stepper = None
+        self._outputs = {name: math.nan for name in self._output_names}
+        self.log(f"{message}; the FMU cannot step: every doStep returns fmi2Discard until it "
+                 f"is reset", Fmi2Status.error)
+
+    # ------------------------------------------------------------------------------------------
+    # Stepping
+    # ------------------------------------------------------------------------------------------
+    def do_step(self, current_time, step_size):
+        try:
+            return self._do_step(float(current_time), float(step_size))
+        except Exception as exc:  # a bug: stop stepping rather than end the importer
+            self._fail(f"doStep at t = {current_time!r} s: unexpected error: {exc!r}\n"
+                       f"{traceback.format_exc()}")
+            return False
+
+    def _refuse(self, message: str, status: Fmi2Status = Fmi2Status.error) -> bool:
+        self.log(message, status)
+        return False
+
+    def _do_step(self, t: float, h: float) -> bool:
+        where = f"doStep at t = {t!r} s (step {h!r} s)"
+        if self._rejected:
+            messages = "; ".join(self._rejected)
+            self._rejected.clear()
+            return self._refuse(f"{where} refused after rejected settings: {messages}")
+        if self._phase == FAILED:
+            return self._refuse(f"{where} refused: {self._failure}")
+        if self._phase == TERMINATED:
+            return self._refuse(f"{where} refused: the FMU is terminated (reset it to run again)")
+        if self._phase != STEPPING:
+            return self._refuse(f"{where} refused: the FMU is not initialised yet (call "
+                                f"exitInitializationMode first)")
+        bad = [f"{name} = {value!r}" for name, value in self._inputs.items()
+               if not math.isfinite(value)]
+        if bad:
+            return self._refuse(f"{where} refused: input not finite ({', '.join(bad)}; expected "
+                                f"finite numbers); the state is unchanged")
+        if not (math.isfinite(h) and h > 0.0):
+            return self._refuse(f"{where} refused: the step size must be a finite number > 0")
+        stepper = self._stepper
+        if abs(t - stepper.time) > TIME_TOLERANCE * max(1.0, abs(t), abs(stepper.time)):
+            return self._refuse(f"{where} refused: the FMU is at t = {stepper.time!r} s; a step "
+                                f"must start where the last one ended (or roll back with "
+                                f"fmi2SetFMUstate)")
+        for name, value in self._inputs.items():
+            stepper.set_input(name, value)
+        t_end = t + h
+        try:
+            stepper.step(t_end)
+        except SimulationError as exc:
+            return self._refuse(f"{where} discarded: {exc}; the FMU stays at t = "
+                                f"{stepper.time!r} s", Fmi2Status.discard)
+        self._outputs = {k: float(v) for k, v in stepper.outputs().items()}
+        return True
+
+    def terminate(self):
+        self._phase = TERMINATED
+
+    # ------------------------------------------------------------------------------------------
+    # FMU state
+    # ------------------------------------------------------------------------------------------
+    def _get_fmu_state(self):
+        try:
+            return {
+                "format": STATE_FORMAT,
+                "scene": self.scene_digest,
+                "phase": self._phase,
+                "failure": self._failure,
+                "settings": dict(self._settings),
+                "explicit": sorted(self._explicit),
+                "start_time": self._start_time,
+                "tolerance": self._tolerance,
+                "inputs": dict(self._inputs),
+                "outputs": dict(self._outputs),
+                "stepper": None if self._stepper is None else bytes(self._stepper.get_state()),
+            }
+        except Exception as exc:
+            self.log(f"getFMUstate: {exc!r}; the state returned cannot be restored",
+                     Fmi2Status.error)
+            return {"format": None, "error": repr(exc)}
+
+    def _set_fmu_state(self, state):
+        try:
+            self._restore(state)
+        except Exception as exc:
+            self.log(f"setFMUstate: the state could not be restored ({exc!r}); the FMU is "
+                     f"unchanged", Fmi2Status.error)
+
+    def _restore(self, state):
+        if not isinstance(state, dict) or state.get("format") != STATE_FORMAT:
+            raise ValueError(f"not an FMU state of this FMU (expected format {STATE_FORMAT})"
+                             + (f": {state['error']}" if isinstance(state, dict)
+                                and "error" in state else ""))
+        if state["scene"] != self.scene_digest:
+            raise ValueError(f"the state belongs to another scene than {self.scene_file}")
+        settings = dict(state["settings"])
+        if set(settings) != set(self._defaults) or set(state["inputs"]) != set(self._inputs):
+            raise ValueError("the state's variables differ from this FMU's")
+        stepper = None
+        if state["stepper"] is not None:
+            effective = dict(settings)
+            if "rtol" not in state["explicit"] and state["tolerance"] is not None:
+                effective["rtol"] = state["tolerance"]
+            stepper = self._new_stepper(effective)
+            stepper.set_state(state["stepper"])
+        # Everything checked: commit.
+        self._settings = settings
+        self._explicit = set(state["explicit"])
+        self._phase = state["phase"]
+        self._failure = state["failure"]
+        self._start_time = state["start_time"]
+        self._tolerance = state["tolerance"]
+        self._inputs = dict(state["inputs"])
+        self._outputs = dict(state["outputs"])
+        self._stepper = stepper
+
+    @staticmethod
+    def _fmu_state_to_bytes(state) -> bytes:
+        if not isinstance(state, dict):
+            return json.dumps({"format": None, "error": "not a state"}).encode()
+        data = dict(state)
+        if data.get("stepper") is not None:
+            data["stepper"] = base64.b64encode(data["stepper"]).decode("ascii")
+        return json.dumps(data).encode("utf-8")
+
+    @staticmethod
+    def _fmu_state_from_bytes(data: bytes):
+        try:
+            state = json.loads(bytes(data).decode("utf-8"))
+            if state.get("stepper") is not None:
+                state["stepper"] = base64.b64decode(state["stepper"])
+            return state
+        except Exception as exc:
+            return {"format": None, "error": f"cannot deserialize: {exc!r}"}
+
+    # ------------------------------------------------------------------------------------------
+    def _warn_if_foreign_package(self):
+        shipped = (Path(self.resources or ".") / "inerter").resolve()
+        used = Path(inerter.__file__).resolve().parent
+        if self.resources and shipped.is_dir() and used != shipped:
+            self.log(f"this process had already imported the inerter package from {used}; the "
+                     f"FMU runs with it, not with the copy shipped in {shipped}",
+                     Fmi2Status.warning)

@@ -34,3 +34,16 @@ def runs():
             return model.simulate(**kw)
         return _cached(cache, key, compute)
     return get
+
+
+@pytest.fixture(scope="session")
+def fmu_runs():
+    """fmu_runs(scene_path, **overrides, stop_time=..., step=...) → FMU result (fmpy), shared."""
+    from inerter.fmu_run import simulate_fmu
+    cache = {}
+
+    def get(scene, stop_time=None, step=None, metrics=True, **overrides):
+        key = (str(scene), stop_time, step, metrics, tuple(sorted(overrides.items())))
+        return _cached(cache, key, lambda: simulate_fmu(scene, overrides, stop_time=stop_time, step=step,
+                                                        metrics=metrics))
+    return get

@@ -3,7 +3,7 @@
 The FMU is built first if it is stale, then simulated by ``fmpy.simulate_fmu`` with an explicit
 communication step (fmpy ignores ``step_size`` for co-simulation and would otherwise choose one).
 The result has the same interface as the solver's (time, ``result[name]``, metrics, CSV, summary),
-with metrics from the samples (no dense output crosses the FMI boundary).
+with metrics from a cubic spline through the samples (no dense output crosses the FMI boundary).
 """
 from __future__ import annotations
 
@@ -64,7 +64,10 @@ class FmuResult:
         return np.asarray(self._table[name], dtype=float)
 
     def dense(self, name):
-        return None
+        """A cubic spline through the communication-point samples (error O(h⁴), where linear
+        interpolation would flatten peaks by (ωh)²/12)."""
+        from scipy.interpolate import CubicSpline
+        return CubicSpline(self.time, self[name])
 
     def summary(self):
         from .model import Result

@@ -13,20 +13,28 @@ the same ``resources/`` and exposes it as
 - every model output as a Real output (``C.r[2]``, ``spring.f``, ``energy``, ...).
 
 Statuses. pythonfmu 0.7.0 turns any Python exception into fmi2Fatal and destroys the instance,
-and its setters and exitInitializationMode cannot return anything but fmi2OK. The only other
-status a Python slave can give is fmi2Discard, from doStep. So this slave never lets an exception
-escape, and reports every problem as a logged message (status error or discard) followed by
-fmi2Discard from the next doStep:
+and its binary returns fmi2OK from every call but doStep, which gives fmi2Discard when
+:meth:`do_step` returns False. So this slave never lets an exception escape: it logs every
+problem (status error, or discard for a failed step) and keeps the status of its last
+exitInitializationMode, setXxx, doStep and setFMUstate call in the Integer variable
+``fmi_status`` (causality local: 0 fmi2OK, 2 fmi2Discard, 3 fmi2Error). On Linux the FMU's
+binary is a shim (``status_shim.c``) in front of pythonfmu's: it reads ``fmi_status`` after each
+of those calls and returns it when it is worse than fmi2OK. So
 
 - an invalid parameter, effect or solver setting: exitInitializationMode logs the solver's
-  message (file, field, value, expected) and returns fmi2OK, the outputs read NaN, and every
-  doStep returns fmi2Discard with the same message until the importer resets the FMU;
-- a non-finite input: logged when it is set; the next doStep returns fmi2Discard and leaves the
-  state unchanged, as long as the input stays non-finite;
-- setting a fixed parameter after initialisation (or an output): the value is ignored, the
-  attempt is logged, and the next doStep returns fmi2Discard without stepping;
+  message (file, field, value, expected; the settings changed) and returns fmi2Error; the
+  outputs read NaN and every doStep returns fmi2Discard with the same message until the
+  importer resets the FMU (FMI 2.0 allows nothing but reset or free after that error);
+- a non-finite input, a fixed parameter set after initialisation, an output or an unknown value
+  reference set: the value is ignored (the state stays as it was), the attempt is logged and the
+  setXxx returns fmi2Error. The importer may go on from there;
 - a step the solver cannot complete: doStep returns fmi2Discard with the solver's message and
   the FMU stays at the last good communication point, so the importer can retry or roll back.
+
+Without the shim (the win64 binary, or a build on a machine without a C compiler) those calls
+return fmi2OK. A rejected value is then reported by the next doStep instead, which returns
+fmi2Discard without stepping, once: a rejection counts as reported when ``fmi_status`` has been
+read after the call that made it (which the shim always does).
 
 FMU state (fmi2GetFMUstate / SetFMUstate / Serialize / DeSerialize) holds the whole state: the
 parameter settings, the inputs, the outputs and the solver's own state (time, coordinates,
@@ -50,6 +58,11 @@ from inerter.errors import InerterError, SimulationError
 
 STATE_FORMAT = "inerter-fmu-state/1"
 
+#: The Integer variable that holds the status of the slave's last checked call; the Linux
+#: binary (fmu_src/status_shim.c) reads it and returns it.
+STATUS_VARIABLE = "fmi_status"
+OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
+
 #: The FMU setting name -> the override key that ``inerter.load`` takes for it.
 SOLVER_SETTINGS = {"solver": "experiment.method", "rtol": "experiment.rtol", "atol": "experiment.atol"}
 
@@ -62,6 +75,21 @@ TERMINATED = "terminated"
 
 #: Communication points closer than this (relative to max(1 s, |t|)) are taken as equal.
 TIME_TOLERANCE = 1e-9
+
+
+class ExactReal(Real):
+    """pythonfmu's Real, with its start value written so that it reads back as the same float.
+
+    pythonfmu 0.7.0 writes it with 16 significant digits, which can be one ulp off (a scene
+    parameter 11.327612281500457 would become 11.32761228150046); ``repr`` gives the shortest
+    string that reads back exactly.
+    """
+
+    def to_xml(self):
+        parent = super().to_xml()
+        if self.start is not None and math.isfinite(float(self.start)):
+            parent.find("Real").set("start", repr(float(self.start)))
+        return parent
 
 
 def _same(a, b) -> bool:
@@ -115,7 +143,9 @@ class InerterSlave(Fmi2Slave):
         self._start_time = 0.0
         self._tolerance: float | None = None      # from fmi2SetupExperiment
         self._failure: str | None = None          # why the instance cannot step
-        self._rejected: list[str] = []            # rejected sets, reported at the next doStep
+        self._status = OK                         # of the last checked call (fmi_status)
+        self._call_rejections: list[str] = []     # values rejected by the last checked call
+        self._rejected: list[str] = []            # unreported rejections: the next doStep's
         self._stepper = None
         # Outputs before initialisation are those of the scene as written (the start values).
         self._outputs = {k: float(v) for k, v in model.stepper().outputs().items()}
@@ -130,7 +160,7 @@ class InerterSlave(Fmi2Slave):
         fixed = dict(causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed)
         methods = ", ".join(model.methods)
         for p in model.parameter_info():
-            self.register_variable(Real(p["name"], description=p["description"], **fixed,
+            self.register_variable(ExactReal(p["name"], description=p["description"], **fixed,
                                         getter=self._setting_getter(p["name"]),
                                         setter=self._setting_setter(p["name"], float)))
         for e in model.effect_info():
@@ -140,27 +170,34 @@ class InerterSlave(Fmi2Slave):
         self.register_variable(String(
             "solver", description=f"integration method, one of: {methods}", **fixed,
             getter=self._setting_getter("solver"), setter=self._setting_setter("solver", str)))
-        self.register_variable(Real(
+        self.register_variable(ExactReal(
             "rtol", description="relative tolerance of the integrator (fmi2SetupExperiment's "
                                 "tolerance is used when rtol is not set)", **fixed,
             getter=self._setting_getter("rtol"), setter=self._setting_setter("rtol", float)))
-        self.register_variable(Real(
+        self.register_variable(ExactReal(
             "atol", description="absolute tolerance of the integrator, in the units of each "
                                 "coordinate", **fixed,
             getter=self._setting_getter("atol"), setter=self._setting_setter("atol", float)))
         for i in model.input_info():
-            self.register_variable(Real(i["name"], description=i["description"],
+            self.register_variable(ExactReal(i["name"], description=i["description"],
                                         causality=Fmi2Causality.input,
                                         variability=Fmi2Variability.continuous, start=0.0,
                                         getter=self._input_getter(i["name"]),
                                         setter=self._input_setter(i["name"])))
         for o in model.output_info():
-            self.register_variable(Real(o["name"], description=o["description"],
+            self.register_variable(ExactReal(o["name"], description=o["description"],
                                         causality=Fmi2Causality.output,
                                         variability=Fmi2Variability.continuous,
                                         initial=Fmi2Initial.exact,
                                         getter=self._output_getter(o["name"]),
                                         setter=self._output_setter(o["name"])))
+        # Last, so that the value references of the other variables do not depend on it.
+        self.register_variable(Integer(
+            STATUS_VARIABLE, description="status of the FMU's last exitInitializationMode, "
+            "setXxx, doStep or setFMUstate call (0 fmi2OK, 2 fmi2Discard, 3 fmi2Error), which "
+            "the FMU's binary returns on Linux", causality=Fmi2Causality.local,
+            variability=Fmi2Variability.discrete, initial=Fmi2Initial.calculated,
+            getter=self._read_status, setter=self._status_setter))
 
     def _setting_getter(self, name):
         return lambda: self._settings[name]
@@ -183,10 +220,11 @@ class InerterSlave(Fmi2Slave):
     def _input_setter(self, name):
         def setter(value):
             value = float(value)
-            self._inputs[name] = value
-            if not math.isfinite(value):
-                self.log(f"{name}: input not finite (got {value!r}; expected a finite number); "
-                         f"doStep returns fmi2Discard until it is", Fmi2Status.error)
+            if math.isfinite(value):
+                self._inputs[name] = value
+            else:
+                self._reject(f"{name}: input not finite (got {value!r}; expected a finite "
+                             f"number): ignored, it stays {self._inputs[name]!r}")
         return setter
 
     def _output_getter(self, name):
@@ -197,9 +235,33 @@ class InerterSlave(Fmi2Slave):
             self._reject(f"{name}: an output cannot be set (got {value!r})")
         return setter
 
+    # ------------------------------------------------------------------------------------------
+    # Statuses
+    # ------------------------------------------------------------------------------------------
+    def _begin_call(self):
+        """Start a call whose status goes to fmi_status (exitInitializationMode, setXxx, doStep,
+        setFMUstate). Rejections of the previous call that nobody read are left to the next
+        doStep."""
+        if self._call_rejections:
+            self._rejected.extend(self._call_rejections)
+            self._call_rejections = []
+        self._status = OK
+
+    def _read_status(self) -> int:
+        """fmi_status; reading an error reports the last call's rejections (the shim reads it
+        after every checked call), so the next doStep does not report them again."""
+        if self._status != OK:
+            self._call_rejections.clear()
+        return self._status
+
+    def _status_setter(self, value):
+        self._reject(f"{STATUS_VARIABLE}: a local variable cannot be set (got {value!r})")
+
     def _reject(self, message: str):
-        self._rejected.append(message)
-        self.log(f"{message}; the next doStep returns fmi2Discard", Fmi2Status.error)
+        """A value the importer set is refused: log it; the call returns fmi2Error."""
+        self._status = ERROR
+        self._call_rejections.append(message)
+        self.log(message, Fmi2Status.error)
 
     # pythonfmu's get_*/set_* raise on a wrong value reference or type, which would end the
     # instance with fmi2Fatal: these log the problem instead.
@@ -239,15 +301,19 @@ class InerterSlave(Fmi2Slave):
         return self._get(vrs, String, str, "")
 
     def set_real(self, vrs, values):
+        self._begin_call()
         self._set(vrs, values, Real)
 
     def set_integer(self, vrs, values):
+        self._begin_call()
         self._set(vrs, values, Integer)
 
     def set_boolean(self, vrs, values):
+        self._begin_call()
         self._set(vrs, values, Boolean)
 
     def set_string(self, vrs, values):
+        self._begin_call()
         self._set(vrs, values, String)
 
     # ------------------------------------------------------------------------------------------
@@ -262,6 +328,7 @@ class InerterSlave(Fmi2Slave):
             self._phase = INITIALIZATION
 
     def exit_initialization_mode(self):
+        self._begin_call()
         try:
             self._initialise()
         except Exception as exc:  # a bug: report it rather than end the importer with fmi2Fatal
@@ -301,6 +368,7 @@ class InerterSlave(Fmi2Slave):
 
     def _initialise(self):
         if self._phase not in (INSTANTIATED, INITIALIZATION):
+            self._status = ERROR
             self.log(f"exitInitializationMode called in phase '{self._phase}': ignored",
                      Fmi2Status.error)
             return
@@ -329,6 +397,7 @@ class InerterSlave(Fmi2Slave):
                  f"changed from the scene: {changed or 'nothing'}", Fmi2Status.ok)
 
     def _fail(self, message: str):
+        self._status = ERROR
         self._phase = FAILED
         self._failure = message
         self._stepper = None
@@ -340,6 +409,7 @@ class InerterSlave(Fmi2Slave):
     # Stepping
     # ------------------------------------------------------------------------------------------
     def do_step(self, current_time, step_size):
+        self._begin_call()
         try:
             return self._do_step(float(current_time), float(step_size))
         except Exception as exc:  # a bug: stop stepping rather than end the importer
@@ -348,6 +418,8 @@ class InerterSlave(Fmi2Slave):
             return False
 
     def _refuse(self, message: str, status: Fmi2Status = Fmi2Status.error) -> bool:
+        """doStep returns fmi2Discard (False) and logs why."""
+        self._status = DISCARD
         self.log(message, status)
         return False
 
@@ -356,7 +428,8 @@ class InerterSlave(Fmi2Slave):
         if self._rejected:
             messages = "; ".join(self._rejected)
             self._rejected.clear()
-            return self._refuse(f"{where} refused after rejected settings: {messages}")
+            return self._refuse(f"{where} refused, once, to report values rejected since the "
+                                f"last step: {messages}")
         if self._phase == FAILED:
             return self._refuse(f"{where} refused: {self._failure}")
         if self._phase == TERMINATED:
@@ -414,9 +487,11 @@ class InerterSlave(Fmi2Slave):
             return {"format": None, "error": repr(exc)}
 
     def _set_fmu_state(self, state):
+        self._begin_call()
         try:
             self._restore(state)
         except Exception as exc:
+            self._status = ERROR
             self.log(f"setFMUstate: the state could not be restored ({exc!r}); the FMU is "
                      f"unchanged", Fmi2Status.error)
 

@@ -72,6 +72,8 @@ def cmd_run(args):
           f"{result.time[-1]:.6g} s in {wall:.2f} s wall")
     for k, v in summary["metrics"].items():
         print(f"  {k} = {v}")
+    for k, v in summary.get("metric_errors", {}).items():
+        print(f"  {k}: not computed: {v}")
     print(f"  max constraint drift = {summary['statistics']['max_constraint_drift']:.3g}")
     print(f"wrote {out / (stem + '.csv')}, {out / 'summary.json'}, {out / (stem + '.png')}")
     return 0 if result.status == "ok" else 3
@@ -151,6 +153,15 @@ def cmd_paper(args):
     return status
 
 
+#: Subcommands whose arguments their own module parses.
+DELEGATED = {
+    "bench": ("bench", "main_bench", "work-precision diagrams: error against the oracle vs CPU time"),
+    "sweep": ("sweep", "main_sweep", "parameter sweeps on dask, resumable"),
+    "study": ("sweep", "main_study", "built-in studies: fig9, two_bar_b, two_bar_f"),
+    "sweep-plot": ("sweep", "main_sweep_plot", "plot a metric of a sweep's results against a parameter"),
+}
+
+
 def build_parser():
     p = argparse.ArgumentParser(prog="inerter", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True)
@@ -181,6 +192,8 @@ def build_parser():
     b.add_argument("scenes", nargs="+")
     b.add_argument("--force", action="store_true")
     b.set_defaults(func=cmd_build_fmu)
+    for name, (module, func, text) in DELEGATED.items():
+        sub.add_parser(name, help=text + f" (inerter {name} -h)")
     pp = sub.add_parser("paper", help="both paper scenes end to end (the main job)")
     pp.add_argument("--out", default="out/paper")
     pp.add_argument("--scenarios", default="scenarios")
@@ -190,6 +203,11 @@ def build_parser():
 
 
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] in DELEGATED:
+        import importlib
+        module, func, _ = DELEGATED[argv[0]]
+        return getattr(importlib.import_module(f"inerter.{module}"), func)(argv[1:])
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)

@@ -38,7 +38,7 @@ class TranslationalElement:
 
     def geometry(self, q, v):
         r, rdot, a_n, H = self.pair.evaluate(q, v)
-        length = math.hypot(r[0], r[1])
+        length = math.sqrt(float(r @ r))
         if not length > MIN_LENGTH:
             raise TerminalsMeet(
                 f"element '{self.name}': its terminals {self.labels[0]} and {self.labels[1]} meet "
@@ -209,3 +209,63 @@ class RotationalDamper(RotationalElement):
 
     def potential(self, q):
         return 0.0
+
+
+class SpatialRotationalElement:
+    """Rotational spring (τ = k(φ − φ0)) or damper (τ = d φ̇) about an axis between two 3D bodies
+    (or a body and the ground). φ is the rotation about the axis (fixed in body a; global for the
+    ground) measured from the initial relative orientation, so φ(0) = 0; exact while the relative
+    rotation is about that axis (as a revolute joint keeps it)."""
+
+    def __init__(self, spec, frame_a, frame_b, q0):
+        self.name = spec.name
+        self.kind = spec.type
+        self.coefficient_name = "k" if spec.type == "rotational_spring" else "d"
+        self.coefficient = float(spec.coefficient)
+        self.free_angle = float(spec.free_length or 0.0)
+        self.fa, self.fb = frame_a, frame_b
+        self.axis = np.asarray(spec.axis, dtype=float)
+        z = np.zeros(max(frame_a.vi, frame_b.vi) + 6)
+        Aa, _ = frame_a.evaluate(q0, z)
+        Ab, _ = frame_b.evaluate(q0, z)
+        self.rel0 = Aa.T @ Ab
+
+    def geometry(self, q, v):
+        Aa, wa = self.fa.evaluate(q, v)
+        Ab, wb = self.fb.evaluate(q, v)
+        D = (Aa.T @ Ab) @ self.rel0.T                  # rotation since t = 0, in a's frame
+        n = self.axis
+        s = 0.5 * (n[0] * (D[2, 1] - D[1, 2]) + n[1] * (D[0, 2] - D[2, 0]) + n[2] * (D[1, 0] - D[0, 1]))
+        c = 0.5 * (np.trace(D) - n @ D @ n)
+        n_w = Aa @ n
+        return math.atan2(s, c), float(n_w @ (Ab @ wb - Aa @ wa)), n_w, Aa, Ab
+
+    def torque(self, q, v, geo=None):
+        phi, w, *_ = geo or self.geometry(q, v)
+        if self.kind == "rotational_spring":
+            return self.coefficient * (phi - self.free_angle)
+        return self.coefficient * w
+
+    def add_force(self, q, v, Q, geo=None):
+        geo = geo or self.geometry(q, v)
+        tau = self.torque(q, v, geo)
+        _, _, n_w, Aa, Ab = geo
+        if self.fb.body >= 0:
+            Q[self.fb.vi + 3:self.fb.vi + 6] -= tau * (Ab.T @ n_w)
+        if self.fa.body >= 0:
+            Q[self.fa.vi + 3:self.fa.vi + 6] += tau * (Aa.T @ n_w)
+
+    def add_mass(self, q, v, M, geo=None):
+        pass
+
+    def outputs(self, q, v, a):
+        geo = self.geometry(q, v)
+        return geo[0], geo[1], self.torque(q, v, geo)
+
+    def kinetic(self, q, v):
+        return 0.0
+
+    def potential(self, q):
+        if self.kind != "rotational_spring":
+            return 0.0
+        return 0.5 * self.coefficient * (self.geometry(q, np.zeros(len(q)))[0] - self.free_angle) ** 2

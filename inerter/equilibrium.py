@@ -39,6 +39,9 @@ def static_forces(mech, q):
 def static_equilibrium(mech, q_start=None, tol=1e-12):
     """q* with static_forces(q*) + C_qᵀλ = 0 and C(q*) = 0, found by Newton (hybrid Powell)
     from `q_start` (default: the initial pose)."""
+    if mech.dim != 2:
+        raise SimulationError("the static equilibrium and linearisation are implemented for planar scenes only; "
+                              "give metrics of 3D scenes an explicit reference")
     n, m = mech.n, mech.m
     q_start = mech.q0 if q_start is None else q_start
     z = np.zeros(n)

@@ -9,6 +9,15 @@ FMUs of several scenes can run in one process. The FMU's ``resources/`` hold
 - a copy of the ``inerter`` package, the scene file, and ``requirements.txt`` (numpy, scipy),
 - pythonfmu's own runtime, added by pythonfmu.
 
+On Linux, ``binaries/linux64/<model>.so`` is the status shim compiled from
+``fmu_src/status_shim.c`` (with gcc, at build time), and pythonfmu's own binary sits beside it as
+``<model>.pythonfmu.so``. pythonfmu's binary returns fmi2OK from every call but doStep; the shim
+forwards every call to it and returns the slave's status (its variable ``fmi_status``, whose value
+reference is compiled in) from exitInitializationMode, setXxx, doStep and setFMUstate. Without
+gcc (or on a host other than Linux x86-64) the FMU is built with pythonfmu's binary alone and the
+build warns (FmuBuildWarning): errors then come as fmi2Discard from the next doStep. The win64
+binary is always pythonfmu's own.
+
 The FMU runs inside the importing process with its Python interpreter (pythonfmu's binary does
 not link libpython), importing numpy and scipy from that environment (``pythonfmu deploy -f X.fmu``
 installs ``requirements.txt``). pythonfmu 0.7.0 cannot give units, so the model description it
@@ -24,12 +33,15 @@ import argparse
 import hashlib
 import keyword
 import math
+import platform
 import re
 import shutil
 import string
+import subprocess
 import sys
 import tempfile
 import uuid
+import warnings
 import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
@@ -41,17 +53,27 @@ REPO_DIR = PACKAGE_DIR.parent
 FMU_SRC = REPO_DIR / "fmu_src"
 SLAVE_FILE = "inerter_slave.py"
 TEMPLATE_FILE = "model_module.py.template"
+SHIM_FILE = "status_shim.c"
+SHIM_HEADER = "fmi2_types.h"
+#: The slave's Integer variable that holds its status (fmu_src/inerter_slave.py).
+STATUS_VARIABLE = "fmi_status"
+#: Where pythonfmu's own Linux binary goes when the shim takes its place.
+ORIGINAL_SUFFIX = ".pythonfmu.so"
 DEFAULT_OUT_DIR = Path("build") / "fmu"
 DEFAULT_SCENES_DIR = REPO_DIR / "scenarios"
 RUNTIME_REQUIREMENTS = ("numpy", "scipy")
 HASH_SUFFIX = ".fmu.source-hash"
 #: Bump when the layout of a built FMU changes without any shipped source changing.
-BUILD_FORMAT = "inerter-fmu-build/1"
+BUILD_FORMAT = "inerter-fmu-build/2"
 MODULE_PREFIX = "inerter_fmu_"
 
 
 class FmuBuildError(InerterError):
     """An FMU cannot be built from a scene (the message names the scene and the problem)."""
+
+
+class FmuBuildWarning(UserWarning):
+    """An FMU was built, but without the status shim (the message says why)."""
 
 
 # ----------------------------------------------------------------------------------------------
@@ -144,7 +166,7 @@ def _shipped_package_files() -> list[Path]:
                   if p.is_file() and "__pycache__" not in p.parts and p.suffix not in (".pyc", ".pyo"))
 
 
-def source_hash(scene_path: Path) -> str:
+def source_hash(scene_path: Path, data_files=()) -> str:
     """A hash of everything an FMU of `scene_path` is built from."""
     import pythonfmu
 
@@ -157,8 +179,12 @@ def source_hash(scene_path: Path) -> str:
     add("pythonfmu", pythonfmu.__version__.encode())
     add("requirements", "\n".join(RUNTIME_REQUIREMENTS).encode())
     add("scene:" + scene_path.name, scene_path.read_bytes())
-    for path in (FMU_SRC / SLAVE_FILE, FMU_SRC / TEMPLATE_FILE):
-        add("fmu_src/" + path.name, path.read_bytes())
+    for rel in data_files:                                 # records the scene reads (ground motion)
+        add("data:" + rel, (scene_path.parent / rel).read_bytes())
+    for name in (SLAVE_FILE, TEMPLATE_FILE, SHIM_FILE, SHIM_HEADER):
+        add("fmu_src/" + name, (FMU_SRC / name).read_bytes())
+    # An FMU built without the shim is rebuilt once a compiler is there.
+    add("shim", b"compiled" if _shim_compiler()[0] else b"none")
     for path in _shipped_package_files():
         add("inerter/" + path.relative_to(PACKAGE_DIR).as_posix(), path.read_bytes())
     return h.hexdigest()
@@ -205,6 +231,7 @@ def _check_model(scene_path: Path, model) -> dict[str, str]:
     add("solver", None, "setting")
     add("rtol", "1", "setting")
     add("atol", None, "setting")
+    add(STATUS_VARIABLE, None, "status variable")
     for i in model.input_info():
         add(i["name"], i.get("unit"), "input")
     for o in model.output_info():
@@ -232,7 +259,7 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
     name = model.name
     fmu_path = out_dir / f"{name}.fmu"
     hash_path = out_dir / f"{name}{HASH_SUFFIX}"
-    digest = source_hash(scene_path)
+    digest = source_hash(scene_path, model.scene.data_files)
     if (not force and fmu_path.is_file() and hash_path.is_file()
             and hash_path.read_text().strip() == digest):
         return fmu_path, False
@@ -253,12 +280,20 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
                         ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo"))
         shutil.copy2(scene_path, stage / scene_path.name)
         (stage / "requirements.txt").write_text("\n".join(RUNTIME_REQUIREMENTS) + "\n")
+        extra = []
+        for rel in model.scene.data_files:                 # beside the scene, as the scene names them
+            target = stage / rel
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(scene_path.parent / rel, target)
+            top = stage / Path(rel).parts[0]
+            if top not in extra:
+                extra.append(top)
 
         built = _run_pythonfmu(stage / f"{module}.py", Path(tmp) / "out",
                                [stage / SLAVE_FILE, stage / "inerter", stage / scene_path.name,
-                                stage / "requirements.txt"])
+                                stage / "requirements.txt", *extra])
         final = Path(tmp) / f"{name}.fmu"
-        _complete_model_description(built, final, units, digest)
+        _complete_model_description(built, final, units, digest, Path(tmp) / "shim")
         hash_path.unlink(missing_ok=True)
         shutil.move(str(final), str(fmu_path))
     hash_path.write_text(digest + "\n")
@@ -286,28 +321,90 @@ def _run_pythonfmu(script: Path, dest: Path, project_files: list[Path]) -> Path:
         sys.modules.update(saved_modules)
 
 
-def _complete_model_description(src: Path, dest: Path, units: dict[str, str], digest: str):
-    """Copy the FMU `src` to `dest` with units and a content-derived GUID in its description."""
+def _complete_model_description(src: Path, dest: Path, units: dict[str, str], digest: str,
+                                shim_dir: Path | None = None):
+    """Copy the FMU `src` to `dest` with units and a content-derived GUID in its description.
+
+    With `shim_dir` (a scratch folder), the status shim is compiled there for the slave's
+    STATUS_VARIABLE and put in front of pythonfmu's Linux binary (see :func:`_compile_shim`).
+    """
     with zipfile.ZipFile(src) as zin:
         root = ET.fromstring(zin.read("modelDescription.xml"))
         root.set("guid", "{%s}" % uuid.uuid5(uuid.NAMESPACE_URL, f"inerter-fmu:{digest}"))
         used = set()
+        status_vr = -1
         for var in root.iter("ScalarVariable"):
             real = var.find("Real")
             unit = units.get(var.get("name"))
             if real is not None and unit:
                 real.set("unit", unit)
                 used.add(unit)
+            if var.get("name") == STATUS_VARIABLE and var.find("Integer") is not None:
+                status_vr = int(var.get("valueReference"))
+        if shim_dir is not None and status_vr < 0:
+            raise FmuBuildError(f"{src.name}: the model description has no Integer "
+                                f"{STATUS_VARIABLE!r} (fmu_src/{SLAVE_FILE} registers it)")
         if used:
             # Schema order: CoSimulation, UnitDefinitions, TypeDefinitions, LogCategories, ...
             position = [child.tag for child in root].index("CoSimulation") + 1
             root.insert(position, unit_definitions(used))
         ET.indent(root, space="  ")
         xml = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+        identifier = root.find("CoSimulation").get("modelIdentifier")
+        linux_binary = f"binaries/linux64/{identifier}.so"
+        shim = None
+        if shim_dir is not None and linux_binary in zin.namelist():
+            shim = _compile_shim(identifier, status_vr, shim_dir, dest.name)
         with zipfile.ZipFile(dest, "w", compression=zipfile.ZIP_DEFLATED) as zout:
             for info in zin.infolist():
-                data = xml if info.filename == "modelDescription.xml" else zin.read(info)
-                zout.writestr(info.filename, data)
+                if info.filename == "modelDescription.xml":
+                    zout.writestr(info.filename, xml)
+                elif info.filename == linux_binary and shim is not None:
+                    zout.writestr(f"binaries/linux64/{identifier}{ORIGINAL_SUFFIX}",
+                                  zin.read(info))
+                    zout.writestr(linux_binary, shim)
+                else:
+                    zout.writestr(info.filename, zin.read(info))
+
+
+def _shim_compiler() -> tuple[str | None, str]:
+    """gcc, when it can build the shim for binaries/linux64 here; else (None, why not)."""
+    if platform.system() != "Linux" or platform.machine().lower() not in ("x86_64", "amd64"):
+        return None, (f"the status shim is built on Linux x86-64 only (this is "
+                      f"{platform.system()} {platform.machine()})")
+    gcc = shutil.which("gcc")
+    if gcc is None:
+        return None, "gcc was not found on PATH"
+    return gcc, ""
+
+
+def _compile_shim(identifier: str, status_vr: int, work: Path, fmu_name: str) -> bytes | None:
+    """The status shim for `identifier`, compiled from fmu_src/status_shim.c; None (with a
+    FmuBuildWarning) when it cannot be compiled here."""
+    gcc, why = _shim_compiler()
+    if gcc is not None:
+        work.mkdir(parents=True, exist_ok=True)
+        out = work / f"{identifier}.so"
+        command = [gcc, "-shared", "-fPIC", "-O2", "-fvisibility=hidden", "-pthread",
+                   f"-DSTATUS_VR={status_vr}u",
+                   f'-DORIGINAL_LIBRARY="{identifier}{ORIGINAL_SUFFIX}"',
+                   "-o", str(out), SHIM_FILE, "-ldl"]
+        try:
+            proc = subprocess.run(command, cwd=FMU_SRC, capture_output=True, text=True,
+                                  timeout=300)
+        except (OSError, subprocess.SubprocessError) as exc:
+            why = f"{' '.join(command)} failed: {exc}"
+        else:
+            if proc.returncode == 0 and out.is_file():
+                return out.read_bytes()
+            why = (f"{' '.join(command)} failed (exit status {proc.returncode}): "
+                   f"{(proc.stderr or proc.stdout).strip()[-2000:]}")
+    warnings.warn(f"{fmu_name}: built without the status shim: {why}. Its Linux binary is "
+                  f"pythonfmu's alone, which returns fmi2OK from exitInitializationMode and "
+                  f"setXxx whatever happens: an error is reported by the message logged and the "
+                  f"fmi2Discard of the next doStep", FmuBuildWarning, stacklevel=2)
+    return None
 
 
 # ----------------------------------------------------------------------------------------------
@@ -333,11 +430,20 @@ def run(args: argparse.Namespace) -> int:
     made: dict[Path, Path] = {}
     for scene in scenes:
         try:
-            path, built = _build(scene, Path(args.out_dir), args.force)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", FmuBuildWarning)
+                path, built = _build(scene, Path(args.out_dir), args.force)
         except InerterError as exc:
             print(f"error: {exc}", file=sys.stderr)
             status = 1
             continue
+        finally:
+            for warning in caught:
+                if issubclass(warning.category, FmuBuildWarning):
+                    print(f"warning: {warning.message}", file=sys.stderr)
+                else:
+                    warnings.showwarning(warning.message, warning.category, warning.filename,
+                                         warning.lineno)
         if path in made:
             print(f"error: {scene}: builds {path}, as {made[path]} does (two scenes with one "
                   f"name)", file=sys.stderr)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import SimulationError
-from .model import Model, compute_metrics
+from .model import Model, compute_metrics, sample_spline
 
 
 @dataclass
@@ -56,6 +56,7 @@ class FmuResult:
         self.status = run.status
         self.message = run.message
         self.metrics = {}
+        self.metric_errors = {}
         self.communication_step = comm_step
 
     def __getitem__(self, name):
@@ -64,10 +65,8 @@ class FmuResult:
         return np.asarray(self._table[name], dtype=float)
 
     def dense(self, name):
-        """A cubic spline through the communication-point samples (error O(h⁴), where linear
-        interpolation would flatten peaks by (ωh)²/12)."""
-        from scipy.interpolate import CubicSpline
-        return CubicSpline(self.time, self[name])
+        """A cubic spline through the communication-point samples."""
+        return sample_spline(self.time, self[name])
 
     def summary(self):
         from .model import Result

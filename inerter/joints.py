@@ -1,7 +1,6 @@
-"""Joint constraints C(q) = 0 with their Jacobian C_q and the right side γ of C_q q̈ = γ (Eq. 26's Q_d).
-
-Each joint reports its rows as (C, C_q over its own coordinates, γ). Formulas follow the standard
-planar forms (Nikravesh 1988, Shabana 2009 as cited by the paper).
+"""Joint constraints C(q) = 0 with their Jacobian C_v (over velocity coordinates) and the right
+side γ of C_v v̇ = γ (Eq. 26's Q_d). Standard forms (Nikravesh 1988; Shabana 2009, as cited by
+the paper): points that coincide, and the dot-1 / dot-2 conditions on body-fixed vectors.
 """
 from __future__ import annotations
 
@@ -9,36 +8,31 @@ import math
 
 import numpy as np
 
-from .planar import PointPair
+from .spatial import cross, skew
 
 
-class Revolute:
-    """Pin joint: the two points coincide, C = r_b − r_a = 0 (2 rows).
+class Coincident:
+    """Two points coincide, C = r_b − r_a = 0: the planar revolute joint (2 rows) and the spatial
+    spherical joint (3 rows). C_v = H and γ = −a_n by Eqs. (18–19), since r̈ = H v̇ + a_n = 0."""
 
-    C_q = H and γ = −a_n from Eqs. (18–19), since r̈ = H q̈ + a_n = 0.
-    """
-
-    kind = "revolute"
-    rows = 2
-
-    def __init__(self, name: str, pair: PointPair):
-        self.name = name
-        self.pair = pair
+    def __init__(self, name: str, kind: str, pair):
+        self.name, self.kind, self.pair = name, kind, pair
         self.dofs = pair.dofs
+        self.rows = len(pair.a.local)
 
     def evaluate(self, q, v):
         r, rdot, a_n, H = self.pair.evaluate(q, v)
         return r, H, -a_n
 
 
-class Prismatic:
-    """Slider: no relative rotation, and point b stays on the line through point a along `axis`
-    (fixed in a's body). Rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0, n = A_a n̄, n̄ ⊥ axis."""
+class Prismatic2D:
+    """Planar slider: no relative rotation, and point b stays on the line through point a along
+    `axis` (fixed in a's body). Rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0, n = A_a n̄."""
 
     kind = "prismatic"
     rows = 2
 
-    def __init__(self, name: str, pair: PointPair, axis, angle_index_a: int, angle_index_b: int, phi0: float):
+    def __init__(self, name: str, pair, axis, angle_index_a: int, angle_index_b: int, phi0: float):
         self.name = name
         self.pair = pair
         self.dofs = pair.dofs
@@ -52,7 +46,6 @@ class Prismatic:
         has_a = pair.a.dofs is not None
         k = len(self.dofs)
         Cq = np.zeros((2, k))
-        # Row 1: relative angle.
         th_a = q[self.ia] if self.ia >= 0 else 0.0
         th_b = q[self.ib] if self.ib >= 0 else 0.0
         c1 = th_b - th_a - self.phi0
@@ -60,7 +53,6 @@ class Prismatic:
             Cq[0, 2] = -1.0
         if pair.b.dofs is not None:
             Cq[0, k - 1] = 1.0
-        # Row 2: n·d with n turning with body a.
         if has_a:
             c, s = math.cos(th_a), math.sin(th_a)
             n = np.array((c * self.normal[0] - s * self.normal[1], s * self.normal[0] + c * self.normal[1]))
@@ -75,3 +67,114 @@ class Prismatic:
         # C̈ = n·(H q̈ + a_n) + θ̈_a n⊥·d − θ̇_a² n·d + 2 θ̇_a n⊥·ḋ
         gamma2 = -(float(n @ a_n) - wa * wa * c2 + 2.0 * wa * float(n_perp @ ddot))
         return np.array((c1, c2)), Cq, np.array((0.0, gamma2))
+
+
+class _Vector:
+    """A body-fixed unit vector s = A s̄: its value, rate and ∂ṡ/∂ω (body-frame ω)."""
+
+    def __init__(self, frame, local):
+        self.frame = frame
+        self.local = np.asarray(local, dtype=float)
+        self._skew = skew(self.local)
+
+    def evaluate(self, q, v):
+        A, w = self.frame.evaluate(q, v)
+        s = A @ self.local
+        wxs = cross(w, self.local)
+        sdot = A @ wxs
+        s_acc = A @ cross(w, wxs)                            # s̈ at ω̇ = 0
+        return s, sdot, s_acc, -A @ self._skew                  # ∂ṡ/∂ω = −A s̄~
+
+
+class SpatialJoint:
+    """A 3D joint as rows of three kinds over the two bodies' velocity coordinates:
+    coincident points (3 rows), dot-1 rows s_a·s_b = 0, dot-2 rows s_a·(r_b − r_a) = 0."""
+
+    def __init__(self, name, kind, pair, frame_a, frame_b, dot1=(), dot2=(), coincident=True):
+        self.name, self.kind, self.pair = name, kind, pair
+        self.dofs = pair.dofs
+        self.has_a = pair.a.dofs is not None
+        self.has_b = pair.b.dofs is not None
+        self.coincident = coincident
+        self.dot1 = [(_Vector(frame_a, sa), _Vector(frame_b, sb)) for sa, sb in dot1]
+        self.dot2 = [_Vector(frame_a, sa) for sa in dot2]
+        self.rows = (3 if coincident else 0) + len(self.dot1) + len(self.dot2)
+        self._wa = slice(3, 6)                                  # a's ω columns within dofs
+        self._wb = slice(9, 12) if self.has_a else slice(3, 6)  # b's ω columns within dofs
+
+    def evaluate(self, q, v):
+        d, ddot, a_n, H = self.pair.evaluate(q, v)
+        k = len(self.dofs)
+        C, rows, gamma = [], [], []
+        if self.coincident:
+            C.extend(d)
+            rows.extend(H)
+            gamma.extend(-a_n)
+        for va, vb in self.dot1:
+            sa, sa_dot, sa_acc, Ja = va.evaluate(q, v)
+            sb, sb_dot, sb_acc, Jb = vb.evaluate(q, v)
+            row = np.zeros(k)
+            if self.has_a:
+                row[self._wa] = sb @ Ja
+            if self.has_b:
+                row[self._wb] = sa @ Jb
+            C.append(float(sa @ sb))
+            rows.append(row)
+            gamma.append(-(float(sa_acc @ sb) + 2.0 * float(sa_dot @ sb_dot) + float(sa @ sb_acc)))
+        for va in self.dot2:
+            sa, sa_dot, sa_acc, Ja = va.evaluate(q, v)
+            row = sa @ H
+            if self.has_a:
+                row[self._wa] += d @ Ja
+            C.append(float(sa @ d))
+            rows.append(row)
+            gamma.append(-(float(sa_acc @ d) + 2.0 * float(sa_dot @ ddot) + float(sa @ a_n)))
+        return np.array(C), np.array(rows), np.array(gamma)
+
+
+def _perpendiculars(axis):
+    """Two unit vectors completing `axis` to a right-handed orthonormal frame."""
+    a = np.asarray(axis, dtype=float)
+    a = a / np.linalg.norm(a)
+    helper = np.array((1.0, 0.0, 0.0)) if abs(a[0]) < 0.9 else np.array((0.0, 1.0, 0.0))
+    p1 = np.cross(a, helper)
+    p1 /= np.linalg.norm(p1)
+    return p1, np.cross(a, p1)
+
+
+def make_joint(spec, mech, q0):
+    """The joint object for a scene joint, on the mechanism's points and body frames."""
+    pair = mech.pair(spec.point_a, spec.point_b)
+    if mech.dim == 2:
+        if spec.type == "revolute":
+            return Coincident(spec.name, "revolute", pair)
+        body_a = mech.scene.points[spec.point_a].body
+        body_b = mech.scene.points[spec.point_b].body
+        ia, ib = mech.angle_index(body_a), mech.angle_index(body_b)
+        phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
+        return Prismatic2D(spec.name, pair, spec.axis, ia, ib, phi0)
+
+    if spec.type == "spherical":
+        return Coincident(spec.name, "spherical", pair)
+    fa = mech.frames[mech.scene.points[spec.point_a].body]
+    fb = mech.frames[mech.scene.points[spec.point_b].body]
+    z = np.zeros(mech.n)
+    Aa, _ = fa.evaluate(q0, z)
+    Ab, _ = fb.evaluate(q0, z)
+
+    def in_b(vec_a):
+        """A vector fixed in a's frame, expressed in b's frame at the initial pose."""
+        return Ab.T @ (Aa @ vec_a)
+
+    if spec.type == "fixed":
+        ex, ey, ez = np.eye(3)
+        dot1 = [(ex, in_b(ey)), (ey, in_b(ez)), (ez, in_b(ex))]
+        return SpatialJoint(spec.name, "fixed", pair, fa, fb, dot1=dot1)
+    axis = np.asarray(spec.axis, dtype=float)
+    p1, p2 = _perpendiculars(axis)
+    if spec.type == "revolute":
+        # b's copy of the axis stays perpendicular to a's two normals
+        return SpatialJoint(spec.name, "revolute", pair, fa, fb, dot1=[(p1, in_b(axis)), (p2, in_b(axis))])
+    # prismatic: axes parallel, no twist about them, and b's point on a's line
+    dot1 = [(p1, in_b(axis)), (p2, in_b(axis)), (p1, in_b(p2))]
+    return SpatialJoint(spec.name, "prismatic", pair, fa, fb, dot1=dot1, dot2=[p1, p2], coincident=False)

@@ -3,12 +3,15 @@
 Only what the scene declares is compiled in: a scene without gravity has no gravity term, a scene
 without inerters no inerter term, and so on. :meth:`Mechanism.terms` lists what was compiled.
 
-The equations of motion are the augmented form of Eq. (33),
+Coordinates q (positions and orientations, `nq` of them) and velocity coordinates v (`n` of them:
+Ṙ and θ̇ per planar body, Ṙ and the body-frame ω per spatial body). The equations of motion are
+the augmented form of Eq. (33),
 
-    [M + M_I  C_qᵀ] [q̈]   [Q_e + Q_Iv]
-    [C_q      0   ] [λ] = [γ − 2α Ċ − α² C]
+    [M + M_I  C_vᵀ] [v̇]   [Q_e + Q_Iv]
+    [C_v      0   ] [λ] = [γ − 2α Ċ − α² C]
 
-with Baumgarte stabilisation of the constraints (α in 1/s; α = 0 gives the plain Eq. 33).
+with Baumgarte stabilisation of the constraints (α in 1/s; α = 0 gives the plain Eq. 33), and
+q̇ = B(q) v (the identity in 2D; the quaternion or Euler-angle rates in 3D).
 """
 from __future__ import annotations
 
@@ -18,9 +21,10 @@ import numpy as np
 
 from . import elements as el
 from .errors import SceneError, SimulationError
-from .joints import Prismatic, Revolute
-from .planar import DOF_PER_BODY, PointKinematics, PointPair
+from .joints import make_joint
+from .planar import PointKinematics, PointPair
 from .scene import GROUND, Scene
+from .spatial import EULER_SINGULARITY, Orientation, RotationCache, SpatialPoint, cross
 
 #: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
 ASSEMBLY_TOLERANCE = 1e-6
@@ -48,6 +52,21 @@ class TimeFunction:
         raise AssertionError(f.function)
 
 
+class BodyFrame:
+    """A body's rotation matrix and body-frame angular velocity (identity and zero for the ground)."""
+
+    __slots__ = ("body", "qi", "vi", "orientation", "dim")
+
+    def __init__(self, body, qi, vi, orientation, dim):
+        self.body, self.qi, self.vi, self.orientation, self.dim = body, qi, vi, orientation, dim
+
+    def evaluate(self, q, v):
+        if self.body < 0:
+            return np.eye(self.dim), np.zeros(3)
+        o = self.orientation
+        return o.matrix(q[self.qi + 3:self.qi + 3 + o.size]), v[self.vi + 3:self.vi + 6]
+
+
 class Mechanism:
     """A scene compiled for simulation. `oracle=True` evaluates the translational elements by
     differentiating their terminal distance L(q) (module `oracle`) instead of Eqs. (15–20)."""
@@ -55,35 +74,47 @@ class Mechanism:
     def __init__(self, scene: Scene, oracle: bool = False):
         self.scene = scene
         self.oracle = oracle
-        self.dim = scene.dimension
+        self.dim = dim = scene.dimension
         self.body_names = list(scene.bodies)
         self.body_index = {n: i for i, n in enumerate(self.body_names)}
-        self.n = DOF_PER_BODY * len(self.body_names)
+        self.orientation = Orientation(scene.orientation) if dim == 3 else None
 
-        masses = []
-        for b in scene.bodies.values():
-            masses += [b.mass, b.mass, b.inertia]
-        self.mass_diagonal = np.array(masses)
+        # Coordinate layout: per body, q = [R, θ] (2D) or [R, orientation] (3D); v = [Ṙ, θ̇] or [Ṙ, ω].
+        nqb = 3 if dim == 2 else 3 + self.orientation.size
+        nvb = 3 if dim == 2 else 6
+        self.q_index = [nqb * i for i in range(len(self.body_names))]
+        self.v_index = [nvb * i for i in range(len(self.body_names))]
+        self.nq = nqb * len(self.body_names)
+        self.n = nvb * len(self.body_names)
+
+        self.M0 = np.zeros((self.n, self.n))
+        q0, v0 = [], []
+        self.inertia_body = []
+        for i, b in enumerate(scene.bodies.values()):
+            k = self.v_index[i]
+            self.M0[k:k + dim, k:k + dim] = b.mass * np.eye(dim)
+            if dim == 2:
+                self.M0[k + 2, k + 2] = b.inertia
+                q0 += [*b.position, b.angle]
+                v0 += [*b.velocity, b.angular_velocity]
+            else:
+                J = np.array(b.inertia)
+                self.M0[k + 3:k + 6, k + 3:k + 6] = J
+                self.inertia_body.append(J)
+                A = np.array(b.rotation)
+                q0 += [*b.position, *self.orientation.from_matrix(A)]
+                v0 += [*b.velocity, *(A.T @ np.array(b.angular_velocity))]   # ω to the body frame
+        q0, v0 = np.array(q0, dtype=float), np.array(v0, dtype=float)
+        self.frames = {GROUND: BodyFrame(-1, 0, 0, None, dim)}
+        for name in self.body_names:
+            i = self.body_index[name]
+            self.frames[name] = BodyFrame(i, self.q_index[i], self.v_index[i], self.orientation, dim)
 
         self.point_names = list(scene.points)
-        self.points = {p.name: PointKinematics(self._body(p.body), p.local) for p in scene.points.values()}
+        self._rotation_caches = [RotationCache() for _ in self.body_names]
+        self.points = {p.name: self._point(p) for p in scene.points.values()}
 
-        q0, v0 = [], []
-        for b in scene.bodies.values():
-            q0 += [*b.position, b.angle]
-            v0 += [*b.velocity, b.angular_velocity]
-        q0, v0 = np.array(q0), np.array(v0)
-
-        self.joints = []
-        for j in scene.joints.values():
-            pair = self._pair(j.point_a, j.point_b)
-            if j.type == "revolute":
-                self.joints.append(Revolute(j.name, pair))
-            else:
-                ia = self._angle_index(scene.points[j.point_a].body)
-                ib = self._angle_index(scene.points[j.point_b].body)
-                phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
-                self.joints.append(Prismatic(j.name, pair, j.axis, ia, ib, phi0))
+        self.joints = [make_joint(j, self, q0) for j in scene.joints.values()]
         self.m = sum(j.rows for j in self.joints)
 
         self.elements = [self._element(e, q0) for e in scene.elements.values()]
@@ -99,44 +130,57 @@ class Mechanism:
                         if f.function not in ("input", "pd")]
         self.feedback = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "pd"]
         self.input_forces = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "input"]
-        self.input_names = [f"{f.point}.f[{i + 1}]" for f, _ in self.input_forces for i in range(self.dim)]
+        self.input_names = [f"{f.point}.f[{i + 1}]" for f, _ in self.input_forces for i in range(dim)]
 
         g = scene.effects.get("gravity")
         self.gravity = None
         if g is not None and any(g):
             self.gravity = np.zeros(self.n)
             for i, b in enumerate(scene.bodies.values()):
-                self.gravity[DOF_PER_BODY * i:DOF_PER_BODY * i + 2] = b.mass * np.asarray(g)
-
+                self.gravity[self.v_index[i]:self.v_index[i] + dim] = b.mass * np.asarray(g)
+        self.masses = np.array([b.mass for b in scene.bodies.values()])
+        self.ground_motion = scene.effects.get("ground_acceleration")
+        if self.ground_motion is not None and self.ground_motion.input:
+            self.input_names += [f"ground.a[{i + 1}]" for i in range(dim)]
         self.q0, self.v0 = self.assemble_initial(q0, v0)
 
     # -- compilation helpers ---------------------------------------------------------------
     def _body(self, name):
         return -1 if name == GROUND else self.body_index[name]
 
-    def _angle_index(self, body_name):
-        i = self._body(body_name)
-        return DOF_PER_BODY * i + 2 if i >= 0 else -1
+    def _point(self, p):
+        i = self._body(p.body)
+        if self.dim == 2:
+            return PointKinematics(i, p.local, self.q_index[i] if i >= 0 else 0, self.v_index[i] if i >= 0 else 0)
+        return SpatialPoint(i, p.local, self.q_index[i] if i >= 0 else 0, self.v_index[i] if i >= 0 else 0,
+                            self.orientation, self._rotation_caches[i] if i >= 0 else None)
 
-    def _pair(self, a, b):
+    def angle_index(self, body_name):
+        """Velocity index of a planar body's angle (−1 for the ground)."""
+        i = self._body(body_name)
+        return self.v_index[i] + 2 if i >= 0 else -1
+
+    def pair(self, a, b):
         return PointPair(self.points[a], self.points[b])
 
     def _element(self, e, q0):
         if e.type in ("rotational_spring", "rotational_damper"):
-            ia, ib = self._angle_index(e.body_a), self._angle_index(e.body_b)
+            if self.dim == 3:
+                return el.SpatialRotationalElement(e, self.frames[e.body_a], self.frames[e.body_b], q0)
+            ia, ib = self.angle_index(e.body_a), self.angle_index(e.body_b)
             if e.type == "rotational_damper":
                 return el.RotationalDamper(e.name, ia, ib, e.coefficient)
             phi0 = e.free_length
             if phi0 is None:
                 phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
             return el.RotationalSpring(e.name, ia, ib, e.coefficient, phi0)
-        pair = self._pair(e.point_a, e.point_b)
+        pair = self.pair(e.point_a, e.point_b)
         labels = (e.point_a, e.point_b)
         L_initial = self._initial_length(e, pair, q0)
         free = (e.free_length if e.free_length is not None else L_initial) if e.type == "spring" else None
         if self.oracle:
             from . import oracle
-            return oracle.OracleElement(e, pair, self.scene.centripetal, free, labels)
+            return oracle.OracleElement(e, pair, self.scene.centripetal, free, labels, self)
         if e.type == "spring":
             return el.Spring(e.name, pair, e.coefficient, free, labels)
         if e.type == "damper":
@@ -145,7 +189,7 @@ class Mechanism:
 
     def _initial_length(self, e, pair, q0):
         r, _, _, _ = pair.evaluate(q0, np.zeros(self.n))
-        length = math.hypot(*r)
+        length = math.sqrt(float(r @ r))
         if not length > el.MIN_LENGTH:
             raise SceneError(self.scene.source, f"elements.{e.name}.between", [e.point_a, e.point_b],
                              f"terminals at least {el.MIN_LENGTH:g} m apart at t = 0",
@@ -153,9 +197,57 @@ class Mechanism:
                              "direction is undefined")
         return length
 
+    # -- coordinates -------------------------------------------------------------------------
+    def qdot(self, q, v, t=None):
+        """q̇ = B(q) v."""
+        if self.dim == 2:
+            return v
+        out = np.empty(self.nq)
+        o = self.orientation
+        for i, name in enumerate(self.body_names):
+            k, j = self.q_index[i], self.v_index[i]
+            out[k:k + 3] = v[j:j + 3]
+            out[k + 3:k + 3 + o.size] = o.rate(q[k + 3:k + 3 + o.size], v[j + 3:j + 6], name, t)
+        return out
+
+    def retract(self, q, dv):
+        """The coordinates moved by a small displacement dv given in velocity coordinates."""
+        if self.dim == 2:
+            return q + dv
+        q = q.copy()
+        o = self.orientation
+        for i in range(len(self.body_names)):
+            k, j = self.q_index[i], self.v_index[i]
+            q[k:k + 3] += dv[j:j + 3]
+            q[k + 3:k + 3 + o.size] = o.retract(q[k + 3:k + 3 + o.size], dv[j + 3:j + 6])
+        return q
+
+    def check_step(self, q_old, q_new, t, t_old=None):
+        """Z-X-Z Euler angles must not pass through their singularity (sin θ = 0) within a step:
+        the rates there are undefined and the result past it would be garbage."""
+        if self.dim != 3 or self.orientation.kind != "euler_zxz":
+            return
+        for i, name in enumerate(self.body_names):
+            k = self.q_index[i] + 4                              # θ of (φ, θ, ψ)
+            s0, s1 = math.sin(q_old[k]), math.sin(q_new[k])
+            if s0 * s1 <= 0.0 or abs(s1) < EULER_SINGULARITY:
+                raise SimulationError(
+                    f"body '{name}': its Z-X-Z Euler angles pass through their singularity (gimbal lock: "
+                    f"sin θ goes from {s0:.3g} to {s1:.3g} in the step"
+                    + (f" from t = {t_old:.6g} s" if t_old is not None else "") + "), where the angle rates are "
+                    "undefined; use orientation = \"quaternion\" (the default)", t)
+
+    def normalise(self, q):
+        if self.dim == 2 or self.orientation.kind != "quaternion":
+            return q
+        q = q.copy()
+        for k in self.q_index:
+            q[k + 3:k + 7] /= np.linalg.norm(q[k + 3:k + 7])
+        return q
+
     # -- constraints -----------------------------------------------------------------------
     def constraints(self, q, v):
-        """(C, C_q, γ) stacked over all joints."""
+        """(C, C_v, γ) stacked over all joints."""
         C = np.empty(self.m)
         Cq = np.zeros((self.m, self.n))
         gamma = np.empty(self.m)
@@ -175,17 +267,17 @@ class Mechanism:
         return float(np.max(np.abs(self.constraints(q, np.zeros(self.n))[0])))
 
     def project(self, q, v, tol=1e-13, max_iter=20):
-        """Move (q, v) onto the constraint manifold: Newton on C(q) = 0, then C_q v = 0
+        """Move (q, v) onto the constraint manifold: Newton on C(q) = 0, then C_v v = 0
         (minimum-norm corrections)."""
+        q = self.normalise(q)
         if not self.m:
             return q, v
-        q = q.copy()
         z = np.zeros(self.n)
         for _ in range(max_iter):
             C, Cq, _ = self.constraints(q, z)
             if np.max(np.abs(C)) <= tol:
                 break
-            q -= Cq.T @ np.linalg.solve(Cq @ Cq.T, C)
+            q = self.retract(q, -Cq.T @ np.linalg.solve(Cq @ Cq.T, C))
         _, Cq, _ = self.constraints(q, z)
         v = v - Cq.T @ np.linalg.solve(Cq @ Cq.T, Cq @ v)
         return q, v
@@ -206,16 +298,20 @@ class Mechanism:
         if np.linalg.matrix_rank(Cq) < self.m:
             raise SceneError(self.scene.source, "joints", [j.name for j in self.joints],
                              "independent joint constraints", "redundant or singular constraints at t = 0")
-        q, v = self.project(q, v)
-        return q, v
+        return self.project(q, v)
 
     # -- forces and dynamics -----------------------------------------------------------------
     def assemble(self, t, q, v, inputs=None, with_mass=True):
         """M + M_I (Eq. 33) and Q_e + Q_Iv: every force except the inerters' acceleration term."""
-        M = np.diag(self.mass_diagonal) if with_mass else None
+        M = self.M0.copy() if with_mass else None
         Q = np.zeros(self.n)
         if self.gravity is not None:
             Q += self.gravity
+        if self.dim == 3:
+            for i, J in enumerate(self.inertia_body):
+                k = self.v_index[i] + 3
+                w = v[k:k + 3]
+                Q[k:k + 3] -= cross(w, J @ w)                   # gyroscopic term, body frame
         for group in self.groups:
             geo = group[0].geometry(q, v)
             for e in group:
@@ -226,9 +322,13 @@ class Mechanism:
             self._add_point_force(Q, point, q, fn(t) * np.asarray(f.direction))
         for f, point in self.feedback:
             self._add_point_force(Q, point, q, self._pd_force(f, point, q, v))
-        if self.input_forces and inputs is not None:
+        if inputs is not None and len(inputs):
             for k, (f, point) in enumerate(self.input_forces):
                 self._add_point_force(Q, point, q, inputs[k * self.dim:(k + 1) * self.dim])
+        if self.ground_motion is not None:
+            a_g = self.ground_motion.acceleration(t, inputs, len(self.input_forces) * self.dim)
+            for i, m in enumerate(self.masses):            # bodies move relative to the ground frame
+                Q[self.v_index[i]:self.v_index[i] + self.dim] -= m * a_g
         return M, Q
 
     def generalized_forces(self, t, q, v, inputs=None):
@@ -237,25 +337,24 @@ class Mechanism:
     @staticmethod
     def _pd_force(f, point, q, v, static=False):
         """A grounded actuator along the fixed direction d: F = −[kp(d·r − ref) + kd d·v] d."""
-        r, rdot, _, _, _ = point.evaluate(q, v)
+        r, rdot, _, _ = point.evaluate(q, v)
         d = np.asarray(f.direction)
         along = float(d @ r) - f.reference
         rate = 0.0 if static else float(d @ rdot)
         return -(f.kp * along + f.kd * rate) * d
 
     def _add_point_force(self, Q, point, q, F):
-        _, _, u, u_t, _ = point.evaluate(q, np.zeros(self.n))
-        Q[point.dofs[:2]] += F
-        Q[point.dofs[2]] += float(u_t @ F)                      # virtual work through A_θ ū
+        _, _, H, _ = point.evaluate(q, np.zeros(self.n))
+        Q[point.dofs] += H.T @ F                                  # virtual work: δr = H δq
 
     def mass_matrix(self, q, v):
-        M = np.diag(self.mass_diagonal)
+        M = self.M0.copy()
         for e in self.inerters:
-            e.add_mass(q, v, M)                                # M + M_I, Eq. (33)
+            e.add_mass(q, v, M)                                    # M + M_I, Eq. (33)
         return M
 
     def accelerations(self, t, q, v, inputs=None, alpha=0.0):
-        """Solve Eq. (33) for (q̈, λ)."""
+        """Solve Eq. (33) for (v̇, λ)."""
         M, Q = self.assemble(t, q, v, inputs)
         if not self.m:
             return self._solve(M, Q, t), np.zeros(0)
@@ -281,21 +380,26 @@ class Mechanism:
 
     # -- energy ----------------------------------------------------------------------------
     def energy(self, q, v) -> float:
-        """T + V: ½q̇ᵀMq̇ + Σ ½bL̇² (inerters) + elastic and gravity potential. Conserved by the
+        """T + V: ½vᵀM v + Σ ½bL̇² (inerters) + elastic and gravity potential. Conserved by the
         corrected model without damping and forcing (the inerter adds ½bL̇² to T, Sec. 2.2)."""
-        E = 0.5 * float(v @ (self.mass_diagonal * v))
+        E = 0.5 * float(v @ (self.M0 @ v))
         for e in self.elements:
             E += e.kinetic(q, v) + e.potential(q)
         if self.gravity is not None:
-            E -= float(self.gravity @ q)
+            for i, m in enumerate(self.masses):
+                k, j = self.q_index[i], self.v_index[i]
+                E -= float(self.gravity[j:j + self.dim] @ q[k:k + self.dim])
         return E
 
     # -- description -----------------------------------------------------------------------
     def terms(self) -> list[str]:
         """What this compiled model computes: one line per term."""
         s = self.scene
-        lines = [f"{len(self.body_names)} bodies, {self.n} coordinates, {self.m} constraint rows "
-                 f"({'oracle: element forces from d²L/dt² by automatic differentiation' if self.oracle else 'fast path: Eqs. (15-20), (33)'})"]
+        path = ("oracle: element forces from d²L/dt² by automatic differentiation" if self.oracle
+                else "fast path: Eqs. (15-20), (33)")
+        orient = f", orientation {self.orientation.kind}" if self.dim == 3 else ""
+        lines = [f"{s.dimension}D, {len(self.body_names)} bodies, {self.nq} coordinates, {self.n} velocity "
+                 f"coordinates, {self.m} constraint rows{orient} ({path})"]
         for j in self.joints:
             lines.append(f"joint {j.name}: {j.kind}, {j.rows} rows")
         for e in self.elements:
@@ -311,6 +415,10 @@ class Mechanism:
         for f, _ in self.input_forces:
             lines.append(f"force {f.name}: input at {f.point} ({', '.join(n for n in self.input_names if n.startswith(f.point + '.'))})")
         lines.append("gravity: " + (f"{list(s.effects['gravity'])} m/s²" if self.gravity is not None else "not declared, not computed"))
+        if self.dim == 3:
+            lines.append("gyroscopic terms: ω × Jω per body")
+        if self.ground_motion is not None:
+            lines.append(f"ground motion: {self.ground_motion.describe()} (coordinates relative to the ground)")
         if not self.inerters:
             lines.append("inerters: none, no inerter term computed")
         return lines

@@ -19,7 +19,6 @@ import math
 import numpy as np
 
 from .elements import MIN_LENGTH, TerminalsMeet
-from .planar import DOF_PER_BODY
 
 
 class Jet:
@@ -61,6 +60,15 @@ class Jet:
 
     __rmul__ = __mul__
 
+    def reciprocal(self):
+        return self._chain(1.0 / self.v, -1.0 / self.v ** 2, 2.0 / self.v ** 3)
+
+    def __truediv__(self, o):
+        return self * (o.reciprocal() if isinstance(o, Jet) else 1.0 / o)
+
+    def __rtruediv__(self, o):
+        return self.reciprocal() * o
+
     def _chain(self, f0, f1, f2):
         """Apply a scalar function with value f0 and derivatives f1, f2 at self.v."""
         return Jet(f0, f1 * self.d1, f1 * self.d2 + f2 * self.d1 * self.d1, f1 * self.g)
@@ -82,42 +90,88 @@ def jcos(x: Jet) -> Jet:
 
 
 def point_position(point, coords):
-    """r = R + A(θ)ū written out from the rotation's definition, on Jets (or floats)."""
+    """r = R + A ū written out from the rotation's definition, on Jets (or floats): in 2D from
+    the angle, in 3D from the (not necessarily unit) quaternion p, A = I + 2/|p|² (w[v]× + [v]×²)."""
     if point.body < 0:
         return list(point.local)
-    x, y, th = coords
-    ux, uy = point.local
-    c, s = jcos(th), jsin(th)
-    return [x + c * ux - s * uy, y + s * ux + c * uy]
+    if len(coords) == 3:
+        x, y, th = coords
+        ux, uy = point.local
+        c, s = jcos(th), jsin(th)
+        return [x + c * ux - s * uy, y + s * ux + c * uy]
+    X, Y, Z, w, a, b, c = coords
+    u = point.local
+    k = 2.0 / (w * w + a * a + b * b + c * c)
+    vec = (a, b, c)
+    t = [vec[1] * u[2] - vec[2] * u[1], vec[2] * u[0] - vec[0] * u[2], vec[0] * u[1] - vec[1] * u[0]]  # v × u
+    tt = [vec[1] * t[2] - vec[2] * t[1], vec[2] * t[0] - vec[0] * t[2], vec[0] * t[1] - vec[1] * t[0]]  # v × (v × u)
+    return [P + u[i] + k * (w * t[i] + tt[i]) for i, P in enumerate((X, Y, Z))]
+
+
+def _seed(q, v, qi, vi, dim, n, k):
+    """Jets for one body's coordinates along the motion, with gradients w.r.t. its velocity
+    coordinates (placed at columns k...). 2D: q = (x, y, θ), q̇ = v, q̈|v̇=0 = 0. 3D: R with
+    Ṙ = v; quaternion p with ṗ = ½ p⊗(0, ω) and p̈|ω̇=0 = ½ ṗ⊗(0, ω) = −¼|ω|² p."""
+    if dim == 2:
+        jets = []
+        for j in range(3):
+            g = np.zeros(n)
+            g[k + j] = 1.0
+            jets.append(Jet(float(q[qi + j]), float(v[vi + j]), 0.0, g))
+        return jets
+    jets = []
+    for j in range(3):
+        g = np.zeros(n)
+        g[k + j] = 1.0
+        jets.append(Jet(float(q[qi + j]), float(v[vi + j]), 0.0, g))
+    p = np.asarray(q[qi + 3:qi + 7], dtype=float)
+    w = np.asarray(v[vi + 3:vi + 6], dtype=float)
+
+    def rate(pp, ww):                                          # ½ p ⊗ (0, ω)
+        a, b, c = ww
+        return 0.5 * np.array((-pp[1] * a - pp[2] * b - pp[3] * c, pp[0] * a + pp[2] * c - pp[3] * b,
+                               pp[0] * b + pp[3] * a - pp[1] * c, pp[0] * c + pp[1] * b - pp[2] * a))
+    pdot = rate(p, w)
+    pddot = rate(pdot, w)
+    basis = [rate(p, e) for e in np.eye(3)]
+    for i in range(4):
+        g = np.zeros(n)
+        for j in range(3):
+            g[k + 3 + j] = basis[j][i]
+        jets.append(Jet(float(p[i]), float(pdot[i]), float(pddot[i]), g))
+    return jets
 
 
 class DistanceProbe:
     """L(q) between two points, with ∇L, L̇, q̇ᵀ∇²Lq̇ and the terminal velocity ṙ, by Jets."""
 
-    def __init__(self, pair, labels, name):
+    def __init__(self, pair, labels, name, mech):
         self.pair = pair
         self.dofs = pair.dofs
         self.labels = labels
         self.name = name
+        self.dim = mech.dim
+        if mech.dim == 3 and mech.orientation.kind != "quaternion":
+            from .errors import SceneError
+            raise SceneError(mech.scene.source, "scene.orientation", mech.orientation.kind,
+                             "orientation = \"quaternion\" for the oracle", "the oracle differentiates "
+                             "quaternion kinematics only")
 
     def evaluate(self, q, v):
         n = len(self.dofs)
         coords, k = {}, 0
+        nvb = 3 if self.dim == 2 else 6
         for p in (self.pair.a, self.pair.b):
             if p.body >= 0 and p.body not in coords:
-                base = DOF_PER_BODY * p.body
-                jets = []
-                for j in range(DOF_PER_BODY):
-                    g = np.zeros(n)
-                    g[k] = 1.0
-                    jets.append(Jet(float(q[base + j]), float(v[base + j]), 0.0, g))
-                    k += 1
-                coords[p.body] = jets
+                coords[p.body] = _seed(q, v, p.qi, p.dofs[0], self.dim, n, k)
+                k += nvb
         ra = point_position(self.pair.a, coords.get(self.pair.a.body))
         rb = point_position(self.pair.b, coords.get(self.pair.b.body))
         r = [b - a for a, b in zip(ra, rb)]
         r = [c if isinstance(c, Jet) else Jet.constant(c, n) for c in r]
-        L2 = r[0] * r[0] + r[1] * r[1]
+        L2 = r[0] * r[0]
+        for c in r[1:]:
+            L2 = L2 + c * c
         if not math.sqrt(L2.v) > MIN_LENGTH:
             raise TerminalsMeet(
                 f"element '{self.name}': its terminals {self.labels[0]} and {self.labels[1]} meet "
@@ -130,14 +184,14 @@ class DistanceProbe:
 class OracleElement:
     """Spring, damper or inerter through L(q) and its derivatives."""
 
-    def __init__(self, spec, pair, centripetal, free_length, labels):
+    def __init__(self, spec, pair, centripetal, free_length, labels, mech):
         self.name = spec.name
         self.kind = spec.type
         self.coefficient = float(spec.coefficient)
         self.coefficient_name = {"spring": "k", "damper": "c", "inerter": "b"}[spec.type]
         self.centripetal = bool(centripetal)
         self.free_length = free_length
-        self.probe = DistanceProbe(pair, labels, spec.name)
+        self.probe = DistanceProbe(pair, labels, spec.name, mech)
         self.pair = pair
 
     def _force_parts(self, L, rdot):

@@ -25,12 +25,16 @@ KNOWN_EFFECTS = {
     "centripetal": "inerter force with the centripetal term, F = b d²L/dt² (Eq. 9); "
                    "false gives the uncorrected F = b r̈·r̂ (Eq. 8)",
     "gravity": "uniform gravity, a vector in m/s²",
+    "ground_acceleration": "the ground moved with a prescribed acceleration (a CSV record, a sine or FMU "
+                           "inputs ground.a[i]); coordinates are relative to the ground",
 }
 
 ELEMENT_TYPES = ("spring", "damper", "inerter", "rotational_spring", "rotational_damper")
 JOINT_TYPES = ("revolute", "prismatic")
+JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed")
+ORIENTATIONS = ("quaternion", "euler_zxz")
 FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
-METRIC_KINDS = ("natural_frequency", "free_oscillation", "harmonics", "steady_state")
+METRIC_KINDS = ("natural_frequency", "free_oscillation", "harmonics", "steady_state", "peak")
 METHODS = ("DOP853", "RK45", "Radau", "BDF", "LSODA", "RK4")
 CONSTRAINT_TREATMENTS = ("baumgarte", "projection")
 
@@ -50,11 +54,12 @@ class Parameter:
 class Body:
     name: str
     mass: float
-    inertia: float
+    inertia: Any                    # 2D: J about the centre of mass; 3D: 3×3 tensor in the body frame
     position: tuple[float, ...]
-    angle: float
+    angle: float                    # 2D
     velocity: tuple[float, ...]
-    angular_velocity: float
+    angular_velocity: Any           # 2D: θ̇; 3D: ω in the global frame
+    rotation: Any = None            # 3D: initial rotation matrix (3×3 tuple)
 
 
 @dataclass(frozen=True)
@@ -83,6 +88,7 @@ class Element:
     body_b: str | None = None
     coefficient: float = 0.0   # k, c or b
     free_length: float | None = None  # spring: L0 (None: the initial distance); rotational: free angle
+    axis: tuple[float, ...] | None = None   # 3D rotational elements: axis in body a's frame
 
 
 @dataclass(frozen=True)
@@ -134,6 +140,7 @@ class Scene:
     name: str
     description: str
     dimension: int
+    orientation: str
     parameters: dict[str, Parameter]
     effects: dict[str, Any]
     bodies: dict[str, Body]
@@ -148,6 +155,12 @@ class Scene:
     @property
     def centripetal(self) -> bool:
         return bool(self.effects.get("centripetal", True))
+
+    @property
+    def data_files(self) -> list[str]:
+        """Files the scene reads besides itself (paths relative to the scene file)."""
+        g = self.effects.get("ground_acceleration")
+        return [g.source] if g is not None and g.record is not None else []
 
 
 # ----------------------------------------------------------------------------------------------
@@ -285,7 +298,9 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
     """Sort overrides into parameters, effects and experiment settings; unknown names are errors."""
     params, effects, experiment = {}, {}, {}
     for key, value in overrides.items():
-        if key.startswith("effects."):
+        if key == "scene.orientation":
+            experiment["__orientation__"] = value
+        elif key.startswith("effects."):
             name = key[len("effects."):]
             if name not in KNOWN_EFFECTS:
                 raise SceneError(what, key, value, "an effect: " + ", ".join(f"effects.{e}" for e in KNOWN_EFFECTS),
@@ -302,7 +317,7 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
         else:
             raise SceneError(what, key, value,
                              "a parameter of " + source + ": " + _listing(parameter_names)
-                             + ", or effects.NAME, or experiment.NAME", "unknown name")
+                             + ", or effects.NAME, experiment.NAME, scene.orientation", "unknown name")
     return params, effects, experiment
 
 
@@ -310,12 +325,25 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     base = _Reader(source, {})
     base.table(data, "", TOP_LEVEL)
 
-    head = base.table(data.get("scene", {}), "scene", {"name": False, "description": False, "dimension": False})
+    head = base.table(data.get("scene", {}), "scene", {"name": False, "description": False, "dimension": False,
+                                                       "orientation": False})
     name = head.get("name", Path(source).stem)
     _check_name(base, name, "scene.name")
     dimension = head.get("dimension", 2)
-    if dimension != 2 or isinstance(dimension, bool):
-        raise base.error("scene.dimension", dimension, "2 (3D scenes are not supported yet)", "unsupported dimension")
+    if dimension not in (2, 3) or isinstance(dimension, bool):
+        raise base.error("scene.dimension", dimension, "2 or 3", "unsupported dimension")
+    orientation = head.get("orientation", "quaternion")
+    p_names = set(data.get("parameters", {})) if isinstance(data.get("parameters", {}), dict) else set()
+    orientation_override = split_overrides(source, overrides, p_names)[2].get("__orientation__")
+    if orientation_override is not None:
+        if dimension != 3:
+            raise SceneError("--set", "scene.orientation", orientation_override, "a 3D scene", "no orientation in 2D")
+        orientation = orientation_override
+    if orientation not in ORIENTATIONS:
+        raise base.error("scene.orientation", orientation, "one of: " + ", ".join(ORIENTATIONS), "unknown value")
+    if dimension == 2 and "orientation" in head:
+        raise base.error("scene.orientation", orientation, "no orientation choice in 2D (one angle per body)",
+                         "unexpected field")
     description = head.get("description", "")
     if not isinstance(description, str):
         raise base.error("scene.description", description, "a string", "wrong type")
@@ -324,24 +352,25 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     if not isinstance(raw_params, dict):
         raise base.error("parameters", raw_params, "a table of named values", "not a table")
     p_over, e_over, x_over = split_overrides(source, overrides, set(raw_params))
+    x_over.pop("__orientation__", None)
     values = evaluate_parameters(raw_params, source, fixed=p_over)
     meta = parameter_meta(raw_params)
     parameters = {n: Parameter(n, values[n], meta[n]["unit"], meta[n]["description"]) for n in values}
     r = _Reader(source, values)
 
-    effects = _read_effects(r, data.get("effects", {}), e_over, dimension)
+    effects = _read_effects(r, data.get("effects", {}), e_over, dimension, Path(source).parent)
     bodies, points = _read_bodies(r, data, dimension)
     joints = _read_joints(r, data.get("joints", {}), points, dimension)
-    elements = _read_elements(r, data.get("elements", {}), points, bodies)
+    elements = _read_elements(r, data.get("elements", {}), points, bodies, dimension)
     forces = _read_forces(r, data.get("forces", {}), points, dimension)
     experiment = _read_experiment(r, data.get("experiment", {}), x_over)
     outputs = _signal_names(points, elements, dimension)
     metrics = _read_metrics(r, data.get("metrics", []), outputs)
-    return Scene(source, name, description, dimension, parameters, effects, bodies, points, joints,
+    return Scene(source, name, description, dimension, orientation, parameters, effects, bodies, points, joints,
                  elements, forces, experiment, metrics, raw=data)
 
 
-def _read_effects(r: _Reader, raw, overrides, dimension):
+def _read_effects(r: _Reader, raw, overrides, dimension, folder):
     if not isinstance(raw, dict):
         raise r.error("effects", raw, "a table of effects", "not a table")
     merged = dict(raw)
@@ -357,7 +386,42 @@ def _read_effects(r: _Reader, raw, overrides, dimension):
             effects[name] = value
         elif name == "gravity":
             effects[name] = r.vector(merged, name, "effects", dimension)
+        elif name == "ground_acceleration":
+            effects[name] = _read_ground_motion(r, value, fld, dimension, folder)
     return effects
+
+
+def _read_ground_motion(r: _Reader, spec, fld, dimension, folder):
+    from .ground_motion import GroundMotion
+    r.table(spec, fld, {"file": False, "amplitude": False, "frequency": False, "scale": False, "input": False})
+    scale = r.number(spec, "scale", fld, default=1.0)
+    kinds = [k for k in ("file", "amplitude", "input") if k in spec]
+    if len(kinds) != 1:
+        raise r.error(fld, spec, "exactly one of: file (a CSV record), amplitude + frequency (a sine), "
+                      "input = true (FMU inputs)", "ambiguous or missing source")
+    if "input" in spec:
+        if spec["input"] is not True:
+            raise r.error(f"{fld}.input", spec["input"], "true", "wrong value")
+        return GroundMotion(dimension, scale=scale, input=True)
+    if "amplitude" in spec:
+        return GroundMotion(dimension, amplitude=r.vector(spec, "amplitude", fld, dimension),
+                            frequency=r.number(spec, "frequency", fld, minimum=0.0, exclusive=True), scale=scale)
+    name = spec["file"]
+    if not isinstance(name, str):
+        raise r.error(f"{fld}.file", name, "a CSV file name, relative to the scene file", "wrong type")
+    path = (folder / name)
+    try:
+        import numpy as np
+        table = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
+    except OSError:
+        raise r.error(f"{fld}.file", str(path), "an existing CSV file (time, a_1 ... a_dim)", "file not found")
+    except ValueError as exc:
+        raise r.error(f"{fld}.file", str(path), "numeric CSV columns: time, a_1 ... a_dim", f"unreadable ({exc})")
+    if table.shape[1] != dimension + 1 or table.shape[0] < 2 or not np.all(np.isfinite(table)) \
+            or np.any(np.diff(table[:, 0]) <= 0):
+        raise r.error(f"{fld}.file", str(path), f"≥ 2 rows of {dimension + 1} finite columns (time increasing, "
+                      f"then {dimension} accelerations in m/s²)", "wrong shape or values")
+    return GroundMotion(dimension, record=(table[:, 0], table[:, 1:].T.copy()), scale=scale, source=name)
 
 
 def _read_bodies(r: _Reader, data, dimension):
@@ -385,21 +449,67 @@ def _read_bodies(r: _Reader, data, dimension):
         _check_name(r, bname, fld)
         if bname == GROUND:
             raise r.error(fld, bname, "a body name other than 'ground'", "reserved name")
-        r.table(raw, fld, {"mass": True, "inertia": True, "position": True, "angle": False,
-                           "velocity": False, "angular_velocity": False, "points": False})
-        bodies[bname] = Body(
-            bname,
-            mass=r.number(raw, "mass", fld, minimum=0.0, exclusive=True),
-            inertia=r.number(raw, "inertia", fld, minimum=0.0),
-            position=r.vector(raw, "position", fld, dimension),
-            angle=r.number(raw, "angle", fld, default=0.0),
-            velocity=r.vector(raw, "velocity", fld, dimension, default=zero),
-            angular_velocity=r.number(raw, "angular_velocity", fld, default=0.0),
-        )
+        if dimension == 2:
+            r.table(raw, fld, {"mass": True, "inertia": True, "position": True, "angle": False,
+                               "velocity": False, "angular_velocity": False, "points": False})
+            bodies[bname] = Body(
+                bname,
+                mass=r.number(raw, "mass", fld, minimum=0.0, exclusive=True),
+                inertia=r.number(raw, "inertia", fld, minimum=0.0),
+                position=r.vector(raw, "position", fld, dimension),
+                angle=r.number(raw, "angle", fld, default=0.0),
+                velocity=r.vector(raw, "velocity", fld, dimension, default=zero),
+                angular_velocity=r.number(raw, "angular_velocity", fld, default=0.0),
+            )
+        else:
+            r.table(raw, fld, {"mass": True, "inertia": True, "position": True, "axis": False, "angle": False,
+                               "euler": False, "velocity": False, "angular_velocity": False, "points": False})
+            bodies[bname] = Body(
+                bname,
+                mass=r.number(raw, "mass", fld, minimum=0.0, exclusive=True),
+                inertia=_read_inertia(r, raw, fld),
+                position=r.vector(raw, "position", fld, 3),
+                angle=0.0,
+                velocity=r.vector(raw, "velocity", fld, 3, default=zero),
+                angular_velocity=r.vector(raw, "angular_velocity", fld, 3, default=zero),
+                rotation=_read_rotation(r, raw, fld),
+            )
         add_points(bname, raw.get("points", {}), f"{fld}.points")
     if not bodies:
         raise r.error("bodies", {}, "at least one body", "no bodies")
     return bodies, points
+
+
+def _read_inertia(r: _Reader, raw, fld):
+    """A 3D inertia: three principal values (body axes) or a symmetric positive semi-definite 3×3."""
+    import numpy as np
+    value = raw["inertia"]
+    path = f"{fld}.inertia"
+    expected = "3 principal moments [Jx, Jy, Jz] ≥ 0 or a symmetric 3×3 matrix, kg.m2"
+    if isinstance(value, list) and len(value) == 3 and all(not isinstance(v, list) for v in value):
+        J = np.diag(r.vector(raw, "inertia", fld, 3))
+    elif isinstance(value, list) and len(value) == 3 and all(isinstance(v, list) and len(v) == 3 for v in value):
+        J = np.array([[evaluate(x, r.names, r.source, f"{path}[{i + 1}][{j + 1}]") for j, x in enumerate(row)]
+                      for i, row in enumerate(value)])
+    else:
+        raise r.error(path, value, expected, "wrong shape")
+    if not np.allclose(J, J.T, rtol=0, atol=1e-12 * max(1.0, np.abs(J).max())) \
+            or np.min(np.linalg.eigvalsh(J)) < -1e-12 * max(1.0, np.abs(J).max()):
+        raise r.error(path, value, expected, "not symmetric positive semi-definite")
+    return tuple(tuple(float(x) for x in row) for row in J)
+
+
+def _read_rotation(r: _Reader, raw, fld):
+    """Initial rotation: axis (default Z) and angle, or Z-X-Z Euler angles [φ, θ, ψ]."""
+    from .spatial import axis_angle_matrix, euler_matrix
+    if "euler" in raw:
+        if "axis" in raw or "angle" in raw:
+            raise r.error(f"{fld}.euler", raw["euler"], "either euler = [φ, θ, ψ] or axis and angle", "both given")
+        A = euler_matrix(r.vector(raw, "euler", fld, 3))
+    else:
+        axis = r.vector(raw, "axis", fld, 3, default=(0.0, 0.0, 1.0), unit_length=True)
+        A = axis_angle_matrix(axis, r.number(raw, "angle", fld, default=0.0))
+    return tuple(tuple(float(x) for x in row) for row in A)
 
 
 def _read_joints(r: _Reader, raw, points, dimension):
@@ -410,21 +520,23 @@ def _read_joints(r: _Reader, raw, points, dimension):
         fld = f"joints.{jname}"
         _check_name(r, jname, fld)
         r.table(spec, fld, {"type": True, "between": True, "axis": False})
-        jtype = r.string(spec, "type", fld, JOINT_TYPES)
+        jtype = r.string(spec, "type", fld, JOINT_TYPES if dimension == 2 else JOINT_TYPES_3D)
         a, b = r.name_pair(spec, "between", fld, points, "point")
         if points[a].body == points[b].body:
             raise r.error(f"{fld}.between", [a, b], "points on two different bodies (or a body and the ground)",
                           f"both points are on {points[a].body}")
         axis = None
-        if jtype == "prismatic":
+        needs_axis = jtype == "prismatic" or (dimension == 3 and jtype == "revolute")
+        if needs_axis:
             axis = r.vector(spec, "axis", fld, dimension, unit_length=True)
         elif "axis" in spec:
-            raise r.error(f"{fld}.axis", spec["axis"], "no axis for a revolute joint in 2D", "unexpected field")
+            raise r.error(f"{fld}.axis", spec["axis"], f"no axis for a {jtype} joint in {dimension}D",
+                          "unexpected field")
         joints[jname] = Joint(jname, jtype, a, b, axis)
     return joints
 
 
-def _read_elements(r: _Reader, raw, points, bodies):
+def _read_elements(r: _Reader, raw, points, bodies, dimension):
     if not isinstance(raw, dict):
         raise r.error("elements", raw, "a table of elements", "not a table")
     elements = {}
@@ -445,11 +557,15 @@ def _read_elements(r: _Reader, raw, points, bodies):
             allowed = {"type": True, "bodies": True, key: True}
             if etype == "rotational_spring":
                 allowed["angle"] = False
+            if dimension == 3:
+                allowed["axis"] = True
             r.table(spec, fld, allowed)
             a, b = r.name_pair(spec, "bodies", fld, body_names, "body")
             coef = r.number(spec, key, fld, minimum=0.0)
             free = r.number(spec, "angle", fld, required=False) if etype == "rotational_spring" else None
-            elements[ename] = Element(ename, etype, body_a=a, body_b=b, coefficient=coef, free_length=free)
+            axis = r.vector(spec, "axis", fld, 3, unit_length=True) if dimension == 3 else None
+            elements[ename] = Element(ename, etype, body_a=a, body_b=b, coefficient=coef, free_length=free,
+                                      axis=axis)
         else:
             allowed = {"type": True, "between": True, key: True}
             if etype == "spring":

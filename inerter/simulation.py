@@ -44,11 +44,13 @@ class Settings:
 
 
 def derivative(mech, inputs, alpha):
-    n = mech.n
+    """y = [q, v] ↦ [q̇ = B(q) v, v̇ from Eq. (33)]."""
+    nq = mech.nq
 
     def fun(t, y):
-        a, _ = mech.accelerations(t, y[:n], y[n:], inputs, alpha)
-        return np.concatenate((y[n:], a))
+        q, v = y[:nq], y[nq:]
+        a, _ = mech.accelerations(t, q, v, inputs, alpha)
+        return np.concatenate((mech.qdot(q, v, t), a))
     return fun
 
 
@@ -70,11 +72,11 @@ class Run:
 def integrate(mech, settings: Settings, inputs=None) -> Run:
     """Integrate from the mechanism's initial state to settings.stop_time. A failure keeps
     everything computed up to the last good step (status "failed", message says where and why)."""
-    n = mech.n
+    n = mech.nq
     fun = derivative(mech, inputs, settings.alpha)
     grid = np.arange(0.0, settings.stop_time + 0.5 * settings.output_interval, settings.output_interval)
     grid[-1] = min(grid[-1], settings.stop_time)
-    out = np.empty((len(grid), 2 * n))
+    out = np.empty((len(grid), mech.nq + mech.n))
     y = np.concatenate((mech.q0, mech.v0))
     out[0] = y
     k = 1
@@ -93,6 +95,7 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
             t_end = grid[k] if project else settings.stop_time
             solver = make_solver(settings.method, fun, t0, y, t_end, settings.rtol, settings.atol,
                                  settings.step, first_step)
+            dense_prev_y = y.copy()
             while solver.status == "running":
                 message_step = solver.step()
                 steps += 1
@@ -103,6 +106,8 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
                         f"more than max_steps = {settings.max_steps} integrator steps (step size "
                         f"{solver.t - solver.t_old:.3g} s): the scene may be stiff for {settings.method}; try "
                         "method = \"Radau\" or \"BDF\"", solver.t)
+                mech.check_step(dense_prev_y, solver.y, solver.t, solver.t_old)
+                dense_prev_y = solver.y.copy()
                 dense = solver.dense_output()
                 ts.append(solver.t)
                 interpolants.append(dense)
@@ -153,7 +158,7 @@ class Stepper:
         self.inputs[self.input_index[name]] = value
 
     def step(self, t_end):
-        n = self.mech.n
+        n = self.mech.nq
         if not t_end > self.time:
             raise SimulationError(f"step to t = {t_end!r} is not after the current time", self.time)
         s = self.settings
@@ -162,9 +167,12 @@ class Stepper:
         steps = 0
         try:
             solver = make_solver(s.method, fun, self.time, self.y, t_end, s.rtol, s.atol, s.step, self.h)
+            previous = self.y
             while solver.status == "running":
                 msg = solver.step()
                 steps += 1
+                self.mech.check_step(previous, solver.y, solver.t, solver.t_old)
+                previous = solver.y.copy()
                 if solver.status == "failed":
                     raise SimulationError(f"the {s.method} integrator failed: {msg}", solver.t)
                 if steps > s.max_steps:
@@ -186,7 +194,7 @@ class Stepper:
         self.steps += steps
 
     def outputs(self) -> dict:
-        n = self.mech.n
+        n = self.mech.nq
         values = self.signals.evaluate(self.time, self.y[:n], self.y[n:], self.inputs, self.settings.alpha)
         return dict(zip(self.signals.names, values.tolist()))
 

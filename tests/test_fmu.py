@@ -1,17 +1,25 @@
 """The FMI 2.0 co-simulation FMUs (inerter.fmu_build, fmu_src/), checked through fmpy.
 
 One FMU per scene in scenarios/, built once per session. What is checked: the model description
-(fmpy's validator, names, units, descriptions), a run in a fresh process against the solver, two
-scenes in one process, bit-identical rollback through FMU state (in memory and serialized),
-and that every error leaves the importer standing with a status and a logged message.
+(fmpy's validator, names, units, descriptions), the binaries (the status shim in front of
+pythonfmu's), a run in a fresh process against the solver, two scenes in one process, a second
+importer, bit-identical rollback through FMU state (in memory and serialized), and that every
+error gives the status FMI 2.0 asks for with a logged message, never fmi2Fatal:
 
-pythonfmu 0.7.0 turns every Python exception into fmi2Fatal and lets a Python slave return no
-other status than fmi2OK and (from doStep) fmi2Discard, so errors are reported as a logged
-message followed by fmi2Discard from the next doStep (see fmu_src/inerter_slave.py).
+- an invalid setting: exitInitializationMode fmi2Error;
+- a non-finite input, a fixed parameter set after initialisation: setReal fmi2Error, the state
+  unchanged;
+- a step the solver cannot complete: doStep fmi2Discard, the last good state kept.
+
+Those statuses come from the status shim (fmu_src/status_shim.c), the FMU's Linux binary; an FMU
+built without it reports errors through the next doStep's fmi2Discard, which is checked too.
 """
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import importlib.util
+import io
 import json
 import math
 import os
@@ -25,7 +33,7 @@ import numpy as np
 import pytest
 
 fmpy = pytest.importorskip("fmpy")
-pytest.importorskip("pythonfmu")
+pythonfmu = pytest.importorskip("pythonfmu")
 
 from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
@@ -42,76 +50,68 @@ SCENE_PARAMS = [pytest.param(p, id=p.stem) for p in SCENES] or [
     pytest.param(None, id="no-scenes", marks=pytest.mark.skip(reason="no scene in scenarios/"))]
 
 FMI_DISCARD = 2
+FMI_ERROR = 3
+FMI_FATAL = 4
 #: Length of the runs compared with the solver (s): short, the comparison needs no more.
 RUN_TIME = 0.5
 RTOL = 1e-10
 
-# A small scene with an input force (the scenes in scenarios/ have none).
-INPUT_SCENE = """
-[scene]
-name = "fmu_test_input"
-description = "a mass on a slider, a spring and an inerter to a pole, pushed by an input force"
+#: A scene with an input force (`function = "input"` at C) and the input used from it.
+INPUT_SCENE = ROOT / "scenarios" / "two_bar_2d.toml"
+INPUT = "C.f[2]"
 
-[parameters]
-m = { value = 2.0, unit = "kg", description = "mass" }
-k = { value = 50.0, unit = "N/m", description = "spring stiffness" }
-b = { value = 1.0, unit = "kg", description = "inertance" }
-
-[ground.points]
-O = [0, 0]
-G = [1, 0]
-
-[bodies.mass]
-mass = "m"
-inertia = 0
-position = [1, 1]
-points = { P = [0, 0] }
-
-[joints.slider]
-type = "prismatic"
-between = ["G", "P"]
-axis = [0, 1]
-
-[elements.spring]
-type = "spring"
-between = ["O", "P"]
-k = "k"
-
-[elements.inerter]
-type = "inerter"
-between = ["O", "P"]
-b = "b"
-
-[forces.push]
-point = "P"
-function = "input"
-
-[experiment]
-stop_time = 1.0
-output_interval = 0.01
-method = "DOP853"
-rtol = 1e-10
-atol = 1e-12
-"""
+#: Every function of FMI 2.0's co-simulation API.
+FMI2_COSIMULATION_FUNCTIONS = [
+    "fmi2GetTypesPlatform", "fmi2GetVersion", "fmi2SetDebugLogging", "fmi2Instantiate",
+    "fmi2FreeInstance", "fmi2SetupExperiment", "fmi2EnterInitializationMode",
+    "fmi2ExitInitializationMode", "fmi2Terminate", "fmi2Reset", "fmi2GetReal", "fmi2GetInteger",
+    "fmi2GetBoolean", "fmi2GetString", "fmi2SetReal", "fmi2SetInteger", "fmi2SetBoolean",
+    "fmi2SetString", "fmi2GetFMUstate", "fmi2SetFMUstate", "fmi2FreeFMUstate",
+    "fmi2SerializedFMUstateSize", "fmi2SerializeFMUstate", "fmi2DeSerializeFMUstate",
+    "fmi2GetDirectionalDerivative", "fmi2SetRealInputDerivatives",
+    "fmi2GetRealOutputDerivatives", "fmi2DoStep", "fmi2CancelStep", "fmi2GetStatus",
+    "fmi2GetRealStatus", "fmi2GetIntegerStatus", "fmi2GetBooleanStatus", "fmi2GetStringStatus"]
 
 
 # ----------------------------------------------------------------------------------------------
 # Fixtures and helpers
 # ----------------------------------------------------------------------------------------------
+class _Built(dict):
+    """scene path -> its FMU, each built once when first asked for (a scene that cannot be built
+    fails its own tests only)."""
+
+    def __init__(self, out: Path):
+        super().__init__()
+        self.out = out
+
+    def __missing__(self, scene: Path) -> Path:
+        self[scene] = fmu_build.build(scene, self.out, force=True)
+        return self[scene]
+
+
 @pytest.fixture(scope="session")
 def fmus(tmp_path_factory):
-    """scene path -> its FMU, all built once (into a temporary folder, not build/)."""
-    out = tmp_path_factory.mktemp("fmu")
-    return {scene: fmu_build.build(scene, out, force=True) for scene in SCENES}
+    """scene path -> its FMU, built once (into a temporary folder, not build/)."""
+    return _Built(tmp_path_factory.mktemp("fmu"))
 
 
 @pytest.fixture(scope="session")
-def input_fmu(tmp_path_factory):
+def input_fmu(fmus):
     """(scene path, FMU) of INPUT_SCENE."""
-    folder = tmp_path_factory.mktemp("input_scene")
-    scene = folder / "fmu_test_input.toml"
-    scene.write_text(INPUT_SCENE)
-    return scene, fmu_build.build(scene, folder / "fmu", force=True)
+    if INPUT_SCENE not in SCENES:
+        pytest.skip(f"no {INPUT_SCENE.name} in scenarios/")
+    return INPUT_SCENE, fmus[INPUT_SCENE]
+
+
+def shim_expected() -> bool:
+    """Whether this machine builds FMUs with the status shim."""
+    return fmu_build._shim_compiler()[0] is not None
+
+
+@pytest.fixture
+def needs_shim():
+    if not shim_expected():
+        pytest.skip("no status shim here (gcc missing, or not Linux x86-64)")
 
 
 @pytest.fixture(scope="session")
@@ -129,11 +129,11 @@ def unzipped(tmp_path_factory):
 class Instance:
     """One FMU instance through fmpy's low-level API, with its log messages captured."""
 
-    def __init__(self, unzipdir: str, name: str = "instance"):
+    def __init__(self, unzipdir: str, name: str = "instance", messages=None):
         self.md = read_model_description(unzipdir)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
-        self.messages: list[tuple[int, str]] = []
+        self.messages: list[tuple[int, str]] = [] if messages is None else messages
         # The callbacks must live as long as the instance.
         self.callbacks = fmi2CallbackFunctions()
         self.callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
@@ -165,6 +165,9 @@ class Instance:
     def logged(self) -> str:
         return "\n".join(m for _, m in self.messages)
 
+    def errors(self) -> list[str]:
+        return [m for s, m in self.messages if s == FMI_ERROR]
+
     def close(self):
         try:
             self.fmu.terminate()
@@ -184,6 +187,8 @@ def instance(unzipped):
     yield make
     for inst in reversed(made):
         inst.close()
+    for inst in made:     # nothing is fatal
+        assert not [m for s, m in inst.messages if s >= FMI_FATAL], inst.logged()
 
 
 def run_fresh(tmp_path, jobs) -> dict:
@@ -303,8 +308,12 @@ def test_variables_are_named_and_united_like_the_model(fmus, scene):
     assert [v.name for v in outputs] == [o["name"] for o in model.output_info()]
     assert [v.unit for v in outputs] == [o["unit"] for o in model.output_info()]
     assert all(v.initial == "exact" for v in outputs)
+    status = vars_[fmu_build.STATUS_VARIABLE]     # read by the status shim
+    assert (status.type, status.causality, status.variability) == ("Integer", "local", "discrete")
+    assert status.valueReference == max(v.valueReference for v in md.modelVariables)
     defined = {u.name: u.baseUnit for u in md.unitDefinitions}
-    assert defined["N"].kg == 1 and defined["N"].m == 1 and defined["N"].s == -2
+    if "N" in defined:
+        assert defined["N"].kg == 1 and defined["N"].m == 1 and defined["N"].s == -2
     assert {v.unit for v in md.modelVariables if v.unit} <= set(defined)
 
 
@@ -326,11 +335,58 @@ def test_the_fmu_ships_the_solver_and_the_scene(fmus, scene):
     assert not any("__pycache__" in f or f.endswith(".pyc") for f in files)
 
 
+@pytest.mark.parametrize("scene", SCENE_PARAMS)
+def test_the_linux_binary_is_the_status_shim_in_front_of_pythonfmus(fmus, scene):
+    name = inerter.load(scene).name
+    pythonfmu_binaries = Path(pythonfmu.__file__).parent / "resources" / "binaries"
+    with zipfile.ZipFile(fmus[scene]) as z:
+        binaries = {f for f in z.namelist() if f.startswith("binaries/")}
+        linux = z.read(f"binaries/linux64/{name}.so")
+        # The win64 binary is pythonfmu's own: there, errors come from the next doStep.
+        assert (z.read(f"binaries/win64/{name}.dll")
+                == (pythonfmu_binaries / "win64" / "pythonfmu-export.dll").read_bytes())
+        original = (pythonfmu_binaries / "linux64" / "libpythonfmu-export.so").read_bytes()
+        if shim_expected():
+            assert binaries == {f"binaries/linux64/{name}.so",
+                                f"binaries/linux64/{name}{fmu_build.ORIGINAL_SUFFIX}",
+                                f"binaries/win64/{name}.dll"}
+            assert z.read(f"binaries/linux64/{name}{fmu_build.ORIGINAL_SUFFIX}") == original
+            assert linux != original and linux.startswith(b"\x7fELF")
+        else:
+            assert linux == original
+
+
+def test_the_status_shim_exports_the_cosimulation_api(input_fmu, unzipped, needs_shim):
+    scene, fmu = input_fmu
+    folder = Path(unzipped(fmu)) / "binaries" / "linux64"
+    shim = ctypes.CDLL(str(folder / f"{inerter.load(scene).name}.so"))
+    assert [f for f in FMI2_COSIMULATION_FUNCTIONS if not hasattr(shim, f)] == []
+    proc = subprocess.run(["nm", "-D", "--defined-only", str(folder / f"{fmu.stem}.so")],
+                          capture_output=True, text=True)
+    if proc.returncode == 0:      # and nothing else (binutils may be missing)
+        exported = {line.split()[-1] for line in proc.stdout.splitlines() if line.strip()}
+        assert exported - {"_init", "_fini"} == set(FMI2_COSIMULATION_FUNCTIONS)
+
+
+def test_without_pythonfmus_binary_the_shim_fails_to_instantiate_with_a_message(
+        input_fmu, unzipped, tmp_path, needs_shim):
+    fmu = input_fmu[1]
+    folder = tmp_path / "unzipped"
+    shutil.copytree(unzipped(fmu), folder)
+    (folder / "binaries" / "linux64" / f"{fmu.stem}{fmu_build.ORIGINAL_SUFFIX}").unlink()
+    messages = []
+    with pytest.raises(Exception, match="Failed to instantiate"):
+        Instance(str(folder), messages=messages)
+    assert messages and messages[0][0] == FMI_ERROR
+    assert "cannot load pythonfmu's binary" in messages[0][1]
+    assert f"{fmu.stem}{fmu_build.ORIGINAL_SUFFIX}" in messages[0][1]
+
+
 def test_a_current_fmu_is_not_rebuilt(tmp_path, capsys, monkeypatch):
-    if not SCENES:
-        pytest.skip("no scene in scenarios/")
-    scene = tmp_path / SCENES[0].name
-    scene.write_bytes(SCENES[0].read_bytes())
+    if INPUT_SCENE not in SCENES:
+        pytest.skip(f"no {INPUT_SCENE.name} in scenarios/")
+    scene = tmp_path / INPUT_SCENE.name
+    scene.write_bytes(INPUT_SCENE.read_bytes())
     out = tmp_path / "fmu"
     fmu = fmu_build.build(scene, out)
     stamp = fmu.stat().st_mtime_ns
@@ -354,15 +410,21 @@ def test_a_current_fmu_is_not_rebuilt(tmp_path, capsys, monkeypatch):
     assert fmu_build.build(scene, out) == fmu and fmu.stat().st_mtime_ns != stamp
     with zipfile.ZipFile(fmu) as z:
         assert z.read("resources/inerter_slave.py").endswith(b"# changed\n")
+    with open(src / fmu_build.SHIM_FILE, "a") as f:                   # the shim changed
+        f.write("\n/* changed */\n")
+    stamp = fmu.stat().st_mtime_ns
+    assert fmu_build.build(scene, out) == fmu and fmu.stat().st_mtime_ns != stamp
 
 
 def test_a_bad_scene_is_reported_by_the_build(tmp_path, capsys):
+    text = INPUT_SCENE.read_text()
+    assert "M1 = { value = 1.0," in text
     scene = tmp_path / "bad.toml"
-    scene.write_text(INPUT_SCENE.replace('m = { value = 2.0', 'm = { value = -2.0'))
+    scene.write_text(text.replace("M1 = { value = 1.0,", "M1 = { value = -2.0,"))
     assert fmu_build.main([str(scene), "-o", str(tmp_path / "fmu")]) == 1
     err = capsys.readouterr().err
     assert "bad.toml" in err and "-2" in err
-    assert not (tmp_path / "fmu" / "fmu_test_input.fmu").exists()
+    assert not (tmp_path / "fmu" / "two_bar_2d.fmu").exists()
 
 
 # ----------------------------------------------------------------------------------------------
@@ -388,9 +450,10 @@ def test_the_fmu_runs_in_a_fresh_process_like_the_solver(fresh_run, scene):
 
 
 def test_two_scenes_run_side_by_side_in_one_process(fmus, tmp_path):
-    if len(SCENES) < 2:
-        pytest.skip("needs two scenes")
-    a, b = SCENES[:2]
+    pair = [s for s in SCENES if s.stem in ("lumped_mass_2d", "two_bar_2d")]
+    if len(pair) < 2:
+        pytest.skip("needs the scenes lumped_mass_2d and two_bar_2d")
+    a, b = pair
     run = run_fresh(tmp_path, [job_for(a, fmus[a]), job_for(b, fmus[b]), job_for(a, fmus[a])])
     first, second, again = run["results"]
     assert len(run["modules"]) == 2
@@ -434,26 +497,31 @@ def test_a_second_importer_gives_the_same_results(fmus, fresh_run, scene, tmp_pa
                             if line.startswith("{")))
     assert cosim["time"] == pytest.approx(RUN_TIME, abs=1e-9)
     reference = fresh_run(scene)["results"][0]
+    # The issue's bound, 1e-9 (in each output's unit), relative or absolute. The importers pass the
+    # communication times differently (libcosimpy in integer nanoseconds), so the FMU's adaptive
+    # integrator restarts at times that differ in the last bits; on a scene solved at rtol 1e-8
+    # (braced_frame_3d) that leaves differences of a few 1e-12 m on millimetre-sized outputs.
     for name, value in zip(job["outputs"], cosim["values"]):
-        assert value == pytest.approx(reference[name][-1], rel=1e-9, abs=1e-12), name
+        assert value == pytest.approx(reference[name][-1], rel=1e-9, abs=1e-9), name
 
 
-def test_an_input_is_held_over_each_step(input_fmu, tmp_path):
+def test_an_input_is_held_over_each_step(input_fmu, fresh_run, tmp_path):
     scene, fmu = input_fmu
-    t = np.arange(0.0, RUN_TIME + 1e-9, 0.01)
+    t = np.arange(0.0, RUN_TIME + 1e-9, inerter.load(scene).experiment["output_interval"])
     force = 20.0 * np.sin(2 * np.pi * 2.0 * t)
     run = run_fresh(tmp_path, [job_for(scene, fmu, input={"time": t.tolist(),
-                                                          "values": {"P.f[2]": force.tolist()}})])
+                                                          "values": {INPUT: force.tolist()}})])
     result = run["results"][0]
     # The solver's own stepper with the same held inputs gives exactly the same outputs.
     model = inerter.load(scene, **{"experiment.rtol": RTOL})
     stepper = model.stepper()
-    assert result["P.r[2]"][0] == stepper.outputs()["P.r[2]"]
+    assert result["C.r[2]"][0] == stepper.outputs()["C.r[2]"]
     for i in range(1, len(result["time"])):
-        stepper.set_input("P.f[2]", force[i - 1])
+        stepper.set_input(INPUT, force[i - 1])
         stepper.step(result["time"][i])
-        assert result["P.r[2]"][i] == stepper.outputs()["P.r[2]"]
-    assert max(result["P.r[2]"]) - min(result["P.r[2]"]) > 0.01   # the input did push
+        assert result["C.r[2]"][i] == stepper.outputs()["C.r[2]"]
+    unpushed = fresh_run(scene)["results"][0]["C.r[2]"]
+    assert np.max(np.abs(np.array(result["C.r[2]"]) - unpushed)) > 1e-4   # the input did push
 
 
 # ----------------------------------------------------------------------------------------------
@@ -497,88 +565,102 @@ def test_a_rolled_back_step_repeats_bit_for_bit(fmus, scene, instance):
 
 
 # ----------------------------------------------------------------------------------------------
-# Errors: a status and a message, never fmi2Fatal, and the importer goes on
+# Errors: the status FMI 2.0 asks for, a message, never fmi2Fatal, and the importer goes on
 # ----------------------------------------------------------------------------------------------
+def raises_status(status: int, call, *args):
+    """`call(*args)` fails with `status` (fmpy raises FMICallException for any status > warning)."""
+    with pytest.raises(FMICallException) as caught:
+        call(*args)
+    assert caught.value.status == status, caught.value
+    return caught.value
+
+
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
 @pytest.mark.parametrize("setting, value, field", [
     ("rtol", 5.0, "experiment.rtol"), ("solver", "Euler", "experiment.method"),
-    ("b", -1.0, "b"), ("first parameter", math.nan, "not finite")])
-def test_an_invalid_setting_fails_initialisation_with_its_message(fmus, scene, instance,
-                                                                  setting, value, field):
+    ("b", -1.0, "inerter.b"), ("M1", 0.0, "bodies.bar1.mass"),
+    ("first parameter", math.nan, "not finite")])
+def test_an_invalid_setting_fails_initialisation_with_fmi2error(fmus, scene, instance, needs_shim,
+                                                               setting, value, field):
     inst = instance(fmus[scene])
     if setting == "first parameter":
         setting = first_parameter(inst)
     if setting not in inst.vr:
         pytest.skip(f"the scene has no {setting}")
     strings, reals = ({setting: value}, {}) if isinstance(value, str) else ({}, {setting: value})
-    inst.initialise(reals=reals, strings=strings)      # fmi2OK: pythonfmu can return no error here
-    errors = [m for s, m in inst.messages if s == 3]
-    assert errors and field in errors[0] and repr(value).strip("'") in errors[0]
+    raises_status(FMI_ERROR, inst.initialise, reals, strings)
+    # The message names the scene's field and the FMU variable with the value set.
+    errors = inst.errors()
+    assert len(errors) == 1 and field in errors[0] and f"{setting} = {value!r}" in errors[0]
     assert all(math.isnan(v) for v in inst.get(inst.outputs))
     inst.messages.clear()
-    with pytest.raises(FMICallException) as caught:
-        inst.fmu.doStep(0.0, 0.01)
-    assert caught.value.status == FMI_DISCARD
+    raises_status(FMI_DISCARD, inst.fmu.doStep, 0.0, 0.01)    # as before: steps are refused
     assert field in inst.logged()
-    # The importer can go on: reset, and initialise with valid values.
+    # FMI 2.0 lets the importer reset the instance, and initialise it with valid values.
     inst.fmu.reset()
     inst.initialise()
     inst.fmu.doStep(0.0, 0.01)
 
 
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
-def test_a_start_time_other_than_zero_is_refused(fmus, scene, instance):
+def test_a_start_time_other_than_zero_is_refused(fmus, scene, instance, needs_shim):
     inst = instance(fmus[scene])
-    inst.initialise(start_time=1.0)
+    raises_status(FMI_ERROR, inst.initialise, None, None, 1.0)
     assert "startTime" in inst.logged()
-    with pytest.raises(FMICallException) as caught:
-        inst.fmu.doStep(1.0, 0.01)
-    assert caught.value.status == FMI_DISCARD
+    raises_status(FMI_DISCARD, inst.fmu.doStep, 1.0, 0.01)
+
+
+def stepped_pair(fmu: Path, instance) -> tuple[Instance, Instance, float]:
+    """Two instances of `fmu` initialised the same way, one step of h done with INPUT at 5 N."""
+    h = 0.01
+    pair = instance(fmu, "seen"), instance(fmu, "clean")
+    for inst in pair:
+        inst.initialise()
+        inst.set(INPUT, 5.0)
+        inst.fmu.doStep(0.0, h)
+    return pair[0], pair[1], h
+
+
+def test_a_non_finite_input_gives_fmi2error_and_leaves_the_state(input_fmu, instance, needs_shim):
+    inst, clean, h = stepped_pair(input_fmu[1], instance)
+    outputs = inst.get(inst.outputs)
+    for bad in (math.nan, math.inf, -math.inf):
+        inst.messages.clear()
+        raises_status(FMI_ERROR, inst.set, INPUT, bad)
+        [message] = inst.errors()
+        assert INPUT in message and "not finite" in message and repr(bad) in message
+        assert inst.get([INPUT]) == [5.0] and inst.get(inst.outputs) == outputs
+    # The next step goes on from the state as it was, like an instance that never saw it.
+    inst.fmu.doStep(h, h)
+    clean.fmu.doStep(h, h)
+    assert inst.get(inst.outputs) == clean.get(clean.outputs) != outputs
+    # Among several values, the finite ones are set.
+    inst.messages.clear()
+    raises_status(FMI_ERROR, inst.fmu.setReal, [inst.vr["C.f[1]"], inst.vr[INPUT]], [1.0, math.nan])
+    assert inst.get(["C.f[1]", INPUT]) == [1.0, 5.0] and len(inst.errors()) == 1
 
 
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
-def test_setting_a_fixed_parameter_after_initialisation_is_refused(fmus, scene, instance):
-    inst = instance(fmus[scene])
-    inst.initialise()
+def test_setting_a_fixed_parameter_after_initialisation_gives_fmi2error(fmus, scene, instance,
+                                                                       needs_shim):
+    inst, clean = instance(fmus[scene], "seen"), instance(fmus[scene], "clean")
+    h = 0.01
+    for i in (inst, clean):
+        i.initialise()
+        i.fmu.doStep(0.0, h)
     name = first_parameter(inst)
     before = inst.get([name])
-    h = 0.01
-    inst.fmu.doStep(0.0, h)
-    outputs = inst.get(inst.outputs)
-    inst.set(name, 2.0 * before[0] + 1.0)
+    raises_status(FMI_ERROR, inst.set, name, 2.0 * before[0] + 1.0)
     assert inst.get([name]) == before
     assert f"{name}: a fixed parameter cannot be changed" in inst.logged()
-    inst.messages.clear()
-    with pytest.raises(FMICallException) as caught:
-        inst.fmu.doStep(h, h)
-    assert caught.value.status == FMI_DISCARD and name in inst.logged()
-    assert inst.get(inst.outputs) == outputs                  # nothing moved
-    inst.fmu.doStep(h, h)                                     # and the importer goes on
-    # Setting an output is refused the same way.
-    inst.set(inst.outputs[0], 1.0)
-    with pytest.raises(FMICallException):
-        inst.fmu.doStep(2 * h, h)
+    # Setting an output, or the status variable, is refused the same way.
+    raises_status(FMI_ERROR, inst.set, inst.outputs[0], 1.0)
     assert "an output cannot be set" in inst.logged()
-
-
-def test_a_non_finite_input_is_refused_and_the_state_kept(input_fmu, instance):
-    inst = instance(input_fmu[1])
-    inst.initialise()
-    h = 0.01
-    inst.set("P.f[2]", 5.0)
-    inst.fmu.doStep(0.0, h)
-    state = inst.get(inst.outputs)
-    for bad in (math.nan, math.inf):
-        inst.messages.clear()
-        inst.set("P.f[2]", bad)
-        with pytest.raises(FMICallException) as caught:
-            inst.fmu.doStep(h, h)
-        assert caught.value.status == FMI_DISCARD
-        assert "P.f[2]" in inst.logged() and "not finite" in inst.logged()
-        assert inst.get(inst.outputs) == state
-    inst.set("P.f[2]", 5.0)
-    inst.fmu.doStep(h, h)
-    assert inst.get(inst.outputs) != state
+    raises_status(FMI_ERROR, inst.fmu.setInteger, [inst.vr[fmu_build.STATUS_VARIABLE]], [0])
+    # Nothing moved, and the importer goes on.
+    for i in (inst, clean):
+        i.fmu.doStep(h, h)
+    assert inst.get(inst.outputs) == clean.get(clean.outputs)
 
 
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
@@ -603,9 +685,7 @@ def test_a_step_the_solver_cannot_complete_is_discarded(fmus, scene, instance):
     assert [s for s, _ in inst.messages if s == FMI_DISCARD]
     assert f"stays at t = {t!r}" in inst.logged()
     assert inst.get(inst.outputs) == good                     # the last good state is kept
-    with pytest.raises(FMICallException) as caught:           # still there: the same step fails
-        inst.fmu.doStep(t, h)
-    assert caught.value.status == FMI_DISCARD
+    raises_status(FMI_DISCARD, inst.fmu.doStep, t, h)         # still there: the same step fails
 
 
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
@@ -619,12 +699,82 @@ def test_tolerance_from_setup_experiment_is_used_unless_rtol_is_set(fmus, scene,
 
 
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
-def test_misuse_of_value_references_is_logged_not_fatal(fmus, scene, instance):
+def test_misuse_of_value_references_is_an_error_not_fatal(fmus, scene, instance, needs_shim):
     inst = instance(fmus[scene])
     inst.initialise()
-    assert math.isnan(inst.fmu.getReal([10_000])[0])
+    assert math.isnan(inst.fmu.getReal([10_000])[0])          # a get logs it, nothing more
     assert "valueReference 10000" in inst.logged()
-    inst.fmu.setBoolean([inst.vr[first_parameter(inst)]], [True])   # a Real, set as a Boolean
-    with pytest.raises(FMICallException):
-        inst.fmu.doStep(0.0, 0.01)
+    raises_status(FMI_ERROR, inst.fmu.setReal, [10_000], [1.0])
+    raises_status(FMI_ERROR, inst.fmu.setBoolean,              # a Real, set as a Boolean
+                  [inst.vr[first_parameter(inst)]], [True])
     inst.fmu.doStep(0.0, 0.01)
+
+
+def test_a_state_that_cannot_be_restored_gives_fmi2error(input_fmu, instance, needs_shim):
+    inst, clean, h = stepped_pair(input_fmu[1], instance)
+    outputs = inst.get(inst.outputs)
+    state = inst.fmu.deSerializeFMUstate(b'{"format": "something else"}')
+    raises_status(FMI_ERROR, inst.fmu.setFMUstate, state)
+    inst.fmu.freeFMUstate(state)
+    assert "setFMUstate: the state could not be restored" in inst.logged()
+    assert inst.get(inst.outputs) == outputs
+    inst.fmu.doStep(h, h)
+    clean.fmu.doStep(h, h)
+    assert inst.get(inst.outputs) == clean.get(clean.outputs)
+
+
+# ----------------------------------------------------------------------------------------------
+# Without the shim (no gcc at build time; the win64 binary): errors come from the next doStep
+# ----------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def unshimmed_fmu(tmp_path_factory):
+    """An FMU of INPUT_SCENE (under another name) built as if gcc were missing, with the
+    build's stderr."""
+    folder = tmp_path_factory.mktemp("unshimmed")
+    scene = folder / "fmu_test_unshimmed.toml"
+    text = INPUT_SCENE.read_text()
+    scene.write_text(text.replace('name = "two_bar_2d"', 'name = "fmu_test_unshimmed"', 1))
+    err = io.StringIO()
+    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stderr(err):
+        patch.setattr(fmu_build, "_shim_compiler", lambda: (None, "gcc was not found on PATH"))
+        assert fmu_build.main([str(scene), "-o", str(folder / "fmu")]) == 0
+    return folder / "fmu" / "fmu_test_unshimmed.fmu", err.getvalue()
+
+
+def test_without_a_compiler_the_build_warns_and_ships_pythonfmus_binary(unshimmed_fmu,
+                                                                        monkeypatch, tmp_path):
+    fmu, err = unshimmed_fmu
+    assert "warning: fmu_test_unshimmed.fmu: built without the status shim" in err
+    assert "gcc was not found" in err
+    original = (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
+                / "libpythonfmu-export.so").read_bytes()
+    with zipfile.ZipFile(fmu) as z:
+        assert z.read("binaries/linux64/fmu_test_unshimmed.so") == original
+        assert not [f for f in z.namelist() if f.endswith(fmu_build.ORIGINAL_SUFFIX)]
+    assert validate_fmu(str(fmu)) == []
+    # What the command line prints is a FmuBuildWarning of the build.
+    monkeypatch.setattr(fmu_build, "_shim_compiler", lambda: (None, "gcc was not found on PATH"))
+    with pytest.warns(fmu_build.FmuBuildWarning, match="x.fmu: built without the status shim"):
+        assert fmu_build._compile_shim("x", 0, tmp_path, "x.fmu") is None
+
+
+def test_without_the_shim_a_rejected_value_fails_the_next_step_once(unshimmed_fmu, instance):
+    inst = instance(unshimmed_fmu[0])
+    inst.initialise()
+    h = 0.01
+    inst.set(INPUT, 5.0)
+    inst.fmu.doStep(0.0, h)
+    outputs = inst.get(inst.outputs)
+    inst.set(INPUT, math.nan)                                  # fmi2OK: no shim to say otherwise
+    assert "not finite" in inst.errors()[0]
+    inst.messages.clear()
+    raises_status(FMI_DISCARD, inst.fmu.doStep, h, h)
+    assert "refused, once" in inst.logged() and "not finite" in inst.logged()
+    assert inst.get(inst.outputs) == outputs and inst.get([INPUT]) == [5.0]
+    inst.fmu.doStep(h, h)                                      # reported: the importer goes on
+    # An invalid setting: exitInitializationMode gives fmi2OK, every doStep fmi2Discard.
+    inst.fmu.reset()
+    inst.initialise(reals={"M1": 0.0})
+    assert "M1 = 0.0" in inst.errors()[-1]
+    raises_status(FMI_DISCARD, inst.fmu.doStep, 0.0, h)
+    raises_status(FMI_DISCARD, inst.fmu.doStep, 0.0, h)

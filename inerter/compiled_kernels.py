@@ -1,0 +1,703 @@
+"""Compiled kernels of the fast path (numba ``@njit(cache=True)``): Eq. (33) and explicit integrators.
+
+Everything here works on flat arrays built once per scene by :mod:`inerter.compiled`; there are no
+Python objects in the inner loop. A scene's arrays hold only the terms it declares: a loop over
+an element kind the scene does not have runs zero times, and gravity is added only when declared.
+
+Importing this module requires numba; :mod:`inerter.compiled` falls back to the numpy path when
+it is missing.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# Translational element kinds (column 0 of ``el_int``).
+SPRING, DAMPER, INERTER = 0, 1, 2
+# Rotational element kinds.
+ROT_SPRING, ROT_DAMPER = 0, 1
+# Joint kinds.
+REVOLUTE, PRISMATIC = 0, 1
+# Time functions of applied forces.
+F_CONSTANT, F_SINE, F_STEP = 0, 1, 2
+# Status codes of the integrators.
+OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET = 0, 1, 2, 3, 4, 5
+
+MIN_LENGTH = 1e-9
+
+
+# ------------------------------------------------------------------------------------------------
+# Kinematics (Eqs. 15-19)
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _point(q, v, body, lx, ly):
+    """(rx, ry, vx, vy, ux, uy, w): position, velocity, A ū and the body's angular velocity."""
+    if body < 0:
+        return lx, ly, 0.0, 0.0, 0.0, 0.0, 0.0
+    k = 3 * body
+    th = q[k + 2]
+    c = math.cos(th)
+    s = math.sin(th)
+    ax = c * lx - s * ly
+    ay = s * lx + c * ly
+    w = v[k + 2]
+    return q[k] + ax, q[k + 1] + ay, v[k] - w * ay, v[k + 1] + w * ax, ax, ay, w
+
+
+@njit(cache=True, inline="always")
+def _pair(q, v, ba, lax, lay, bb, lbx, lby):
+    """Relative kinematics b − a: r, ṙ, a_n (Eq. 19) and the θ-columns of H (A_θ ū of each end)."""
+    rax, ray, vax, vay, uax, uay, wa = _point(q, v, ba, lax, lay)
+    rbx, rby, vbx, vby, ubx, uby, wb = _point(q, v, bb, lbx, lby)
+    rx = rbx - rax
+    ry = rby - ray
+    rdx = vbx - vax
+    rdy = vby - vay
+    anx = wa * wa * uax - wb * wb * ubx
+    any_ = wa * wa * uay - wb * wb * uby
+    # A_θ ū = (−u_y, u_x)
+    return rx, ry, rdx, rdy, anx, any_, -uay, uax, -uby, ubx
+
+
+# ------------------------------------------------------------------------------------------------
+# Assembly of the augmented system of Eq. (33) in band storage
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _addK(AB, perm, off, i, j, x):
+    """K[i, j] += x in LAPACK band storage of the permuted matrix (row off + pi − pj, column pj)."""
+    pi = perm[i]
+    pj = perm[j]
+    AB[off + pi - pj, pj] += x
+
+
+@njit(cache=True)
+def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
+    """Fill AB (band storage of the permuted augmented matrix) and rhs (permuted) at (t, q, v).
+
+    gen: work vector of length n for the generalised forces. Returns a status code."""
+    (mass, pbody, ploc, el_int, el_real, rot_int, rot_real, jt_int, jt_real,
+     fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims) = P
+    n = dims[0]
+    m = dims[1]
+    kl = dims[2]
+    ku = dims[3]
+    has_gravity = dims[4]
+    off = kl + ku
+    AB[:, :] = 0.0
+    for i in range(n):
+        gen[i] = 0.0
+    if has_gravity:
+        for i in range(n):
+            gen[i] += gravity[i]
+    for i in range(n):
+        _addK(AB, perm, off, i, i, mass[i])
+
+    status = OK
+    # -- translational elements (spring, damper, inerter), Eqs. (5), (7), (9)/(8), (29), (31), (33)
+    ga = np.empty(3)
+    gb = np.empty(3)
+    for e in range(el_int.shape[0]):
+        kind = el_int[e, 0]
+        pa = el_int[e, 1]
+        pb = el_int[e, 2]
+        ba = pbody[pa]
+        bb = pbody[pb]
+        rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
+            q, v, ba, ploc[pa, 0], ploc[pa, 1], bb, ploc[pb, 0], ploc[pb, 1])
+        L = math.hypot(rx, ry)
+        if not L > MIN_LENGTH:
+            status = TERMINALS_MEET
+            L = MIN_LENGTH
+        ex = rx / L
+        ey = ry / L
+        # g = Hᵀ r̂ over a's then b's coordinates
+        ga[0] = -ex
+        ga[1] = -ey
+        ga[2] = -(tax * ex + tay * ey)
+        gb[0] = ex
+        gb[1] = ey
+        gb[2] = tbx * ex + tby * ey
+        coef = el_real[e, 0]
+        if kind == SPRING:
+            F = coef * (L - el_real[e, 1])
+        elif kind == DAMPER:
+            F = coef * (rdx * ex + rdy * ey)
+        else:
+            term = anx * ex + any_ * ey
+            if el_int[e, 3]:
+                along = rdx * ex + rdy * ey
+                term += (rdx * rdx + rdy * rdy - along * along) / L
+            F = coef * term
+            # M_I = b (Hᵀ r̂)(Hᵀ r̂)ᵀ
+            if ba >= 0:
+                ka = 3 * ba
+                for i in range(3):
+                    for j in range(3):
+                        _addK(AB, perm, off, ka + i, ka + j, coef * ga[i] * ga[j])
+            if bb >= 0:
+                kb = 3 * bb
+                for i in range(3):
+                    for j in range(3):
+                        _addK(AB, perm, off, kb + i, kb + j, coef * gb[i] * gb[j])
+            if ba >= 0 and bb >= 0:
+                ka = 3 * ba
+                kb = 3 * bb
+                for i in range(3):
+                    for j in range(3):
+                        x = coef * ga[i] * gb[j]
+                        _addK(AB, perm, off, ka + i, kb + j, x)
+                        _addK(AB, perm, off, kb + j, ka + i, x)
+        if ba >= 0:
+            ka = 3 * ba
+            for i in range(3):
+                gen[ka + i] -= F * ga[i]
+        if bb >= 0:
+            kb = 3 * bb
+            for i in range(3):
+                gen[kb + i] -= F * gb[i]
+
+    # -- rotational springs and dampers
+    for e in range(rot_int.shape[0]):
+        ia = rot_int[e, 1]
+        ib = rot_int[e, 2]
+        if rot_int[e, 0] == ROT_SPRING:
+            phi = (q[ib] if ib >= 0 else 0.0) - (q[ia] if ia >= 0 else 0.0)
+            tau = rot_real[e, 0] * (phi - rot_real[e, 1])
+        else:
+            w = (v[ib] if ib >= 0 else 0.0) - (v[ia] if ia >= 0 else 0.0)
+            tau = rot_real[e, 0] * w
+        if ib >= 0:
+            gen[ib] -= tau
+        if ia >= 0:
+            gen[ia] += tau
+
+    # -- applied point forces with time functions
+    for f in range(fa_int.shape[0]):
+        p = fa_int[f, 0]
+        code = fa_int[f, 1]
+        # real columns: dx, dy, value, amplitude, frequency, phase, offset, time, initial
+        if code == F_CONSTANT:
+            mag = fa_real[f, 2]
+        elif code == F_SINE:
+            mag = fa_real[f, 6] + fa_real[f, 3] * math.sin(2.0 * math.pi * fa_real[f, 4] * t + fa_real[f, 5])
+        else:
+            mag = fa_real[f, 2] if t >= fa_real[f, 7] else fa_real[f, 8]
+        _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], mag * fa_real[f, 0], mag * fa_real[f, 1], gen)
+
+    # -- grounded PD actuators
+    for f in range(pd_int.shape[0]):
+        p = pd_int[f, 0]
+        rx, ry, vx, vy, ux, uy, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
+        dx = pd_real[f, 0]
+        dy = pd_real[f, 1]
+        along = dx * rx + dy * ry - pd_real[f, 4]
+        rate = dx * vx + dy * vy
+        mag = -(pd_real[f, 2] * along + pd_real[f, 3] * rate)
+        _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], mag * dx, mag * dy, gen)
+
+    # -- held inputs
+    if inputs.shape[0] > 0:
+        for f in range(in_int.shape[0]):
+            p = in_int[f, 0]
+            _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], inputs[2 * f], inputs[2 * f + 1], gen)
+
+    for i in range(n):
+        rhs[perm[i]] = gen[i]
+
+    # -- joints: C_q (and its transpose) and γ − 2αĊ − α²C
+    row = n
+    for jn in range(jt_int.shape[0]):
+        pa = jt_int[jn, 1]
+        pb = jt_int[jn, 2]
+        ba = pbody[pa]
+        bb = pbody[pb]
+        rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
+            q, v, ba, ploc[pa, 0], ploc[pa, 1], bb, ploc[pb, 0], ploc[pb, 1])
+        if jt_int[jn, 0] == REVOLUTE:
+            # C = r, C_q = H, γ = −a_n
+            cdx = rdx
+            cdy = rdy
+            if ba >= 0:
+                ka = 3 * ba
+                _sym(AB, perm, off, row, ka, -1.0)
+                _sym(AB, perm, off, row, ka + 2, -tax)
+                _sym(AB, perm, off, row + 1, ka + 1, -1.0)
+                _sym(AB, perm, off, row + 1, ka + 2, -tay)
+            if bb >= 0:
+                kb = 3 * bb
+                _sym(AB, perm, off, row, kb, 1.0)
+                _sym(AB, perm, off, row, kb + 2, tbx)
+                _sym(AB, perm, off, row + 1, kb + 1, 1.0)
+                _sym(AB, perm, off, row + 1, kb + 2, tby)
+            rhs[perm[row]] = -anx - 2.0 * alpha * cdx - alpha * alpha * rx
+            rhs[perm[row + 1]] = -any_ - 2.0 * alpha * cdy - alpha * alpha * ry
+        else:
+            # θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0 with n = A_a n̄
+            nbx = jt_real[jn, 0]
+            nby = jt_real[jn, 1]
+            phi0 = jt_real[jn, 2]
+            tha = q[3 * ba + 2] if ba >= 0 else 0.0
+            thb = q[3 * bb + 2] if bb >= 0 else 0.0
+            wa = v[3 * ba + 2] if ba >= 0 else 0.0
+            wb = v[3 * bb + 2] if bb >= 0 else 0.0
+            c1 = thb - tha - phi0
+            cd1 = wb - wa
+            if ba >= 0:
+                c = math.cos(tha)
+                s = math.sin(tha)
+                nx = c * nbx - s * nby
+                ny = s * nbx + c * nby
+            else:
+                nx = nbx
+                ny = nby
+            npx = -ny
+            npy = nx
+            c2 = nx * rx + ny * ry
+            cd2 = 0.0
+            if ba >= 0:
+                ka = 3 * ba
+                _sym(AB, perm, off, row, ka + 2, -1.0)
+                _sym(AB, perm, off, row + 1, ka, -nx)
+                _sym(AB, perm, off, row + 1, ka + 1, -ny)
+                h2 = -(nx * tax + ny * tay) + (npx * rx + npy * ry)
+                _sym(AB, perm, off, row + 1, ka + 2, h2)
+                cd2 += -nx * v[ka] - ny * v[ka + 1] + h2 * v[ka + 2]
+            if bb >= 0:
+                kb = 3 * bb
+                _sym(AB, perm, off, row, kb + 2, 1.0)
+                _sym(AB, perm, off, row + 1, kb, nx)
+                _sym(AB, perm, off, row + 1, kb + 1, ny)
+                h2 = nx * tbx + ny * tby
+                _sym(AB, perm, off, row + 1, kb + 2, h2)
+                cd2 += nx * v[kb] + ny * v[kb + 1] + h2 * v[kb + 2]
+            gamma2 = -((nx * anx + ny * any_) - wa * wa * c2 + 2.0 * wa * (npx * rdx + npy * rdy))
+            rhs[perm[row]] = 0.0 - 2.0 * alpha * cd1 - alpha * alpha * c1
+            rhs[perm[row + 1]] = gamma2 - 2.0 * alpha * cd2 - alpha * alpha * c2
+        row += 2
+    return status
+
+
+@njit(cache=True, inline="always")
+def _sym(AB, perm, off, row, col, x):
+    """C_q[row − n, col] = x and its transpose in the augmented matrix."""
+    _addK(AB, perm, off, row, col, x)
+    _addK(AB, perm, off, col, row, x)
+
+
+@njit(cache=True, inline="always")
+def _point_force(q, v, body, lx, ly, Fx, Fy, gen):
+    """A force at a point: into x, y and, through A_θ ū, the body's angle (virtual work)."""
+    if body < 0:
+        return
+    k = 3 * body
+    th = q[k + 2]
+    c = math.cos(th)
+    s = math.sin(th)
+    ax = c * lx - s * ly
+    ay = s * lx + c * ly
+    gen[k] += Fx
+    gen[k + 1] += Fy
+    gen[k + 2] += -ay * Fx + ax * Fy
+
+
+# ------------------------------------------------------------------------------------------------
+# Band LU with partial pivoting (LAPACK gbsv layout): O(N kl (kl + ku)) for a banded system
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def band_solve(AB, b, kl, ku):
+    """Solve A x = b in place (b becomes x); A in LAPACK band storage with kl extra rows for the
+    fill. Returns False when A is singular."""
+    N = b.shape[0]
+    off = kl + ku
+    for k in range(N):
+        imax = min(N - 1, k + kl)
+        p = k
+        best = abs(AB[off, k])
+        for i in range(k + 1, imax + 1):
+            a = abs(AB[off + i - k, k])
+            if a > best:
+                best = a
+                p = i
+        if best == 0.0:
+            return False
+        jmax = min(N - 1, k + kl + ku)
+        if p != k:
+            for j in range(k, jmax + 1):
+                tmp = AB[off + k - j, j]
+                AB[off + k - j, j] = AB[off + p - j, j]
+                AB[off + p - j, j] = tmp
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+        piv = AB[off, k]
+        for i in range(k + 1, imax + 1):
+            l = AB[off + i - k, k] / piv
+            if l != 0.0:
+                for j in range(k + 1, jmax + 1):
+                    AB[off + i - j, j] -= l * AB[off + k - j, j]
+                b[i] -= l * b[k]
+    for i in range(N - 1, -1, -1):
+        s = b[i]
+        jmax = min(N - 1, i + kl + ku)
+        for j in range(i + 1, jmax + 1):
+            s -= AB[off + i - j, j] * b[j]
+        b[i] = s / AB[off, i]
+    return True
+
+
+@njit(cache=True)
+def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
+    """Eq. (33): out[:n] = q̈, out[n:] = λ (original ordering). Returns a status code."""
+    perm = P[15]
+    dims = P[16]
+    status = assemble(t, q, v, inputs, alpha, P, AB, rhs, gen)
+    if not band_solve(AB, rhs, dims[2], dims[3]):
+        return SINGULAR
+    for i in range(out.shape[0]):
+        out[i] = rhs[perm[i]]
+    return status
+
+
+@njit(cache=True)
+def constraint_residual(q, P):
+    """Largest |C_i| over the joints."""
+    pbody = P[1]
+    ploc = P[2]
+    jt_int = P[7]
+    jt_real = P[8]
+    worst = 0.0
+    z = np.zeros(q.shape[0])
+    for jn in range(jt_int.shape[0]):
+        pa = jt_int[jn, 1]
+        pb = jt_int[jn, 2]
+        ba = pbody[pa]
+        bb = pbody[pb]
+        rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
+            q, z, ba, ploc[pa, 0], ploc[pa, 1], bb, ploc[pb, 0], ploc[pb, 1])
+        if jt_int[jn, 0] == REVOLUTE:
+            worst = max(worst, abs(rx), abs(ry))
+        else:
+            tha = q[3 * ba + 2] if ba >= 0 else 0.0
+            thb = q[3 * bb + 2] if bb >= 0 else 0.0
+            nbx = jt_real[jn, 0]
+            nby = jt_real[jn, 1]
+            c = math.cos(tha)
+            s = math.sin(tha)
+            if ba < 0:
+                c = 1.0
+                s = 0.0
+            nx = c * nbx - s * nby
+            ny = s * nbx + c * nby
+            worst = max(worst, abs(thb - tha - jt_real[jn, 2]), abs(nx * rx + ny * ry))
+    return worst
+
+
+# ------------------------------------------------------------------------------------------------
+# Integrators: DOP853 and RK45 (scipy's error control, step-size rule and dense output, sampled
+# at the output grid) and the classical RK4 with a fixed step (cubic Hermite between nodes).
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
+    n = P[16][0]
+    q = y[:n]
+    v = y[n:]
+    st = accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, acc)
+    for i in range(n):
+        dy[i] = y[n + i]
+        dy[n + i] = acc[i]
+    if st == OK:
+        for i in range(2 * n):
+            if not math.isfinite(dy[i]):
+                return NOT_FINITE
+    return st
+
+
+@njit(cache=True)
+def _rms(x):
+    s = 0.0
+    for i in range(x.shape[0]):
+        s += x[i] * x[i]
+    return math.sqrt(s / x.shape[0])
+
+
+@njit(cache=True)
+def _initial_step(t0, y0, f0, t_bound, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc):
+    """scipy.integrate._ivp.common.select_initial_step (one extra evaluation)."""
+    ny = y0.shape[0]
+    interval = abs(t_bound - t0)
+    if interval == 0.0:
+        return 0.0
+    scale = atol + np.abs(y0) * rtol
+    d0 = _rms(y0 / scale)
+    d1 = _rms(f0 / scale)
+    if d0 < 1e-5 or d1 < 1e-5:
+        h0 = 1e-6
+    else:
+        h0 = 0.01 * d0 / d1
+    h0 = min(h0, interval)
+    y1 = y0 + h0 * f0
+    f1 = np.empty(ny)
+    _rhs(t0 + h0, y1, inputs, alpha, P, AB, rhs, gen, acc, f1)
+    d2 = _rms((f1 - f0) / scale) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / (order + 1))
+    return min(100 * h0, h1, interval)
+
+
+@njit(cache=True)
+def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_steps, inputs, alpha, P,
+                 A, B, C, E, E3, Dm, Pm):
+    """Adaptive explicit Runge-Kutta from t0 to t_end, sampling `out[k] = y(grid[k])` for k ≥ 1.
+
+    method 0: DOP853 (A, B, C, E5 = E, E3, D = Dm as in scipy), method 1: RK45 (A, B, C, E, P = Pm).
+    Returns (status, samples written, steps, evaluations, t reached)."""
+    n = P[16][0]
+    m = P[16][1]
+    N = n + m
+    kl = P[16][2]
+    ku = P[16][3]
+    AB = np.empty((2 * kl + ku + 1, N))
+    rhs = np.empty(N)
+    gen = np.empty(n)
+    acc = np.empty(N)
+    ny = y0.shape[0]
+    if method == 0:
+        n_stages = 12
+        order = 7
+    else:
+        n_stages = 6
+        order = 4
+    err_exp = -1.0 / (order + 1)
+    K = np.zeros((max(A.shape[0], n_stages + 1), ny))
+    y = y0.copy()
+    f = np.empty(ny)
+    y_new = np.empty(ny)
+    f_new = np.empty(ny)
+    ys = np.empty(ny)
+    t = t0
+    evals = 1
+    st = _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, f)
+    if st != OK:
+        return st, 1, 0, evals, t
+    if first_step > 0.0:
+        h_abs = first_step
+    else:
+        h_abs = _initial_step(t, y, f, t_end, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc)
+        evals += 1
+    k = 1
+    ngrid = grid.shape[0]
+    steps = 0
+    Fd = np.empty((7, ny))
+    while t < t_end:
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        if h_abs < min_step:
+            h_abs = min_step
+        accepted = False
+        rejected = False
+        while not accepted:
+            if h_abs < min_step:
+                return STEP_TOO_SMALL, k, steps, evals, t
+            h = h_abs
+            t_new = t + h
+            if t_new - t_end > 0:
+                t_new = t_end
+            h = t_new - t
+            h_abs = abs(h)
+            # stages
+            for i in range(ny):
+                K[0, i] = f[i]
+            for s in range(1, n_stages):
+                for i in range(ny):
+                    acc_s = 0.0
+                    for j in range(s):
+                        acc_s += K[j, i] * A[s, j]
+                    ys[i] = y[i] + acc_s * h
+                st = _rhs(t + C[s] * h, ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
+                evals += 1
+                if st != OK:
+                    return st, k, steps, evals, t
+            for i in range(ny):
+                acc_s = 0.0
+                for j in range(n_stages):
+                    acc_s += K[j, i] * B[j]
+                y_new[i] = y[i] + h * acc_s
+            st = _rhs(t + h, y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new)
+            evals += 1
+            if st != OK:
+                return st, k, steps, evals, t
+            for i in range(ny):
+                K[n_stages, i] = f_new[i]
+            # error norm
+            if method == 0:
+                e5 = 0.0
+                e3 = 0.0
+                for i in range(ny):
+                    sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+                    a5 = 0.0
+                    a3 = 0.0
+                    for j in range(n_stages + 1):
+                        a5 += K[j, i] * E[j]
+                        a3 += K[j, i] * E3[j]
+                    a5 /= sc
+                    a3 /= sc
+                    e5 += a5 * a5
+                    e3 += a3 * a3
+                if e5 == 0.0 and e3 == 0.0:
+                    err = 0.0
+                else:
+                    err = abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * ny)
+            else:
+                e = 0.0
+                for i in range(ny):
+                    sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+                    a = 0.0
+                    for j in range(n_stages + 1):
+                        a += K[j, i] * E[j]
+                    a = a * h / sc
+                    e += a * a
+                err = math.sqrt(e / ny)
+            if err < 1.0:
+                if err == 0.0:
+                    factor = 10.0
+                else:
+                    factor = min(10.0, 0.9 * err ** err_exp)
+                if rejected:
+                    factor = min(1.0, factor)
+                h_abs *= factor
+                accepted = True
+            else:
+                h_abs *= max(0.2, 0.9 * err ** err_exp)
+                rejected = True
+        steps += 1
+        # dense output at the grid points inside (t, t_new]
+        if k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
+            if method == 0:
+                for s in range(n_stages + 1, A.shape[0]):
+                    for i in range(ny):
+                        acc_s = 0.0
+                        for j in range(s):
+                            acc_s += K[j, i] * A[s, j]
+                        ys[i] = y[i] + acc_s * h
+                    st = _rhs(t + C[s] * h, ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
+                    evals += 1
+                    if st != OK:
+                        return st, k, steps, evals, t
+                for i in range(ny):
+                    dlt = y_new[i] - y[i]
+                    Fd[0, i] = dlt
+                    Fd[1, i] = h * K[0, i] - dlt
+                    Fd[2, i] = 2.0 * dlt - h * (f_new[i] + K[0, i])
+                    for r in range(4):
+                        acc_s = 0.0
+                        for j in range(Dm.shape[1]):
+                            acc_s += Dm[r, j] * K[j, i]
+                        Fd[3 + r, i] = h * acc_s
+            while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
+                x = (grid[k] - t) / h
+                if method == 0:
+                    for i in range(ny):
+                        val = 0.0
+                        for r in range(6, -1, -1):
+                            val += Fd[r, i]
+                            if (6 - r) % 2 == 0:
+                                val *= x
+                            else:
+                                val *= 1.0 - x
+                        out[k, i] = val + y[i]
+                else:
+                    for i in range(ny):
+                        val = 0.0
+                        p = 1.0
+                        for r in range(Pm.shape[1]):
+                            p *= x
+                            qr = 0.0
+                            for j in range(n_stages + 1):
+                                qr += K[j, i] * Pm[j, r]
+                            val += qr * p
+                        out[k, i] = y[i] + h * val
+                k += 1
+        for i in range(ny):
+            y[i] = y_new[i]
+            f[i] = f_new[i]
+        t = t_new
+        if steps > max_steps:
+            return MAX_STEPS, k, steps, evals, t
+    return OK, k, steps, evals, t
+
+
+@njit(cache=True)
+def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P):
+    """Classical RK4 with a fixed step (the last one shortened), cubic Hermite between nodes."""
+    n = P[16][0]
+    m = P[16][1]
+    N = n + m
+    kl = P[16][2]
+    ku = P[16][3]
+    AB = np.empty((2 * kl + ku + 1, N))
+    rhs = np.empty(N)
+    gen = np.empty(n)
+    acc = np.empty(N)
+    ny = y0.shape[0]
+    y = y0.copy()
+    f = np.empty(ny)
+    k2 = np.empty(ny)
+    k3 = np.empty(ny)
+    k4 = np.empty(ny)
+    ys = np.empty(ny)
+    y_new = np.empty(ny)
+    f_new = np.empty(ny)
+    t = t0
+    evals = 1
+    st = _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, f)
+    if st != OK:
+        return st, 1, 0, evals, t
+    k = 1
+    ngrid = grid.shape[0]
+    steps = 0
+    while t < t_end:
+        h = min(step, abs(t_end - t))
+        for i in range(ny):
+            ys[i] = y[i] + h / 2 * f[i]
+        st = _rhs(t + h / 2, ys, inputs, alpha, P, AB, rhs, gen, acc, k2)
+        for i in range(ny):
+            ys[i] = y[i] + h / 2 * k2[i]
+        st = max(st, _rhs(t + h / 2, ys, inputs, alpha, P, AB, rhs, gen, acc, k3))
+        for i in range(ny):
+            ys[i] = y[i] + h * k3[i]
+        st = max(st, _rhs(t + h, ys, inputs, alpha, P, AB, rhs, gen, acc, k4))
+        for i in range(ny):
+            y_new[i] = y[i] + h / 6 * (f[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
+        t_new = t + h
+        st = max(st, _rhs(t_new, y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new))
+        evals += 4
+        if st != OK:
+            return st, k, steps, evals, t
+        steps += 1
+        while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
+            s = (grid[k] - t) / h
+            h00 = 2 * s ** 3 - 3 * s ** 2 + 1
+            h10 = s ** 3 - 2 * s ** 2 + s
+            h01 = -2 * s ** 3 + 3 * s ** 2
+            h11 = s ** 3 - s ** 2
+            for i in range(ny):
+                out[k, i] = h00 * y[i] + h10 * h * f[i] + h01 * y_new[i] + h11 * h * f_new[i]
+            k += 1
+        for i in range(ny):
+            y[i] = y_new[i]
+            f[i] = f_new[i]
+        t = t_new
+        if steps > max_steps:
+            return MAX_STEPS, k, steps, evals, t
+    return OK, k, steps, evals, t
+
+
+@njit(cache=True)
+def max_residual(states, n, P):
+    worst = 0.0
+    for k in range(states.shape[0]):
+        worst = max(worst, constraint_residual(states[k, :n], P))
+    return worst

@@ -1,0 +1,192 @@
+"""Spatial rigid-body kinematics (paper Sec. 3.2, Appendix B).
+
+A 3D body has the position R of its centre of mass and an orientation; its velocity coordinates
+are (Ṙ, ω) with ω the angular velocity in the body frame, so that its mass matrix is the constant
+diag(m I, J) and only the gyroscopic term −ω × Jω appears in the forces.
+
+A point with body coordinates ū is at r = R + A ū (Eq. 15); ṙ = Ṙ − A ũ ω (the 3D H of Eq. 22,
+written with body-frame ω instead of Euler-angle rates); r̈ = R̈ − A ũ ω̇ + A(ω × (ω × ū)), whose
+last term is the 3D a_n of Eq. (25).
+
+Orientations:
+* ``quaternion`` (default): a unit quaternion p = (w, x, y, z); ṗ = ½ p ⊗ (0, ω). No singularity.
+* ``euler_zxz``: the paper's Euler angles (φ, θ, ψ), A = R_z(φ) R_x(θ) R_z(ψ) (Eq. B.1). Their
+  rates follow from ω through the inverse of G (Eq. 23), which does not exist where sin θ = 0
+  (gimbal lock): there the solver stops with an error naming the body and the time.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import SimulationError
+
+#: |sin θ| below which Z-X-Z Euler angles are taken to be at their singularity.
+EULER_SINGULARITY = 1e-6
+
+
+def cross(a, b):
+    """a × b for 3-vectors (np.cross costs tens of µs on arrays this small)."""
+    return np.array((a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]))
+
+
+def skew(u):
+    return np.array(((0.0, -u[2], u[1]), (u[2], 0.0, -u[0]), (-u[1], u[0], 0.0)))
+
+
+# -- quaternions ---------------------------------------------------------------------------------
+def quat_matrix(p):
+    """Rotation matrix of a quaternion (normalised on the fly)."""
+    w, x, y, z = p
+    s = 2.0 / (w * w + x * x + y * y + z * z)
+    return np.array((
+        (1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)),
+        (s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)),
+        (s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y))))
+
+
+def quat_rate(p, omega):
+    """ṗ = ½ p ⊗ (0, ω), ω in the body frame."""
+    w, x, y, z = p
+    a, b, c = omega
+    return 0.5 * np.array((-x * a - y * b - z * c, w * a + y * c - z * b, w * b + z * a - x * c,
+                           w * c + x * b - y * a))
+
+
+def quat_from_matrix(A):
+    """A unit quaternion (w ≥ 0) for a rotation matrix."""
+    tr = A[0, 0] + A[1, 1] + A[2, 2]
+    if tr > 0:
+        s = 2.0 * math.sqrt(tr + 1.0)
+        p = (0.25 * s, (A[2, 1] - A[1, 2]) / s, (A[0, 2] - A[2, 0]) / s, (A[1, 0] - A[0, 1]) / s)
+    elif A[0, 0] > A[1, 1] and A[0, 0] > A[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + A[0, 0] - A[1, 1] - A[2, 2])
+        p = ((A[2, 1] - A[1, 2]) / s, 0.25 * s, (A[0, 1] + A[1, 0]) / s, (A[0, 2] + A[2, 0]) / s)
+    elif A[1, 1] > A[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + A[1, 1] - A[0, 0] - A[2, 2])
+        p = ((A[0, 2] - A[2, 0]) / s, (A[0, 1] + A[1, 0]) / s, 0.25 * s, (A[1, 2] + A[2, 1]) / s)
+    else:
+        s = 2.0 * math.sqrt(1.0 + A[2, 2] - A[0, 0] - A[1, 1])
+        p = ((A[1, 0] - A[0, 1]) / s, (A[0, 2] + A[2, 0]) / s, (A[1, 2] + A[2, 1]) / s, 0.25 * s)
+    p = np.array(p)
+    return p if p[0] >= 0 else -p
+
+
+def axis_angle_matrix(axis, angle):
+    n = np.asarray(axis, dtype=float)
+    n = n / np.linalg.norm(n)
+    K = skew(n)
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * (K @ K)
+
+
+# -- Z-X-Z Euler angles (Appendix B) --------------------------------------------------------------
+def euler_matrix(e):
+    """Eq. (B.1): A = R_z(φ) R_x(θ) R_z(ψ)."""
+    phi, th, psi = e
+    cf, sf, ct, st, cp, sp = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th), math.cos(psi), math.sin(psi)
+    return np.array((
+        (cp * cf - ct * sf * sp, -sp * cf - ct * sf * cp, st * sf),
+        (cp * sf + ct * cf * sp, -sp * sf + ct * cf * cp, -st * cf),
+        (st * sp, st * cp, ct)))
+
+
+def euler_from_matrix(A):
+    th = math.acos(max(-1.0, min(1.0, A[2, 2])))
+    if abs(math.sin(th)) < EULER_SINGULARITY:
+        return np.array((math.atan2(A[1, 0], A[0, 0]), th, 0.0))
+    return np.array((math.atan2(A[0, 2], -A[1, 2]), th, math.atan2(A[2, 0], A[2, 1])))
+
+
+def euler_rate(e, omega, body_name="", t=None):
+    """Euler-angle rates from the body-frame angular velocity: ω = G_b(θ) ė, inverted."""
+    _, th, psi = e
+    st = math.sin(th)
+    if abs(st) < EULER_SINGULARITY:
+        raise SimulationError(
+            f"body '{body_name}': its Z-X-Z Euler angles reach their singularity (gimbal lock, "
+            f"sin θ = {st:.2e}): the angle rates are undefined; use orientation = \"quaternion\"", t)
+    a, b, c = omega
+    cp, sp = math.cos(psi), math.sin(psi)
+    phidot = (a * sp + b * cp) / st
+    return np.array((phidot, a * cp - b * sp, c - phidot * math.cos(th)))
+
+
+class Orientation:
+    """How a 3D body's orientation is stored: ``quaternion`` (4 numbers) or ``euler_zxz`` (3)."""
+
+    def __init__(self, kind: str):
+        self.kind = kind
+        self.size = 4 if kind == "quaternion" else 3
+
+    def matrix(self, o):
+        return quat_matrix(o) if self.kind == "quaternion" else euler_matrix(o)
+
+    def from_matrix(self, A):
+        return quat_from_matrix(A) if self.kind == "quaternion" else euler_from_matrix(A)
+
+    def rate(self, o, omega, body_name="", t=None):
+        return quat_rate(o, omega) if self.kind == "quaternion" else euler_rate(o, omega, body_name, t)
+
+    def retract(self, o, dtheta):
+        """The orientation turned by the small body-frame rotation vector dθ."""
+        A = self.matrix(o) @ axis_angle_matrix(dtheta, np.linalg.norm(dtheta)) if np.any(dtheta) else self.matrix(o)
+        new = self.from_matrix(A)
+        if self.kind == "quaternion" and float(np.dot(new, o)) < 0:
+            new = -new          # stay on the same sheet as before
+        return new
+
+    def normalise(self, o):
+        return o / np.linalg.norm(o) if self.kind == "quaternion" else o
+
+
+class RotationCache:
+    """The last rotation matrix computed for one body: points of a body share it, so that an
+    evaluation of the mechanism computes each body's A once."""
+
+    __slots__ = ("key", "A")
+
+    def __init__(self):
+        self.key, self.A = None, None
+
+    def matrix(self, orientation, o):
+        key = o.tobytes()
+        if key != self.key:
+            self.key, self.A = key, orientation.matrix(o)
+        return self.A
+
+
+class SpatialPoint:
+    """A point on a 3D body (or the ground, body −1): r, ṙ, its H block and acceleration term."""
+
+    __slots__ = ("body", "local", "dofs", "qi", "orientation", "_skew", "cache")
+
+    def __init__(self, body: int, local, q_index: int, v_index: int, orientation: Orientation | None,
+                 cache: RotationCache | None = None):
+        self.body = body
+        self.local = np.asarray(local, dtype=float)
+        self.qi = q_index
+        self.orientation = orientation
+        self.dofs = np.arange(v_index, v_index + 6) if body >= 0 else None
+        self._skew = skew(self.local)
+        self.cache = cache or RotationCache()
+
+    def evaluate(self, q, v):
+        """(r, ṙ, H_b, acc): ṙ = H_b v_body, r̈ = H_b v̇_body + acc."""
+        if self.body < 0:
+            z = np.zeros(3)
+            return self.local, z, None, z
+        k, o = self.qi, self.orientation
+        A = self.cache.matrix(o, q[k + 3:k + 3 + o.size])
+        vb = v[self.dofs[0]:self.dofs[0] + 6]
+        w = vb[3:]
+        u = A @ self.local
+        Au = -A @ self._skew                                     # ∂ṙ/∂ω: −A ũ
+        H = np.empty((3, 6))
+        H[:, :3] = np.eye(3)
+        H[:, 3:] = Au
+        wxu = cross(w, self.local)
+        r = q[k:k + 3] + u
+        rdot = vb[:3] + A @ wxu
+        acc = A @ cross(w, wxu)                               # A(ω × (ω × ū)), Eq. (25)
+        return r, rdot, H, acc

@@ -73,9 +73,16 @@ class Model:
         return info
 
     def input_info(self):
-        return [dict(name=n, unit="N", description=f"force at point {n.split('.')[0]}, global axis "
-                     f"{n[n.index('[') + 1]}, held over each communication step")
-                for n in self.mechanism.input_names]
+        info = []
+        for n in self.mechanism.input_names:
+            axis = n[n.index("[") + 1]
+            if n.startswith("ground.a["):
+                info.append(dict(name=n, unit="m/s2", description=f"ground acceleration, global axis {axis}, "
+                                 "held over each communication step"))
+            else:
+                info.append(dict(name=n, unit="N", description=f"force at point {n.split('.')[0]}, global "
+                                 f"axis {axis}, held over each communication step"))
+        return info
 
     def output_info(self):
         return self.signals.info()

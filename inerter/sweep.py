@@ -1,0 +1,909 @@
+"""Parameter sweeps on dask.distributed: ``inerter sweep`` and ``inerter sweep-plot``.
+
+    inerter sweep SCENE --vary NAME=START:STOP:NUM [--vary NAME=V1,V2,...] --out DIR
+                  [--model solver|fmu] [--workers N] [--scheduler ADDRESS]
+                  [--set NAME=VALUE ...] [--stop-time T] [--step H]
+    inerter sweep-plot DIR/results.csv --x NAME --y METRIC [--hue NAME] --out FILE.png
+
+A sweep runs every combination of the varied values (the names that ``--set`` takes: parameters,
+``effects.NAME``, ``experiment.NAME``), each run in a task of its own on dask.distributed: a
+LocalCluster of N worker processes with one thread each, or the workers of a running scheduler
+(``--scheduler tcp://host:8786``). A tqdm progress bar counts the runs done and failed and
+estimates the time left.
+
+Results. One row per run is appended to ``DIR/results.csv`` (and flushed) as soon as the run
+finishes: its key, the scene's name, the model, the value of every ``--set`` and ``--vary`` name,
+status (``ok`` or ``failed``), the error message of a failed run, the scalar metrics of the scene,
+the run time on the worker (s), the worker and the time it finished. The columns are ordered
+``key, scene, model, <parameters>, status, error, <metrics>, run_time_s, worker, finished_at``, so
+that the file says itself which columns are parameters and which are metrics.
+
+Resuming. Each run is keyed by a hash of the scene file's content, the run's overrides (the
+``--set`` values and its varied values) and the run settings (model, stop time, FMU step). A
+sweep started again with the same arguments skips every key already in ``results.csv``: nothing
+finished is computed twice, and a sweep stopped part-way (Ctrl-C, a killed process, ``--max-runs``)
+is finished by running the same command again. A run that fails (an invalid value for that
+combination, such as a negative inertance, or a simulation that stops part-way) is recorded with
+its message and never stops the sweep; ``--retry-failed`` runs the failed keys again.
+
+With ``--model fmu`` each worker extracts and instantiates the scene's FMU once, and resets it
+between runs (:class:`FmuSlot`).
+"""
+from __future__ import annotations
+
+import argparse
+import atexit
+import csv
+import hashlib
+import io
+import itertools
+import json
+import math
+import os
+import shutil
+import socket
+import sys
+import tempfile
+import threading
+import time
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import InerterError, SceneError
+
+try:  # POSIX: one sweep at a time writes a results file
+    import fcntl
+except ImportError:  # pragma: no cover - not on Linux
+    fcntl = None
+
+RESULTS_FILE = "results.csv"
+SWEEP_FILE = "sweep.json"
+MODELS = ("solver", "fmu")
+
+#: Columns before the parameters, between the parameters and the metrics, and after the metrics.
+HEAD_COLUMNS = ("key", "scene", "model")
+STATUS_COLUMNS = ("status", "error")
+TAIL_COLUMNS = ("run_time_s", "worker", "finished_at")
+META_COLUMNS = HEAD_COLUMNS + STATUS_COLUMNS + TAIL_COLUMNS
+
+#: The metric keys each kind of [[metrics]] gives (see inerter.model.compute_metrics). Used to lay
+#: out the CSV header before any run has finished; a key not listed here still gets its column.
+METRIC_KEYS = {
+    "natural_frequency": ("natural_frequency",),
+    "free_oscillation": ("fundamental_frequency", "fundamental_amplitude", "mean_offset"),
+    "harmonics": ("mean", "amplitude"),
+    "steady_state": ("peak_to_peak", "mean_offset"),
+}
+
+
+class SweepError(InerterError):
+    """A sweep cannot start or a results file cannot be used (the message says which and why)."""
+
+
+# ----------------------------------------------------------------------------------------------
+# What to run
+# ----------------------------------------------------------------------------------------------
+def _value(name: str, text: str):
+    """One value as ``--set`` reads it (a TOML value, else a bare string)."""
+    from .cli import parse_set
+    return parse_set([f"{name}={text}"])[name]
+
+
+def parse_vary(text: str) -> tuple[str, list]:
+    """``NAME=START:STOP:NUM`` (NUM evenly spaced values, ends included) or ``NAME=V1,V2,...``."""
+    expected = "NAME=START:STOP:NUM or NAME=V1,V2,... (e.g. y0=1.05:1.8:16 or effects.centripetal=true,false)"
+    if "=" not in text:
+        raise SceneError("--vary", text, text, expected, "missing '='")
+    name, spec = (s.strip() for s in text.split("=", 1))
+    if not name or not spec:
+        raise SceneError("--vary", name or text, text, expected, "missing name or values")
+    if ":" in spec and "," not in spec:
+        parts = spec.split(":")
+        try:
+            if len(parts) != 3:
+                raise ValueError
+            start, stop, num = float(parts[0]), float(parts[1]), int(parts[2])
+        except ValueError:
+            raise SceneError("--vary", name, spec, "START:STOP:NUM with numbers START, STOP and a whole "
+                             "number NUM ≥ 1 (e.g. 1.05:1.8:16)", "not a range") from None
+        if num < 1 or not (math.isfinite(start) and math.isfinite(stop)):
+            raise SceneError("--vary", name, spec, "finite START and STOP and NUM ≥ 1", "out of range")
+        # 12 significant digits: 1.15, not 1.1500000000000001, in the CSV and in the run keys.
+        values = [float(f"{v:.12g}") for v in np.linspace(start, stop, num)]
+    else:
+        items = [s.strip() for s in spec.split(",")]
+        if any(not s for s in items):
+            raise SceneError("--vary", name, spec, "values separated by commas", "empty value")
+        values = [_value(name, s) for s in items]
+    return name, values
+
+
+def _canonical(value):
+    """A value as it enters a run key: 10 and 10.0 are the same run."""
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return value
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        return float(value)
+    if isinstance(value, (list, tuple)):
+        return [_canonical(v) for v in value]
+    return str(value)
+
+
+def run_key(scene_digest: str, overrides: dict, settings: dict) -> str:
+    """The stable key of one run: scene content + overrides + run settings (16 hex digits)."""
+    text = json.dumps({"scene": scene_digest,
+                       "overrides": {k: _canonical(v) for k, v in overrides.items()},
+                       "settings": {k: _canonical(v) for k, v in settings.items()}},
+                      sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Run:
+    key: str
+    overrides: dict          # the --set values and this run's varied values
+
+
+@dataclass
+class Sweep:
+    """A scene, the varied names with their values, fixed overrides and the run settings."""
+    scene: Path
+    axes: list[tuple[str, list]]
+    fixed: dict = field(default_factory=dict)
+    model: str = "solver"
+    stop_time: float | None = None
+    step: float | None = None            # FMU communication step (--model fmu)
+
+    def __post_init__(self):
+        from .model import load
+        from .scene import EXPERIMENT_FIELDS, KNOWN_EFFECTS
+
+        self.scene = Path(self.scene).resolve()
+        if not self.scene.is_file():
+            raise SweepError(f"{self.scene}: no such scene file")
+        if self.model not in MODELS:
+            raise SweepError(f"--model {self.model}: expected one of {', '.join(MODELS)}")
+        if not self.axes:
+            raise SweepError("nothing to sweep: give at least one --vary NAME=START:STOP:NUM")
+        self.content = self.scene.read_bytes()
+        self.digest = hashlib.sha256(self.content).hexdigest()
+        base = load(self.scene, **self.fixed)          # a bad --set is an error of the whole sweep
+        self.name = base.name
+        params = list(base.scene.parameters)
+        names = [n for n, _ in self.axes]
+        for name in names:
+            if names.count(name) > 1:
+                raise SweepError(f"--vary {name}: given more than once")
+            if name in self.fixed:
+                raise SweepError(f"--vary {name}: also given with --set (vary it or fix it, not both)")
+            known = (name in params
+                     or (name.startswith("effects.") and name[8:] in KNOWN_EFFECTS)
+                     or (name.startswith("experiment.") and name[11:] in EXPERIMENT_FIELDS))
+            if not known:
+                raise SceneError("--vary", name, name, "a parameter of " + str(self.scene) + ": "
+                                 + ", ".join(params) + ", or effects.NAME, or experiment.NAME", "unknown name")
+        self.metric_columns = []
+        for m in base.scene.metrics:
+            for k in METRIC_KEYS.get(m.kind, ()):
+                key = f"{m.prefix}_{k}" if m.prefix else k
+                if key not in self.metric_columns:
+                    self.metric_columns.append(key)
+        self.parameter_columns = list(self.fixed) + names
+        clash = set(self.parameter_columns) & (set(META_COLUMNS) | set(self.metric_columns))
+        if clash:
+            raise SweepError(f"{', '.join(sorted(clash))}: a name of both a parameter and a column of "
+                             "results.csv; rename the parameter in the scene")
+
+    @property
+    def settings(self) -> dict:
+        """The run settings that enter each run's key."""
+        out = {"model": self.model, "stop_time": self.stop_time}
+        if self.model == "fmu":
+            out["step"] = self.step
+        return out
+
+    def runs(self) -> list[Run]:
+        """Every combination, in the order of the axes (the last varies fastest); one per key."""
+        out, seen = [], set()
+        names = [n for n, _ in self.axes]
+        for combo in itertools.product(*(values for _, values in self.axes)):
+            overrides = dict(self.fixed)
+            overrides.update(zip(names, combo))
+            key = run_key(self.digest, overrides, self.settings)
+            if key not in seen:
+                seen.add(key)
+                out.append(Run(key, overrides))
+        return out
+
+    def describe(self) -> dict:
+        return {"scene": str(self.scene), "scene_sha256": self.digest, "name": self.name,
+                "model": self.model, "stop_time": self.stop_time, "step": self.step,
+                "set": self.fixed, "vary": {n: v for n, v in self.axes}, "runs": len(self.runs())}
+
+
+# ----------------------------------------------------------------------------------------------
+# One run, on a worker
+# ----------------------------------------------------------------------------------------------
+def _cell(value) -> str:
+    """A CSV cell: booleans as in a scene file, floats to full precision, one line of text."""
+    if value is None:
+        return ""
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value))
+    return " ".join(str(value).split())
+
+
+def _scene_on_worker(task) -> Path:
+    """The scene file, or a copy of its content where the worker does not see the same file."""
+    path = Path(task["scene_path"])
+    try:
+        if hashlib.sha256(path.read_bytes()).hexdigest() == task["scene_digest"]:
+            return path
+    except OSError:
+        pass
+    folder = Path(tempfile.gettempdir()) / f"inerter-sweep-{task['scene_digest'][:16]}"
+    folder.mkdir(parents=True, exist_ok=True)
+    copy = folder / path.name
+    if not copy.is_file():
+        tmp = folder / f".{path.name}.{os.getpid()}"
+        tmp.write_bytes(task["scene_content"])
+        os.replace(tmp, copy)
+    return copy
+
+
+def run_one(task: dict) -> dict:
+    """Run one combination and return its row. Never raises: a failure is a row with its error."""
+    t0 = time.perf_counter()
+    row = {"key": task["key"], "scene": task["name"], "model": task["model"]}
+    row.update(task["overrides"])
+    metrics: dict[str, Any] = {}
+    try:
+        scene = _scene_on_worker(task)
+        if task["model"] == "fmu":
+            slot = fmu_slot(task["fmu_path"], scene)
+            try:
+                result = slot.simulate(scene, task["overrides"], task["stop_time"], task["step"])
+            except InerterError:          # the overrides: the instance is as good as before
+                raise
+            except Exception:             # the instance may be broken: the next run makes a new one
+                _drop_slot(slot)
+                raise
+        else:
+            from .model import load
+            result = load(scene, **task["overrides"]).simulate(stop_time=task["stop_time"])
+        status, error = result.status, ("" if result.status == "ok" else result.message)
+        metrics = {k: v for k, v in result.metrics.items()
+                   if isinstance(v, (int, float)) and not isinstance(v, bool)}
+    except InerterError as exc:
+        status, error = "failed", str(exc)
+    except Exception as exc:  # a bug or an environment problem: recorded, the sweep goes on
+        status, error = "failed", f"{type(exc).__name__}: {exc}"
+    row["status"], row["error"] = status, error
+    row.update(metrics)
+    row["run_time_s"] = round(time.perf_counter() - t0, 4)
+    row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
+    row["finished_at"] = datetime.now(timezone.utc).isoformat(timespec="microseconds")
+    return row
+
+
+# ----------------------------------------------------------------------------------------------
+# The FMU, once per worker
+# ----------------------------------------------------------------------------------------------
+@dataclass
+class _FmuRunInfo:
+    steps: int
+    evaluations: int
+    cpu_time: float
+    max_drift: float
+    status: str
+    message: str
+
+
+_local = threading.local()
+
+
+def _worker_folder() -> Path:
+    """A folder that lives as long as this worker (dask's own), else a temporary one."""
+    try:
+        from distributed import get_worker
+        return Path(get_worker().local_directory)
+    except (ImportError, ValueError):
+        folder = getattr(_local, "tmp", None)
+        if folder is None:
+            folder = _local.tmp = Path(tempfile.mkdtemp(prefix="inerter-sweep-"))
+            atexit.register(shutil.rmtree, folder, True)
+        return folder
+
+
+def fmu_slot(fmu_path, scene) -> "FmuSlot":
+    """This thread's instance of the FMU at `fmu_path` (made on first use, then reused)."""
+    slots = getattr(_local, "fmus", None)
+    if slots is None:
+        slots = _local.fmus = {}
+    path = Path(fmu_path) if fmu_path else None
+    if path is None or not path.is_file():          # a worker on another machine: build it here
+        from .fmu_build import build
+        path = build(scene, _worker_folder() / "fmu")
+    stat = path.stat()
+    key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)
+    slot = slots.get(key)
+    if slot is None:
+        for old in slots.values():
+            old.free()
+        slots.clear()
+        slot = slots[key] = FmuSlot(path)
+    return slot
+
+
+def _drop_slot(slot: "FmuSlot"):
+    slots = getattr(_local, "fmus", {})
+    for key in [k for k, v in slots.items() if v is slot]:
+        del slots[key]
+    slot.free()
+
+
+class FmuSlot:
+    """One FMU instance kept across runs: extracted and instantiated once, reset between runs.
+
+    Each run sets the start values, runs setupExperiment, enter/exitInitializationMode, then
+    doStep over the communication step to the stop time, reading every output after each step,
+    as ``fmpy.simulate_fmu`` does (``inerter.fmu_run.simulate_fmu`` gives the same numbers).
+    """
+
+    instances = 0          # made in this process (the tests check the reuse)
+
+    def __init__(self, fmu_path: Path):
+        import fmpy
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+
+        self.path = Path(fmu_path)
+        self.md = read_model_description(str(self.path))
+        self.unzipdir = tempfile.mkdtemp(prefix=f"{self.path.stem}-", dir=_worker_folder())
+        extract(str(self.path), unzipdir=self.unzipdir)
+        self.variables = {v.name: v for v in self.md.modelVariables}
+        self.outputs = [v for v in self.md.modelVariables if v.causality == "output" and v.type == "Real"]
+        self.variable_step = bool(self.md.coSimulation.canHandleVariableCommunicationStepSize)
+        self.messages: list[str] = []
+        # The callbacks must live as long as the instance.
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipdir,
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName="sweep")
+        self.fmu.instantiate(callbacks=self.callbacks, loggingOn=True)
+        self.fresh = True
+        self.runs = 0
+        FmuSlot.instances += 1
+
+    def _log(self, env, instance, status, category, message):
+        self.messages.append(message.decode("utf-8", errors="replace") if isinstance(message, bytes)
+                             else str(message))
+
+    def free(self):
+        try:
+            self.fmu.freeInstance()
+        except Exception:
+            pass
+        shutil.rmtree(self.unzipdir, ignore_errors=True)
+
+    def _set(self, values: dict):
+        by_type: dict[str, tuple[list, list]] = {}
+        for name, value in values.items():
+            var = self.variables.get(name)
+            if var is None:
+                raise SweepError(f"{name}: not a variable of the FMU {self.path.name}")
+            vrs, vals = by_type.setdefault(var.type, ([], []))
+            vrs.append(var.valueReference)
+            vals.append(value)
+        for kind, (vrs, vals) in by_type.items():
+            if kind == "Real":
+                self.fmu.setReal(vrs, [float(v) for v in vals])
+            elif kind == "Boolean":
+                self.fmu.setBoolean(vrs, [bool(v) for v in vals])
+            elif kind == "String":
+                self.fmu.setString(vrs, [str(v) for v in vals])
+            else:
+                self.fmu.setInteger(vrs, [int(v) for v in vals])
+
+    def simulate(self, scene, overrides: dict, stop_time=None, step=None):
+        from fmpy.fmi1 import FMICallException
+
+        from .fmu_run import FmuResult, start_values
+        from .model import Model, compute_metrics
+
+        model = Model(scene, overrides)                # the solver's messages for bad overrides
+        settings = model.settings(stop_time=stop_time)
+        comm = step or model.scene.experiment.communication_step
+        start = start_values(model, overrides)
+        if not self.fresh:
+            self.fmu.reset()
+        self.fresh = False
+        self.runs += 1
+        self.messages.clear()
+        stop = settings.stop_time
+        vrs = [v.valueReference for v in self.outputs]
+        t0 = time.process_time()
+        self.fmu.setupExperiment(tolerance=None, startTime=0.0, stopTime=stop)
+        self._set(start)
+        self.fmu.enterInitializationMode()
+        self.fmu.exitInitializationMode()
+        rows = [(0.0, *self.fmu.getReal(vrs))]
+        t, n = 0.0, 0
+        failure = None
+        while not (t > stop or math.isclose(t, stop)):
+            regular = (n + 1) * comm
+            nxt = regular
+            if nxt > stop and not math.isclose(nxt, stop):
+                if not self.variable_step:
+                    break
+                nxt = stop
+            try:
+                self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=nxt - t)
+            except FMICallException:
+                failure = "; ".join(self.messages[-3:]) or "a step was discarded"
+                break
+            t = nxt
+            rows.append((t, *self.fmu.getReal(vrs)))
+            if math.isclose(t, regular):
+                n += 1
+        cpu = time.process_time() - t0
+        table = np.array(rows, dtype=[("time", np.float64)] + [(v.name, np.float64) for v in self.outputs])
+        ok = failure is None and abs(t - stop) <= 1e-9 * max(1.0, stop)
+        message = "completed" if ok else f"the FMU stopped at t = {t:.9g} s: {failure or 'before the stop time'}"
+        run = _FmuRunInfo(steps=len(table) - 1, evaluations=0, cpu_time=cpu,
+                          max_drift=float(np.max(table["constraint_residual"]))
+                          if "constraint_residual" in table.dtype.names else 0.0,
+                          status="ok" if ok else "failed", message=message)
+        result = FmuResult(model, table, settings, run, comm)
+        if ok:
+            result.metrics = compute_metrics(model, result)
+        return result
+
+
+# ----------------------------------------------------------------------------------------------
+# The results file
+# ----------------------------------------------------------------------------------------------
+class ResultsFile:
+    """``results.csv``: rows appended and flushed one by one, read back to resume.
+
+    Held under an exclusive lock while a sweep writes it. A row cut short by a killed process
+    (no final newline) is dropped when the file is opened again. A row with a parameter or metric
+    the header lacks rewrites the file with the column added in its place.
+    """
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.columns: list[str] = []
+        self.rows: list[dict] = []
+        self._fh = None
+        self._lock = None
+
+    # -- reading (no lock needed) -------------------------------------------------------------
+    @staticmethod
+    def read(path) -> tuple[list[str], list[dict]]:
+        path = Path(path)
+        if not path.is_file():
+            raise SweepError(f"{path}: no such results file")
+        text = path.read_text(encoding="utf-8")
+        if text and not text.endswith("\n"):
+            text = text[: text.rfind("\n") + 1]
+        reader = csv.DictReader(io.StringIO(text))
+        rows = [r for r in reader if r.get("key")]
+        return list(reader.fieldnames or []), rows
+
+    # -- writing ------------------------------------------------------------------------------
+    def open(self, parameters=(), metrics=()) -> "ResultsFile":
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        if fcntl is not None:
+            self._lock = open(self.path.with_name(self.path.name + ".lock"), "w")
+            try:
+                fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                self._lock.close()
+                self._lock = None
+                raise SweepError(f"{self.path}: another sweep is writing this file; wait for it to finish "
+                                 "or use another --out") from None
+        if self.path.is_file() and self.path.stat().st_size:
+            data = self.path.read_bytes()
+            if not data.endswith(b"\n"):                        # a row cut short by a kill
+                with open(self.path, "r+b") as fh:
+                    fh.truncate(data.rfind(b"\n") + 1)
+            self.columns, self.rows = self.read(self.path)
+        if not self.columns or "key" not in self.columns or "status" not in self.columns:
+            if self.rows:
+                raise SweepError(f"{self.path}: not a results file of inerter sweep (no key/status columns)")
+            self.columns = list(HEAD_COLUMNS) + list(STATUS_COLUMNS) + list(TAIL_COLUMNS)
+            self._add_columns(parameters, metrics)
+            self._rewrite()
+        elif self._add_columns(parameters, metrics):
+            self._rewrite()
+        self._fh = open(self.path, "a", newline="", encoding="utf-8")
+        return self
+
+    def _add_columns(self, parameters=(), metrics=()) -> bool:
+        """Put new parameter columns before ``status`` and new metric columns before ``run_time_s``."""
+        changed = False
+        for name in parameters:
+            if name not in self.columns:
+                self.columns.insert(self.columns.index("status"), name)
+                changed = True
+        for name in metrics:
+            if name not in self.columns:
+                at = self.columns.index("run_time_s") if "run_time_s" in self.columns else len(self.columns)
+                self.columns.insert(at, name)
+                changed = True
+        return changed
+
+    def _rewrite(self):
+        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        with open(tmp, "w", newline="", encoding="utf-8") as fh:
+            writer = csv.DictWriter(fh, self.columns, lineterminator="\n", extrasaction="ignore")
+            writer.writeheader()
+            writer.writerows(self.rows)
+        os.replace(tmp, self.path)
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = open(self.path, "a", newline="", encoding="utf-8")
+
+    def append(self, row: dict, parameters=()):
+        cells = {k: _cell(v) for k, v in row.items()}
+        new_params = [k for k in parameters if k not in self.columns]
+        new_metrics = [k for k in cells if k not in self.columns and k not in parameters]
+        self.rows.append(cells)
+        if new_params or new_metrics:
+            self._add_columns(new_params, new_metrics)
+            self._rewrite()                     # the new row is written with the others
+            return
+        csv.DictWriter(self._fh, self.columns, lineterminator="\n", extrasaction="ignore").writerow(cells)
+        self._fh.flush()
+
+    def drop(self, keys: set):
+        """Remove the rows of these keys (``--retry-failed``)."""
+        before = len(self.rows)
+        self.rows = [r for r in self.rows if r.get("key") not in keys]
+        if len(self.rows) != before:
+            self._rewrite()
+
+    def close(self):
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
+        if self._lock is not None:
+            self._lock.close()
+            self._lock = None
+
+
+# ----------------------------------------------------------------------------------------------
+# Running a sweep
+# ----------------------------------------------------------------------------------------------
+@dataclass
+class SweepReport:
+    total: int                     # runs in the sweep
+    skipped: int                   # already in results.csv
+    ok: int = 0                    # run now
+    failed: int = 0                # run now
+    failed_before: int = 0         # skipped, recorded as failed by an earlier start
+    pending: int = 0               # left for a later start (--max-runs, interrupted)
+    results: Path | None = None
+    wall_time: float = 0.0
+    rows: list = field(default_factory=list)    # the rows written now
+
+
+class DaskClient:
+    """``with DaskClient(workers=2) as client``: a dask Client on a LocalCluster of `workers` processes
+    with one thread each (default: one per core), or on the running scheduler at `scheduler`."""
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None):
+        if workers is not None and workers < 1:
+            raise SweepError(f"--workers {workers}: expected at least 1")
+        self.workers, self.scheduler = workers, scheduler
+        self.cluster = self.client = None
+
+    def __enter__(self):
+        import logging
+
+        from distributed import Client, LocalCluster
+        if self.scheduler:
+            try:
+                self.client = Client(self.scheduler, timeout="20s")
+            except (OSError, TimeoutError) as exc:
+                raise SweepError(f"--scheduler {self.scheduler}: cannot connect ({exc})") from None
+        else:
+            n = self.workers or os.cpu_count() or 1
+            self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                        dashboard_address=":0", host="127.0.0.1",   # any free port
+                                        silence_logs=logging.ERROR)
+            self.client = Client(self.cluster)
+        return self.client
+
+    def __exit__(self, *exc):
+        if self.client is not None:
+            self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | None = None, client=None,
+              progress: bool = True, max_runs: int | None = None, retry_failed: bool = False,
+              fmu_dir=None) -> SweepReport:
+    """Run the runs of `sweep` not yet in ``out/results.csv`` and append their rows.
+
+    `client`: a dask Client to use (else one is made from `workers` / `scheduler`).
+    `max_runs`: stop after this many new runs (the rest are left for a later start).
+    `fmu_dir`: where the FMU is built with ``--model fmu`` (default: build/fmu, as ``inerter run``).
+    """
+    from tqdm.auto import tqdm
+
+    t_start = time.perf_counter()
+    out = Path(out)
+    runs = sweep.runs()
+    results = ResultsFile(out / RESULTS_FILE).open(sweep.parameter_columns, sweep.metric_columns)
+    try:
+        if retry_failed:
+            results.drop({r["key"] for r in results.rows if r.get("status") != "ok"})
+        finished = {r["key"] for r in results.rows if r.get("status") in ("ok", "failed")}
+        todo = [r for r in runs if r.key not in finished]
+        report = SweepReport(total=len(runs), skipped=len(runs) - len(todo), results=results.path)
+        keys = {r.key for r in runs}
+        report.failed_before = sum(1 for r in results.rows if r.get("key") in keys and r.get("status") == "failed")
+        if max_runs is not None:
+            todo = todo[:max(0, max_runs)]
+        (out / SWEEP_FILE).write_text(json.dumps(sweep.describe(), indent=2, default=str))
+        if todo:
+            fmu_path = None
+            if sweep.model == "fmu":
+                from .fmu_build import DEFAULT_OUT_DIR, build
+                fmu_path = str(Path(build(sweep.scene, fmu_dir or DEFAULT_OUT_DIR)).resolve())
+            tasks = [dict(key=r.key, name=sweep.name, model=sweep.model, overrides=r.overrides,
+                          stop_time=sweep.stop_time, step=sweep.step, fmu_path=fmu_path,
+                          scene_path=str(sweep.scene), scene_digest=sweep.digest, scene_content=sweep.content)
+                     for r in todo]
+            bar = tqdm(total=report.skipped + len(todo), initial=report.skipped, desc=sweep.name, unit="run",
+                       disable=not progress, dynamic_ncols=True, smoothing=0.1)
+            bar.set_postfix_str(f"ok 0, failed 0, skipped {report.skipped}")
+            try:
+                if client is not None:
+                    _run_tasks(client, tasks, results, sweep, report, bar)
+                else:
+                    with DaskClient(workers, scheduler) as own:
+                        _run_tasks(own, tasks, results, sweep, report, bar)
+            finally:
+                bar.close()
+    finally:
+        results.close()
+    report.pending = report.total - report.skipped - report.ok - report.failed
+    report.wall_time = time.perf_counter() - t_start
+    return report
+
+
+#: A sweep with runs left and no worker for this long stops with an error (its rows are kept).
+NO_WORKER_TIMEOUT = 120.0
+WORKER_CHECK_INTERVAL = 5.0
+
+
+def _run_tasks(client, tasks, results: ResultsFile, sweep: Sweep, report: SweepReport, bar):
+    from distributed import as_completed
+
+    futures = client.map(run_one, tasks, key=[f"inerter-run-{t['key']}" for t in tasks], pure=False)
+    by_future = dict(zip(futures, tasks))
+    finished = as_completed(futures)
+    seen_workers = checked = time.monotonic()
+    try:
+        while not finished.is_empty():
+            batch = finished.next_batch(block=False)
+            if not batch:
+                time.sleep(0.05)
+                now = time.monotonic()
+                if now - checked > WORKER_CHECK_INTERVAL:    # no worker left (killed, or none joined the scheduler)?
+                    checked = now
+                    if client.scheduler_info(n_workers=1).get("workers"):
+                        seen_workers = now
+                    elif now - seen_workers > NO_WORKER_TIMEOUT:
+                        raise SweepError(f"no dask worker for {NO_WORKER_TIMEOUT:.0f} s with {len(finished.futures)}"
+                                         f" runs left; the finished runs are in {results.path}: start the sweep "
+                                         "again to run the others")
+                continue
+            for future in batch:
+                _record(future, by_future[future], results, sweep, report, bar)
+    finally:
+        client.cancel([f for f in futures if not f.done()])
+
+
+def _record(future, task, results: ResultsFile, sweep: Sweep, report: SweepReport, bar):
+    try:
+        row = future.result()
+    except Exception as exc:   # the worker died (KilledWorker) or the task was lost
+        row = {"key": task["key"], "scene": task["name"], "model": task["model"], **task["overrides"],
+               "status": "failed", "error": f"{type(exc).__name__}: {exc} (run again with --retry-failed)",
+               "finished_at": datetime.now(timezone.utc).isoformat(timespec="microseconds")}
+    future.release()
+    results.append(row, parameters=sweep.parameter_columns)
+    report.rows.append(row)
+    if row["status"] == "ok":
+        report.ok += 1
+    else:
+        report.failed += 1
+    bar.set_postfix_str(f"ok {report.ok}, failed {report.failed}, skipped {report.skipped}", refresh=False)
+    bar.update(1)
+
+
+# ----------------------------------------------------------------------------------------------
+# Plotting any metric against any parameter
+# ----------------------------------------------------------------------------------------------
+def read_results(path) -> tuple[list[str], list[str], list[dict]]:
+    """(parameter columns, metric columns, rows) of a results file."""
+    columns, rows = ResultsFile.read(path)
+    if "status" not in columns or "model" not in columns:
+        raise SweepError(f"{path}: not a results file of inerter sweep (no model/status columns)")
+    params = columns[columns.index("model") + 1:columns.index("status")]
+    end = columns.index("run_time_s") if "run_time_s" in columns else len(columns)
+    metrics = columns[columns.index("error") + 1:end] if "error" in columns else []
+    return params, metrics, rows
+
+
+def _number(text):
+    if text in ("true", "false"):
+        return float(text == "true")
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def plot_results(path, x: str, y: str, out, hue: str | None = None, title: str | None = None, ax=None):
+    """`y` against `x` from a results file: one line per value of `hue` and of every other
+    parameter that varies in the file (failed runs left out)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    params, metrics, rows = read_results(path)
+    columns = params + metrics
+    for flag, name in (("--x", x), ("--y", y), ("--hue", hue)):
+        if name is not None and name not in columns:
+            raise SweepError(f"{flag} {name}: not a column of {path}; parameters: {', '.join(params)}; "
+                             f"metrics: {', '.join(metrics)}")
+    ok = [r for r in rows if r.get("status") == "ok"]
+    if not ok:
+        raise SweepError(f"{path}: no finished run to plot (all {len(rows)} failed or none yet)")
+    varying = [p for p in params if p not in (x, y) and len({r.get(p, "") for r in ok}) > 1]
+    groups = [hue] if hue in varying else []
+    groups += [p for p in varying if p != hue]
+    series: dict[tuple, list] = {}
+    for r in ok:
+        series.setdefault(tuple(r.get(g, "") for g in groups), []).append((_number(r[x]), _number(r[y])))
+    own = ax is None
+    if own:
+        fig, ax = plt.subplots(figsize=(7, 4.2))
+    for label, points in sorted(series.items()):
+        points.sort()
+        xs, ys = zip(*points)
+        text = ", ".join(f"{g} = {v}" for g, v in zip(groups, label)) or None
+        style = {"marker": "o", "ms": 3.5, "lw": 1.3}
+        if hue and label and label[0] == "false":
+            style["ls"] = "--"
+        ax.plot(xs, ys, label=text, **style)
+    ax.set_xlabel(x)
+    ax.set_ylabel(y)
+    ax.grid(alpha=0.3)
+    if any(label for label in series):
+        ax.legend(fontsize=8)
+    if own:
+        ax.set_title(title or f"{y} against {x}")
+        fig.tight_layout()
+        Path(out).parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(out, dpi=130)
+        plt.close(fig)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# Command lines
+# ----------------------------------------------------------------------------------------------
+def add_run_arguments(p: argparse.ArgumentParser):
+    """Options shared by ``sweep`` and ``study``."""
+    p.add_argument("--model", choices=MODELS, default="solver",
+                   help="run each combination on the solver (default) or on the scene's FMU")
+    p.add_argument("--workers", type=int, default=None,
+                   help="worker processes of the local cluster (default: one per core)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on a running dask scheduler (tcp://host:8786) instead of a local cluster")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="fix a parameter, effects.NAME or experiment.NAME for every run (repeatable)")
+    p.add_argument("--stop-time", type=float, default=None, help="stop time of every run (s)")
+    p.add_argument("--step", type=float, default=None, help="FMU communication step (s), with --model fmu")
+    p.add_argument("--max-runs", type=int, default=None,
+                   help="stop after this many new runs; run the same command again to go on")
+    p.add_argument("--retry-failed", action="store_true", help="run the failed runs of results.csv again")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _guarded(fn, argv):
+    try:
+        return fn(argv)
+    except InerterError as exc:
+        print(f"inerter: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("inerter: interrupted; the runs that finished are in results.csv: run the same command again "
+              "to go on", file=sys.stderr)
+        return 130
+
+
+def print_report(report: SweepReport, sweep: Sweep):
+    text = (f"{sweep.name}: {report.total} runs: {report.ok + report.failed} run now ({report.failed} failed), "
+            f"{report.skipped} already in {report.results}")
+    if report.failed_before:
+        text += f" ({report.failed_before} of them failed)"
+    if report.pending:
+        text += f", {report.pending} left (run the same command again to go on)"
+    print(text)
+    for row in report.rows:
+        if row["status"] != "ok":
+            values = ", ".join(f"{n} = {_cell(row.get(n))}" for n, _ in sweep.axes)
+            print(f"  failed: {values}: {row['error']}")
+    print(f"wrote {report.results} in {report.wall_time:.1f} s")
+
+
+def status_code(report: SweepReport) -> int:
+    """0: every run of the sweep so far is ok; 3: some failed (as ``inerter run``)."""
+    return 3 if report.failed or report.failed_before else 0
+
+
+def _sweep(argv) -> int:
+    from .cli import parse_set
+    p = argparse.ArgumentParser(prog="inerter sweep", description="Run every combination of the varied "
+                                "parameters in parallel on dask; rows go to DIR/results.csv as runs finish.")
+    p.add_argument("scene")
+    p.add_argument("--vary", action="append", required=True, metavar="NAME=START:STOP:NUM",
+                   help="a parameter, effects.NAME or experiment.NAME and its values: START:STOP:NUM "
+                        "(evenly spaced) or V1,V2,... (repeatable: every combination is run)")
+    p.add_argument("--out", required=True, metavar="DIR", help="folder of results.csv (resumed if present)")
+    add_run_arguments(p)
+    args = p.parse_args(argv)
+    sweep = Sweep(args.scene, [parse_vary(v) for v in args.vary], parse_set(args.set), args.model,
+                  args.stop_time, args.step)
+    report = run_sweep(sweep, args.out, workers=args.workers, scheduler=args.scheduler,
+                       progress=not args.no_progress, max_runs=args.max_runs, retry_failed=args.retry_failed)
+    print_report(report, sweep)
+    return status_code(report)
+
+
+def _sweep_plot(argv) -> int:
+    p = argparse.ArgumentParser(prog="inerter sweep-plot", description="Plot a metric of a sweep against a "
+                                "varied parameter.")
+    p.add_argument("results", help="results.csv of a sweep")
+    p.add_argument("--x", required=True, help="a parameter column (e.g. y0)")
+    p.add_argument("--y", required=True, help="a metric column (e.g. fundamental_frequency)")
+    p.add_argument("--hue", default=None, help="one line per value of this parameter (e.g. effects.centripetal)")
+    p.add_argument("--out", required=True, help="the PNG to write")
+    p.add_argument("--title", default=None)
+    args = p.parse_args(argv)
+    out = plot_results(args.results, args.x, args.y, args.out, hue=args.hue, title=args.title)
+    print(f"wrote {out}")
+    return 0
+
+
+def main_sweep(argv=None) -> int:
+    """``inerter sweep``: exit 0 (all ok), 3 (some runs failed, recorded), 2 (bad arguments)."""
+    return _guarded(_sweep, argv)
+
+
+def main_study(argv=None) -> int:
+    """``inerter study NAME``: a built-in study (module `studies`)."""
+    from .studies import main as study_main
+    return _guarded(study_main, argv)
+
+
+def main_sweep_plot(argv=None) -> int:
+    """``inerter sweep-plot``: exit 0, or 2 for an unknown column or an unreadable file."""
+    return _guarded(_sweep_plot, argv)

@@ -1,0 +1,311 @@
+"""Parameter sweeps on dask (inerter.sweep, inerter.studies): results, resuming, failures, studies.
+
+Short runs (lumped mass, 3 s at rtol 1e-8) on one local cluster of 2 worker processes shared by
+the module; the sweeps reach it through ``--scheduler``, as they would reach a remote one. One
+test starts a sweep with its own LocalCluster in a subprocess and kills it part-way.
+"""
+from __future__ import annotations
+
+import csv
+import logging
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import inerter
+from conftest import LUMPED, ROOT
+from inerter import sweep as sw
+from inerter.studies import STUDIES, make_sweep, study_table
+from inerter.sweep import (ResultsFile, Sweep, main_study, main_sweep, main_sweep_plot, parse_vary, run_key,
+                           run_one, run_sweep)
+
+distributed = pytest.importorskip("distributed")
+
+FAST = ["--set", "experiment.rtol=1e-8", "--stop-time", "3"]
+SCALARS = ("natural_frequency", "fundamental_frequency", "fundamental_amplitude", "mean_offset",
+           "inerter_force_mean", "inerter_force_amplitude")
+
+
+@pytest.fixture(scope="module")
+def client():
+    from distributed import Client, LocalCluster
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                      host="127.0.0.1", silence_logs=logging.ERROR) as cluster, Client(cluster) as c:
+        yield c
+
+
+@pytest.fixture
+def address(client):
+    return client.scheduler.address
+
+
+def rows_of(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+# ----------------------------------------------------------------------------------------------
+# What is run
+# ----------------------------------------------------------------------------------------------
+def test_parse_vary_ranges_and_lists():
+    assert parse_vary("y0=1.05:1.8:16")[1][:3] == [1.05, 1.1, 1.15]     # 12 significant digits
+    assert len(parse_vary("y0=1.05:1.8:16")[1]) == 16
+    assert parse_vary("y0=1.05:1.8:16")[1][-1] == 1.8
+    assert parse_vary("effects.centripetal=true,false") == ("effects.centripetal", [True, False])
+    assert parse_vary("b=-1,10") == ("b", [-1, 10])
+    assert parse_vary("experiment.method=DOP853,Radau") == ("experiment.method", ["DOP853", "Radau"])
+    assert parse_vary("k=5") == ("k", [5])
+    for bad in ("b", "b=", "b=1:2", "b=1:2:x", "b=1:2:0", "b=1,,2"):
+        with pytest.raises(inerter.InerterError):
+            parse_vary(bad)
+
+
+def test_run_keys_are_stable_and_follow_the_scene_content(tmp_path):
+    a = Sweep(LUMPED, [("y0", [1.2, 1.5]), ("effects.centripetal", [True, False])], {"experiment.rtol": 1e-8},
+              stop_time=3.0)
+    b = Sweep(LUMPED, [("y0", [1.2, 1.5]), ("effects.centripetal", [True, False])], {"experiment.rtol": 1e-8},
+              stop_time=3.0)
+    keys = [r.key for r in a.runs()]
+    assert keys == [r.key for r in b.runs()] and len(set(keys)) == 4
+    assert [r.overrides for r in a.runs()][1] == {"experiment.rtol": 1e-8, "y0": 1.2, "effects.centripetal": False}
+    # 10 and 10.0 are the same run; another stop time or model is another run
+    assert run_key(a.digest, {"b": 10}, a.settings) == run_key(a.digest, {"b": 10.0}, a.settings)
+    assert Sweep(LUMPED, [("y0", [1.2])], stop_time=4.0).runs()[0].key != Sweep(LUMPED, [("y0", [1.2])],
+                                                                                stop_time=3.0).runs()[0].key
+    assert Sweep(LUMPED, [("y0", [1.2])], model="fmu").runs()[0].key != Sweep(LUMPED, [("y0", [1.2])]).runs()[0].key
+    copy = tmp_path / "lumped.toml"
+    copy.write_text(LUMPED.read_text() + "\n# a comment changes the content\n")
+    assert Sweep(copy, [("y0", [1.2])]).runs()[0].key != Sweep(LUMPED, [("y0", [1.2])]).runs()[0].key
+
+
+def test_bad_arguments_are_errors_of_the_whole_sweep(tmp_path, capsys):
+    out = str(tmp_path / "never")
+    assert main_sweep([str(LUMPED), "--vary", "bb=1,2", "--out", out]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("inerter: error:") and "bb" in err and "unknown name" in err
+    assert main_sweep([str(LUMPED), "--vary", "b", "--out", out]) == 2
+    assert "missing '='" in capsys.readouterr().err
+    assert main_sweep([str(LUMPED), "--vary", "b=1,2", "--set", "b=3", "--out", out]) == 2
+    assert "also given with --set" in capsys.readouterr().err
+    assert main_sweep([str(LUMPED), "--vary", "b=1,2", "--set", "zz=3", "--out", out]) == 2
+    assert "zz" in capsys.readouterr().err
+    assert not Path(out).exists()
+
+
+def test_results_file_appends_repairs_and_extends(tmp_path):
+    path = tmp_path / "results.csv"
+    f = ResultsFile(path).open(["b"], ["m1"])
+    f.append({"key": "k1", "scene": "s", "model": "solver", "b": 1.0, "status": "ok", "error": "", "m1": 0.1,
+              "run_time_s": 1.0, "worker": "w", "finished_at": "t"})
+    with pytest.raises(sw.SweepError, match="another sweep"):
+        ResultsFile(path).open()
+    # a metric the header lacks: the file is rewritten with the column in its place
+    f.append({"key": "k2", "scene": "s", "model": "solver", "b": True, "status": "failed", "error": "a\nb",
+              "m2": 0.2, "run_time_s": 1.0})
+    f.close()
+    with open(path, "a") as fh:
+        fh.write("k3,s,solver,2.0,o")            # a row cut short by a kill
+    f = ResultsFile(path).open()
+    f.close()
+    assert path.read_text().splitlines() == [
+        "key,scene,model,b,status,error,m1,m2,run_time_s,worker,finished_at",
+        "k1,s,solver,1.0,ok,,0.1,,1.0,w,t",
+        "k2,s,solver,true,failed,a b,,0.2,1.0,,"]
+    params, metrics, _ = sw.read_results(path)
+    assert (params, metrics) == (["b"], ["m1", "m2"])
+
+
+# ----------------------------------------------------------------------------------------------
+# Sweeps on the cluster
+# ----------------------------------------------------------------------------------------------
+def test_sweep_equals_the_same_runs_one_by_one(tmp_path, address, capsys):
+    out = tmp_path / "sweep"
+    code = main_sweep([str(LUMPED), "--vary", "y0=1.2:1.6:2", "--vary", "effects.centripetal=true,false",
+                       *FAST, "--scheduler", address, "--out", str(out), "--no-progress"])
+    assert code == 0, capsys.readouterr()
+    rows = rows_of(out / "results.csv")
+    assert len(rows) == 4 and {r["status"] for r in rows} == {"ok"}
+    assert len({r["worker"] for r in rows}) == 2                   # both workers took runs
+    for row in rows:
+        overrides = {"experiment.rtol": 1e-8, "y0": float(row["y0"]),
+                     "effects.centripetal": row["effects.centripetal"] == "true"}
+        alone = inerter.load(LUMPED, **overrides).simulate(stop_time=3.0).metrics
+        for name in SCALARS:
+            # exactly equal: same code and inputs in another process, and the CSV keeps every digit
+            assert float(row[name]) == alone[name], name
+        assert "natural_frequencies" not in row                    # lists are left out
+        assert float(row["run_time_s"]) > 0
+    assert "4 run now (0 failed)" in capsys.readouterr().out
+
+
+def test_a_failing_run_is_recorded_and_the_others_complete(tmp_path, address, capsys):
+    out = tmp_path / "fail"
+    code = main_sweep([str(LUMPED), "--vary", "b=-1,10", "--vary", "experiment.max_steps=20,1000000", *FAST,
+                       "--scheduler", address, "--out", str(out), "--no-progress"])
+    assert code == 3                                              # as `inerter run` for a failed run
+    rows = {(r["b"], r["experiment.max_steps"]): r for r in rows_of(out / "results.csv")}
+    assert len(rows) == 4
+    for steps in ("20", "1000000"):                               # a SceneError for that combination
+        bad = rows[("-1", steps)]
+        assert bad["status"] == "failed" and bad["fundamental_frequency"] == ""
+        assert "elements.inerter.b" in bad["error"] and "got -1" in bad["error"]
+    partway = rows[("10", "20")]                                  # status "failed" from the solver
+    assert partway["status"] == "failed" and "max_steps = 20" in partway["error"]
+    assert rows[("10", "1000000")]["status"] == "ok" and float(rows[("10", "1000000")]["mean_offset"]) < 0
+    printed = capsys.readouterr().out
+    assert "4 run now (3 failed)" in printed and "failed: b = -1" in printed
+    # started again: nothing to run, the failures are kept (and the exit code says so)
+    assert main_sweep([str(LUMPED), "--vary", "b=-1,10", "--vary", "experiment.max_steps=20,1000000", *FAST,
+                       "--scheduler", address, "--out", str(out), "--no-progress"]) == 3
+    assert "0 run now" in capsys.readouterr().out and len(rows_of(out / "results.csv")) == 4
+    # --retry-failed runs the failed keys again and keeps one row per key
+    ok_row = rows[("10", "1000000")]
+    assert main_sweep([str(LUMPED), "--vary", "b=-1,10", "--vary", "experiment.max_steps=20,1000000", *FAST,
+                       "--scheduler", address, "--out", str(out), "--no-progress", "--retry-failed"]) == 3
+    assert "3 run now (3 failed), 1 already in" in capsys.readouterr().out
+    again = rows_of(out / "results.csv")
+    assert len(again) == 4 and again[0] == ok_row and len({r["key"] for r in again}) == 4
+
+
+def test_a_sweep_stopped_part_way_resumes_without_recomputing(tmp_path, client):
+    sweep = Sweep(LUMPED, [("y0", [1.2, 1.3, 1.4, 1.5])], {"experiment.rtol": 1e-8}, stop_time=3.0)
+    first = run_sweep(sweep, tmp_path, client=client, progress=False, max_runs=2)
+    assert (first.ok, first.skipped, first.pending) == (2, 0, 2)
+    before = (tmp_path / "results.csv").read_text()
+    second = run_sweep(sweep, tmp_path, client=client, progress=False)
+    assert (second.ok, second.skipped, second.pending) == (2, 2, 0)
+    after = (tmp_path / "results.csv").read_text()
+    assert after.startswith(before)                               # the first rows are untouched
+    rows = rows_of(tmp_path / "results.csv")
+    assert sorted(r["key"] for r in rows) == sorted(r.key for r in sweep.runs())   # each key once
+    third = run_sweep(sweep, tmp_path, client=client, progress=False)
+    assert (third.ok, third.skipped) == (0, 4) and (tmp_path / "results.csv").read_text() == after
+
+
+def test_a_killed_sweep_is_finished_by_running_it_again(tmp_path, address):
+    out = tmp_path / "killed"
+    args = [str(LUMPED), "--vary", "y0=1.1:1.8:8", *FAST, "--workers", "2", "--out", str(out), "--no-progress"]
+    proc = subprocess.Popen([sys.executable, "-c", f"from inerter.sweep import main_sweep; main_sweep({args!r})"],
+                            cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    results = out / "results.csv"
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and proc.poll() is None:
+            if results.is_file() and len(results.read_text().splitlines()) >= 3:     # header + 2 rows
+                break
+            time.sleep(0.05)
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)                  # the sweep and its workers
+        except ProcessLookupError:
+            pass
+        proc.wait()
+    done_before = rows_of(results)
+    assert 0 < len(done_before) < 8, "the sweep was not stopped part-way"
+    with open(results, "a") as fh:
+        fh.write(done_before[0]["key"][:8])                      # as if killed in the middle of a row
+    assert main_sweep(args[:-3] + ["--scheduler", address, "--out", str(out), "--no-progress"]) == 0
+    rows = rows_of(results)
+    assert len(rows) == 8 and len({r["key"] for r in rows}) == 8
+    assert rows[:len(done_before)] == done_before                 # nothing finished was recomputed
+
+
+# ----------------------------------------------------------------------------------------------
+# The FMU: built once, instantiated once per worker, reset between runs
+# ----------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def lumped_fmu(tmp_path_factory):
+    pytest.importorskip("fmpy")
+    pytest.importorskip("pythonfmu")
+    from inerter.fmu_build import build
+    try:
+        return build(LUMPED, tmp_path_factory.mktemp("fmu"))
+    except inerter.InerterError as exc:                          # pragma: no cover
+        pytest.skip(f"the FMU of lumped_mass_2d cannot be built here: {exc}")
+
+
+def test_fmu_runs_reuse_one_instance_and_match_simulate_fmu(tmp_path, lumped_fmu, client):
+    from inerter.fmu_run import simulate_fmu
+    sweep = Sweep(LUMPED, [("y0", [1.3, 1.5])], {"effects.centripetal": False}, model="fmu", stop_time=2.0)
+    made = sw.FmuSlot.instances
+    rows = []
+    for run in sweep.runs():
+        task = dict(key=run.key, name=sweep.name, model="fmu", overrides=run.overrides, stop_time=2.0, step=None,
+                    fmu_path=str(lumped_fmu), scene_path=str(sweep.scene), scene_digest=sweep.digest,
+                    scene_content=sweep.content)
+        rows.append(run_one(task))
+        reference = simulate_fmu(LUMPED, run.overrides, stop_time=2.0, fmu_path=lumped_fmu).metrics
+        assert rows[-1]["status"] == "ok"
+        for name in SCALARS:
+            assert rows[-1][name] == reference[name], name        # exactly: same FMU, same steps
+    assert sw.FmuSlot.instances == made + 1                      # one instance, reset for the second run
+    # the same runs through the cluster (each worker keeps its own instance)
+    report = run_sweep(sweep, tmp_path, client=client, progress=False, fmu_dir=lumped_fmu.parent)
+    assert report.ok == 2
+    by_key = {r["key"]: r for r in rows_of(tmp_path / "results.csv")}
+    for row in rows:
+        assert by_key[row["key"]]["model"] == "fmu"
+        for name in SCALARS:
+            assert float(by_key[row["key"]][name]) == row[name]
+
+
+# ----------------------------------------------------------------------------------------------
+# Studies and plots
+# ----------------------------------------------------------------------------------------------
+def test_fig9_study_shows_the_papers_trends(tmp_path, address, capsys):
+    out = tmp_path / "fig9"
+    code = main_study(["fig9", "--points", "3", *FAST, "--scheduler", address, "--out", str(out), "--no-progress"])
+    assert code == 0, capsys.readouterr()
+    study = STUDIES["fig9"]
+    table = study_table(study, make_sweep(study, points=3, fixed={"experiment.rtol": 1e-8}, stop_time=3.0),
+                        out / "results.csv")
+    on = [v for _, v in table[True]]
+    off = [v for _, v in table[False]]
+    assert len(on) == len(off) == 3
+    f_on, f_off = [v["fundamental_frequency"] for v in on], [v["fundamental_frequency"] for v in off]
+    d_on, d_off = [v["mean_offset"] for v in on], [v["mean_offset"] for v in off]
+    assert f_on[0] < on[0]["natural_frequency"] and f_on == sorted(f_on, reverse=True)    # falls from 1.518 Hz
+    assert f_off == sorted(f_off) and f_off[-1] > on[0]["natural_frequency"]              # rises
+    assert d_on == sorted(d_on, reverse=True) and d_on[-1] < 0                            # more negative
+    assert d_off == sorted(d_off)                                                         # rises
+    assert (out / "fig9.png").stat().st_size > 20_000
+    # the study is a sweep: started again, it runs nothing
+    assert main_study(["fig9", "--points", "3", *FAST, "--scheduler", address, "--out", str(out),
+                       "--no-progress"]) == 0
+    assert "0 run now" in capsys.readouterr().out
+
+
+def test_sweep_plot_draws_any_metric_against_any_parameter(tmp_path, capsys):
+    results = tmp_path / "results.csv"
+    columns = "key,scene,model,y0,effects.centripetal,status,error,mean_offset,run_time_s,worker,finished_at"
+    lines = [columns] + [f"k{i}{c},lm,solver,{y},{c},ok,,{(-1 if c == 'true' else 1) * y / 10},1,w,t"
+                         for i, y in enumerate((1.1, 1.3, 1.5)) for c in ("true", "false")]
+    lines.append("kf,lm,solver,1.7,true,failed,boom,,1,w,t")
+    results.write_text("\n".join(lines) + "\n")
+    png = tmp_path / "plot.png"
+    assert main_sweep_plot([str(results), "--x", "y0", "--y", "mean_offset", "--hue", "effects.centripetal",
+                            "--out", str(png)]) == 0
+    assert png.stat().st_size > 10_000
+    assert main_sweep_plot([str(results), "--x", "y0", "--y", "nope", "--out", str(png)]) == 2
+    err = capsys.readouterr().err
+    assert "inerter: error: --y nope" in err and "metrics: mean_offset" in err
+
+
+
+def test_a_scheduler_without_workers_stops_the_sweep_with_a_clear_error(tmp_path, monkeypatch, capsys):
+    from distributed import LocalCluster
+    monkeypatch.setattr(sw, "NO_WORKER_TIMEOUT", 0.5)
+    monkeypatch.setattr(sw, "WORKER_CHECK_INTERVAL", 0.1)
+    with LocalCluster(n_workers=0, processes=True, dashboard_address=":0", host="127.0.0.1",
+                      silence_logs=logging.ERROR) as empty:
+        code = main_sweep([str(LUMPED), "--vary", "y0=1.2,1.3", *FAST, "--scheduler", empty.scheduler_address,
+                           "--out", str(tmp_path), "--no-progress"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "inerter: error: no dask worker" in err and "2 runs left" in err
+    assert rows_of(tmp_path / "results.csv") == []

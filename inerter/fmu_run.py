@@ -100,7 +100,7 @@ def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None
     t0 = _time.process_time()
     table = fmpy.simulate_fmu(str(path), stop_time=settings.stop_time, output_interval=comm,
                               start_values=start_values(model, overrides), output=outputs,
-                              logger=logger, debug_logging=False)
+                              logger=logger, debug_logging=True)   # so the FMU's messages reach `logger`
     cpu = _time.process_time() - t0
     t_last = float(table["time"][-1]) if len(table) else 0.0
     ok = abs(t_last - settings.stop_time) <= 1e-9 * max(1.0, settings.stop_time)

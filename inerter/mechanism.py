@@ -29,6 +29,16 @@ from .spatial import EULER_SINGULARITY, Orientation, RotationCache, SpatialPoint
 #: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
 ASSEMBLY_TOLERANCE = 1e-6
 
+#: The augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]] counts as singular at t = 0 when its smallest
+#: singular value is below this fraction of its largest.
+SINGULAR_RATIO = 1e-14
+
+#: A translational element's terminals count as meeting when, within an integrator step, they come
+#: closer than this fraction of the element's initial length (or MIN_LENGTH, whichever is larger):
+#: its direction is then lost in round-off, and an adaptive integrator would shrink its step there
+#: without end.
+MEET_RELATIVE = 1e-6
+
 
 class TimeFunction:
     """A point force's magnitude as a function of time (constant, sine, step) or a held input."""
@@ -131,6 +141,8 @@ class Mechanism:
         self.feedback = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "pd"]
         self.input_forces = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "input"]
         self.input_names = [f"{f.point}.f[{i + 1}]" for f, _ in self.input_forces for i in range(dim)]
+        #: Times where a step force switches: the integrators restart there (module simulation).
+        self.discontinuities = sorted({f.time for f in scene.forces.values() if f.function == "step" and f.time > 0})
 
         g = scene.effects.get("gravity")
         self.gravity = None
@@ -143,6 +155,16 @@ class Mechanism:
         if self.ground_motion is not None and self.ground_motion.input:
             self.input_names += [f"ground.a[{i + 1}]" for i in range(dim)]
         self.q0, self.v0 = self.assemble_initial(q0, v0)
+        # Translational elements by terminal pair, with the distance below which the terminals meet.
+        self._meet = []
+        for spec, group in zip(groups, self.groups):
+            if group[0].kind.startswith("rotational"):
+                continue
+            pair = self.pair(*spec)
+            r0 = pair.evaluate(self.q0, np.zeros(self.n))[0]
+            self._meet.append((pair, [e.name for e in group], spec,
+                               max(el.MIN_LENGTH, MEET_RELATIVE * math.sqrt(float(r0 @ r0)))))
+        self.check_mass_matrix(self.q0, self.v0)
 
     # -- compilation helpers ---------------------------------------------------------------
     def _body(self, name):
@@ -223,8 +245,12 @@ class Mechanism:
         return q
 
     def check_step(self, q_old, q_new, t, t_old=None):
-        """Z-X-Z Euler angles must not pass through their singularity (sin θ = 0) within a step:
-        the rates there are undefined and the result past it would be garbage."""
+        """After each accepted step: translational elements' terminals must not meet
+        (:meth:`check_terminals`), and Z-X-Z Euler angles must not pass through their singularity
+        (sin θ = 0) within a step: the rates there are undefined and the result past it would be
+        garbage."""
+        if self._meet:
+            self.check_terminals(q_old, q_new, t, t_old)
         if self.dim != 3 or self.orientation.kind != "euler_zxz":
             return
         for i, name in enumerate(self.body_names):
@@ -236,6 +262,70 @@ class Mechanism:
                     f"sin θ goes from {s0:.3g} to {s1:.3g} in the step"
                     + (f" from t = {t_old:.6g} s" if t_old is not None else "") + "), where the angle rates are "
                     "undefined; use orientation = \"quaternion\" (the default)", t)
+
+    def check_terminals(self, q_old, q_new, t, t_old=None):
+        """Stop where a translational element's terminals meet within a step: the closest approach
+        of the chord from r(q_old) to r(q_new) (catches a pass through each other between two
+        accepted steps too) below the element's threshold (see MEET_RELATIVE)."""
+        z = np.zeros(self.n)
+        for pair, names, (a, b), limit in self._meet:
+            r0 = pair.evaluate(q_old, z)[0]
+            r1 = pair.evaluate(q_new, z)[0]
+            d = r1 - r0
+            dd = float(d @ d)
+            s = 1.0 if dd == 0.0 else min(1.0, max(0.0, -float(r0 @ d) / dd))
+            closest = r0 + s * d
+            dist = math.sqrt(float(closest @ closest))
+            if not dist > limit:
+                label = ", ".join(f"'{n}'" for n in names)
+                where = (f" at about t = {t_old + s * (t - t_old):.6g} s (in the step from t = {t_old:.9g} s to "
+                         f"{t:.9g} s)" if t_old is not None else f" at t = {t:.9g} s")
+                raise el.TerminalsMeet(
+                    f"element{'s' if len(names) > 1 else ''} {label}: terminals {a} and {b} meet{where}: "
+                    f"distance {dist:.3g} m, below {limit:.3g} m ({MEET_RELATIVE:g} of the initial length), so "
+                    f"the direction is undefined; stopped at the last good time",
+                    t_old if t_old is not None else t)
+
+    def diagnose(self, q) -> str:
+        """Why a run may have stalled at q: the translational elements that are nearly closed."""
+        z = np.zeros(self.n)
+        short = []
+        for pair, names, (a, b), limit in self._meet:
+            r = pair.evaluate(q, z)[0]
+            L = math.sqrt(float(r @ r))
+            if L < 1e3 * limit:
+                short.append(f"{'/'.join(names)} ({a}-{b}: {L:.3g} m)")
+        return ("; terminals nearly meeting: " + ", ".join(short)) if short else ""
+
+    def check_mass_matrix(self, q, v):
+        """At t = 0: the augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]] must be non-singular, or some
+        coordinate has no mass (a massless body not carried by an inerter, a zero inertia not held
+        by a joint, an inerter at right angles to the only direction it could carry)."""
+        M = self.mass_matrix(q, v)
+        if self.m:
+            Cq = self.constraints(q, np.zeros(self.n))[1]
+            K = np.block([[M, Cq.T], [Cq, np.zeros((self.m, self.m))]])
+        else:
+            K = M
+        U, sv, Vt = np.linalg.svd(K)
+        if sv[-1] > SINGULAR_RATIO * sv[0]:
+            return
+        null = Vt[-1, :self.n]
+        i = int(np.argmax([np.linalg.norm(null[j:j + (3 if self.dim == 2 else 6)]) for j in self.v_index]))
+        body = self.body_names[i]
+        spec = self.scene.bodies[body]
+        j = self.v_index[i]
+        block = np.abs(null[j:j + (3 if self.dim == 2 else 6)])
+        rotational = int(np.argmax(block)) >= self.dim
+        fld = f"bodies.{body}.{'inertia' if rotational else 'mass'}"
+        value = spec.inertia if rotational else spec.mass
+        carried = ("its rotation" if rotational else "its translation") + " has no mass"
+        raise SceneError(self.scene.source, fld, value,
+                         "a mass matrix M + M_I that, with the joints, is non-singular at t = 0: give the body "
+                         "mass/inertia, hold the coordinate with a joint, or connect an inerter along it",
+                         f"the system matrix is singular at t = 0 (smallest/largest singular value "
+                         f"{sv[-1] / sv[0]:.2g}): body '{body}': {carried}"
+                         + (" (massless = true, and no inerter or joint supplies it)" if spec.massless else ""))
 
     def normalise(self, q):
         if self.dim == 2 or self.orientation.kind != "quaternion":

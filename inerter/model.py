@@ -150,9 +150,23 @@ class Result:
         self.metric_errors: dict[str, str] = {}
         n = model.mechanism.nq
         sig = model.signals
-        self._values = np.array([sig.evaluate(t, y[:n], y[n:], None, settings.alpha)
-                                 for t, y in zip(run.time, run.states)]) if len(run.time) else np.zeros((0, 0))
+        values = []
+        for i, (t, y) in enumerate(zip(run.time, run.states)):
+            try:
+                values.append(sig.evaluate(t, y[:n], y[n:], None, settings.alpha))
+            except SimulationError as exc:   # an output undefined at a sample: keep what came before
+                self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
+                break
+        self._values = np.array(values) if values else np.zeros((0, len(sig.names)))
         self.names = list(sig.names)
+
+    def _truncate(self, i, exc):
+        """The outputs cannot be evaluated from sample i on: the result ends before it, failed."""
+        run = self.run
+        run.time, run.states = run.time[:i], run.states[:i]
+        run.message = str(exc) if run.message == "completed" else f"{exc}; the integrator had reported: {run.message}"
+        run.status = "failed"
+        self.time, self.status, self.message = run.time, run.status, run.message
 
     def __getitem__(self, name) -> np.ndarray:
         try:

@@ -60,6 +60,7 @@ class Body:
     velocity: tuple[float, ...]
     angular_velocity: Any           # 2D: θ̇; 3D: ω in the global frame
     rotation: Any = None            # 3D: initial rotation matrix (3×3 tuple)
+    massless: bool = False          # mass (and inertia) may be 0: the body is carried by inerters
 
 
 @dataclass(frozen=True)
@@ -450,34 +451,60 @@ def _read_bodies(r: _Reader, data, dimension):
         if bname == GROUND:
             raise r.error(fld, bname, "a body name other than 'ground'", "reserved name")
         if dimension == 2:
-            r.table(raw, fld, {"mass": True, "inertia": True, "position": True, "angle": False,
-                               "velocity": False, "angular_velocity": False, "points": False})
+            massless = _read_massless(r, raw, fld)
+            r.table(raw, fld, {"mass": not massless, "inertia": not massless, "position": True, "angle": False,
+                               "velocity": False, "angular_velocity": False, "points": False, "massless": False})
             bodies[bname] = Body(
                 bname,
-                mass=r.number(raw, "mass", fld, minimum=0.0, exclusive=True),
-                inertia=r.number(raw, "inertia", fld, minimum=0.0),
+                mass=_read_mass(r, raw, fld, massless),
+                inertia=r.number(raw, "inertia", fld, minimum=0.0, default=0.0 if massless else None),
                 position=r.vector(raw, "position", fld, dimension),
                 angle=r.number(raw, "angle", fld, default=0.0),
                 velocity=r.vector(raw, "velocity", fld, dimension, default=zero),
                 angular_velocity=r.number(raw, "angular_velocity", fld, default=0.0),
+                massless=massless,
             )
         else:
-            r.table(raw, fld, {"mass": True, "inertia": True, "position": True, "axis": False, "angle": False,
-                               "euler": False, "velocity": False, "angular_velocity": False, "points": False})
+            massless = _read_massless(r, raw, fld)
+            r.table(raw, fld, {"mass": not massless, "inertia": not massless, "position": True, "axis": False,
+                               "angle": False, "euler": False, "velocity": False, "angular_velocity": False,
+                               "points": False, "massless": False})
             bodies[bname] = Body(
                 bname,
-                mass=r.number(raw, "mass", fld, minimum=0.0, exclusive=True),
-                inertia=_read_inertia(r, raw, fld),
+                mass=_read_mass(r, raw, fld, massless),
+                inertia=_read_inertia(r, raw, fld) if "inertia" in raw else ((0.0,) * 3,) * 3,
                 position=r.vector(raw, "position", fld, 3),
                 angle=0.0,
                 velocity=r.vector(raw, "velocity", fld, 3, default=zero),
                 angular_velocity=r.vector(raw, "angular_velocity", fld, 3, default=zero),
                 rotation=_read_rotation(r, raw, fld),
+                massless=massless,
             )
         add_points(bname, raw.get("points", {}), f"{fld}.points")
     if not bodies:
         raise r.error("bodies", {}, "at least one body", "no bodies")
     return bodies, points
+
+
+def _read_massless(r: _Reader, raw, fld) -> bool:
+    if not isinstance(raw, dict):
+        raise r.error(fld, raw, "a table", "not a table")
+    value = raw.get("massless", False)
+    if not isinstance(value, bool):
+        raise r.error(f"{fld}.massless", value, "true or false", "wrong type")
+    return value
+
+
+def _read_mass(r: _Reader, raw, fld, massless: bool) -> float:
+    """A body's mass: > 0, or ≥ 0 (default 0) on a body declared ``massless = true``, whose
+    coordinates then get their mass from inerters (checked when the mechanism is compiled)."""
+    if massless:
+        return r.number(raw, "mass", fld, default=0.0, minimum=0.0)
+    mass = r.number(raw, "mass", fld)
+    if not mass > 0.0:
+        raise r.error(f"{fld}.mass", mass, "a number > 0 (kg); a body carried only by inerters may have "
+                      "mass = 0 if it says so with massless = true", "out of range")
+    return mass
 
 
 def _read_inertia(r: _Reader, raw, fld):

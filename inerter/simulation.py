@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import OdeSolution
 
+from .elements import TerminalsMeet
 from .errors import SimulationError
 from .integrators import make_solver
 
@@ -43,15 +44,114 @@ class Settings:
         return self.baumgarte if self.constraint == "baumgarte" else 0.0
 
 
-def derivative(mech, inputs, alpha):
-    """y = [q, v] ↦ [q̇ = B(q) v, v̇ from Eq. (33)]."""
+def derivative(mech, inputs, alpha, jump=None):
+    """y = [q, v] ↦ [q̇ = B(q) v, v̇ from Eq. (33)]. `jump`: a time where a step force switches,
+    ending the segment integrated: it is evaluated just before (one ulp), so that stages at the
+    segment's end see the value the force had over the segment."""
     nq = mech.nq
+    before = None if jump is None else float(np.nextafter(jump, -np.inf))
 
     def fun(t, y):
+        if before is not None and t > before:
+            t = before
         q, v = y[:nq], y[nq:]
         a, _ = mech.accelerations(t, q, v, inputs, alpha)
         return np.concatenate((mech.qdot(q, v, t), a))
     return fun
+
+
+def jumps(mech, t0, t1):
+    """Times in (t0, t1] where a step force switches (the integrators restart there)."""
+    times = getattr(mech, "discontinuities", ())
+    return [t for t in times if t0 < t <= t1]
+
+
+#: Hairer's stiffness test for the explicit Runge–Kutta pairs (DOP853 and DOPRI5 in Hairer and
+#: Wanner, Solving ODEs II, Sec. IV.2): h·|λ| estimated from the last two stages, both at t + h, and
+#: compared with the size of the method's stability region along the negative real axis.
+STIFFNESS_BOUND = {"DOP853": 6.1, "RK45": 3.25}
+#: Checked every STIFFNESS_EVERY accepted steps, then at every step while it fires; STIFFNESS_HITS
+#: firings in a row stop the run.
+STIFFNESS_EVERY = 1000
+STIFFNESS_HITS = 15
+#: A step below this (relative to max(1 s, |t|)) is a collapsing step; COLLAPSE_STEPS of them in a row
+#: stop the run (a singularity the integrator is creeping towards).
+COLLAPSE_RELATIVE = 1e-11
+COLLAPSE_STEPS = 200
+
+
+class StepMonitor:
+    """Watches an integration after every accepted step: the mechanism's own checks (terminals
+    meeting, Euler-angle singularity), the explicit methods' stiffness (Hairer's test), a step size
+    collapsing towards a singularity, and the step budget max_steps. Each stops the run with a
+    SimulationError that names the method and what to do."""
+
+    def __init__(self, mech, method, max_steps):
+        self.mech, self.method, self.max_steps = mech, method, max_steps
+        self.bound = STIFFNESS_BOUND.get(method)
+        self.steps = 0
+        self.hits = self.calm = 0
+        self.small = 0
+
+    def after_step(self, solver, y_old):
+        self.steps += 1
+        t, t_old = solver.t, solver.t_old
+        h = t - t_old
+        if self.steps > self.max_steps:
+            raise SimulationError(
+                f"more than max_steps = {self.max_steps} integrator steps (step size {h:.3g} s): the scene may "
+                f"be stiff for {self.method}; try method = \"Radau\" or \"BDF\"", t_old)
+        self.mech.check_step(y_old, solver.y, t, t_old)
+        if self.bound is not None and (self.hits or self.steps % STIFFNESS_EVERY == 0):
+            self._stiffness(solver, h)
+        if h < COLLAPSE_RELATIVE * max(1.0, abs(t)):
+            self.small += 1
+            if self.small >= COLLAPSE_STEPS:
+                raise SimulationError(
+                    f"the {self.method} step size collapsed ({self.small} steps in a row below "
+                    f"{COLLAPSE_RELATIVE:g}·max(1 s, t), the last {h:.3g} s): the solution is approaching a "
+                    f"singularity" + self.mech.diagnose(solver.y), t_old)
+        else:
+            self.small = 0
+
+    def _stiffness(self, solver, h):
+        K = getattr(solver, "K", None)
+        A = getattr(solver, "A", None)
+        y_old = getattr(solver, "y_old", None)
+        if K is None or A is None or y_old is None:
+            return
+        s = solver.n_stages
+        y_stage = y_old + h * (K[:s - 1].T @ A[s - 1, :s - 1])       # the last stage's argument (c = 1)
+        den = float(np.linalg.norm(solver.y - y_stage))
+        if den == 0.0:
+            return
+        hlam = h * float(np.linalg.norm(K[s] - K[s - 1])) / den
+        if hlam > self.bound:
+            self.calm = 0
+            self.hits += 1
+            if self.hits >= STIFFNESS_HITS:
+                raise SimulationError(
+                    f"the scene is stiff for {self.method}: its step size ({h:.3g} s) is held at the method's "
+                    f"stability limit (h·|λ| ≈ {hlam:.3g} > {self.bound:g} in {self.hits} steps in a row, "
+                    f"Hairer's test) after {self.steps} steps; use method = \"Radau\" or \"BDF\" (implicit)",
+                    solver.t_old)
+        else:
+            self.calm += 1
+            if self.calm >= 6:
+                self.hits = 0
+
+
+def _step(solver, method):
+    """solver.step(), its failures as SimulationError at the last good time."""
+    t = solver.t
+    try:
+        message = solver.step()
+    except SimulationError as exc:
+        if exc.time is None:
+            raise type(exc)(exc.message, t) from None
+        raise
+    if solver.status == "failed":
+        raise SimulationError(f"the {method} integrator failed: {message}", t)
 
 
 @dataclass
@@ -89,24 +189,24 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
     t0 = 0.0
     first_step = None
     max_drift = mech.constraint_residual(y[:n])
+    monitor = StepMonitor(mech, settings.method, settings.max_steps)
+    solver = None
     try:
         while t0 < settings.stop_time:
-            # With projection, each output interval is a fresh integration from a projected state.
+            # With projection, each output interval is a fresh integration from a projected state;
+            # a step force's switching time also ends a segment (the integrator restarts there).
             t_end = grid[k] if project else settings.stop_time
+            switch = jumps(mech, t0, t_end)
+            if switch:
+                t_end = switch[0]
+            fun = derivative(mech, inputs, settings.alpha, t_end if switch else None)
             solver = make_solver(settings.method, fun, t0, y, t_end, settings.rtol, settings.atol,
                                  settings.step, first_step)
             dense_prev_y = y.copy()
             while solver.status == "running":
-                message_step = solver.step()
+                _step(solver, settings.method)
                 steps += 1
-                if solver.status == "failed":
-                    raise SimulationError(f"the {settings.method} integrator failed: {message_step}", solver.t)
-                if steps > settings.max_steps:
-                    raise SimulationError(
-                        f"more than max_steps = {settings.max_steps} integrator steps (step size "
-                        f"{solver.t - solver.t_old:.3g} s): the scene may be stiff for {settings.method}; try "
-                        "method = \"Radau\" or \"BDF\"", solver.t)
-                mech.check_step(dense_prev_y, solver.y, solver.t, solver.t_old)
+                monitor.after_step(solver, dense_prev_y)
                 dense_prev_y = solver.y.copy()
                 dense = solver.dense_output()
                 ts.append(solver.t)
@@ -119,13 +219,16 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
             if project:
                 q, v = mech.project(y[:n], y[n:])
                 y = np.concatenate((q, v))
-                out[k - 1] = y
-                first_step = getattr(solver, "h_abs", None)
+                if abs(grid[k - 1] - solver.t) <= 1e-12 * max(1.0, solver.t):
+                    out[k - 1] = y
+            first_step = getattr(solver, "h_abs", None) if (project or switch) else None
             max_drift = max(max_drift, mech.constraint_residual(y[:n]))
             t0 = solver.t
     except SimulationError as exc:
         status = "failed"
         message = str(exc)
+        if solver is not None and not isinstance(exc, TerminalsMeet) and "terminals" not in message:
+            message += mech.diagnose(solver.y)
     cpu = _time.process_time() - start
     for i in range(1, k):
         max_drift = max(max_drift, mech.constraint_residual(out[i, :n]))
@@ -163,22 +266,24 @@ class Stepper:
             raise SimulationError(f"step to t = {t_end!r} is not after the current time", self.time)
         s = self.settings
         inputs = self.inputs.copy()
-        fun = derivative(self.mech, inputs, s.alpha)
-        steps = 0
+        monitor = StepMonitor(self.mech, s.method, s.max_steps)
+        t0, y, h = self.time, self.y, self.h
+        # A step force switching within the step (or at its end) ends a segment: the integrator
+        # restarts there, so that the solution is the same as the solver's whole run.
+        eps = 1e-12 * max(1.0, abs(t_end))
+        ends = [t for t in jumps(self.mech, t0 + eps, t_end - eps)] + [float(t_end)]
         try:
-            solver = make_solver(s.method, fun, self.time, self.y, t_end, s.rtol, s.atol, s.step, self.h)
-            previous = self.y
-            while solver.status == "running":
-                msg = solver.step()
-                steps += 1
-                self.mech.check_step(previous, solver.y, solver.t, solver.t_old)
-                previous = solver.y.copy()
-                if solver.status == "failed":
-                    raise SimulationError(f"the {s.method} integrator failed: {msg}", solver.t)
-                if steps > s.max_steps:
-                    raise SimulationError(f"more than max_steps = {s.max_steps} integrator steps in one "
-                                          "communication step: the scene may be stiff; try Radau or BDF", solver.t)
-            y = solver.y
+            for end in ends:
+                jump = end if jumps(self.mech, end - eps, end + eps) else None
+                fun = derivative(self.mech, inputs, s.alpha, jump)
+                solver = make_solver(s.method, fun, t0, y, end, s.rtol, s.atol, s.step, h)
+                previous = y
+                while solver.status == "running":
+                    _step(solver, s.method)
+                    monitor.after_step(solver, previous)
+                    previous = solver.y.copy()
+                t0, y, h = solver.t, solver.y, getattr(solver, "h_abs", None)
+            steps = monitor.steps
             if s.constraint == "projection":
                 q, v = self.mech.project(y[:n], y[n:])
                 y = np.concatenate((q, v))
@@ -190,7 +295,7 @@ class Stepper:
             raise SimulationError(f"the step could not be completed: {exc}", self.time) from None
         self.y = y
         self.time = float(t_end)
-        self.h = getattr(solver, "h_abs", None)
+        self.h = h
         self.steps += steps
 
     def outputs(self) -> dict:

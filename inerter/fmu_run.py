@@ -17,7 +17,8 @@ from .model import Model, compute_metrics, sample_spline
 
 
 @dataclass
-class _FmuRun:
+class FmuRunInfo:
+    """How an FMU run went (the solver's `Run` has the same fields, for the summaries)."""
     steps: int
     evaluations: int
     cpu_time: float
@@ -106,7 +107,7 @@ def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None
     ok = abs(t_last - settings.stop_time) <= 1e-9 * max(1.0, settings.stop_time)
     message = "completed" if ok else (f"the FMU stopped at t = {t_last:.9g} s: " + ("; ".join(messages[-3:])
                                       or "a step was discarded"))
-    run = _FmuRun(steps=len(table) - 1, evaluations=0, cpu_time=cpu,
+    run = FmuRunInfo(steps=len(table) - 1, evaluations=0, cpu_time=cpu,
                   max_drift=float(np.max(table["constraint_residual"])) if len(table) else 0.0,
                   status="ok" if ok else "failed", message=message)
     result = FmuResult(model, table, settings, run, comm)

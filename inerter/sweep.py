@@ -295,16 +295,6 @@ def run_one(task: dict) -> dict:
 # ----------------------------------------------------------------------------------------------
 # The FMU, once per worker
 # ----------------------------------------------------------------------------------------------
-@dataclass
-class _FmuRunInfo:
-    steps: int
-    evaluations: int
-    cpu_time: float
-    max_drift: float
-    status: str
-    message: str
-
-
 _local = threading.local()
 
 
@@ -417,7 +407,7 @@ class FmuSlot:
     def simulate(self, scene, overrides: dict, stop_time=None, step=None):
         from fmpy.fmi1 import FMICallException
 
-        from .fmu_run import FmuResult, start_values
+        from .fmu_run import FmuResult, FmuRunInfo, start_values
         from .model import Model, compute_metrics
 
         model = Model(scene, overrides)                # the solver's messages for bad overrides
@@ -459,7 +449,7 @@ class FmuSlot:
         table = np.array(rows, dtype=[("time", np.float64)] + [(v.name, np.float64) for v in self.outputs])
         ok = failure is None and abs(t - stop) <= 1e-9 * max(1.0, stop)
         message = "completed" if ok else f"the FMU stopped at t = {t:.9g} s: {failure or 'before the stop time'}"
-        run = _FmuRunInfo(steps=len(table) - 1, evaluations=0, cpu_time=cpu,
+        run = FmuRunInfo(steps=len(table) - 1, evaluations=0, cpu_time=cpu,
                           max_drift=float(np.max(table["constraint_residual"]))
                           if "constraint_residual" in table.dtype.names else 0.0,
                           status="ok" if ok else "failed", message=message)

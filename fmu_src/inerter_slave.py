@@ -47,6 +47,7 @@ import base64
 import hashlib
 import json
 import math
+import operator
 import traceback
 from pathlib import Path
 
@@ -65,6 +66,8 @@ OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
 
 #: The FMU setting name -> the override key that ``inerter.load`` takes for it.
 SOLVER_SETTINGS = {"solver": "experiment.method", "rtol": "experiment.rtol", "atol": "experiment.atol"}
+#: The Boolean parameter choosing the compiled path (not a scene setting).
+PATH_SETTING = "compiled"
 
 # Phases of an instance, after FMI 2.0 co-simulation's states.
 INSTANTIATED = "instantiated"      # fixed parameters may be set
@@ -134,6 +137,7 @@ class InerterSlave(Fmi2Slave):
         self._defaults["solver"] = str(experiment["method"])
         self._defaults["rtol"] = float(experiment["rtol"])
         self._defaults["atol"] = float(experiment["atol"])
+        self._defaults[PATH_SETTING] = True
         self._settings = dict(self._defaults)
         self._explicit: set[str] = set()          # settings the importer set
         self._inputs = {i["name"]: 0.0 for i in model.input_info()}
@@ -147,6 +151,7 @@ class InerterSlave(Fmi2Slave):
         self._call_rejections: list[str] = []     # values rejected by the last checked call
         self._rejected: list[str] = []            # unreported rejections: the next doStep's
         self._stepper = None
+        self._getters: dict = {}                  # (class, value references) -> their getter
         # Outputs before initialisation are those of the scene as written (the start values).
         self._outputs = {k: float(v) for k, v in model.stepper().outputs().items()}
 
@@ -178,6 +183,12 @@ class InerterSlave(Fmi2Slave):
             "atol", description="absolute tolerance of the integrator, in the units of each "
                                 "coordinate", **fixed,
             getter=self._setting_getter("atol"), setter=self._setting_setter("atol", float)))
+        self.register_variable(Boolean(
+            PATH_SETTING, description="integrate with the numba-compiled kernels and integrator loops "
+            "where numba is installed in the importing Python and the scene allows it (planar, no "
+            "ground motion, an explicit method, Baumgarte stabilisation, no step force); false: the "
+            "numpy path. Both give the same results to round-off", **fixed,
+            getter=self._setting_getter(PATH_SETTING), setter=self._setting_setter(PATH_SETTING, bool)))
         for i in model.input_info():
             self.register_variable(ExactReal(i["name"], description=i["description"],
                                         causality=Fmi2Causality.input,
@@ -266,6 +277,18 @@ class InerterSlave(Fmi2Slave):
     # pythonfmu's get_*/set_* raise on a wrong value reference or type, which would end the
     # instance with fmi2Fatal: these log the problem instead.
     def _get(self, vrs, cls, kind, fallback):
+        # The fast path: a plan per (class, value references), made once (see _plan).
+        key = (cls, tuple(vrs))
+        plan = self._getters.get(key)
+        if plan is None:
+            if len(self._getters) > 64:           # an importer asking for ever new sets
+                self._getters.clear()
+            plan = self._getters[key] = self._plan(vrs, cls, kind)
+        if plan is not None:
+            try:
+                return plan()
+            except Exception:
+                pass                              # the slow path below logs each problem
         values = []
         for vr in vrs:
             var = self.vars.get(vr)
@@ -277,6 +300,23 @@ class InerterSlave(Fmi2Slave):
                 self.log(f"get{cls.__name__}: {exc}", Fmi2Status.error)
                 values.append(fallback)
         return values
+
+    def _plan(self, vrs, cls, kind):
+        """A function returning the values of `vrs` (all of class `cls`), or None when one is not:
+        the outputs straight from the dict of the last step's values, the others through their
+        getters. Taken at every step for the recorded variables; isinstance on pythonfmu's
+        variable classes alone costs about a microsecond per variable and call."""
+        variables = [self.vars.get(vr) for vr in vrs]
+        if not vrs or not all(isinstance(var, cls) for var in variables):
+            return None
+        names = [var.name for var in variables]
+        if kind is float and all(var.causality == Fmi2Causality.output for var in variables):
+            pick = operator.itemgetter(*names)
+            if len(names) == 1:
+                return lambda: [pick(self._outputs)]
+            return lambda: list(pick(self._outputs))
+        getters = [var.getter for var in variables]
+        return lambda: [kind(g()) for g in getters]
 
     def _set(self, vrs, values, cls):
         for vr, value in zip(vrs, values):
@@ -343,7 +383,7 @@ class InerterSlave(Fmi2Slave):
     def _overrides(self, settings: dict) -> dict:
         """The `inerter.load` overrides for the settings that differ from the scene's."""
         return {SOLVER_SETTINGS.get(name, name): value for name, value in settings.items()
-                if not _same(value, self._defaults[name])}
+                if name != PATH_SETTING and not _same(value, self._defaults[name])}
 
     def _model_for(self, overrides: dict):
         key = tuple(sorted(overrides.items(), key=lambda kv: kv[0]))
@@ -364,7 +404,8 @@ class InerterSlave(Fmi2Slave):
         model = self._model_for(self._overrides(settings))
         experiment = model.experiment
         return model.stepper(method=experiment["method"], rtol=experiment["rtol"],
-                             atol=experiment["atol"])
+                             atol=experiment["atol"],
+                             path="compiled" if settings[PATH_SETTING] else "numpy")
 
     def _initialise(self):
         if self._phase not in (INSTANTIATED, INITIALIZATION):
@@ -393,7 +434,7 @@ class InerterSlave(Fmi2Slave):
         changed = ", ".join(f"{k} = {v!r}" for k, v in settings.items()
                             if not _same(v, self._defaults[k]))
         self.log(f"initialised at t = 0 s with solver {settings['solver']}, "
-                 f"rtol {settings['rtol']:g}, atol {settings['atol']:g}; "
+                 f"rtol {settings['rtol']:g}, atol {settings['atol']:g}, {stepper.path} path; "
                  f"changed from the scene: {changed or 'nothing'}", Fmi2Status.ok)
 
     def _fail(self, message: str):
@@ -457,7 +498,7 @@ class InerterSlave(Fmi2Slave):
         except SimulationError as exc:
             return self._refuse(f"{where} discarded: {exc}; the FMU stays at t = "
                                 f"{stepper.time!r} s", Fmi2Status.discard)
-        self._outputs = {k: float(v) for k, v in stepper.outputs().items()}
+        self._outputs = stepper.outputs()          # floats, by output name
         return True
 
     def terminate(self):

@@ -26,14 +26,72 @@ numba is optional (``pip install numba``). Without it, :data:`AVAILABLE` is Fals
 """
 from __future__ import annotations
 
+import hashlib
+import importlib.util
+import os
+import sys
+import tempfile
 import time as _time
+from pathlib import Path
 
 import numpy as np
 
 from .errors import SimulationError
+from .simulation import Stepper
+
+
+
+def _kernel_cache_dir() -> Path:
+    """Where the kernels' source is copied for numba's on-disk cache: ``$INERTER_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/inerter``, else ``~/.cache/inerter``."""
+    if os.environ.get("INERTER_CACHE_DIR"):
+        return Path(os.environ["INERTER_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "inerter"
+
+
+def _import_kernels():
+    """Import :mod:`inerter.compiled_kernels` from a per-user copy named by the hash of its source.
+
+    numba keys its on-disk cache by the source file's path and time stamp. An FMU importer extracts
+    the FMU, and with it this package, into a new temporary folder each time, so a cache next to
+    the shipped source would never be found again and every run would pay the compilation (about
+    6 s). The copy lives at a path that depends only on the source's content, and is written once,
+    so every process (solver runs, sweep workers, each instance of every FMU built from this
+    source) loads the kernels compiled by the first. When the cache folder cannot be written,
+    the package's own module is imported (numba then caches next to it, where it can)."""
+    source = Path(__file__).with_name("compiled_kernels.py")
+    text = source.read_bytes()
+    digest = hashlib.sha256(text).hexdigest()[:16]
+    name = f"inerter_kernels_{digest}"
+    if name in sys.modules:
+        return sys.modules[name]
+    try:
+        folder = _kernel_cache_dir() / "kernels" / digest
+        target = folder / f"{name}.py"
+        if not (target.is_file() and target.read_bytes() == text):
+            folder.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(text)
+            os.replace(tmp, target)          # atomic: concurrent processes see a whole file or none
+    except OSError:
+        from . import compiled_kernels
+        return compiled_kernels
+    spec = importlib.util.spec_from_file_location(name, target)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        del sys.modules[name]
+        raise
+    return module
+
 
 try:
-    from . import compiled_kernels as _k
+    import numba  # noqa: F401
+    _k = _import_kernels()
     AVAILABLE = True
     WHY_NOT = ""
 except ImportError as exc:          # numba missing (or unusable): the numpy path is used
@@ -45,6 +103,13 @@ except ImportError as exc:          # numba missing (or unusable): the numpy pat
 COMPILED_METHODS = ("DOP853", "RK45", "RK4")
 _RK_CODE = {"DOP853": 0, "RK45": 1}
 
+def _monitor(method) -> np.ndarray:
+    """The constants of :class:`inerter.simulation.StepMonitor` for the compiled loop."""
+    from . import simulation as sim
+    return np.array([sim.STIFFNESS_BOUND.get(method, 0.0), sim.STIFFNESS_EVERY, sim.STIFFNESS_HITS,
+                     sim.COLLAPSE_RELATIVE, sim.COLLAPSE_STEPS], dtype=float)
+
+
 _STATUS_TEXT = {
     1: "more than max_steps integrator steps: the scene may be stiff; try method = \"Radau\" or \"BDF\"",
     2: "the step size became too small (below 10 ulp of t)",
@@ -52,7 +117,12 @@ _STATUS_TEXT = {
        "(check zero masses/inertias and the inerters)",
     4: "accelerations are not finite (the system matrix is near-singular or a force is unbounded)",
     5: "the terminals of a translational element meet: its direction is undefined",
+    6: "the scene is stiff for {method}: its step size ({h:.3g} s) is held at the method's stability limit "
+       "(Hairer's test fired in {hits} steps in a row); use method = \"Radau\" or \"BDF\" (implicit)",
+    7: "the {method} step size collapsed ({steps} steps in a row below {relative:g}·max(1 s, t), the last "
+       "{h:.3g} s): the solution is approaching a singularity",
 }
+
 
 
 # ------------------------------------------------------------------------------------------------
@@ -100,7 +170,7 @@ def flatten(mech) -> dict:
             jt_real.append((-float(axis[1]), float(axis[0]), float(phi0)))
 
     mech_elements = _by_name(getattr(mech, "elements", []))
-    el_int, el_real, rot_int, rot_real = [], [], [], []
+    el_int, el_real, rot_int, rot_real, el_names, rot_names = [], [], [], [], [], []
     kinds = {"spring": 0, "damper": 1, "inerter": 2}
     for e in scene.elements.values():
         me = mech_elements.get(e.name)
@@ -112,6 +182,7 @@ def flatten(mech) -> dict:
                     (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
             rot_int.append((0 if e.type == "rotational_spring" else 1, ia, ib))
             rot_real.append((float(e.coefficient), float(free)))
+            rot_names.append(e.name)
             continue
         free = 0.0
         if e.type == "spring":
@@ -122,6 +193,7 @@ def flatten(mech) -> dict:
                 raise ValueError(f"spring {e.name}: no free length on the compiled mechanism")
         el_int.append((kinds[e.type], pidx[e.point_a], pidx[e.point_b], int(bool(scene.centripetal))))
         el_real.append((float(e.coefficient), float(free)))
+        el_names.append(e.name)
 
     fa_int, fa_real, pd_int, pd_real, in_int = [], [], [], [], []
     codes = {"constant": 0, "sine": 1, "step": 2}
@@ -156,7 +228,15 @@ def flatten(mech) -> dict:
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 9, float),
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 5, float),
                 in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
-                point_names=point_names, body_names=body_names)
+                point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names)
+
+
+def signal_layout(flat) -> list[str]:
+    """The names of the values :func:`compiled_kernels.signal_values` writes, in its order."""
+    names = [f"{p}.{x}" for p in flat["point_names"] for x in ("r[1]", "r[2]", "v[1]", "v[2]")]
+    names += [f"{e}.{x}" for e in flat["el_names"] for x in ("s_rel", "v_rel", "f")]
+    names += [f"{e}.{x}" for e in flat["rot_names"] for x in ("phi_rel", "w_rel", "tau")]
+    return names + ["energy", "constraint_residual"]
 
 
 def _k_code(name):
@@ -278,6 +358,38 @@ class Kernel:
     def constraint_residual(self, q) -> float:
         return float(_k.constraint_residual(np.ascontiguousarray(q, dtype=float), self.params)) if self.m else 0.0
 
+    def signal_order(self, signals):
+        """Indices taking the kernel's signal layout to the order of `signals.names` (None when the
+        two do not hold the same signals)."""
+        layout = {name: i for i, name in enumerate(signal_layout(self.flat))}
+        if sorted(layout) != sorted(signals.names):
+            return None
+        return np.array([layout[name] for name in signals.names], dtype=np.int64)
+
+    def signal_values(self, signals, order, t, q, v, inputs=None, alpha=0.0) -> np.ndarray:
+        """Every signal of `signals` at one state (as ``Signals.evaluate``), in compiled code."""
+        q = np.ascontiguousarray(q, dtype=float)
+        v = np.ascontiguousarray(v, dtype=float)
+        raw = np.empty(len(order))
+        acc = np.zeros(self.n + self.m)
+        if signals.needs_accelerations:
+            st = _k.accelerations(float(t), q, v, self._inputs(inputs), float(alpha), self.params, self._AB,
+                                  self._rhs, self._gen, acc)
+            if st:
+                return signals.evaluate(t, q, v, inputs, alpha)     # raises the numpy path's message
+        if _k.signal_values(q, v, acc, self.params, raw):
+            return signals.evaluate(t, q, v, inputs, alpha)
+        return raw[order]
+
+    def signal_history(self, signals, order, times, states, inputs=None, alpha=0.0):
+        """(values, k): every signal at each sample of a history, up to the first sample k where one
+        cannot be evaluated (k = len(times) when all can)."""
+        states = np.ascontiguousarray(states, dtype=float)
+        raw = np.empty((len(states), len(order)))
+        st, k = _k.signal_history(np.ascontiguousarray(times, dtype=float), states, self._inputs(inputs),
+                                  float(alpha), bool(signals.needs_accelerations), self.params, raw)
+        return raw[:k][:, order], int(k)
+
     def point_positions(self, states) -> dict:
         """Global positions (time × 2) of every named point along a state history (rows [q, v])."""
         states = np.atleast_2d(states)
@@ -310,8 +422,9 @@ class NumpyKernel:
 
 
 def compile_mechanism(mech):
-    """A :class:`Kernel` for a 2D mechanism (numba), or the numpy path when numba is missing."""
-    if not AVAILABLE:
+    """A :class:`Kernel` for a 2D mechanism (numba), or the numpy path where the kernels cannot take
+    it (:func:`unsupported`)."""
+    if unsupported(mech):
         return NumpyKernel(mech)
     return Kernel(mech)
 
@@ -375,18 +488,15 @@ def integrate_compiled(mech, settings, inputs=None):
     other methods and ``projection`` use scipy's integrators on the compiled right-hand side."""
     from .simulation import Run, integrate
 
-    if getattr(mech.scene, "dimension", 2) != 2:
+    why = unsupported(mech)
+    if why:
         run = integrate(mech, settings, inputs)
-        run.extra["path"] = "numpy (the compiled path is planar)"
+        run.extra["path"] = f"numpy ({why})"
         return run
     kernel = _kernel_for(mech)
-    if not getattr(kernel, "compiled", False):
-        run = integrate(mech, settings, inputs)
-        run.extra["path"] = "numpy (numba missing)"
-        return run
     if settings.method not in COMPILED_METHODS or settings.constraint == "projection":
         run = integrate(_KernelMechanism(mech, kernel), settings, inputs)
-        run.extra["path"] = "scipy integrator, compiled right-hand side"
+        run.extra.update(path="scipy integrator, compiled right-hand side", kernel=kernel)
         return run
 
     n = kernel.n
@@ -404,20 +514,132 @@ def integrate_compiled(mech, settings, inputs=None):
             alpha, kernel.params)
     else:
         A, B, C, E, E3, D, Pm = _tables(settings.method)
-        status, k, steps, evals, t_reached = _k.integrate_rk(
+        status, k, steps, evals, t_reached, h = _k.integrate_rk(
             _RK_CODE[settings.method], y0, 0.0, float(settings.stop_time), grid, out, float(settings.rtol),
-            float(settings.atol), 0.0, int(settings.max_steps), inp, alpha, kernel.params, A, B, C, E, E3, D, Pm)
+            float(settings.atol), 0.0, int(settings.max_steps), inp, alpha, kernel.params, A, B, C, E, E3, D, Pm,
+            _monitor(settings.method))
     cpu = _time.process_time() - start
     states = out[:k].copy()
     max_drift = float(_k.max_residual(states, n, kernel.params)) if kernel.m else 0.0
     if status == 0:
         message = "completed"
     else:
-        message = f"at t = {t_reached:.6g} s: the {settings.method} integrator failed: {_STATUS_TEXT[status]}"
+        why = failure_text(kernel, status, settings.method, h if settings.method != "RK4" else settings.step,
+                           states[-1], grid[k - 1])
+        message = f"at t = {t_reached:.6g} s: the {settings.method} integrator failed: {why}"
     run = Run(grid[:k].copy(), states, None, "ok" if status == 0 else "failed", message, int(steps), int(evals),
               cpu, max_drift)
-    run.extra["path"] = "compiled"
+    run.extra.update(path="compiled", kernel=kernel)
     return run
+
+
+class CompiledStepper(Stepper):
+    """Co-simulation stepping on the compiled path: each communication step is one call of the
+    compiled integrator loop (DOP853, RK45 or RK4 with Baumgarte stabilisation), restarted at the
+    communication point with the step size the error control proposed at the end of the last step,
+    as :class:`inerter.simulation.Stepper` does with scipy's integrators; so the two take the same
+    steps, and (time, state, step size, inputs) is still the complete state. Outputs are evaluated
+    with the kernel's Eq. (33)."""
+
+    def __init__(self, mech, settings, signals, kernel):
+        super().__init__(mech, settings, signals)
+        self.kernel = kernel
+        self.path = "compiled"
+        self._order = kernel.signal_order(signals)
+        self._tables = _tables(settings.method) if settings.method in _RK_CODE else None
+        self._monitor = _monitor(settings.method)
+        self._grid = np.empty(2)
+        self._out = np.empty((2, 2 * kernel.n))
+
+    def step(self, t_end):
+        if not t_end > self.time:
+            raise SimulationError(f"step to t = {t_end!r} is not after the current time", self.time)
+        s, kernel = self.settings, self.kernel
+        grid, out = self._grid, self._out
+        grid[0], grid[1] = self.time, float(t_end)
+        inp = kernel._inputs(self.inputs.copy())
+        y0 = np.ascontiguousarray(self.y, dtype=float)
+        if s.method == "RK4":
+            status, k, steps, evals, t_reached = _k.integrate_rk4(
+                y0, self.time, float(t_end), grid, out, float(s.step), int(s.max_steps), inp, float(s.alpha),
+                kernel.params)
+            h = None
+        else:
+            A, B, C, E, E3, D, Pm = self._tables
+            status, k, steps, evals, t_reached, h = _k.integrate_rk(
+                _RK_CODE[s.method], y0, self.time, float(t_end), grid, out, float(s.rtol), float(s.atol),
+                float(self.h or 0.0), int(s.max_steps), inp, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm,
+                self._monitor)
+        if status:
+            why = failure_text(kernel, status, s.method, h if h is not None else s.step, y0, self.time)
+            raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
+        y = out[1].copy()
+        if not np.isfinite(y).all():
+            raise SimulationError("the state became non-finite", float(t_end))
+        self.y = y
+        self.time = float(t_end)
+        self.h = h
+        self.steps += int(steps)
+
+    def outputs(self) -> dict:
+        n, kernel = self.kernel.n, self.kernel
+        if self._order is None:
+            values = self.signals.evaluate(self.time, self.y[:n], self.y[n:], self.inputs, self.settings.alpha,
+                                           kernel.accelerations)
+        else:
+            values = kernel.signal_values(self.signals, self._order, self.time, self.y[:n], self.y[n:],
+                                          self.inputs, self.settings.alpha)
+        return dict(zip(self.signals.names, values.tolist()))
+
+
+def failure_text(kernel, status, method, h, y_last, t_last) -> str:
+    """What a compiled loop's failure `status` means, in the words of the numpy path: the step size
+    `h` it ended with; for terminals meeting, the element whose terminals were closest in the last
+    good state `y_last` (at `t_last`), the loop having stopped within a step of it."""
+    from . import simulation as sim
+    text = _STATUS_TEXT[status]
+    if status == 6:
+        return text.format(method=method, h=h, hits=sim.STIFFNESS_HITS)
+    if status == 7:
+        return text.format(method=method, h=h, steps=sim.COLLAPSE_STEPS, relative=sim.COLLAPSE_RELATIVE)
+    names = kernel.flat["el_names"]
+    if status == 5 and names:
+        n = kernel.n
+        y = np.ascontiguousarray(y_last, dtype=float)
+        raw = np.empty(len(signal_layout(kernel.flat)))
+        _k.signal_values(y[:n].copy(), y[n:].copy(), np.zeros(n + kernel.m), kernel.params, raw)
+        first = 4 * len(kernel.flat["point_names"])
+        lengths = raw[first:first + 3 * len(names):3]
+        closest = float(np.min(lengths))
+        which = [name for name, L in zip(names, lengths) if L <= closest * (1.0 + 1e-9)]
+        spec = kernel.mech.scene.elements[which[0]]
+        label = ", ".join(f"'{name}'" for name in which)
+        label = f"element {label}: its" if len(which) == 1 else f"elements {label}: their"
+        return (f"{label} terminals {spec.point_a} and {spec.point_b} meet within a step of t = {t_last:.6g} s "
+                f"(where they were {closest:.3g} m apart), so the direction is undefined")
+    return text
+
+
+def compiled_stepper(mech, settings, signals):
+    """A :class:`CompiledStepper`, or None where the compiled loop cannot take the scene: see
+    :func:`unsupported`; an implicit method or the projection treatment; a step force (the numpy
+    stepper restarts the integrator at its switching time)."""
+    if unsupported(mech) or settings.method not in COMPILED_METHODS or settings.constraint == "projection" \
+            or getattr(mech, "discontinuities", ()):
+        return None
+    return CompiledStepper(mech, settings, signals, _kernel_for(mech))
+
+
+def unsupported(mech) -> str:
+    """Why the compiled kernels cannot take `mech` ("" when they can): numba missing, a 3D scene,
+    ground motion (not in the kernels)."""
+    if not AVAILABLE:
+        return WHY_NOT
+    if getattr(mech.scene, "dimension", 2) != 2:
+        return "the compiled path is planar"
+    if getattr(mech, "ground_motion", None) is not None:
+        return "ground motion is computed on the numpy path only"
+    return ""
 
 
 def warm_up():
@@ -425,7 +647,6 @@ def warm_up():
     Returns the seconds it took."""
     if not AVAILABLE:
         return 0.0
-    from pathlib import Path
     from .model import load
 
     t0 = _time.perf_counter()

@@ -23,7 +23,7 @@ REVOLUTE, PRISMATIC = 0, 1
 # Time functions of applied forces.
 F_CONSTANT, F_SINE, F_STEP = 0, 1, 2
 # Status codes of the integrators.
-OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET = 0, 1, 2, 3, 4, 5
+OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED = 0, 1, 2, 3, 4, 5, 6, 7
 
 MIN_LENGTH = 1e-9
 
@@ -395,6 +395,118 @@ def constraint_residual(q, P):
 
 
 # ------------------------------------------------------------------------------------------------
+# Output signals (the same values as inerter.outputs.Signals, in the layout of `signal_layout`)
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def signal_values(q, v, qdd, P, out):
+    """Every point's position and velocity (4 per point), every translational element's s_rel,
+    v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd), every
+    rotational element's φ_rel, ω_rel and torque (3 each), the energy (as ``Mechanism.energy``)
+    and the largest constraint residual. Returns a status code."""
+    (mass, pbody, ploc, el_int, el_real, rot_int, rot_real, jt_int, jt_real,
+     fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims) = P
+    n = dims[0]
+    status = OK
+    k = 0
+    for p in range(pbody.shape[0]):
+        rx, ry, vx, vy, ux, uy, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
+        out[k] = rx
+        out[k + 1] = ry
+        out[k + 2] = vx
+        out[k + 3] = vy
+        k += 4
+    energy = 0.0
+    for i in range(n):
+        energy += 0.5 * mass[i] * v[i] * v[i]
+    if dims[4]:
+        for i in range(0, n, 3):
+            energy -= gravity[i] * q[i] + gravity[i + 1] * q[i + 1]
+    for e in range(el_int.shape[0]):
+        kind = el_int[e, 0]
+        pa = el_int[e, 1]
+        pb = el_int[e, 2]
+        ba = pbody[pa]
+        bb = pbody[pb]
+        rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
+            q, v, ba, ploc[pa, 0], ploc[pa, 1], bb, ploc[pb, 0], ploc[pb, 1])
+        L = math.hypot(rx, ry)
+        if not L > MIN_LENGTH:
+            status = TERMINALS_MEET
+            L = MIN_LENGTH
+        ex = rx / L
+        ey = ry / L
+        along = rdx * ex + rdy * ey
+        coef = el_real[e, 0]
+        if kind == SPRING:
+            F = coef * (L - el_real[e, 1])
+            energy += 0.5 * coef * (L - el_real[e, 1]) ** 2
+        elif kind == DAMPER:
+            F = coef * along
+        else:
+            # r̈ = H q̈ + a_n (Eqs. 17-19); F = b (r̈·r̂ [+ |ṙ⊥|²/L]), Eq. (9) / (8)
+            ax = anx
+            ay = any_
+            if ba >= 0:
+                ka = 3 * ba
+                ax -= qdd[ka] + qdd[ka + 2] * tax
+                ay -= qdd[ka + 1] + qdd[ka + 2] * tay
+            if bb >= 0:
+                kb = 3 * bb
+                ax += qdd[kb] + qdd[kb + 2] * tbx
+                ay += qdd[kb + 1] + qdd[kb + 2] * tby
+            term = ax * ex + ay * ey
+            if el_int[e, 3]:
+                term += (rdx * rdx + rdy * rdy - along * along) / L
+            F = coef * term
+            energy += 0.5 * coef * along * along
+        out[k] = L
+        out[k + 1] = along
+        out[k + 2] = F
+        k += 3
+    for e in range(rot_int.shape[0]):
+        ia = rot_int[e, 1]
+        ib = rot_int[e, 2]
+        phi = (q[ib] if ib >= 0 else 0.0) - (q[ia] if ia >= 0 else 0.0)
+        w = (v[ib] if ib >= 0 else 0.0) - (v[ia] if ia >= 0 else 0.0)
+        coef = rot_real[e, 0]
+        if rot_int[e, 0] == ROT_SPRING:
+            tau = coef * (phi - rot_real[e, 1])
+            energy += 0.5 * coef * (phi - rot_real[e, 1]) ** 2
+        else:
+            tau = coef * w
+        out[k] = phi
+        out[k + 1] = w
+        out[k + 2] = tau
+        k += 3
+    out[k] = energy
+    out[k + 1] = constraint_residual(q, P) if jt_int.shape[0] else 0.0
+    return status
+
+
+@njit(cache=True)
+def signal_history(times, states, inputs, alpha, need_acc, P, out):
+    """`signal_values` at every sample of a history (rows [q, v]); accelerations from Eq. (33)
+    only when `need_acc`. Returns (status, index of the sample where it was raised)."""
+    n = P[16][0]
+    N = n + P[16][1]
+    AB = np.empty((2 * P[16][2] + P[16][3] + 1, N))
+    rhs = np.empty(N)
+    gen = np.empty(n)
+    acc = np.zeros(N)
+    for i in range(states.shape[0]):
+        q = states[i, :n]
+        v = states[i, n:]
+        if need_acc:
+            st = accelerations(times[i], q, v, inputs, alpha, P, AB, rhs, gen, acc)
+            if st != OK:
+                return st, i
+        st = signal_values(q, v, acc, P, out[i])
+        if st != OK:
+            return st, i
+    return OK, states.shape[0]
+
+
+# ------------------------------------------------------------------------------------------------
 # Integrators: DOP853 and RK45 (scipy's error control, step-size rule and dense output, sampled
 # at the output grid) and the classical RK4 with a fixed step (cubic Hermite between nodes).
 # ------------------------------------------------------------------------------------------------
@@ -450,11 +562,20 @@ def _initial_step(t0, y0, f0, t_bound, order, rtol, atol, inputs, alpha, P, AB, 
 
 @njit(cache=True)
 def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_steps, inputs, alpha, P,
-                 A, B, C, E, E3, Dm, Pm):
+                 A, B, C, E, E3, Dm, Pm, monitor):
     """Adaptive explicit Runge-Kutta from t0 to t_end, sampling `out[k] = y(grid[k])` for k ≥ 1.
 
+    Watched as inerter.simulation.StepMonitor watches scipy's integrators, with its constants in
+    `monitor` = (stiffness bound, every, hits, collapse relative, collapse steps): Hairer's stiffness
+    test (h·|λ| from the last two stages, both at t + h, against the bound, checked every `every`
+    accepted steps and then at every step while it fires; `hits` firings in a row: STIFF), a step
+    size collapsing below `collapse relative`·max(1 s, |t|) for `collapse steps` steps in a row
+    (COLLAPSED), the step budget (MAX_STEPS).
+
     method 0: DOP853 (A, B, C, E5 = E, E3, D = Dm as in scipy), method 1: RK45 (A, B, C, E, P = Pm).
-    Returns (status, samples written, steps, evaluations, t reached)."""
+    Returns (status, samples written, steps, evaluations, t reached, next step size): the last is
+    the step size the error control proposes after the last accepted step (scipy's ``h_abs``), with
+    which a co-simulation step restarts the integrator at the next communication point."""
     n = P[16][0]
     m = P[16][1]
     N = n + m
@@ -480,9 +601,10 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     ys = np.empty(ny)
     t = t0
     evals = 1
+    h_abs = first_step
     st = _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, f)
     if st != OK:
-        return st, 1, 0, evals, t
+        return st, 1, 0, evals, t, h_abs
     if first_step > 0.0:
         h_abs = first_step
     else:
@@ -491,6 +613,9 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     k = 1
     ngrid = grid.shape[0]
     steps = 0
+    hits = 0
+    calm = 0
+    small = 0
     Fd = np.empty((7, ny))
     while t < t_end:
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
@@ -500,7 +625,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
         rejected = False
         while not accepted:
             if h_abs < min_step:
-                return STEP_TOO_SMALL, k, steps, evals, t
+                return STEP_TOO_SMALL, k, steps, evals, t, h_abs
             h = h_abs
             t_new = t + h
             if t_new - t_end > 0:
@@ -519,7 +644,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
                 st = _rhs(t + C[s] * h, ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
                 evals += 1
                 if st != OK:
-                    return st, k, steps, evals, t
+                    return st, k, steps, evals, t, h_abs
             for i in range(ny):
                 acc_s = 0.0
                 for j in range(n_stages):
@@ -528,7 +653,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
             st = _rhs(t + h, y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new)
             evals += 1
             if st != OK:
-                return st, k, steps, evals, t
+                return st, k, steps, evals, t, h_abs
             for i in range(ny):
                 K[n_stages, i] = f_new[i]
             # error norm
@@ -573,9 +698,39 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
                 h_abs *= max(0.2, 0.9 * err ** err_exp)
                 rejected = True
         steps += 1
+        if monitor[0] > 0.0 and (hits > 0 or steps % int(monitor[1]) == 0):
+            num = 0.0
+            den = 0.0
+            last = n_stages - 1
+            for i in range(ny):
+                acc_s = 0.0
+                for j in range(last):
+                    acc_s += K[j, i] * A[last, j]
+                d = y_new[i] - (y[i] + h * acc_s)     # y_new − the last stage's argument (c = 1)
+                e = K[n_stages, i] - K[last, i]
+                den += d * d
+                num += e * e
+            if den > 0.0:
+                hlam = abs(h) * math.sqrt(num / den)
+                if hlam > monitor[0]:
+                    calm = 0
+                    hits += 1
+                    if hits >= monitor[2]:
+                        return STIFF, k, steps, evals, t, abs(h)
+                else:
+                    calm += 1
+                    if calm >= 6:
+                        hits = 0
+        if abs(h) < monitor[3] * max(1.0, abs(t_new)):
+            small += 1
+            if small >= monitor[4]:
+                return COLLAPSED, k, steps, evals, t, abs(h)
+        else:
+            small = 0
         # dense output at the grid points inside (t, t_new]
         if k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
-            if method == 0:
+            # DOP853's extra dense stages, needed only for a sample inside the step
+            if method == 0 and grid[k] < t_new:
                 for s in range(n_stages + 1, A.shape[0]):
                     for i in range(ny):
                         acc_s = 0.0
@@ -585,7 +740,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
                     st = _rhs(t + C[s] * h, ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
                     evals += 1
                     if st != OK:
-                        return st, k, steps, evals, t
+                        return st, k, steps, evals, t, h_abs
                 for i in range(ny):
                     dlt = y_new[i] - y[i]
                     Fd[0, i] = dlt
@@ -598,7 +753,10 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
                         Fd[3 + r, i] = h * acc_s
             while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
                 x = (grid[k] - t) / h
-                if method == 0:
+                if grid[k] >= t_new:           # at the node: the step's own solution, not the interpolant
+                    for i in range(ny):
+                        out[k, i] = y_new[i]
+                elif method == 0:
                     for i in range(ny):
                         val = 0.0
                         for r in range(6, -1, -1):
@@ -625,8 +783,8 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
             f[i] = f_new[i]
         t = t_new
         if steps > max_steps:
-            return MAX_STEPS, k, steps, evals, t
-    return OK, k, steps, evals, t
+            return MAX_STEPS, k, steps, evals, t, h_abs
+    return OK, k, steps, evals, t, h_abs
 
 
 @njit(cache=True)

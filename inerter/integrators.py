@@ -67,6 +67,8 @@ def make_solver(method, fun, t0, y0, t_bound, rtol, atol, step=1e-3, first_step=
     if cls is RK4:
         return RK4(fun, t0, y0, t_bound, step=step)
     kwargs = {}
-    if first_step is not None and first_step < abs(t_bound - t0):
-        kwargs["first_step"] = first_step
+    if first_step is not None and first_step > 0.0:
+        # A restart (co-simulation step) goes on with the step size the error control proposed,
+        # clipped to the interval as the integrator would clip it, rather than a fresh guess.
+        kwargs["first_step"] = min(first_step, abs(t_bound - t0))
     return cls(fun, t0, y0, t_bound, rtol=rtol, atol=atol, **kwargs)

@@ -132,8 +132,19 @@ class Model:
             result.metrics = compute_metrics(self, result)
         return result
 
-    def stepper(self, method=None, rtol=None, atol=None) -> Stepper:
-        return Stepper(self.mechanism, self.settings(method=method, rtol=rtol, atol=atol), self.signals)
+    def stepper(self, method=None, rtol=None, atol=None, path="numpy") -> Stepper:
+        """A co-simulation stepper at t = 0. `path` = "compiled": each step one call of the compiled
+        integrator loop where :func:`inerter.compiled.compiled_stepper` can take the scene (the numpy
+        stepper otherwise; ``stepper.path`` says which)."""
+        s = self.settings(method=method, rtol=rtol, atol=atol)
+        if path == "compiled" and not self.is_oracle:
+            from . import compiled
+            stepper = compiled.compiled_stepper(self.mechanism, s, self.signals)
+            if stepper is not None:
+                return stepper
+        elif path != "numpy" and path != "compiled":
+            raise ValueError(f"path = {path!r}; expected 'numpy' or 'compiled'")
+        return Stepper(self.mechanism, s, self.signals)
 
 
 class Result:
@@ -150,8 +161,14 @@ class Result:
         self.metric_errors: dict[str, str] = {}
         n = model.mechanism.nq
         sig = model.signals
-        values = []
-        for i, (t, y) in enumerate(zip(run.time, run.states)):
+        values, start = [], 0
+        kernel = run.extra.get("kernel")             # a compiled run's outputs come from its kernels
+        order = kernel.signal_order(sig) if kernel is not None and hasattr(kernel, "signal_order") else None
+        if order is not None:
+            compiled_values, start = kernel.signal_history(sig, order, run.time, run.states, None, settings.alpha)
+            values = list(compiled_values)
+        for i in range(start, len(run.time)):        # the numpy path (and its messages where one fails)
+            t, y = run.time[i], run.states[i]
             try:
                 values.append(sig.evaluate(t, y[:n], y[n:], None, settings.alpha))
             except SimulationError as exc:   # an output undefined at a sample: keep what came before

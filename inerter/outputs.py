@@ -14,15 +14,19 @@ class Signals:
     def __init__(self, mech):
         self.mech = mech
         self.names, self.units, self.descriptions = [], [], []
-        self._eval = []       # (name, needs_accelerations, f(t, q, v, a) -> float)
+        # Groups of signals computed together: (needs_accelerations, f(t, q, v, a) -> values), in the
+        # order of `names`; a point's position and velocity, an element's three outputs come from
+        # one evaluation.
+        self._groups = []
+        self._where = {}      # name -> (group, position in it)
         for pname in mech.point_names:
             point = mech.points[pname]
-            for i in range(mech.dim):
-                self._add(f"{pname}.r[{i + 1}]", "m", f"position of point {pname}, global axis {i + 1}",
-                          False, lambda t, q, v, a, p=point, i=i: float(p.evaluate(q, v)[0][i]))
-            for i in range(mech.dim):
-                self._add(f"{pname}.v[{i + 1}]", "m/s", f"velocity of point {pname}, global axis {i + 1}",
-                          False, lambda t, q, v, a, p=point, i=i: float(p.evaluate(q, v)[1][i]))
+            d = mech.dim
+            self._group([(f"{pname}.r[{i + 1}]", "m", f"position of point {pname}, global axis {i + 1}")
+                         for i in range(d)]
+                        + [(f"{pname}.v[{i + 1}]", "m/s", f"velocity of point {pname}, global axis {i + 1}")
+                           for i in range(d)],
+                        False, lambda t, q, v, a, p=point: np.concatenate(p.evaluate(q, v)[:2]))
         for e in mech.elements:
             if e.kind.startswith("rotational"):
                 spec = (("phi_rel", "rad", "relative angle"), ("w_rel", "rad/s", "relative angular velocity"),
@@ -31,36 +35,48 @@ class Signals:
                 spec = (("s_rel", "m", "distance between the terminals"),
                         ("v_rel", "m/s", "rate of change of the terminal distance"),
                         ("f", "N", "axial force, tension positive"))
-            needs_a = e.kind == "inerter"
-            for k, (suffix, unit, text) in enumerate(spec):
-                self._add(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}", needs_a and k == 2,
-                          lambda t, q, v, a, e=e, k=k: float(e.outputs(q, v, a)[k]))
-        self._add("energy", "J", "kinetic + potential energy, with ½·b·(dL/dt)² per inerter", False,
-                  lambda t, q, v, a: mech.energy(q, v))
-        self._add("constraint_residual", "m", "largest |C_i(q)| of the joint constraints (m or rad)", False,
-                  lambda t, q, v, a: mech.constraint_residual(q))
+            self._group([(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}") for suffix, unit, text in spec],
+                        e.kind == "inerter", lambda t, q, v, a, e=e: e.outputs(q, v, a)[:3])
+        self._group([("energy", "J", "kinetic + potential energy, with ½·b·(dL/dt)² per inerter")], False,
+                    lambda t, q, v, a: (mech.energy(q, v),))
+        self._group([("constraint_residual", "m", "largest |C_i(q)| of the joint constraints (m or rad)")], False,
+                    lambda t, q, v, a: (mech.constraint_residual(q),))
         self.index = {n: i for i, n in enumerate(self.names)}
-        self.needs_accelerations = any(f[1] for f in self._eval)
+        self.needs_accelerations = any(needs_a for needs_a, _ in self._groups)
 
-    def _add(self, name, unit, description, needs_a, fn):
-        self.names.append(name)
-        self.units.append(unit)
-        self.descriptions.append(description)
-        self._eval.append((name, needs_a, fn))
+    def _group(self, signals, needs_a, fn):
+        for k, (name, unit, description) in enumerate(signals):
+            self._where[name] = (len(self._groups), k)
+            self.names.append(name)
+            self.units.append(unit)
+            self.descriptions.append(description)
+        self._groups.append((needs_a, fn))
 
     def info(self):
         return [dict(name=n, unit=u, description=d) for n, u, d in zip(self.names, self.units, self.descriptions)]
 
-    def evaluate(self, t, q, v, inputs=None, alpha=0.0) -> np.ndarray:
-        a = self.mech.accelerations(t, q, v, inputs, alpha)[0] if self.needs_accelerations else None
-        return np.array([fn(t, q, v, a) for _, _, fn in self._eval])
+    def evaluate(self, t, q, v, inputs=None, alpha=0.0, accelerations=None) -> np.ndarray:
+        """Every signal at one state. `accelerations`: the function giving (q̈, λ) of Eq. (33)
+        (default the mechanism's; the compiled path passes its kernel's)."""
+        a = None
+        if self.needs_accelerations:
+            a = (accelerations or self.mech.accelerations)(t, q, v, inputs, alpha)[0]
+        return self.values(t, q, v, a)
+
+    def values(self, t, q, v, a) -> np.ndarray:
+        """Every signal at one state with the accelerations `a` (None when no signal needs them)."""
+        out = []
+        for _, fn in self._groups:
+            out.extend(fn(t, q, v, a))
+        return np.array(out, dtype=float)
 
     def function(self, name):
         """f(t, q, v, inputs) → value of one signal."""
-        _, needs_a, fn = self._eval[self.index[name]]
+        g, k = self._where[name]
+        needs_a, fn = self._groups[g]
         mech = self.mech
 
         def signal(t, q, v, inputs=None, alpha=0.0):
             a = mech.accelerations(t, q, v, inputs, alpha)[0] if needs_a else None
-            return fn(t, q, v, a)
+            return float(fn(t, q, v, a)[k])
         return signal

@@ -221,7 +221,9 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
                 y = np.concatenate((q, v))
                 if abs(grid[k - 1] - solver.t) <= 1e-12 * max(1.0, solver.t):
                     out[k - 1] = y
-            first_step = getattr(solver, "h_abs", None) if (project or switch) else None
+            # Projection restarts go on with the step size the error control proposed; after a
+            # step force the solution's derivative jumps, and the integrator starts afresh.
+            first_step = getattr(solver, "h_abs", None) if (project and not switch) else None
             max_drift = max(max_drift, mech.constraint_residual(y[:n]))
             t0 = solver.t
     except SimulationError as exc:
@@ -252,6 +254,7 @@ class Stepper:
         self.h = None
         self.input_index = {name: i for i, name in enumerate(mech.input_names)}
         self.steps = 0
+        self.path = "numpy"
 
     def set_input(self, name, value):
         value = float(value)
@@ -283,6 +286,8 @@ class Stepper:
                     monitor.after_step(solver, previous)
                     previous = solver.y.copy()
                 t0, y, h = solver.t, solver.y, getattr(solver, "h_abs", None)
+                if jump is not None:        # the derivative jumps here: a fresh start after it
+                    h = None
             steps = monitor.steps
             if s.constraint == "projection":
                 q, v = self.mech.project(y[:n], y[n:])

@@ -3,6 +3,7 @@ compiled integrators against the oracle. No timing assertions (timings: benchmar
 from __future__ import annotations
 
 import dataclasses
+import os
 from pathlib import Path
 
 import numpy as np
@@ -152,3 +153,124 @@ def test_bench_writes_table_csv_and_png(tmp_path):
     for ext in ("md", "csv", "png"):
         assert (tmp_path / f"work_precision.{ext}").stat().st_size > 0
     assert "compiled DOP853" in (tmp_path / "work_precision.md").read_text()
+
+
+# ----------------------------------------------------------------------------------------------
+# Outputs, co-simulation stepping and the kernels' on-disk cache
+# ----------------------------------------------------------------------------------------------
+@needs_numba
+@pytest.mark.parametrize("path", PLANAR, ids=lambda p: p.stem)
+def test_compiled_outputs_match_the_numpy_signals(path):
+    """Every output (positions, velocities, element s_rel/v_rel/f with the inerter's Eq. 9 force,
+    energy, constraint residual) from the kernels equals inerter.outputs.Signals to round-off
+    (1e-12 relative) at random states."""
+    model = inerter.load(path)
+    mech, signals = model.mechanism, model.signals
+    kernel = compiled.compile_mechanism(mech)
+    order = kernel.signal_order(signals)
+    assert order is not None
+    rng = np.random.default_rng(3)
+    for t, q, v, inputs, alpha in _random_states(mech, rng):
+        ref = signals.evaluate(t, q, v, inputs, alpha)
+        got = kernel.signal_values(signals, order, t, q, v, inputs, alpha)
+        assert np.all(np.abs(got - ref) <= 1e-12 * (1.0 + np.abs(ref))), [
+            (n, a, b) for n, a, b in zip(signals.names, got, ref) if abs(a - b) > 1e-12 * (1 + abs(b))]
+
+
+def _step_both(model, stop, step, inputs=None):
+    runs = {}
+    for path in ("compiled", "numpy"):
+        st = model.stepper(path=path)
+        assert st.path == path
+        ys, outs = [], []
+        for k in range(1, int(round(stop / step)) + 1):
+            for name, value in (inputs or {}).items():
+                st.set_input(name, value(k * step))
+            st.step(k * step)
+            ys.append(st.y.copy())
+            outs.append(list(st.outputs().values()))
+        runs[path] = (np.array(ys), np.array(outs), st.steps)
+    return runs
+
+
+@needs_numba
+@pytest.mark.parametrize("path", PAPER + [ROOT / "scenarios" / "two_bar_2d_pd.toml"], ids=lambda p: p.stem)
+def test_compiled_stepper_takes_the_numpy_steppers_steps(path):
+    """The FMU's compiled stepping: each communication step one call of the compiled DOP853 loop,
+    restarted with the step size the error control proposed. Same steps as the numpy stepper
+    (scipy's DOP853), so the states agree to round-off carried over 100 restarts: bound 1e-10 (m,
+    rad, m/s) at the scene's tolerance rtol 1e-10; outputs to 1e-9 relative."""
+    model = inerter.load(path)
+    inputs = {name: (lambda t: 5.0 * np.sin(7.0 * t)) for name in model.mechanism.input_names}
+    runs = _step_both(model, 1.0, 0.01, inputs)
+    (ya, oa, sa), (yb, ob, sb) = runs["compiled"], runs["numpy"]
+    assert sa == sb
+    assert np.max(np.abs(ya - yb)) <= 1e-10
+    assert np.all(np.abs(oa - ob) <= 1e-9 * (1.0 + np.abs(ob)))
+
+
+@needs_numba
+def test_compiled_stepper_rolls_back_bit_for_bit():
+    model = inerter.load(PAPER[1])
+    st = model.stepper(path="compiled")
+    for k in range(1, 6):
+        st.step(0.01 * k)
+    state = st.get_state()
+    st.set_input("C.f[2]", 3.0)
+    st.step(0.06)
+    first = (st.y.copy(), st.outputs())
+    st.set_state(state)
+    st.set_input("C.f[2]", 3.0)
+    st.step(0.06)
+    assert np.array_equal(st.y, first[0]) and st.outputs() == first[1]
+
+
+def test_the_compiled_stepper_falls_back_where_the_loop_cannot_go():
+    """Implicit methods, projection, step forces, 3D scenes and a missing numba: the numpy stepper."""
+    two_bar = inerter.load(PAPER[1])
+    assert two_bar.stepper(method="Radau", path="compiled").path == "numpy"
+    assert inerter.load(ROOT / "scenarios" / "two_bar_2d_as_3d.toml").stepper(path="compiled").path == "numpy"
+    assert inerter.load(ROOT / "scenarios" / "hard" / "step_force_1dof_2d.toml").stepper(path="compiled").path \
+        == "numpy"
+    assert two_bar.stepper(path="compiled").path == ("compiled" if compiled.AVAILABLE else "numpy")
+    with pytest.raises(ValueError, match="expected 'numpy' or 'compiled'"):
+        two_bar.stepper(path="fast")
+
+
+KERNEL_CACHE_PROBE = """
+import json, sys
+from inerter import compiled
+import inerter
+model = inerter.load(sys.argv[1])
+kernel = compiled.compile_mechanism(model.mechanism)
+kernel.accelerations(0.0, kernel.q0, kernel.v0)
+stats = compiled._k.accelerations.stats
+print(json.dumps({"file": compiled._k.__file__, "package": inerter.__file__,
+                  "hits": sum(stats.cache_hits.values()), "misses": sum(stats.cache_misses.values())}))
+"""
+
+
+@needs_numba
+def test_kernels_compiled_once_are_found_from_another_copy_of_the_package(tmp_path):
+    """An FMU importer extracts the FMU, and the package inside it, to a new folder each run; the
+    kernels are loaded from a copy named by their source's hash, so numba's on-disk cache made by
+    one copy of the package is found by the next (no compilation: cache hits, no misses)."""
+    import json
+    import shutil
+    import subprocess
+    import sys
+    cache = tmp_path / "cache"
+    results = []
+    for copy in ("first", "second"):
+        shutil.copytree(ROOT / "inerter", tmp_path / copy / "inerter",
+                        ignore=shutil.ignore_patterns("__pycache__"))
+        env = dict(os.environ, INERTER_CACHE_DIR=str(cache), PYTHONPATH=str(tmp_path / copy))
+        proc = subprocess.run([sys.executable, "-c", KERNEL_CACHE_PROBE, str(PAPER[1])], env=env,
+                              capture_output=True, text=True, timeout=600, cwd=tmp_path)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        results.append(json.loads(proc.stdout.strip().splitlines()[-1]))
+    first, second = results
+    assert first["package"].startswith(str(tmp_path / "first")) and second["package"].startswith(str(tmp_path / "second"))
+    assert first["file"] == second["file"] and first["file"].startswith(str(cache))
+    assert first["misses"] >= 1                      # compiled by the first copy ...
+    assert second["hits"] >= 1 and second["misses"] == 0   # ... and only loaded by the second

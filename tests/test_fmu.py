@@ -147,13 +147,15 @@ class Instance:
     def _log(self, env, instance, status, category, message):
         self.messages.append((status, message.decode("utf-8")))
 
-    def initialise(self, reals=None, strings=None, start_time=0.0, tolerance=None):
+    def initialise(self, reals=None, strings=None, start_time=0.0, tolerance=None, booleans=None):
         self.fmu.setupExperiment(tolerance=tolerance, startTime=start_time)
         self.fmu.enterInitializationMode()
         for name, value in (reals or {}).items():
             self.fmu.setReal([self.vr[name]], [value])
         for name, value in (strings or {}).items():
             self.fmu.setString([self.vr[name]], [value])
+        for name, value in (booleans or {}).items():
+            self.fmu.setBoolean([self.vr[name]], [value])
         self.fmu.exitInitializationMode()
 
     def get(self, names):
@@ -309,6 +311,8 @@ def test_variables_are_named_and_united_like_the_model(fmus, scene):
     assert vars_["solver"].type == "String" and vars_["solver"].start == model.experiment["method"]
     assert float(vars_["rtol"].start) == model.experiment["rtol"]
     assert float(vars_["atol"].start) == model.experiment["atol"]
+    assert (vars_["compiled"].type, vars_["compiled"].variability, vars_["compiled"].start) == \
+        ("Boolean", "fixed", "true")
     for i in model.input_info():
         v = vars_[i["name"]]
         assert (v.causality, v.type, v.unit, float(v.start)) == ("input", "Real", i["unit"], 0.0)
@@ -520,9 +524,10 @@ def test_an_input_is_held_over_each_step(input_fmu, fresh_run, tmp_path):
     run = run_fresh(tmp_path, [job_for(scene, fmu, input={"time": t.tolist(),
                                                           "values": {INPUT: force.tolist()}})])
     result = run["results"][0]
-    # The solver's own stepper with the same held inputs gives exactly the same outputs.
+    # The solver's own stepper with the same held inputs, on the FMU's default path (compiled where
+    # numba is installed, numpy otherwise), gives exactly the same outputs.
     model = inerter.load(scene, **{"experiment.rtol": RTOL})
-    stepper = model.stepper()
+    stepper = model.stepper(path="compiled")
     assert result["C.r[2]"][0] == stepper.outputs()["C.r[2]"]
     for i in range(1, len(result["time"])):
         stepper.set_input(INPUT, force[i - 1])
@@ -570,6 +575,26 @@ def test_a_rolled_back_step_repeats_bit_for_bit(fmus, scene, instance):
     assert other.get([name]) == [changed[name]]
     assert three_steps(other) == first
     assert not [m for s, m in inst.messages + other.messages if s > 1]
+
+
+@pytest.mark.parametrize("scene", SCENE_PARAMS)
+def test_the_compiled_and_the_numpy_path_of_the_fmu_agree(fmus, scene, instance):
+    """The parameter `compiled` picks the path (the log says which ran; the compiled one where numba
+    is installed and the scene allows it). Both take the same integrator steps, so the outputs agree
+    to round-off carried over the steps: 1e-9 in each output's unit, relative or absolute, as
+    between importers."""
+    expected = inerter.load(scene).stepper(path="compiled").path
+    outputs = {}
+    for flag in (True, False):
+        inst = instance(fmus[scene], f"compiled-{flag}")
+        inst.initialise(booleans={"compiled": flag})
+        assert f"{expected if flag else 'numpy'} path" in inst.logged()
+        h, t = float(inst.md.defaultExperiment.stepSize), 0.0
+        for _ in range(20):
+            inst.fmu.doStep(t, h)
+            t += h
+        outputs[flag] = inst.get(inst.outputs)
+    assert outputs[True] == pytest.approx(outputs[False], rel=1e-9, abs=1e-9)
 
 
 # ----------------------------------------------------------------------------------------------

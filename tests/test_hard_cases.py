@@ -21,6 +21,7 @@ from conftest import LUMPED, SCENARIOS, TWO_BAR
 from inerter import compiled
 from inerter.cli import main as cli_main
 from inerter.errors import SceneError
+from inerter.simulation import STIFFNESS_EVERY, STIFFNESS_HITS
 
 fmpy = pytest.importorskip("fmpy")
 from fmpy import extract  # noqa: E402
@@ -121,8 +122,8 @@ def test_terminals_meeting_stop_the_run_naming_the_elements_and_the_time(method)
     assert time.process_time() - start < 30.0
     assert r.status == "failed"
     assert "terminals" in r.message and "meet" in r.message
-    if method != "compiled":                  # the compiled kernel reports the kind, not the name
-        assert "'inerter'" in r.message and "O and P" in r.message
+    assert "'inerter'" in r.message and "O and P" in r.message
+    if method != "compiled":                  # the compiled loop names the last sample before it
         assert re.search(r"t = 1\.110\d* s", r.message), r.message
     assert r.time[-1] <= T_MEET and r.time[-1] >= T_MEET - 0.02     # kept up to the last sample
     for name in r.names:
@@ -324,15 +325,22 @@ def test_stiff_overdamped_implicit_methods_are_stable_and_accurate(method):
     assert np.max(np.abs(r["P.r[1]"] - 1.0 - _overdamped(r.time))) <= 1e-10
 
 
+@pytest.mark.parametrize("path", ["numpy", pytest.param("compiled", marks=needs_numba)])
 @pytest.mark.parametrize("method", ["DOP853", "RK45"])
-def test_stiff_overdamped_explicit_methods_report_stiffness_in_bounded_time(method):
+def test_stiff_overdamped_explicit_methods_report_stiffness_in_bounded_time(method, path):
     start = time.process_time()
     r = inerter.load(STIFF, c=1e8).simulate(method=method, stop_time=5.0, output_interval=0.01,
-                                            metrics=False)
+                                            metrics=False, path=path)
+    assert r.run.extra.get("path", "numpy") == path
     cpu = time.process_time() - start
     assert r.status == "failed"
     assert f"stiff for {method}" in r.message and "Radau" in r.message and "BDF" in r.message
-    assert r.run.steps <= 1100 and cpu < 20.0
+    # Hairer's test runs every STIFFNESS_EVERY (1000) accepted steps and fires after STIFFNESS_HITS (15) estimates
+    # h·|λ| above the bound in a row. At the stability limit the step size oscillates and the
+    # estimates hover around the bound (6.1 for DOP853), so which check fires depends on round-off:
+    # changing rtol by 0.1 % moves it between the 1st, 2nd and 3rd check on both paths (1016-3027
+    # steps measured). The bound allows five checks.
+    assert r.run.steps <= 5 * STIFFNESS_EVERY + STIFFNESS_HITS and cpu < 20.0
     # what it computed before is kept, and right
     assert r.time[-1] > 0.01
     assert np.max(np.abs(r["P.r[1]"] - 1.0 - _overdamped(r.time))) <= 1e-10

@@ -15,11 +15,22 @@ import math
 from pathlib import Path
 
 
+#: The chain's parameters (SI units), shared with the MuJoCo model of benchmarks/chain_mujoco.py.
+PARAMETERS = dict(l=0.5, m=1.0, kr=200.0, dr=0.2, k=500.0, c=2.0, b=2.0, Fa=5.0, f=1.0)
+
+
+def initial_angles(links: int) -> list[float]:
+    """Absolute angle of every bar at t = 0: a quarter turn spread evenly over the chain."""
+    turn = 0.5 * math.pi / links
+    return [(i - 0.5) * turn for i in range(1, links + 1)]
+
+
 def chain_toml(links: int, gravity: bool = False, extra_forces: bool = False, centripetal: bool = True,
                inerters: bool = True) -> str:
     if links < 1:
         raise ValueError("links must be at least 1")
-    l, m = 0.5, 1.0
+    P = PARAMETERS
+    l, m = P["l"], P["m"]
     lines = [
         "[scene]",
         f'name = "chain_{links}"',
@@ -28,13 +39,13 @@ def chain_toml(links: int, gravity: bool = False, extra_forces: bool = False, ce
         "[parameters]",
         f'l = {{ value = {l}, unit = "m", description = "bar length" }}',
         f'm = {{ value = {m}, unit = "kg", description = "bar mass" }}',
-        'kr = { value = 200.0, unit = "N.m/rad", description = "rotational spring at every pin" }',
-        'dr = { value = 0.2, unit = "N.m.s/rad", description = "rotational damper at every pin" }',
-        'k = { value = 500.0, unit = "N/m", description = "spring between neighbouring midpoints" }',
-        'c = { value = 2.0, unit = "N.s/m", description = "damper between neighbouring midpoints" }',
-        'b = { value = 2.0, unit = "kg", description = "inertance between neighbouring midpoints" }',
-        'Fa = { value = 5.0, unit = "N", description = "tip force amplitude" }',
-        'f = { value = 1.0, unit = "Hz", description = "tip force frequency" }',
+        f'kr = {{ value = {P["kr"]}, unit = "N.m/rad", description = "rotational spring at every pin" }}',
+        f'dr = {{ value = {P["dr"]}, unit = "N.m.s/rad", description = "rotational damper at every pin" }}',
+        f'k = {{ value = {P["k"]}, unit = "N/m", description = "spring between neighbouring midpoints" }}',
+        f'c = {{ value = {P["c"]}, unit = "N.s/m", description = "damper between neighbouring midpoints" }}',
+        f'b = {{ value = {P["b"]}, unit = "kg", description = "inertance between neighbouring midpoints" }}',
+        f'Fa = {{ value = {P["Fa"]}, unit = "N", description = "tip force amplitude" }}',
+        f'f = {{ value = {P["f"]}, unit = "Hz", description = "tip force frequency" }}',
         "",
         "[effects]",
         f"centripetal = {'true' if centripetal else 'false'}",
@@ -43,9 +54,7 @@ def chain_toml(links: int, gravity: bool = False, extra_forces: bool = False, ce
         lines.append("gravity = [0, -9.81]")
     lines += ["", "[ground.points]", "O = [0, 0]", ""]
     x = y = 0.0
-    turn = 0.5 * math.pi / links
-    for i in range(1, links + 1):
-        th = (i - 0.5) * turn
+    for i, th in enumerate(initial_angles(links), start=1):
         cx, cy = x + 0.5 * l * math.cos(th), y + 0.5 * l * math.sin(th)
         lines += [
             f"[bodies.bar{i}]",

@@ -105,10 +105,11 @@ def test_compiled_rk4_matches_numpy_rk4():
 
 
 @needs_numba
-@pytest.mark.parametrize("path", PAPER, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", PLANAR, ids=lambda p: p.stem)
 @pytest.mark.parametrize("centripetal", [True, False])
 def test_compiled_integration_against_oracle(path, centripetal):
-    """Compiled DOP853 at tight tolerance within 1e-9 m of the oracle (positions of all points)."""
+    """Compiled DOP853 at tight tolerance within 1e-9 m of the oracle (positions of all points), on
+    every planar scene (the 3D scenes run the numpy path, tested against the oracle in test_3d)."""
     model = inerter.load(path, **{"effects.centripetal": centripetal})
     stop = 2.0
     run = compiled.integrate_compiled(model.mechanism, model.settings(method="DOP853", stop_time=stop, rtol=1e-11,
@@ -153,6 +154,26 @@ def test_bench_writes_table_csv_and_png(tmp_path):
     for ext in ("md", "csv", "png"):
         assert (tmp_path / f"work_precision.{ext}").stat().st_size > 0
     assert "compiled DOP853" in (tmp_path / "work_precision.md").read_text()
+
+
+def test_bench_measures_the_fmu_path_against_the_oracle(tmp_path):
+    """`inerter bench --paths fmu`: whole fmpy runs at 10 ms and 2 ms communication steps, their error
+    against the oracle (rtol 1e-12) on every point. At rtol 1e-11 DOP853 restarted at every
+    communication point is within 1e-9 m of the oracle over 0.5 s."""
+    pytest.importorskip("fmpy")
+    import csv
+
+    from inerter.bench import main_bench
+    code = main_bench([str(PAPER[0]), "--out", str(tmp_path), "--stop-time", "0.5", "--paths", "fmu",
+                       "--methods", "DOP853", "--quick"])
+    assert code == 0
+    with open(tmp_path / "work_precision.csv") as fh:
+        rows = [r for r in csv.DictReader(fh)]
+    for label in ("FMU DOP853, 10 ms step", "FMU DOP853, 2 ms step"):
+        mine = [r for r in rows if r["series"] == label]
+        assert mine and all(r["status"] == "ok" for r in mine), label
+        tight = [float(r["error_m"]) for r in mine if float(r["setting"]) == 1e-11]
+        assert tight and tight[0] <= 1e-9, (label, tight)
 
 
 # ----------------------------------------------------------------------------------------------

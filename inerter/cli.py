@@ -54,6 +54,8 @@ def simulate(scene, overrides, model_kind, args):
     if model_kind == "oracle":
         model = model.oracle()
         kw.update(rtol=args.rtol or ORACLE_RTOL, atol=ORACLE_ATOL, method="DOP853")
+    else:
+        kw["path"] = getattr(args, "path", "numpy")
     return model.simulate(**kw)
 
 
@@ -69,7 +71,7 @@ def cmd_run(args):
     from .plotting import plot_runs
     plot_runs([(args.model, result, {})], out / f"{stem}.png", f"{stem} ({args.model})")
     print(f"{stem}: {result.status} ({result.message}); {len(result.time)} samples to t = "
-          f"{result.time[-1]:.6g} s in {wall:.2f} s wall")
+          f"{result.time[-1]:.6g} s in {wall:.2f} s wall; path: {summary['statistics']['path']}")
     for k, v in summary["metrics"].items():
         print(f"  {k} = {v}")
     for k, v in summary.get("metric_errors", {}).items():
@@ -175,6 +177,9 @@ def build_parser():
         sp.add_argument("--method", default=None)
         sp.add_argument("--rtol", type=float, default=None)
         sp.add_argument("--step", type=float, default=None, help="FMU communication step (s)")
+        sp.add_argument("--path", choices=("numpy", "compiled"), default="numpy",
+                        help="the solver's path: numpy (the readable reference) or compiled (numba kernels "
+                             "and integrator loops; planar scenes, falls back to numpy elsewhere)")
 
     r = sub.add_parser("run", help="simulate a scene: CSV, summary.json and a PNG")
     r.add_argument("scene")

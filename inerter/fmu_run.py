@@ -8,7 +8,7 @@ with metrics from a cubic spline through the samples (no dense output crosses th
 from __future__ import annotations
 
 import time as _time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -25,6 +25,7 @@ class FmuRunInfo:
     max_drift: float
     status: str
     message: str
+    extra: dict = field(default_factory=dict)
 
 
 def start_values(model: Model, overrides: dict) -> dict:
@@ -110,6 +111,9 @@ def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None
     run = FmuRunInfo(steps=len(table) - 1, evaluations=0, cpu_time=cpu,
                   max_drift=float(np.max(table["constraint_residual"])) if len(table) else 0.0,
                   status="ok" if ok else "failed", message=message)
+    # the FMU's log of exitInitializationMode names the path its stepper took
+    path = next((p for p in ("compiled", "numpy") if any(f"{p} path" in m for m in messages)), None)
+    run.extra["path"] = f"FMU ({path} path)" if path else "FMU"
     result = FmuResult(model, table, settings, run, comm)
     if metrics and ok:
         result.metrics = compute_metrics(model, result)

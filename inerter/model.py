@@ -223,7 +223,8 @@ class Result:
                          "parameters": {p.name: p.value for p in self.model.scene.parameters.values()},
                          "effects": {k: (list(v) if isinstance(v, tuple) else v)
                                      for k, v in self.model.scene.effects.items()}},
-            "statistics": {"steps": self.run.steps, "evaluations": self.run.evaluations,
+            "statistics": {"path": self.run.extra.get("path", "numpy"),
+                           "steps": self.run.steps, "evaluations": self.run.evaluations,
                            "cpu_time_s": self.run.cpu_time, "max_constraint_drift": self.run.max_drift,
                            "energy_start": float(self["energy"][0]) if len(self.time) else None,
                            "energy_end": float(self["energy"][-1]) if len(self.time) else None},

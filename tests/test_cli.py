@@ -4,6 +4,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from inerter.cli import main, parse_set
 from conftest import LUMPED, TWO_BAR
@@ -33,6 +34,21 @@ def test_set_switches_the_correction_off(tmp_path):
                  "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["settings"]["effects"]["centripetal"] is False
+
+
+def test_run_on_the_compiled_path_gives_the_numpy_paths_figures(tmp_path):
+    """`--path compiled`: the summary says which path ran; DOP853 at rtol 1e-11 on both paths agrees
+    to 1e-9 m (both within the tolerance of the same solution; the compiled loop takes scipy's steps)."""
+    pytest.importorskip("numba")
+    runs = {}
+    for path in ("numpy", "compiled"):
+        out = tmp_path / path
+        assert main(["run", str(TWO_BAR), "--path", path, "--stop-time", "2", "--rtol", "1e-11",
+                     "--out", str(out)]) == 0
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["statistics"]["path"] == path
+        runs[path] = np.genfromtxt(out / "two_bar_2d.csv", delimiter=",", names=True)
+    assert np.max(np.abs(runs["compiled"]["Cr2"] - runs["numpy"]["Cr2"])) <= 1e-9
 
 
 def test_parse_set_reads_toml_values():

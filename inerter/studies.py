@@ -83,12 +83,12 @@ def scene_path(study: Study, scenarios=None) -> Path:
 
 
 def make_sweep(study: Study, scenarios=None, points=None, span=None, fixed=None, model="solver",
-               stop_time=None, step=None) -> Sweep:
+               stop_time=None, step=None, path="numpy") -> Sweep:
     n = points or study.points
     start, stop = span or (study.start, study.stop)
     _, xs = parse_vary(f"{study.x}={start}:{stop}:{n}")
     return Sweep(scene_path(study, scenarios), [(study.x, xs), (CORRECTION, [True, False])],
-                 {**study.fixed, **(fixed or {})}, model, stop_time, step)
+                 {**study.fixed, **(fixed or {})}, model, stop_time, step, path)
 
 
 def study_table(study: Study, sweep: Sweep, results_csv) -> dict:
@@ -184,7 +184,7 @@ def main(argv=None) -> int:
         raise SweepError(f"--points {args.points}: expected at least 2")
     out = Path(args.out or Path("out") / "study" / study.name)
     sweep = make_sweep(study, args.scenarios, args.points, span, parse_set(args.set), args.model,
-                       args.stop_time, args.step)
+                       args.stop_time, args.step, args.path)
     report = run_sweep(sweep, out, workers=args.workers, scheduler=args.scheduler,
                        progress=not args.no_progress, max_runs=args.max_runs, retry_failed=args.retry_failed)
     print_report(report, sweep)

@@ -63,6 +63,7 @@ except ImportError:  # pragma: no cover - not on Linux
 RESULTS_FILE = "results.csv"
 SWEEP_FILE = "sweep.json"
 MODELS = ("solver", "fmu")
+PATHS = ("numpy", "compiled")
 
 #: Columns before the parameters, between the parameters and the metrics, and after the metrics.
 HEAD_COLUMNS = ("key", "scene", "model")
@@ -157,6 +158,7 @@ class Sweep:
     model: str = "solver"
     stop_time: float | None = None
     step: float | None = None            # FMU communication step (--model fmu)
+    path: str = "numpy"                  # the solver's path (--model solver): numpy or compiled
 
     def __post_init__(self):
         from .model import load
@@ -167,6 +169,8 @@ class Sweep:
             raise SweepError(f"{self.scene}: no such scene file")
         if self.model not in MODELS:
             raise SweepError(f"--model {self.model}: expected one of {', '.join(MODELS)}")
+        if self.path not in PATHS:
+            raise SweepError(f"--path {self.path}: expected one of {', '.join(PATHS)}")
         if not self.axes:
             raise SweepError("nothing to sweep: give at least one --vary NAME=START:STOP:NUM")
         self.content = self.scene.read_bytes()
@@ -204,6 +208,8 @@ class Sweep:
         out = {"model": self.model, "stop_time": self.stop_time}
         if self.model == "fmu":
             out["step"] = self.step
+        elif self.path != "numpy":           # (the keys of numpy-path runs stay as they were)
+            out["path"] = self.path
         return out
 
     def runs(self) -> list[Run]:
@@ -221,7 +227,7 @@ class Sweep:
 
     def describe(self) -> dict:
         return {"scene": str(self.scene), "scene_sha256": self.digest, "name": self.name,
-                "model": self.model, "stop_time": self.stop_time, "step": self.step,
+                "model": self.model, "stop_time": self.stop_time, "step": self.step, "path": self.path,
                 "set": self.fixed, "vary": {n: v for n, v in self.axes}, "runs": len(self.runs())}
 
 
@@ -276,7 +282,8 @@ def run_one(task: dict) -> dict:
                 raise
         else:
             from .model import load
-            result = load(scene, **task["overrides"]).simulate(stop_time=task["stop_time"])
+            result = load(scene, **task["overrides"]).simulate(stop_time=task["stop_time"],
+                                                               path=task.get("path", "numpy"))
         status, error = result.status, ("" if result.status == "ok" else result.message)
         metrics = {k: v for k, v in result.metrics.items()
                    if isinstance(v, (int, float)) and not isinstance(v, bool)}
@@ -664,7 +671,7 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
                 from .fmu_build import DEFAULT_OUT_DIR, build
                 fmu_path = str(Path(build(sweep.scene, fmu_dir or DEFAULT_OUT_DIR)).resolve())
             tasks = [dict(key=r.key, name=sweep.name, model=sweep.model, overrides=r.overrides,
-                          stop_time=sweep.stop_time, step=sweep.step, fmu_path=fmu_path,
+                          stop_time=sweep.stop_time, step=sweep.step, fmu_path=fmu_path, path=sweep.path,
                           scene_path=str(sweep.scene), scene_digest=sweep.digest, scene_content=sweep.content)
                      for r in todo]
             bar = tqdm(total=report.skipped + len(todo), initial=report.skipped, desc=sweep.name, unit="run",
@@ -821,6 +828,8 @@ def add_run_arguments(p: argparse.ArgumentParser):
                    help="fix a parameter, effects.NAME or experiment.NAME for every run (repeatable)")
     p.add_argument("--stop-time", type=float, default=None, help="stop time of every run (s)")
     p.add_argument("--step", type=float, default=None, help="FMU communication step (s), with --model fmu")
+    p.add_argument("--path", choices=PATHS, default="numpy",
+                   help="with --model solver: the numpy path (default) or the compiled one (numba kernels)")
     p.add_argument("--max-runs", type=int, default=None,
                    help="stop after this many new runs; run the same command again to go on")
     p.add_argument("--retry-failed", action="store_true", help="run the failed runs of results.csv again")
@@ -871,7 +880,7 @@ def _sweep(argv) -> int:
     add_run_arguments(p)
     args = p.parse_args(argv)
     sweep = Sweep(args.scene, [parse_vary(v) for v in args.vary], parse_set(args.set), args.model,
-                  args.stop_time, args.step)
+                  args.stop_time, args.step, args.path)
     report = run_sweep(sweep, args.out, workers=args.workers, scheduler=args.scheduler,
                        progress=not args.no_progress, max_runs=args.max_runs, retry_failed=args.retry_failed)
     print_report(report, sweep)

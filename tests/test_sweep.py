@@ -143,6 +143,24 @@ def test_sweep_equals_the_same_runs_one_by_one(tmp_path, address, capsys):
     assert "4 run now (0 failed)" in capsys.readouterr().out
 
 
+def test_a_sweep_on_the_compiled_path_equals_the_compiled_runs_one_by_one(tmp_path, address, capsys):
+    pytest.importorskip("numba")
+    out = tmp_path / "compiled"
+    code = main_sweep([str(LUMPED), "--vary", "y0=1.2:1.6:2", *FAST, "--path", "compiled",
+                       "--scheduler", address, "--out", str(out), "--no-progress"])
+    assert code == 0, capsys.readouterr()
+    rows = rows_of(out / "results.csv")
+    assert len(rows) == 2 and {r["status"] for r in rows} == {"ok"}
+    numpy_keys = {r.key for r in Sweep(LUMPED, [parse_vary("y0=1.2:1.6:2")], {"experiment.rtol": 1e-8},
+                                       stop_time=3.0).runs()}
+    assert not numpy_keys & {r["key"] for r in rows}                # the path enters each run's key
+    for row in rows:
+        alone = inerter.load(LUMPED, **{"experiment.rtol": 1e-8, "y0": float(row["y0"])}).simulate(
+            stop_time=3.0, path="compiled").metrics
+        for name in SCALARS:
+            assert float(row[name]) == alone[name], name          # same code, same inputs: every digit
+
+
 def test_a_failing_run_is_recorded_and_the_others_complete(tmp_path, address, capsys):
     out = tmp_path / "fail"
     code = main_sweep([str(LUMPED), "--vary", "b=-1,10", "--vary", "experiment.max_steps=20,1000000", *FAST,

@@ -61,6 +61,23 @@ def _pair(q, v, ba, lax, lay, bb, lbx, lby):
     return rx, ry, rdx, rdy, anx, any_, -uay, uax, -uby, ubx
 
 
+@njit(cache=True, inline="always")
+def _element(q, v, e, el_int, pbody, ploc):
+    """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, the θ-columns of H, L, r̂,
+    whether the terminals meet); L is held at MIN_LENGTH where they do."""
+    pa = el_int[e, 1]
+    pb = el_int[e, 2]
+    ba = pbody[pa]
+    bb = pbody[pb]
+    rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
+        q, v, ba, ploc[pa, 0], ploc[pa, 1], bb, ploc[pb, 0], ploc[pb, 1])
+    L = math.hypot(rx, ry)
+    meets = not L > MIN_LENGTH
+    if meets:
+        L = MIN_LENGTH
+    return el_int[e, 0], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, rx / L, ry / L, meets
+
+
 # ------------------------------------------------------------------------------------------------
 # Assembly of the augmented system of Eq. (33) in band storage
 # ------------------------------------------------------------------------------------------------
@@ -80,7 +97,6 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     (mass, pbody, ploc, el_int, el_real, rot_int, rot_real, jt_int, jt_real,
      fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims) = P
     n = dims[0]
-    m = dims[1]
     kl = dims[2]
     ku = dims[3]
     has_gravity = dims[4]
@@ -99,19 +115,10 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     ga = np.empty(3)
     gb = np.empty(3)
     for e in range(el_int.shape[0]):
-        kind = el_int[e, 0]
-        pa = el_int[e, 1]
-        pb = el_int[e, 2]
-        ba = pbody[pa]
-        bb = pbody[pb]
-        rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
-            q, v, ba, ploc[pa, 0], ploc[pa, 1], bb, ploc[pb, 0], ploc[pb, 1])
-        L = math.hypot(rx, ry)
-        if not L > MIN_LENGTH:
+        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
+            q, v, e, el_int, pbody, ploc)
+        if meets:
             status = TERMINALS_MEET
-            L = MIN_LENGTH
-        ex = rx / L
-        ey = ry / L
         # g = Hᵀ r̂ over a's then b's coordinates
         ga[0] = -ex
         ga[1] = -ey
@@ -422,19 +429,10 @@ def signal_values(q, v, qdd, P, out):
         for i in range(0, n, 3):
             energy -= gravity[i] * q[i] + gravity[i + 1] * q[i + 1]
     for e in range(el_int.shape[0]):
-        kind = el_int[e, 0]
-        pa = el_int[e, 1]
-        pb = el_int[e, 2]
-        ba = pbody[pa]
-        bb = pbody[pb]
-        rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
-            q, v, ba, ploc[pa, 0], ploc[pa, 1], bb, ploc[pb, 0], ploc[pb, 1])
-        L = math.hypot(rx, ry)
-        if not L > MIN_LENGTH:
+        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
+            q, v, e, el_int, pbody, ploc)
+        if meets:
             status = TERMINALS_MEET
-            L = MIN_LENGTH
-        ex = rx / L
-        ey = ry / L
         along = rdx * ex + rdy * ey
         coef = el_real[e, 0]
         if kind == SPRING:

@@ -141,10 +141,13 @@ class InerterSlave(Fmi2Slave):
         self._settings = dict(self._defaults)
         self._explicit: set[str] = set()          # settings the importer set
         self._inputs = {i["name"]: 0.0 for i in model.input_info()}
+        self._inputs_pending = True               # inputs set since the stepper last took them
         self._output_names = [o["name"] for o in model.output_info()]
+        self._output_index = {name: i for i, name in enumerate(self._output_names)}
 
         self._phase = INSTANTIATED
         self._start_time = 0.0
+        self._stop_time: float | None = None      # from fmi2SetupExperiment, where defined
         self._tolerance: float | None = None      # from fmi2SetupExperiment
         self._failure: str | None = None          # why the instance cannot step
         self._status = OK                         # of the last checked call (fmi_status)
@@ -152,8 +155,9 @@ class InerterSlave(Fmi2Slave):
         self._rejected: list[str] = []            # unreported rejections: the next doStep's
         self._stepper = None
         self._getters: dict = {}                  # (class, value references) -> their getter
-        # Outputs before initialisation are those of the scene as written (the start values).
-        self._outputs = {k: float(v) for k, v in model.stepper().outputs().items()}
+        # Outputs before initialisation are those of the scene as written (the start values),
+        # in the order of _output_names.
+        self._outputs = [float(v) for v in model.stepper().output_values()]
 
         self._register(model)
         self._warn_if_foreign_package()
@@ -233,13 +237,15 @@ class InerterSlave(Fmi2Slave):
             value = float(value)
             if math.isfinite(value):
                 self._inputs[name] = value
+                self._inputs_pending = True
             else:
                 self._reject(f"{name}: input not finite (got {value!r}; expected a finite "
                              f"number): ignored, it stays {self._inputs[name]!r}")
         return setter
 
     def _output_getter(self, name):
-        return lambda: self._outputs[name]
+        index = self._output_index[name]
+        return lambda: self._outputs[index]
 
     def _output_setter(self, name):
         def setter(value):
@@ -303,16 +309,15 @@ class InerterSlave(Fmi2Slave):
 
     def _plan(self, vrs, cls, kind):
         """A function returning the values of `vrs` (all of class `cls`), or None when one is not:
-        the outputs straight from the dict of the last step's values, the others through their
+        the outputs straight from the list of the last step's values, the others through their
         getters. Taken at every step for the recorded variables; isinstance on pythonfmu's
         variable classes alone costs about a microsecond per variable and call."""
         variables = [self.vars.get(vr) for vr in vrs]
         if not vrs or not all(isinstance(var, cls) for var in variables):
             return None
-        names = [var.name for var in variables]
         if kind is float and all(var.causality == Fmi2Causality.output for var in variables):
-            pick = operator.itemgetter(*names)
-            if len(names) == 1:
+            pick = operator.itemgetter(*[self._output_index[var.name] for var in variables])
+            if len(variables) == 1:
                 return lambda: [pick(self._outputs)]
             return lambda: list(pick(self._outputs))
         getters = [var.getter for var in variables]
@@ -361,6 +366,7 @@ class InerterSlave(Fmi2Slave):
     # ------------------------------------------------------------------------------------------
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._start_time = float(start_time)
+        self._stop_time = None if stop_time is None else float(stop_time)
         self._tolerance = None if tolerance is None else float(tolerance)
 
     def enter_initialization_mode(self):
@@ -405,7 +411,8 @@ class InerterSlave(Fmi2Slave):
         experiment = model.experiment
         return model.stepper(method=experiment["method"], rtol=experiment["rtol"],
                              atol=experiment["atol"],
-                             path="compiled" if settings[PATH_SETTING] else "numpy")
+                             path="compiled" if settings[PATH_SETTING] else "numpy",
+                             stop_time=self._stop_time)
 
     def _initialise(self):
         if self._phase not in (INSTANTIATED, INITIALIZATION):
@@ -420,7 +427,7 @@ class InerterSlave(Fmi2Slave):
         settings = self._effective_settings()
         try:
             stepper = self._new_stepper(settings)
-            outputs = {k: float(v) for k, v in stepper.outputs().items()}
+            outputs = [float(v) for v in stepper.output_values()]
         except (InerterError, ValueError) as exc:
             changed = ", ".join(f"{k} = {v!r}" for k, v in settings.items()
                                 if not _same(v, self._defaults[k]))
@@ -431,6 +438,7 @@ class InerterSlave(Fmi2Slave):
                        f"{changed or 'none'}{origin}]")
             return
         self._stepper, self._outputs, self._phase = stepper, outputs, STEPPING
+        self._inputs_pending = True
         changed = ", ".join(f"{k} = {v!r}" for k, v in settings.items()
                             if not _same(v, self._defaults[k]))
         self.log(f"initialised at t = 0 s with solver {settings['solver']}, "
@@ -442,7 +450,7 @@ class InerterSlave(Fmi2Slave):
         self._phase = FAILED
         self._failure = message
         self._stepper = None
-        self._outputs = {name: math.nan for name in self._output_names}
+        self._outputs = [math.nan] * len(self._output_names)
         self.log(f"{message}; the FMU cannot step: every doStep returns fmi2Discard until it "
                  f"is reset", Fmi2Status.error)
 
@@ -465,40 +473,49 @@ class InerterSlave(Fmi2Slave):
         return False
 
     def _do_step(self, t: float, h: float) -> bool:
-        where = f"doStep at t = {t!r} s (step {h!r} s)"
+        why = self._refusal(t, h)
+        if why is not None:
+            return self._refuse(f"doStep at t = {t!r} s (step {h!r} s) refused{why}")
+        stepper = self._stepper
+        if self._inputs_pending:
+            for name, value in self._inputs.items():
+                stepper.set_input(name, value)
+            self._inputs_pending = False
+        return self._advance(stepper, t, h)
+
+    def _refusal(self, t: float, h: float) -> str | None:
+        """Why a doStep(t, h) cannot be taken (the end of the message), or None when it can."""
         if self._rejected:
             messages = "; ".join(self._rejected)
             self._rejected.clear()
-            return self._refuse(f"{where} refused, once, to report values rejected since the "
-                                f"last step: {messages}")
+            return f", once, to report values rejected since the last step: {messages}"
         if self._phase == FAILED:
-            return self._refuse(f"{where} refused: {self._failure}")
+            return f": {self._failure}"
         if self._phase == TERMINATED:
-            return self._refuse(f"{where} refused: the FMU is terminated (reset it to run again)")
+            return ": the FMU is terminated (reset it to run again)"
         if self._phase != STEPPING:
-            return self._refuse(f"{where} refused: the FMU is not initialised yet (call "
-                                f"exitInitializationMode first)")
-        bad = [f"{name} = {value!r}" for name, value in self._inputs.items()
-               if not math.isfinite(value)]
-        if bad:
-            return self._refuse(f"{where} refused: input not finite ({', '.join(bad)}; expected "
-                                f"finite numbers); the state is unchanged")
+            return ": the FMU is not initialised yet (call exitInitializationMode first)"
+        if self._inputs_pending:
+            bad = [f"{name} = {value!r}" for name, value in self._inputs.items()
+                   if not math.isfinite(value)]
+            if bad:
+                return (f": input not finite ({', '.join(bad)}; expected finite numbers); the "
+                        f"state is unchanged")
         if not (math.isfinite(h) and h > 0.0):
-            return self._refuse(f"{where} refused: the step size must be a finite number > 0")
-        stepper = self._stepper
-        if abs(t - stepper.time) > TIME_TOLERANCE * max(1.0, abs(t), abs(stepper.time)):
-            return self._refuse(f"{where} refused: the FMU is at t = {stepper.time!r} s; a step "
-                                f"must start where the last one ended (or roll back with "
-                                f"fmi2SetFMUstate)")
-        for name, value in self._inputs.items():
-            stepper.set_input(name, value)
-        t_end = t + h
+            return ": the step size must be a finite number > 0"
+        now = self._stepper.time
+        if abs(t - now) > TIME_TOLERANCE * max(1.0, abs(t), abs(now)):
+            return (f": the FMU is at t = {now!r} s; a step must start where the last one ended "
+                    f"(or roll back with fmi2SetFMUstate)")
+        return None
+
+    def _advance(self, stepper, t: float, h: float) -> bool:
         try:
-            stepper.step(t_end)
+            stepper.step(t + h)
         except SimulationError as exc:
-            return self._refuse(f"{where} discarded: {exc}; the FMU stays at t = "
-                                f"{stepper.time!r} s", Fmi2Status.discard)
-        self._outputs = stepper.outputs()          # floats, by output name
+            return self._refuse(f"doStep at t = {t!r} s (step {h!r} s) discarded: {exc}; the FMU "
+                                f"stays at t = {stepper.time!r} s", Fmi2Status.discard)
+        self._outputs = stepper.output_values()    # floats, in the order of _output_names
         return True
 
     def terminate(self):
@@ -519,7 +536,8 @@ class InerterSlave(Fmi2Slave):
                 "start_time": self._start_time,
                 "tolerance": self._tolerance,
                 "inputs": dict(self._inputs),
-                "outputs": dict(self._outputs),
+                "stop_time": self._stop_time,
+                "outputs": list(self._outputs),
                 "stepper": None if self._stepper is None else bytes(self._stepper.get_state()),
             }
         except Exception as exc:
@@ -544,7 +562,8 @@ class InerterSlave(Fmi2Slave):
         if state["scene"] != self.scene_digest:
             raise ValueError(f"the state belongs to another scene than {self.scene_file}")
         settings = dict(state["settings"])
-        if set(settings) != set(self._defaults) or set(state["inputs"]) != set(self._inputs):
+        if set(settings) != set(self._defaults) or set(state["inputs"]) != set(self._inputs) \
+                or len(state["outputs"]) != len(self._output_names):
             raise ValueError("the state's variables differ from this FMU's")
         stepper = None
         if state["stepper"] is not None:
@@ -559,9 +578,11 @@ class InerterSlave(Fmi2Slave):
         self._phase = state["phase"]
         self._failure = state["failure"]
         self._start_time = state["start_time"]
+        self._stop_time = state["stop_time"]
         self._tolerance = state["tolerance"]
         self._inputs = dict(state["inputs"])
-        self._outputs = dict(state["outputs"])
+        self._inputs_pending = True
+        self._outputs = list(state["outputs"])
         self._stepper = stepper
 
     @staticmethod

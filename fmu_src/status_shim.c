@@ -5,9 +5,10 @@
  * exports the FMI 2.0 co-simulation API under the FMU's model identifier and forwards every call
  * to pythonfmu's binary, shipped beside it as ORIGINAL_LIBRARY. After the calls that can fail on
  * the importer's values (fmi2ExitInitializationMode, fmi2SetReal/Integer/Boolean/String,
- * fmi2DoStep, fmi2SetFMUstate) have returned fmi2OK from the original, it reads the slave's
- * Integer variable STATUS_VR (fmi_status: the status of the slave's last such call) through the
- * original's fmi2GetInteger and returns that status when it is worse than fmi2OK.
+ * fmi2SetFMUstate) have returned fmi2OK from the original, it reads the slave's Integer variable
+ * STATUS_VR (fmi_status: the status of the slave's last such call) through the original's
+ * fmi2GetInteger and returns that status when it is worse than fmi2OK; after fmi2DoStep, when the
+ * original returned fmi2Discard, it returns fmi2Error where the slave says so.
  *
  * The component is the original's: every call is forwarded unchanged, and the slave's messages
  * reach the importer through the original's logger calls as before.
@@ -360,9 +361,18 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
+    fmi2Status status;
+
     GUARD
-    return checked(c, original.DoStep(c, currentCommunicationPoint, communicationStepSize,
-                                      noSetFMUStatePriorToCurrentPoint));
+    status = original.DoStep(c, currentCommunicationPoint, communicationStepSize,
+                             noSetFMUStatePriorToCurrentPoint);
+    /* The slave's do_step returns True (fmi2OK) only with fmi_status fmi2OK, so a step that went
+     * well costs no second call into the slave; a refused or failed one (fmi2Discard) says which
+     * it was through fmi_status (fmi2Discard or fmi2Error). */
+    if (status != fmi2Discard || c == NULL)
+        return status;
+    status = checked(c, fmi2OK);
+    return status == fmi2OK || status == fmi2Warning ? fmi2Discard : status;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)

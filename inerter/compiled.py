@@ -29,6 +29,7 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import os
+import pickle
 import sys
 import tempfile
 import time as _time
@@ -102,6 +103,7 @@ except ImportError as exc:          # numba missing (or unusable): the numpy pat
 #: Methods integrated in one compiled loop; the others run scipy's integrators on the kernel.
 COMPILED_METHODS = ("DOP853", "RK45", "RK4")
 _RK_CODE = {"DOP853": 0, "RK45": 1}
+_NO_ORDER = np.zeros(0, dtype=np.int64)
 
 def _monitor(method) -> np.ndarray:
     """The constants of :class:`inerter.simulation.StepMonitor` for the compiled loop."""
@@ -534,54 +536,120 @@ def integrate_compiled(mech, settings, inputs=None):
 
 
 class CompiledStepper(Stepper):
-    """Co-simulation stepping on the compiled path: each communication step is one call of the
-    compiled integrator loop (DOP853, RK45 or RK4 with Baumgarte stabilisation), restarted at the
-    communication point with the step size the error control proposed at the end of the last step,
-    as :class:`inerter.simulation.Stepper` does with scipy's integrators; so the two take the same
-    steps, and (time, state, step size, inputs) is still the complete state. Outputs are evaluated
-    with the kernel's Eq. (33)."""
+    """Co-simulation stepping on the compiled path, one compiled call per communication step.
 
-    def __init__(self, mech, settings, signals, kernel):
+    DOP853 and RK45 keep one integration running across communication points
+    (:func:`~inerter.compiled_kernels.rk_advance`): a step advances the integrator until its last
+    step covers the communication point and takes the state there from the step's dense output,
+    as the whole run samples its output grid. The integrator's steps are clipped only to the
+    experiment's stop time (`stop_time`, where the importer gave one), so while the inputs stay as
+    they were, the outputs equal the whole run's (:func:`integrate_compiled`) bit for bit, and a
+    communication step shorter than the integrator's costs no extra evaluations. An input that
+    changes is a discontinuity of the right-hand side: the integrator restarts at that
+    communication point, with the step size the error control proposed last, and its last step in
+    that communication step lands on the next point (as the numpy stepper's always do).
+
+    RK4 (fixed step) restarts at every communication point, its last step shortened to land on it.
+    The outputs are evaluated in the same compiled call. (time, state, inputs, the integrator's
+    own state) is the complete state: a rolled-back step repeats bit for bit."""
+
+    def __init__(self, mech, settings, signals, kernel, stop_time=None):
         super().__init__(mech, settings, signals)
         self.kernel = kernel
         self.path = "compiled"
+        self.t_bound = float(stop_time) if stop_time is not None and stop_time > 0 else np.inf
         self._order = kernel.signal_order(signals)
+        self._need_acc = bool(signals.needs_accelerations)
         self._tables = _tables(settings.method) if settings.method in _RK_CODE else None
         self._monitor = _monitor(settings.method)
-        self._grid = np.empty(2)
-        self._out = np.empty((2, 2 * kernel.n))
+        self._tol = (float(settings.rtol), float(settings.atol), int(settings.max_steps))
+        self._raw = np.empty(len(signal_layout(kernel.flat)))
+        self._values = None                   # the outputs at self.time, when the last step made them
+        self._rk = None                       # the running integration: [hdr, y, f, y_prev, dense]
+        self._rk_inputs = None                # the inputs it runs with
+        self._input_moved = False             # an input changed since the last step
+
+    def _start_rk(self):
+        """A fresh integration at (self.time, self.y) with the held inputs and the last step size."""
+        ny = 2 * self.kernel.n
+        hdr = np.zeros(_k.RK_HEADER)
+        hdr[_k.RK_T] = self.time
+        hdr[_k.RK_H] = self.h or 0.0
+        self._rk_inputs = self.kernel._inputs(self.inputs.copy())
+        return [hdr, np.array(self.y, dtype=float), np.empty(ny), np.array(self.y, dtype=float), np.zeros((7, ny))]
+
+    def set_input(self, name, value):
+        old = self.inputs[self.input_index[name]]
+        super().set_input(name, value)
+        if self.inputs[self.input_index[name]] != old:
+            self._rk = None                   # a discontinuity: the integration restarts here
+            self._input_moved = True
+            self._values = None               # outputs depend on the inputs (inerter forces)
 
     def step(self, t_end):
+        t_end = float(t_end)
         if not t_end > self.time:
             raise SimulationError(f"step to t = {t_end!r} is not after the current time", self.time)
         s, kernel = self.settings, self.kernel
-        grid, out = self._grid, self._out
-        grid[0], grid[1] = self.time, float(t_end)
-        inp = kernel._inputs(self.inputs.copy())
-        y0 = np.ascontiguousarray(self.y, dtype=float)
         if s.method == "RK4":
-            status, k, steps, evals, t_reached = _k.integrate_rk4(
-                y0, self.time, float(t_end), grid, out, float(s.step), int(s.max_steps), inp, float(s.alpha),
-                kernel.params)
-            h = None
-        else:
-            A, B, C, E, E3, D, Pm = self._tables
-            status, k, steps, evals, t_reached, h = _k.integrate_rk(
-                _RK_CODE[s.method], y0, self.time, float(t_end), grid, out, float(s.rtol), float(s.atol),
-                float(self.h or 0.0), int(s.max_steps), inp, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm,
-                self._monitor)
+            self._step_rk4(t_end)
+            return
+        rk = self._rk
+        if rk is None:
+            rk = self._start_rk()
+        # The integration runs on in place; a failed step drops it, and the next one restarts at
+        # (self.time, self.y), which a failure leaves as they were.
+        self._rk = None
+        hdr = rk[0]
+        if t_end > self.t_bound:               # the importer went past its stop time
+            self.t_bound = np.inf
+        # Right after an input changed, the step lands on t_end (an importer that moves its inputs at
+        # every point gets the numpy stepper's steps); otherwise it runs on towards the stop time.
+        bound = t_end if self._input_moved else self.t_bound
+        steps_before = hdr[_k.RK_STEPS]
+        y_out = np.empty(2 * kernel.n)
+        order = self._order if self._order is not None else _NO_ORDER
+        values = np.empty(len(order))
+        A, B, C, E, E3, D, Pm = self._tables
+        rtol, atol, max_steps = self._tol
+        status, signal_status = _k.cosim_rk(
+            _RK_CODE[s.method], hdr, rk[1], rk[2], rk[3], rk[4], t_end, bound, rtol, atol, max_steps,
+            self._rk_inputs, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm, self._monitor, y_out,
+            self._need_acc, self._raw, order, values)
         if status:
-            why = failure_text(kernel, status, s.method, h if h is not None else s.step, y0, self.time)
+            why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk[1], hdr[_k.RK_T])
+            raise SimulationError(f"the {s.method} integrator failed: {why}", float(hdr[_k.RK_T]))
+        self._rk = rk
+        self._input_moved = False
+        self.y = y_out
+        self.time = t_end
+        self.h = float(hdr[_k.RK_H])
+        self.steps += int(hdr[_k.RK_STEPS] - steps_before)
+        self._values = None if signal_status or self._order is None else values.tolist()
+
+    def _step_rk4(self, t_end):
+        s, kernel = self.settings, self.kernel
+        grid = np.array([self.time, t_end])
+        out = np.empty((2, 2 * kernel.n))
+        y0 = np.ascontiguousarray(self.y, dtype=float)
+        status, k, steps, evals, t_reached = _k.integrate_rk4(
+            y0, self.time, t_end, grid, out, float(s.step), int(s.max_steps), kernel._inputs(self.inputs.copy()),
+            float(s.alpha), kernel.params)
+        if status:
+            why = failure_text(kernel, status, s.method, s.step, y0, self.time)
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
         y = out[1].copy()
         if not np.isfinite(y).all():
-            raise SimulationError("the state became non-finite", float(t_end))
+            raise SimulationError("the state became non-finite", t_end)
         self.y = y
-        self.time = float(t_end)
-        self.h = h
+        self.time = t_end
         self.steps += int(steps)
+        self._values = None
 
-    def outputs(self) -> dict:
+    def output_values(self) -> list:
+        """The outputs at the current time, in the order of ``signals.names``."""
+        if self._values is not None:
+            return self._values
         n, kernel = self.kernel.n, self.kernel
         if self._order is None:
             values = self.signals.evaluate(self.time, self.y[:n], self.y[n:], self.inputs, self.settings.alpha,
@@ -589,7 +657,20 @@ class CompiledStepper(Stepper):
         else:
             values = kernel.signal_values(self.signals, self._order, self.time, self.y[:n], self.y[n:],
                                           self.inputs, self.settings.alpha)
-        return dict(zip(self.signals.names, values.tolist()))
+        self._values = values.tolist()
+        return self._values
+
+    def get_state(self) -> bytes:
+        rk = None if self._rk is None else [a.copy() for a in self._rk]
+        return pickle.dumps((self.time, self.y.copy(), self.h, self.inputs.copy(), self.steps, self.t_bound, rk,
+                             self._rk_inputs, self._input_moved))
+
+    def set_state(self, blob: bytes):
+        (self.time, y, self.h, inputs, self.steps, self.t_bound, self._rk, self._rk_inputs,
+         self._input_moved) = pickle.loads(blob)
+        self.y = np.array(y)
+        self.inputs = np.array(inputs)
+        self._values = None
 
 
 def failure_text(kernel, status, method, h, y_last, t_last) -> str:
@@ -620,14 +701,14 @@ def failure_text(kernel, status, method, h, y_last, t_last) -> str:
     return text
 
 
-def compiled_stepper(mech, settings, signals):
+def compiled_stepper(mech, settings, signals, stop_time=None):
     """A :class:`CompiledStepper`, or None where the compiled loop cannot take the scene: see
     :func:`unsupported`; an implicit method or the projection treatment; a step force (the numpy
     stepper restarts the integrator at its switching time)."""
     if unsupported(mech) or settings.method not in COMPILED_METHODS or settings.constraint == "projection" \
             or getattr(mech, "discontinuities", ()):
         return None
-    return CompiledStepper(mech, settings, signals, _kernel_for(mech))
+    return CompiledStepper(mech, settings, signals, _kernel_for(mech), stop_time)
 
 
 def unsupported(mech) -> str:

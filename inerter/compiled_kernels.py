@@ -482,23 +482,25 @@ def signal_values(q, v, qdd, P, out):
 
 
 @njit(cache=True)
-def signal_history(times, states, inputs, alpha, need_acc, P, out):
-    """`signal_values` at every sample of a history (rows [q, v]); accelerations from Eq. (33)
-    only when `need_acc`. Returns (status, index of the sample where it was raised)."""
+def _signals_at(t, y, inputs, alpha, need_acc, P, out):
+    """`signal_values` at one state y = [q, v]; accelerations from Eq. (33) only when `need_acc`."""
     n = P[16][0]
     N = n + P[16][1]
-    AB = np.empty((2 * P[16][2] + P[16][3] + 1, N))
-    rhs = np.empty(N)
-    gen = np.empty(n)
     acc = np.zeros(N)
+    if need_acc:
+        st = accelerations(t, y[:n], y[n:], inputs, alpha, P, np.empty((2 * P[16][2] + P[16][3] + 1, N)),
+                           np.empty(N), np.empty(n), acc)
+        if st != OK:
+            return st
+    return signal_values(y[:n], y[n:], acc, P, out)
+
+
+@njit(cache=True)
+def signal_history(times, states, inputs, alpha, need_acc, P, out):
+    """`signal_values` at every sample of a history (rows [q, v]). Returns (status, index of the
+    sample where it was raised)."""
     for i in range(states.shape[0]):
-        q = states[i, :n]
-        v = states[i, n:]
-        if need_acc:
-            st = accelerations(times[i], q, v, inputs, alpha, P, AB, rhs, gen, acc)
-            if st != OK:
-                return st, i
-        st = signal_values(q, v, acc, P, out[i])
+        st = _signals_at(times[i], states[i], inputs, alpha, need_acc, P, out[i])
         if st != OK:
             return st, i
     return OK, states.shape[0]
@@ -558,22 +560,35 @@ def _initial_step(t0, y0, f0, t_bound, order, rtol, atol, inputs, alpha, P, AB, 
     return min(100 * h0, h1, interval)
 
 
+# Header of the resumable adaptive Runge-Kutta state (``rk_advance``): float slots.
+RK_T, RK_H, RK_T_PREV, RK_H_LAST, RK_DENSE, RK_STEPS, RK_EVALS, RK_HITS, RK_CALM, RK_SMALL, RK_STARTED = range(11)
+RK_HEADER = 11
+
+
 @njit(cache=True)
-def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_steps, inputs, alpha, P,
-                 A, B, C, E, E3, Dm, Pm, monitor):
-    """Adaptive explicit Runge-Kutta from t0 to t_end, sampling `out[k] = y(grid[k])` for k ≥ 1.
+def rk_advance(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max_steps, inputs, alpha, P,
+               A, B, C, E, E3, Dm, Pm, monitor, y_out):
+    """Advance an adaptive explicit Runge-Kutta integration until its last step covers `t_end`, and
+    write y(t_end) into `y_out`: the step's own solution at a node (within 1e-12·max(1 s, t)), its
+    dense output inside a step. Steps are clipped to `t_bound` only, never to `t_end`, so a run
+    sampled at many points takes the steps of one integration from start to `t_bound`.
+
+    The integration is resumable: its whole state lives in the arrays passed in, `hdr` (time, the
+    step size the error control proposes next, the last step's start and length, whether its dense
+    output is computed, counters; slots RK_*), the solution `y` and its derivative `f` at the last
+    node, the solution `y_prev` at the start of the last step and that step's dense-output
+    coefficients `dense` (7 × len(y)). A fresh state has RK_STARTED = 0: the derivative is evaluated
+    first and, where RK_H is 0, the first step chosen as scipy's select_initial_step does.
 
     Watched as inerter.simulation.StepMonitor watches scipy's integrators, with its constants in
     `monitor` = (stiffness bound, every, hits, collapse relative, collapse steps): Hairer's stiffness
     test (h·|λ| from the last two stages, both at t + h, against the bound, checked every `every`
     accepted steps and then at every step while it fires; `hits` firings in a row: STIFF), a step
     size collapsing below `collapse relative`·max(1 s, |t|) for `collapse steps` steps in a row
-    (COLLAPSED), the step budget (MAX_STEPS).
+    (COLLAPSED), the step budget `max_steps` counted from the start (MAX_STEPS).
 
     method 0: DOP853 (A, B, C, E5 = E, E3, D = Dm as in scipy), method 1: RK45 (A, B, C, E, P = Pm).
-    Returns (status, samples written, steps, evaluations, t reached, next step size): the last is
-    the step size the error control proposes after the last accepted step (scipy's ``h_abs``), with
-    which a co-simulation step restarts the integrator at the next communication point."""
+    Returns the status; on failure y, f and the last step's data are those of the last good node."""
     n = P[16][0]
     m = P[16][1]
     N = n + m
@@ -583,7 +598,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     rhs = np.empty(N)
     gen = np.empty(n)
     acc = np.empty(N)
-    ny = y0.shape[0]
+    ny = y.shape[0]
     if method == 0:
         n_stages = 12
         order = 7
@@ -591,31 +606,31 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
         n_stages = 6
         order = 4
     err_exp = -1.0 / (order + 1)
+    t = hdr[RK_T]
+    if hdr[RK_STARTED] == 0.0:
+        st = _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, f)
+        hdr[RK_EVALS] += 1
+        if st != OK:
+            return st
+        if not hdr[RK_H] > 0.0:
+            hdr[RK_H] = _initial_step(t, y, f, t_bound, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc)
+            hdr[RK_EVALS] += 1
+        hdr[RK_STARTED] = 1.0
+        hdr[RK_DENSE] = 0.0
+        hdr[RK_T_PREV] = t
+        hdr[RK_H_LAST] = 0.0
+    h_abs = hdr[RK_H]
+    steps = int(hdr[RK_STEPS])
+    evals = int(hdr[RK_EVALS])
+    hits = int(hdr[RK_HITS])
+    calm = int(hdr[RK_CALM])
+    small = int(hdr[RK_SMALL])
+    status = OK
     K = np.zeros((max(A.shape[0], n_stages + 1), ny))
-    y = y0.copy()
-    f = np.empty(ny)
     y_new = np.empty(ny)
     f_new = np.empty(ny)
     ys = np.empty(ny)
-    t = t0
-    evals = 1
-    h_abs = first_step
-    st = _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, f)
-    if st != OK:
-        return st, 1, 0, evals, t, h_abs
-    if first_step > 0.0:
-        h_abs = first_step
-    else:
-        h_abs = _initial_step(t, y, f, t_end, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc)
-        evals += 1
-    k = 1
-    ngrid = grid.shape[0]
-    steps = 0
-    hits = 0
-    calm = 0
-    small = 0
-    Fd = np.empty((7, ny))
-    while t < t_end:
+    while t_end > t + 1e-12 * max(1.0, t) and status == OK:
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         if h_abs < min_step:
             h_abs = min_step
@@ -623,11 +638,12 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
         rejected = False
         while not accepted:
             if h_abs < min_step:
-                return STEP_TOO_SMALL, k, steps, evals, t, h_abs
+                status = STEP_TOO_SMALL
+                break
             h = h_abs
             t_new = t + h
-            if t_new - t_end > 0:
-                t_new = t_end
+            if t_new - t_bound > 0:
+                t_new = t_bound
             h = t_new - t
             h_abs = abs(h)
             # stages
@@ -642,7 +658,10 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
                 st = _rhs(t + C[s] * h, ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
                 evals += 1
                 if st != OK:
-                    return st, k, steps, evals, t, h_abs
+                    status = st
+                    break
+            if status != OK:
+                break
             for i in range(ny):
                 acc_s = 0.0
                 for j in range(n_stages):
@@ -651,7 +670,8 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
             st = _rhs(t + h, y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new)
             evals += 1
             if st != OK:
-                return st, k, steps, evals, t, h_abs
+                status = st
+                break
             for i in range(ny):
                 K[n_stages, i] = f_new[i]
             # error norm
@@ -695,6 +715,8 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
             else:
                 h_abs *= max(0.2, 0.9 * err ** err_exp)
                 rejected = True
+        if status != OK:
+            break
         steps += 1
         if monitor[0] > 0.0 and (hits > 0 or steps % int(monitor[1]) == 0):
             num = 0.0
@@ -714,7 +736,9 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
                     calm = 0
                     hits += 1
                     if hits >= monitor[2]:
-                        return STIFF, k, steps, evals, t, abs(h)
+                        status = STIFF
+                        h_abs = abs(h)
+                        break
                 else:
                     calm += 1
                     if calm >= 6:
@@ -722,13 +746,16 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
         if abs(h) < monitor[3] * max(1.0, abs(t_new)):
             small += 1
             if small >= monitor[4]:
-                return COLLAPSED, k, steps, evals, t, abs(h)
+                status = COLLAPSED
+                h_abs = abs(h)
+                break
         else:
             small = 0
-        # dense output at the grid points inside (t, t_new]
-        if k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
-            # DOP853's extra dense stages, needed only for a sample inside the step
-            if method == 0 and grid[k] < t_new:
+        # The step is accepted: it becomes the last step, with its dense output where t_end lies
+        # inside it (DOP853's extra stages are evaluated only then).
+        hdr[RK_DENSE] = 0.0
+        if t_end <= t_new + 1e-12 * max(1.0, t_new) and t_end < t_new:
+            if method == 0:
                 for s in range(n_stages + 1, A.shape[0]):
                     for i in range(ny):
                         acc_s = 0.0
@@ -738,51 +765,114 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
                     st = _rhs(t + C[s] * h, ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
                     evals += 1
                     if st != OK:
-                        return st, k, steps, evals, t, h_abs
+                        status = st
+                        break
+                if status != OK:
+                    break
                 for i in range(ny):
                     dlt = y_new[i] - y[i]
-                    Fd[0, i] = dlt
-                    Fd[1, i] = h * K[0, i] - dlt
-                    Fd[2, i] = 2.0 * dlt - h * (f_new[i] + K[0, i])
+                    dense[0, i] = dlt
+                    dense[1, i] = h * K[0, i] - dlt
+                    dense[2, i] = 2.0 * dlt - h * (f_new[i] + K[0, i])
                     for r in range(4):
                         acc_s = 0.0
                         for j in range(Dm.shape[1]):
                             acc_s += Dm[r, j] * K[j, i]
-                        Fd[3 + r, i] = h * acc_s
-            while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
-                x = (grid[k] - t) / h
-                if grid[k] >= t_new:           # at the node: the step's own solution, not the interpolant
-                    for i in range(ny):
-                        out[k, i] = y_new[i]
-                elif method == 0:
-                    for i in range(ny):
-                        val = 0.0
-                        for r in range(6, -1, -1):
-                            val += Fd[r, i]
-                            if (6 - r) % 2 == 0:
-                                val *= x
-                            else:
-                                val *= 1.0 - x
-                        out[k, i] = val + y[i]
-                else:
-                    for i in range(ny):
-                        val = 0.0
-                        p = 1.0
-                        for r in range(Pm.shape[1]):
-                            p *= x
-                            qr = 0.0
-                            for j in range(n_stages + 1):
-                                qr += K[j, i] * Pm[j, r]
-                            val += qr * p
-                        out[k, i] = y[i] + h * val
-                k += 1
+                        dense[3 + r, i] = h * acc_s
+            else:
+                for i in range(ny):
+                    for r in range(Pm.shape[1]):
+                        qr = 0.0
+                        for j in range(n_stages + 1):
+                            qr += K[j, i] * Pm[j, r]
+                        dense[r, i] = qr
+            hdr[RK_DENSE] = 1.0
         for i in range(ny):
+            y_prev[i] = y[i]
             y[i] = y_new[i]
             f[i] = f_new[i]
+        hdr[RK_T_PREV] = t
+        hdr[RK_H_LAST] = h
         t = t_new
         if steps > max_steps:
-            return MAX_STEPS, k, steps, evals, t, h_abs
-    return OK, k, steps, evals, t, h_abs
+            status = MAX_STEPS
+    hdr[RK_T] = t
+    hdr[RK_H] = h_abs
+    hdr[RK_STEPS] = steps
+    hdr[RK_EVALS] = evals
+    hdr[RK_HITS] = hits
+    hdr[RK_CALM] = calm
+    hdr[RK_SMALL] = small
+    if status != OK:
+        return status
+    # y(t_end): the node, or the last step's dense output
+    if t_end >= t or hdr[RK_DENSE] == 0.0:
+        for i in range(ny):
+            y_out[i] = y[i]
+        return OK
+    h = hdr[RK_H_LAST]
+    x = (t_end - hdr[RK_T_PREV]) / h
+    if method == 0:
+        for i in range(ny):
+            val = 0.0
+            for r in range(6, -1, -1):
+                val += dense[r, i]
+                if (6 - r) % 2 == 0:
+                    val *= x
+                else:
+                    val *= 1.0 - x
+            y_out[i] = val + y_prev[i]
+    else:
+        for i in range(ny):
+            val = 0.0
+            p = 1.0
+            for r in range(Pm.shape[1]):
+                p *= x
+                val += dense[r, i] * p
+            y_out[i] = y_prev[i] + h * val
+    return OK
+
+
+@njit(cache=True)
+def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_steps, inputs, alpha, P,
+                 A, B, C, E, E3, Dm, Pm, monitor):
+    """One integration from t0 to t_end with :func:`rk_advance`, sampling `out[k] = y(grid[k])` for
+    k ≥ 1 (grid[-1] = t_end). Returns (status, samples written, steps, evaluations, t reached, next
+    step size): the last is the step size the error control proposes after the last accepted step
+    (scipy's ``h_abs``)."""
+    ny = y0.shape[0]
+    hdr = np.zeros(RK_HEADER)
+    hdr[RK_T] = t0
+    hdr[RK_H] = first_step
+    y = y0.copy()
+    f = np.empty(ny)
+    y_prev = y0.copy()
+    dense = np.zeros((7, ny))
+    for k in range(1, grid.shape[0]):
+        st = rk_advance(method, hdr, y, f, y_prev, dense, grid[k], t_end, rtol, atol, max_steps, inputs, alpha,
+                        P, A, B, C, E, E3, Dm, Pm, monitor, out[k])
+        if st != OK:
+            return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H]
+    return OK, grid.shape[0], int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H]
+
+
+@njit(cache=True)
+def cosim_rk(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max_steps, inputs, alpha, P,
+             A, B, C, E, E3, Dm, Pm, monitor, y_out, need_acc, raw, order, values):
+    """One co-simulation step on the compiled path: :func:`rk_advance` to `t_end`, then every output
+    signal at y(t_end): `raw` in the layout of :func:`signal_values`, `values[i] = raw[order[i]]`.
+    Returns (integrator status, signal status); NOT_FINITE where y(t_end) is not finite."""
+    st = rk_advance(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max_steps, inputs, alpha, P,
+                    A, B, C, E, E3, Dm, Pm, monitor, y_out)
+    if st != OK:
+        return st, OK
+    for i in range(y_out.shape[0]):
+        if not math.isfinite(y_out[i]):
+            return NOT_FINITE, OK
+    st = _signals_at(t_end, y_out, inputs, alpha, need_acc, P, raw)
+    for i in range(order.shape[0]):
+        values[i] = raw[order[i]]
+    return OK, st
 
 
 @njit(cache=True)

@@ -132,14 +132,15 @@ class Model:
             result.metrics = compute_metrics(self, result)
         return result
 
-    def stepper(self, method=None, rtol=None, atol=None, path="numpy") -> Stepper:
+    def stepper(self, method=None, rtol=None, atol=None, path="numpy", stop_time=None) -> Stepper:
         """A co-simulation stepper at t = 0. `path` = "compiled": each step one call of the compiled
         integrator loop where :func:`inerter.compiled.compiled_stepper` can take the scene (the numpy
-        stepper otherwise; ``stepper.path`` says which)."""
+        stepper otherwise; ``stepper.path`` says which); its adaptive integrators run on across
+        communication points, their steps clipped to `stop_time` where it is given."""
         s = self.settings(method=method, rtol=rtol, atol=atol)
         if path == "compiled" and not self.is_oracle:
             from . import compiled
-            stepper = compiled.compiled_stepper(self.mechanism, s, self.signals)
+            stepper = compiled.compiled_stepper(self.mechanism, s, self.signals, stop_time)
             if stepper is not None:
                 return stepper
         elif path != "numpy" and path != "compiled":

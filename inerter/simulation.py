@@ -303,10 +303,13 @@ class Stepper:
         self.h = h
         self.steps += steps
 
-    def outputs(self) -> dict:
+    def output_values(self) -> list:
+        """The outputs at the current time, in the order of ``signals.names``."""
         n = self.mech.nq
-        values = self.signals.evaluate(self.time, self.y[:n], self.y[n:], self.inputs, self.settings.alpha)
-        return dict(zip(self.signals.names, values.tolist()))
+        return self.signals.evaluate(self.time, self.y[:n], self.y[n:], self.inputs, self.settings.alpha).tolist()
+
+    def outputs(self) -> dict:
+        return dict(zip(self.signals.names, self.output_values()))
 
     def get_state(self) -> bytes:
         return pickle.dumps((self.time, self.y.copy(), self.h, self.inputs.copy(), self.steps))

@@ -215,14 +215,15 @@ def _step_both(model, stop, step, inputs=None):
 
 
 @needs_numba
-@pytest.mark.parametrize("path", PAPER + [ROOT / "scenarios" / "two_bar_2d_pd.toml"], ids=lambda p: p.stem)
-def test_compiled_stepper_takes_the_numpy_steppers_steps(path):
-    """The FMU's compiled stepping: each communication step one call of the compiled DOP853 loop,
-    restarted with the step size the error control proposed. Same steps as the numpy stepper
-    (scipy's DOP853), so the states agree to round-off carried over 100 restarts: bound 1e-10 (m,
+@pytest.mark.parametrize("path", [PAPER[1], ROOT / "scenarios" / "two_bar_2d_pd.toml"], ids=lambda p: p.stem)
+def test_where_inputs_change_the_compiled_stepper_restarts_as_the_numpy_stepper(path):
+    """An input that changes at every communication point: the compiled stepper restarts its DOP853
+    loop there with the step size the error control proposed, as the numpy stepper restarts scipy's
+    DOP853. Same steps, so the states agree to round-off carried over 100 restarts: bound 1e-10 (m,
     rad, m/s) at the scene's tolerance rtol 1e-10; outputs to 1e-9 relative."""
     model = inerter.load(path)
     inputs = {name: (lambda t: 5.0 * np.sin(7.0 * t)) for name in model.mechanism.input_names}
+    assert inputs
     runs = _step_both(model, 1.0, 0.01, inputs)
     (ya, oa, sa), (yb, ob, sb) = runs["compiled"], runs["numpy"]
     assert sa == sb
@@ -231,19 +232,51 @@ def test_compiled_stepper_takes_the_numpy_steppers_steps(path):
 
 
 @needs_numba
-def test_compiled_stepper_rolls_back_bit_for_bit():
+@pytest.mark.parametrize("method", ["DOP853", "RK45"])
+@pytest.mark.parametrize("path", PAPER + [ROOT / "scenarios" / "two_bar_2d_pd.toml"], ids=lambda p: p.stem)
+def test_with_inputs_held_the_compiled_stepper_is_the_whole_run(path, method):
+    """Inputs that do not change: the compiled stepper keeps one integration running across the
+    communication points, its steps clipped to the stop time only, and takes the state at each
+    point from the dense output, as the whole run samples its grid: the same steps and, at every
+    communication point, the whole run's state and outputs bit for bit. It takes fewer steps than
+    the numpy stepper, which restarts scipy's integrator at every point."""
+    model = inerter.load(path)
+    stop, step = 2.0, 0.01
+    whole = model.simulate(stop_time=stop, output_interval=step, method=method, metrics=False, path="compiled")
+    assert whole.run.extra["path"] == "compiled"
+    st = model.stepper(method=method, path="compiled", stop_time=stop)
+    restarting = model.stepper(method=method, path="numpy")
+    assert st.outputs() == {name: float(whole[name][0]) for name in model.signals.names}
+    for k in range(1, len(whole.time)):
+        st.step(whole.time[k])
+        restarting.step(whole.time[k])
+        assert np.array_equal(st.y, whole.run.states[k])
+        assert st.outputs() == {name: float(whole[name][k]) for name in model.signals.names}
+    assert st.steps == whole.run.steps < restarting.steps
+
+
+@needs_numba
+@pytest.mark.parametrize("change_input", [False, True], ids=["running on", "restarted by an input"])
+def test_compiled_stepper_rolls_back_bit_for_bit(change_input):
+    """get_state holds the running integration too: the steps repeated after set_state give the same
+    states and outputs, bit for bit, whether the integration ran on or restarted."""
     model = inerter.load(PAPER[1])
-    st = model.stepper(path="compiled")
+    st = model.stepper(path="compiled", stop_time=1.0)
     for k in range(1, 6):
         st.step(0.01 * k)
     state = st.get_state()
-    st.set_input("C.f[2]", 3.0)
-    st.step(0.06)
-    first = (st.y.copy(), st.outputs())
+
+    def two_steps():
+        if change_input:
+            st.set_input("C.f[2]", 3.0)
+        st.step(0.06)
+        st.step(0.07)
+        return st.y.copy(), st.outputs(), st.steps
+
+    first = two_steps()
     st.set_state(state)
-    st.set_input("C.f[2]", 3.0)
-    st.step(0.06)
-    assert np.array_equal(st.y, first[0]) and st.outputs() == first[1]
+    again = two_steps()
+    assert np.array_equal(again[0], first[0]) and again[1:] == first[1:]
 
 
 def test_the_compiled_stepper_falls_back_where_the_loop_cannot_go():

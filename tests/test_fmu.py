@@ -461,6 +461,23 @@ def test_the_fmu_runs_in_a_fresh_process_like_the_solver(fresh_run, scene):
     assert_matches_solver(scene, run["results"][0])
 
 
+@pytest.mark.parametrize("scene", SCENE_PARAMS)
+def test_on_the_compiled_path_the_fmu_gives_the_whole_runs_outputs_bit_for_bit(fresh_run, scene):
+    """Inputs held: the FMU on the compiled path keeps one integration running across the
+    communication points, clipped to the stop time fmpy gives to fmi2SetupExperiment, so every
+    output at every communication point equals `Model.simulate(path="compiled")` exactly."""
+    model = inerter.load(scene, **{"experiment.rtol": RTOL})
+    if model.stepper(path="compiled").path != "compiled":
+        pytest.skip("the compiled stepper does not take this scene (or numba is missing)")
+    result = fresh_run(scene)["results"][0]
+    ref = model.simulate(stop_time=RUN_TIME, output_interval=model.experiment["output_interval"],
+                         metrics=False, path="compiled")
+    assert ref.run.extra["path"] == "compiled"
+    assert np.array_equal(result["time"], ref.time)
+    different = [name for name in model.signals.names if not np.array_equal(result[name], ref[name])]
+    assert not different, different
+
+
 def test_two_scenes_run_side_by_side_in_one_process(fmus, tmp_path):
     pair = [s for s in SCENES if s.stem in ("lumped_mass_2d", "two_bar_2d")]
     if len(pair) < 2:
@@ -524,10 +541,11 @@ def test_an_input_is_held_over_each_step(input_fmu, fresh_run, tmp_path):
     run = run_fresh(tmp_path, [job_for(scene, fmu, input={"time": t.tolist(),
                                                           "values": {INPUT: force.tolist()}})])
     result = run["results"][0]
-    # The solver's own stepper with the same held inputs, on the FMU's default path (compiled where
-    # numba is installed, numpy otherwise), gives exactly the same outputs.
+    # The solver's own stepper with the same held inputs and the stop time fmpy gives the FMU, on
+    # the FMU's default path (compiled where numba is installed, numpy otherwise), gives exactly
+    # the same outputs.
     model = inerter.load(scene, **{"experiment.rtol": RTOL})
-    stepper = model.stepper(path="compiled")
+    stepper = model.stepper(path="compiled", stop_time=RUN_TIME)
     assert result["C.r[2]"][0] == stepper.outputs()["C.r[2]"]
     for i in range(1, len(result["time"])):
         stepper.set_input(INPUT, force[i - 1])

@@ -561,6 +561,8 @@ class CompiledStepper(Stepper):
         self._order = kernel.signal_order(signals)
         self._need_acc = bool(signals.needs_accelerations)
         self._tables = _tables(settings.method) if settings.method in _RK_CODE else None
+        self._work = (None if self._tables is None else
+                      _k.work_arrays(kernel.params, 2 * kernel.n, _k.rk_stages(self._tables[0])))
         self._monitor = _monitor(settings.method)
         self._tol = (float(settings.rtol), float(settings.atol), int(settings.max_steps))
         self._raw = np.empty(len(signal_layout(kernel.flat)))
@@ -607,21 +609,21 @@ class CompiledStepper(Stepper):
         # every point gets the numpy stepper's steps); otherwise it runs on towards the stop time.
         bound = t_end if self._input_moved else self.t_bound
         steps_before = hdr[_k.RK_STEPS]
-        y_out = np.empty(2 * kernel.n)
+        out = np.empty((1, 2 * kernel.n))
         order = self._order if self._order is not None else _NO_ORDER
         values = np.empty(len(order))
         A, B, C, E, E3, D, Pm = self._tables
         rtol, atol, max_steps = self._tol
         status, signal_status = _k.cosim_rk(
-            _RK_CODE[s.method], hdr, rk[1], rk[2], rk[3], rk[4], t_end, bound, rtol, atol, max_steps,
-            self._rk_inputs, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm, self._monitor, y_out,
-            self._need_acc, self._raw, order, values)
+            _RK_CODE[s.method], hdr, rk[1], rk[2], rk[3], rk[4], np.array([t_end]), out, bound, rtol, atol,
+            max_steps, self._rk_inputs, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm, self._monitor,
+            self._work, self._need_acc, self._raw, order, values)
         if status:
             why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk[1], hdr[_k.RK_T])
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(hdr[_k.RK_T]))
         self._rk = rk
         self._input_moved = False
-        self.y = y_out
+        self.y = out[0]
         self.time = t_end
         self.h = float(hdr[_k.RK_H])
         self.steps += int(hdr[_k.RK_STEPS] - steps_before)

@@ -482,25 +482,36 @@ def signal_values(q, v, qdd, P, out):
 
 
 @njit(cache=True)
-def _signals_at(t, y, inputs, alpha, need_acc, P, out):
-    """`signal_values` at one state y = [q, v]; accelerations from Eq. (33) only when `need_acc`."""
+def work_arrays(P, ny, stages):
+    """Scratch arrays of the integrators and of the outputs, allocated once per integration:
+    (AB, rhs, gen, acc: Eq. 33 in band storage; K: `stages` rows of Runge-Kutta stages; y_new,
+    f_new, ys: a step's solution, derivative and stage argument; sig_acc: the accelerations the
+    outputs are evaluated with, zero where they need none)."""
     n = P[16][0]
     N = n + P[16][1]
-    acc = np.zeros(N)
+    return (np.empty((2 * P[16][2] + P[16][3] + 1, N)), np.empty(N), np.empty(n), np.empty(N),
+            np.zeros((stages, ny)), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros(N))
+
+
+@njit(cache=True)
+def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
+    """`signal_values` at one state y = [q, v]; accelerations from Eq. (33) only when `need_acc`."""
+    n = P[16][0]
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = work
     if need_acc:
-        st = accelerations(t, y[:n], y[n:], inputs, alpha, P, np.empty((2 * P[16][2] + P[16][3] + 1, N)),
-                           np.empty(N), np.empty(n), acc)
+        st = accelerations(t, y[:n], y[n:], inputs, alpha, P, AB, rhs, gen, sig_acc)
         if st != OK:
             return st
-    return signal_values(y[:n], y[n:], acc, P, out)
+    return signal_values(y[:n], y[n:], sig_acc, P, out)
 
 
 @njit(cache=True)
 def signal_history(times, states, inputs, alpha, need_acc, P, out):
     """`signal_values` at every sample of a history (rows [q, v]). Returns (status, index of the
     sample where it was raised)."""
+    work = work_arrays(P, states.shape[1], 1)
     for i in range(states.shape[0]):
-        st = _signals_at(times[i], states[i], inputs, alpha, need_acc, P, out[i])
+        st = _signals_at(times[i], states[i], inputs, alpha, need_acc, P, work, out[i])
         if st != OK:
             return st, i
     return OK, states.shape[0]
@@ -560,18 +571,57 @@ def _initial_step(t0, y0, f0, t_bound, order, rtol, atol, inputs, alpha, P, AB, 
     return min(100 * h0, h1, interval)
 
 
+@njit(cache=True)
+def rk_stages(A):
+    """Rows of stages :func:`rk_advance` needs for the tableau A (DOP853's 16 with its dense-output
+    stages; RK45's 6 + 1)."""
+    return max(A.shape[0], 7)
+
+
 # Header of the resumable adaptive Runge-Kutta state (``rk_advance``): float slots.
 RK_T, RK_H, RK_T_PREV, RK_H_LAST, RK_DENSE, RK_STEPS, RK_EVALS, RK_HITS, RK_CALM, RK_SMALL, RK_STARTED = range(11)
 RK_HEADER = 11
 
 
+@njit(cache=True, inline="always")
+def _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out):
+    """out[k] = y(ts[k]) for a sample covered by the last step (within 1e-12·max(1 s, t) of its end
+    node t): the step's own solution at the node, its dense output inside the step."""
+    ny = y.shape[0]
+    if ts[k] >= t or hdr[RK_DENSE] == 0.0:
+        for i in range(ny):
+            out[k, i] = y[i]
+        return
+    h = hdr[RK_H_LAST]
+    x = (ts[k] - hdr[RK_T_PREV]) / h
+    if method == 0:
+        for i in range(ny):
+            val = 0.0
+            for r in range(6, -1, -1):
+                val += dense[r, i]
+                if (6 - r) % 2 == 0:
+                    val *= x
+                else:
+                    val *= 1.0 - x
+            out[k, i] = val + y_prev[i]
+    else:
+        for i in range(ny):
+            val = 0.0
+            p = 1.0
+            for r in range(Pm.shape[1]):
+                p *= x
+                val += dense[r, i] * p
+            out[k, i] = y_prev[i] + h * val
+
+
 @njit(cache=True)
-def rk_advance(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-               A, B, C, E, E3, Dm, Pm, monitor, y_out):
-    """Advance an adaptive explicit Runge-Kutta integration until its last step covers `t_end`, and
-    write y(t_end) into `y_out`: the step's own solution at a node (within 1e-12·max(1 s, t)), its
-    dense output inside a step. Steps are clipped to `t_bound` only, never to `t_end`, so a run
-    sampled at many points takes the steps of one integration from start to `t_bound`.
+def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, atol, max_steps, inputs, alpha, P,
+               A, B, C, E, E3, Dm, Pm, monitor, work):
+    """Advance an adaptive explicit Runge-Kutta integration until its last step covers the last of
+    the increasing times `ts`, writing out[k] = y(ts[k]) for k ≥ k0 as the steps cover them: the step's own
+    solution at a node (within 1e-12·max(1 s, t)), its dense output inside a step. Steps are
+    clipped to `t_bound` only, never to a sample time, so samples taken in one call or over many
+    calls lie on the steps of one integration from its start to `t_bound`.
 
     The integration is resumable: its whole state lives in the arrays passed in, `hdr` (time, the
     step size the error control proposes next, the last step's start and length, whether its dense
@@ -588,16 +638,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max
     (COLLAPSED), the step budget `max_steps` counted from the start (MAX_STEPS).
 
     method 0: DOP853 (A, B, C, E5 = E, E3, D = Dm as in scipy), method 1: RK45 (A, B, C, E, P = Pm).
-    Returns the status; on failure y, f and the last step's data are those of the last good node."""
-    n = P[16][0]
-    m = P[16][1]
-    N = n + m
-    kl = P[16][2]
-    ku = P[16][3]
-    AB = np.empty((2 * kl + ku + 1, N))
-    rhs = np.empty(N)
-    gen = np.empty(n)
-    acc = np.empty(N)
+    `work`: scratch from :func:`work_arrays` with rk_stages(A) rows of stages.
+    Returns (status, the first k not written); on failure y, f and the last step's data are those of
+    the last good node."""
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = work
     ny = y.shape[0]
     if method == 0:
         n_stages = 12
@@ -611,7 +655,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max
         st = _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, f)
         hdr[RK_EVALS] += 1
         if st != OK:
-            return st
+            return st, k0
         if not hdr[RK_H] > 0.0:
             hdr[RK_H] = _initial_step(t, y, f, t_bound, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc)
             hdr[RK_EVALS] += 1
@@ -626,11 +670,12 @@ def rk_advance(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max
     calm = int(hdr[RK_CALM])
     small = int(hdr[RK_SMALL])
     status = OK
-    K = np.zeros((max(A.shape[0], n_stages + 1), ny))
-    y_new = np.empty(ny)
-    f_new = np.empty(ny)
-    ys = np.empty(ny)
-    while t_end > t + 1e-12 * max(1.0, t) and status == OK:
+    nts = ts.shape[0]
+    k = k0
+    while k < nts and ts[k] <= t + 1e-12 * max(1.0, t):     # covered by the last step already
+        _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
+        k += 1
+    while k < nts and status == OK:
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         if h_abs < min_step:
             h_abs = min_step
@@ -751,10 +796,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max
                 break
         else:
             small = 0
-        # The step is accepted: it becomes the last step, with its dense output where t_end lies
+        # The step is accepted: it becomes the last step, with its dense output where a sample lies
         # inside it (DOP853's extra stages are evaluated only then).
         hdr[RK_DENSE] = 0.0
-        if t_end <= t_new + 1e-12 * max(1.0, t_new) and t_end < t_new:
+        if ts[k] <= t_new + 1e-12 * max(1.0, t_new) and ts[k] < t_new:
             if method == 0:
                 for s in range(n_stages + 1, A.shape[0]):
                     for i in range(ny):
@@ -794,6 +839,9 @@ def rk_advance(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max
         hdr[RK_T_PREV] = t
         hdr[RK_H_LAST] = h
         t = t_new
+        while k < nts and ts[k] <= t + 1e-12 * max(1.0, t):
+            _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
+            k += 1
         if steps > max_steps:
             status = MAX_STEPS
     hdr[RK_T] = t
@@ -803,34 +851,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max
     hdr[RK_HITS] = hits
     hdr[RK_CALM] = calm
     hdr[RK_SMALL] = small
-    if status != OK:
-        return status
-    # y(t_end): the node, or the last step's dense output
-    if t_end >= t or hdr[RK_DENSE] == 0.0:
-        for i in range(ny):
-            y_out[i] = y[i]
-        return OK
-    h = hdr[RK_H_LAST]
-    x = (t_end - hdr[RK_T_PREV]) / h
-    if method == 0:
-        for i in range(ny):
-            val = 0.0
-            for r in range(6, -1, -1):
-                val += dense[r, i]
-                if (6 - r) % 2 == 0:
-                    val *= x
-                else:
-                    val *= 1.0 - x
-            y_out[i] = val + y_prev[i]
-    else:
-        for i in range(ny):
-            val = 0.0
-            p = 1.0
-            for r in range(Pm.shape[1]):
-                p *= x
-                val += dense[r, i] * p
-            y_out[i] = y_prev[i] + h * val
-    return OK
+    return status, k
 
 
 @njit(cache=True)
@@ -848,28 +869,28 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     f = np.empty(ny)
     y_prev = y0.copy()
     dense = np.zeros((7, ny))
-    for k in range(1, grid.shape[0]):
-        st = rk_advance(method, hdr, y, f, y_prev, dense, grid[k], t_end, rtol, atol, max_steps, inputs, alpha,
-                        P, A, B, C, E, E3, Dm, Pm, monitor, out[k])
-        if st != OK:
-            return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H]
-    return OK, grid.shape[0], int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H]
+    work = work_arrays(P, ny, rk_stages(A))
+    st, k = rk_advance(method, hdr, y, f, y_prev, dense, grid, out, 1, t_end, rtol, atol, max_steps, inputs,
+                       alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work)
+    return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H]
 
 
 @njit(cache=True)
-def cosim_rk(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-             A, B, C, E, E3, Dm, Pm, monitor, y_out, need_acc, raw, order, values):
-    """One co-simulation step on the compiled path: :func:`rk_advance` to `t_end`, then every output
-    signal at y(t_end): `raw` in the layout of :func:`signal_values`, `values[i] = raw[order[i]]`.
-    Returns (integrator status, signal status); NOT_FINITE where y(t_end) is not finite."""
-    st = rk_advance(method, hdr, y, f, y_prev, dense, t_end, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-                    A, B, C, E, E3, Dm, Pm, monitor, y_out)
+def cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, t_bound, rtol, atol, max_steps, inputs, alpha, P,
+             A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values):
+    """One co-simulation step on the compiled path: :func:`rk_advance` to the one time in `ts`
+    (out[0] = y there), then every output signal there: `raw` in the layout of
+    :func:`signal_values`, `values[i] = raw[order[i]]`. Returns (integrator status, signal status);
+    NOT_FINITE where the state is not finite."""
+    st, k = rk_advance(method, hdr, y, f, y_prev, dense, ts, out, 0, t_bound, rtol, atol, max_steps, inputs,
+                       alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work)
     if st != OK:
         return st, OK
+    y_out = out[0]
     for i in range(y_out.shape[0]):
         if not math.isfinite(y_out[i]):
             return NOT_FINITE, OK
-    st = _signals_at(t_end, y_out, inputs, alpha, need_acc, P, raw)
+    st = _signals_at(ts[0], y_out, inputs, alpha, need_acc, P, work, raw)
     for i in range(order.shape[0]):
         values[i] = raw[order[i]]
     return OK, st

@@ -1,9 +1,10 @@
 """What a scene costs through its FMU, against the solver called directly, on both paths.
 
-    python benchmarks/fmu_overhead.py [--stop-time 20] [--step 0.01] [--repeats 3]
+    python benchmarks/fmu_overhead.py [--stop-time 20] [--step 0.01] [--repeats 3] [--chains 8,32]
 
-For each paper scene and each path (numpy; compiled, numba), three ways to produce the same
-outputs at the same communication points, measured side by side (process CPU time, best of
+For each paper scene and each path (numpy; compiled, numba), and for N-link chains
+(benchmarks/chain_scene.py, compiled path only), four ways to produce the same outputs at the same
+communication points, measured side by side (process CPU time, best of
 `--repeats` rounds taken in turn, so drifting load weighs on all alike):
 
 - the solver's whole run (`Model.simulate(path=...)`: one integration sampled every step, every
@@ -22,6 +23,7 @@ in the README). Writes docs/fmu_overhead.md.
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -33,7 +35,9 @@ from inerter import compiled
 from inerter.fmu_build import build
 
 ROOT = Path(__file__).resolve().parents[1]
-SIGNAL = {"two_bar_2d": "C.r[2]", "lumped_mass_2d": "P.r[2]"}
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from chain_scene import write_chain  # noqa: E402
 
 
 def cpu(fn):
@@ -80,6 +84,7 @@ def main(argv=None):
     ap.add_argument("--stop-time", type=float, default=20.0)
     ap.add_argument("--step", type=float, default=0.01)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--chains", default="8,32", help="links of the chain scenes ('' for none)")
     args = ap.parse_args(argv)
     import fmpy
     if not compiled.AVAILABLE:
@@ -87,12 +92,15 @@ def main(argv=None):
     compiled.warm_up()
     rows = []
     scratch = Path(tempfile.mkdtemp(prefix="inerter_floor_"))
-    for name in ("lumped_mass_2d", "two_bar_2d"):
-        scene = ROOT / "scenarios" / f"{name}.toml"
-        fmu = str(build(scene))
+    cases = [(ROOT / "scenarios" / f"{name}.toml", ("numpy", "compiled")) for name in ("lumped_mass_2d", "two_bar_2d")]
+    cases += [(write_chain(scratch / f"chain_{links}.toml", links), ("compiled",))
+              for links in (int(x) for x in args.chains.split(",") if x.strip())]
+    for scene, paths in cases:
+        name = scene.stem
+        fmu = str(build(scene, scratch / "fmu"))
         model = inerter.load(scene)
         n = int(round(args.stop_time / args.step))
-        signal = SIGNAL[name]
+        lengths = [o["name"] for o in model.output_info() if o["unit"] == "m"]
         floor = floor_fmu(len(model.output_info()), scratch)
 
         def whole(path):
@@ -116,7 +124,7 @@ def main(argv=None):
             return fmpy.simulate_fmu(floor, stop_time=args.stop_time, output_interval=args.step)
 
         fmu_run("compiled")                                  # load the kernels inside the FMU once
-        for path in ("numpy", "compiled"):
+        for path in paths:
             best = {"whole": np.inf, "stepper": np.inf, "fmu": np.inf, "floor": np.inf}
             for _ in range(args.repeats):
                 t, reference = cpu(lambda: whole(path))
@@ -127,14 +135,14 @@ def main(argv=None):
                 best["floor"] = min(best["floor"], cpu(floor_run)[0])
                 if path == "numpy" and best["whole"] > 2.0:
                     break                                    # the numpy path is slow: one round is enough
-            diff = float(np.max(np.abs(res[signal] - reference[signal])))
+            diff = max(float(np.max(np.abs(res[s] - reference[s]))) for s in lengths)
             rows.append((name, path, n, best["whole"], best["stepper"], best["fmu"], best["floor"], diff))
             print(rows[-1], flush=True)
     head = (f"Communication step {args.step:g} s, {args.stop_time:g} s simulated, default scene tolerances, "
             f"process CPU seconds, best of {args.repeats} rounds.\n\n"
             "| scene | path | steps | solver, whole run (s) | solver stepper (s) | FMU via fmpy (s) "
             "| FMU per step (µs) | harness floor (s) | **FMU / whole run** | FMU / stepper "
-            "| (FMU − floor) / whole run | max difference FMU vs whole run (m) |\n"
+            "| (FMU − floor) / whole run | largest difference of a length, FMU vs whole run (m) |\n"
             "|---|---|---|---|---|---|---|---|---|---|---|---|\n")
     body = "".join(f"| {a} | {p} | {b} | {c:.3f} | {d:.3f} | {e:.3f} | {1e6 * e / b:.0f} | {g:.3f} "
                    f"| **{e / c:.2f}** | {e / d:.2f} | {(e - g) / c:.2f} | {f:.2e} |\n"

@@ -26,6 +26,9 @@ F_CONSTANT, F_SINE, F_STEP = 0, 1, 2
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED = 0, 1, 2, 3, 4, 5, 6, 7
 
 MIN_LENGTH = 1e-9
+#: A trial step reaching a state where the accelerations cannot be evaluated is tried again this much
+#: shorter (inerter.simulation.TRIAL_SHRINK).
+TRIAL_SHRINK = 0.2
 
 
 # ------------------------------------------------------------------------------------------------
@@ -681,9 +684,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
             h_abs = min_step
         accepted = False
         rejected = False
+        trial_failure = OK
         while not accepted:
             if h_abs < min_step:
-                status = STEP_TOO_SMALL
+                status = STEP_TOO_SMALL if trial_failure == OK else trial_failure
                 break
             h = h_abs
             t_new = t + h
@@ -703,17 +707,23 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
                 st = _rhs(t + C[s] * h, ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
                 evals += 1
                 if st != OK:
-                    status = st
                     break
-            if status != OK:
-                break
-            for i in range(ny):
-                acc_s = 0.0
-                for j in range(n_stages):
-                    acc_s += K[j, i] * B[j]
-                y_new[i] = y[i] + h * acc_s
-            st = _rhs(t + h, y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new)
-            evals += 1
+            if st == OK:
+                for i in range(ny):
+                    acc_s = 0.0
+                    for j in range(n_stages):
+                        acc_s += K[j, i] * B[j]
+                    y_new[i] = y[i] + h * acc_s
+                st = _rhs(t + h, y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new)
+                evals += 1
+            if st == SINGULAR or st == NOT_FINITE:
+                # A stage the accelerations cannot be evaluated at (a wild stage of too long a step,
+                # say): the trial is rejected and tried again TRIAL_SHRINK times as long, as
+                # inerter.simulation does with scipy's integrators; fatal below 10 ulp of t.
+                trial_failure = st
+                h_abs *= TRIAL_SHRINK
+                rejected = True
+                continue
             if st != OK:
                 status = st
                 break

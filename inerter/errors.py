@@ -28,10 +28,14 @@ class SceneError(InerterError, ValueError):
 
 
 class SimulationError(InerterError, RuntimeError):
-    """A simulation cannot go on: the state stays at the last good time `time`."""
+    """A simulation cannot go on: the state stays at the last good time `time`.
 
-    def __init__(self, message: str, time: float | None = None):
+    `recoverable`: raised where a state cannot be evaluated (a singular or non-finite linear solve)
+    and so, inside an explicit integrator's trial step, a shorter step may avoid it."""
+
+    def __init__(self, message: str, time: float | None = None, recoverable: bool = False):
         self.time = time
         self.message = message
+        self.recoverable = recoverable
         text = message if time is None else f"t = {time:.9g} s: {message}"
         super().__init__(text)

@@ -462,10 +462,11 @@ class Mechanism:
             x = np.linalg.solve(K, rhs)
         except np.linalg.LinAlgError:
             raise SimulationError("the mass matrix M + M_I with the joint constraints is singular: some "
-                                  "coordinate has no mass (check zero masses/inertias and the inerters)", t)
+                                  "coordinate has no mass (check zero masses/inertias and the inerters)", t,
+                                  recoverable=True)
         if not np.all(np.isfinite(x)):
             raise SimulationError("accelerations are not finite (the system matrix is near-singular or a "
-                                  "force is unbounded)", t)
+                                  "force is unbounded)", t, recoverable=True)
         return x
 
     # -- energy ----------------------------------------------------------------------------

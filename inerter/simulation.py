@@ -141,15 +141,32 @@ class StepMonitor:
                 self.hits = 0
 
 
+#: A trial step of an explicit Runge-Kutta method that reaches a state where the accelerations cannot
+#: be evaluated is rejected and tried again this much shorter (scipy's smallest step-size factor).
+TRIAL_SHRINK = 0.2
+
+
 def _step(solver, method):
-    """solver.step(), its failures as SimulationError at the last good time."""
+    """solver.step(), its failures as SimulationError at the last good time.
+
+    DOP853 and RK45: a stage of the trial step that cannot be evaluated (a recoverable
+    SimulationError: a wild stage of too long a step, say) rejects the step, which is tried again
+    TRIAL_SHRINK times as long, until it is shorter than 10 ulp of t; scipy's step leaves the
+    solver's state as it was when a stage raises."""
     t = solver.t
-    try:
-        message = solver.step()
-    except SimulationError as exc:
-        if exc.time is None:
-            raise type(exc)(exc.message, t) from None
-        raise
+    while True:
+        try:
+            with np.errstate(all="ignore"):     # a wild stage overflows; non-finite results are checked
+                message = solver.step()
+            break
+        except SimulationError as exc:
+            shrinkable = exc.recoverable and hasattr(solver, "h_abs") and method in ("DOP853", "RK45")
+            if shrinkable and solver.h_abs * TRIAL_SHRINK >= 10 * abs(np.nextafter(t, np.inf) - t):
+                solver.h_abs *= TRIAL_SHRINK
+                continue
+            if exc.time is None:
+                raise type(exc)(exc.message, t) from None
+            raise
     if solver.status == "failed":
         raise SimulationError(f"the {method} integrator failed: {message}", t)
 

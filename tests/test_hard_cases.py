@@ -361,6 +361,59 @@ def test_stiffness_through_the_fmu(hard_fmu, instance):
 
 
 # ----------------------------------------------------------------------------------------------
+# 4b. A trial step into a state that cannot be evaluated
+# ----------------------------------------------------------------------------------------------
+def _chain(tmp_path, links):
+    import sys
+    sys.path.insert(0, str(SCENARIOS.parent / "benchmarks"))
+    try:
+        from chain_scene import write_chain
+    finally:
+        sys.path.pop(0)
+    return inerter.load(write_chain(tmp_path / f"chain_{links}.toml", links), **{"experiment.stop_time": 20.0})
+
+
+def test_a_trial_step_into_an_unevaluable_state_is_retried_shorter(tmp_path, monkeypatch):
+    """An 8-link chain run for 20 s: the first step DOP853's initial-step rule picks (1.42 s) puts a
+    stage where the augmented system cannot be solved (non-finite accelerations). That trial is
+    rejected and tried 5 times shorter, as a step with too large an error would be; the run used to
+    stop at t = 0 there. The whole run completes on both paths, which agree to 1e-9 m (the same
+    algorithm, the same steps), with the constraints held (drift ≤ 1e-8 m)."""
+    from inerter import mechanism, simulation
+    from inerter.errors import SimulationError
+    model = _chain(tmp_path, 8)
+    mech, s = model.mechanism, model.settings()
+    raised = []
+    solve = mechanism.Mechanism._solve
+
+    def counting(self, K, rhs, t):
+        try:
+            return solve(self, K, rhs, t)
+        except SimulationError as exc:
+            raised.append(exc)
+            raise
+    monkeypatch.setattr(mechanism.Mechanism, "_solve", counting)
+    y0 = np.concatenate((mech.q0, mech.v0))
+    solver = simulation.make_solver(s.method, simulation.derivative(mech, None, s.alpha), 0.0, y0, s.stop_time,
+                                    s.rtol, s.atol, s.step)
+    assert solver.h_abs > 1.0                        # the long first trial
+    simulation._step(solver, s.method)
+    assert raised and all(exc.recoverable for exc in raised)     # it did reach such a state
+    assert 0.0 < solver.t < 0.3 and np.all(np.isfinite(solver.y))
+    monkeypatch.undo()
+    if not compiled.AVAILABLE:
+        pytest.skip(compiled.WHY_NOT)
+    runs = {path: model.simulate(path=path, metrics=False, output_interval=0.1) for path in ("numpy", "compiled")}
+    for path, r in runs.items():
+        assert r.status == "ok" and r.time[-1] == 20.0, (path, r.message)
+        assert r.run.max_drift <= 1e-8, path
+    assert runs["compiled"].run.extra["path"] == "compiled"
+    assert runs["compiled"].run.steps == runs["numpy"].run.steps
+    tip = [o["name"] for o in model.output_info() if o["unit"] == "m"]
+    assert max(np.max(np.abs(runs["compiled"][n] - runs["numpy"][n])) for n in tip) <= 1e-9
+
+
+# ----------------------------------------------------------------------------------------------
 # 5. Long runs (compiled path)
 # ----------------------------------------------------------------------------------------------
 @needs_numba

@@ -65,15 +65,23 @@ def _pair(q, v, ba, lax, lay, bb, lbx, lby):
 
 
 @njit(cache=True, inline="always")
-def _element(q, v, e, el_int, pbody, ploc):
-    """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, the θ-columns of H, L, r̂,
-    whether the terminals meet); L is held at MIN_LENGTH where they do."""
-    pa = el_int[e, 1]
-    pb = el_int[e, 2]
+def _row_pair(q, v, table, row, pbody, ploc):
+    """The points named in columns 1 and 2 of a table row (element or joint): their bodies and
+    :func:`_pair` of them, (ba, bb, r, ṙ, a_n, the θ-columns of H)."""
+    pa = table[row, 1]
+    pb = table[row, 2]
     ba = pbody[pa]
     bb = pbody[pb]
     rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
         q, v, ba, ploc[pa, 0], ploc[pa, 1], bb, ploc[pb, 0], ploc[pb, 1])
+    return ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby
+
+
+@njit(cache=True, inline="always")
+def _element(q, v, e, el_int, pbody, ploc):
+    """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, the θ-columns of H, L, r̂,
+    whether the terminals meet); L is held at MIN_LENGTH where they do."""
+    ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, v, el_int, e, pbody, ploc)
     L = math.hypot(rx, ry)
     meets = not L > MIN_LENGTH
     if meets:
@@ -219,12 +227,7 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     # -- joints: C_q (and its transpose) and γ − 2αĊ − α²C
     row = n
     for jn in range(jt_int.shape[0]):
-        pa = jt_int[jn, 1]
-        pb = jt_int[jn, 2]
-        ba = pbody[pa]
-        bb = pbody[pb]
-        rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
-            q, v, ba, ploc[pa, 0], ploc[pa, 1], bb, ploc[pb, 0], ploc[pb, 1])
+        ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, v, jt_int, jn, pbody, ploc)
         if jt_int[jn, 0] == REVOLUTE:
             # C = r, C_q = H, γ = −a_n
             cdx = rdx
@@ -380,12 +383,7 @@ def constraint_residual(q, P):
     worst = 0.0
     z = np.zeros(q.shape[0])
     for jn in range(jt_int.shape[0]):
-        pa = jt_int[jn, 1]
-        pb = jt_int[jn, 2]
-        ba = pbody[pa]
-        bb = pbody[pb]
-        rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
-            q, z, ba, ploc[pa, 0], ploc[pa, 1], bb, ploc[pb, 0], ploc[pb, 1])
+        ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, z, jt_int, jn, pbody, ploc)
         if jt_int[jn, 0] == REVOLUTE:
             worst = max(worst, abs(rx), abs(ry))
         else:

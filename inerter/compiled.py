@@ -740,5 +740,9 @@ def warm_up():
             integrate_compiled(model.mechanism, model.settings(method=method, stop_time=0.05, step=1e-2))
         kernel = _kernel_for(model.mechanism)
         kernel.accelerations(0.0, kernel.q0, kernel.v0)
+        for method in _RK_CODE:                               # the co-simulation step (the FMU's)
+            stepper = model.stepper(method=method, path="compiled", stop_time=0.05)
+            stepper.step(0.01)
+            stepper.output_values()
     return _time.perf_counter() - t0
 

@@ -603,6 +603,10 @@ LOCAL_WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
                        "distributed.admin.system-monitor.interval": "2s"}
 
 
+#: Attempts at the handshake with a running scheduler (see DaskClient).
+CONNECT_ATTEMPTS = 3
+
+
 class DaskClient:
     """``with DaskClient(workers=2) as client``: a dask Client on a LocalCluster of `workers` processes
     with one thread each (default: one per core), or on the running scheduler at `scheduler`."""
@@ -618,10 +622,19 @@ class DaskClient:
 
         from distributed import Client, LocalCluster
         if self.scheduler:
-            try:
-                self.client = Client(self.scheduler, timeout="20s")
-            except (OSError, TimeoutError) as exc:
-                raise SweepError(f"--scheduler {self.scheduler}: cannot connect ({exc})") from None
+            for attempt in range(1, CONNECT_ATTEMPTS + 1):
+                try:
+                    self.client = Client(self.scheduler, timeout="20s")
+                    break
+                except (OSError, TimeoutError) as exc:
+                    raise SweepError(f"--scheduler {self.scheduler}: cannot connect ({exc})") from None
+                except AssertionError:
+                    # distributed's Client asserts that the scheduler's first reply is one message; on a
+                    # scheduler busy with other clients it can come batched with another: connect anew.
+                    if attempt == CONNECT_ATTEMPTS:
+                        raise SweepError(f"--scheduler {self.scheduler}: the connection handshake failed "
+                                         f"{CONNECT_ATTEMPTS} times") from None
+                    time.sleep(0.2 * attempt)
         else:
             import dask
             n = self.workers or os.cpu_count() or 1

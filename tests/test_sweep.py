@@ -327,3 +327,32 @@ def test_a_scheduler_without_workers_stops_the_sweep_with_a_clear_error(tmp_path
     err = capsys.readouterr().err
     assert "inerter: error: no dask worker" in err and "2 runs left" in err
     assert rows_of(tmp_path / "results.csv") == []
+
+
+def test_a_failed_handshake_with_a_running_scheduler_is_tried_again(address, monkeypatch):
+    """distributed's Client asserts that the scheduler's first reply is a single message; with other
+    clients on the scheduler it can come batched with another (seen once in this suite). The sweep
+    connects anew, up to CONNECT_ATTEMPTS times, then stops with its own error."""
+    import distributed
+
+    from inerter.sweep import CONNECT_ATTEMPTS, DaskClient, SweepError
+    real, calls = distributed.Client, []
+
+    def flaky(*args, **kwargs):
+        calls.append(args)
+        if len(calls) == 1:
+            raise AssertionError
+        return real(*args, **kwargs)
+    monkeypatch.setattr(distributed, "Client", flaky)
+    with DaskClient(scheduler=address) as client:
+        assert client.submit(sum, [1, 2]).result() == 3
+    assert len(calls) == 2
+
+    def broken(*args, **kwargs):
+        calls.append(args)
+        raise AssertionError
+    calls.clear()
+    monkeypatch.setattr(distributed, "Client", broken)
+    with pytest.raises(SweepError, match=f"--scheduler {address}: the connection handshake failed"):
+        DaskClient(scheduler=address).__enter__()
+    assert len(calls) == CONNECT_ATTEMPTS

@@ -328,3 +328,17 @@ def test_kernels_compiled_once_are_found_from_another_copy_of_the_package(tmp_pa
     assert first["file"] == second["file"] and first["file"].startswith(str(cache))
     assert first["misses"] >= 1                      # compiled by the first copy ...
     assert second["hits"] >= 1 and second["misses"] == 0   # ... and only loaded by the second
+
+
+@needs_numba
+def test_the_compiled_stepper_runs_on_past_the_stop_time_it_was_given():
+    """An importer that steps past the stop time it announced: the bound is dropped and the
+    integration runs on. Up to the stop time the steps are the whole run's; after it, the state
+    agrees with a run to the later time within its tolerance (scene rtol 1e-10: bound 1e-9)."""
+    model = inerter.load(PAPER[1])
+    st = model.stepper(path="compiled", stop_time=0.05)
+    for k in range(1, 11):
+        st.step(0.01 * k)
+    assert st.t_bound == np.inf and st.time == 0.1
+    ref = model.simulate(stop_time=0.1, output_interval=0.01, metrics=False, path="compiled")
+    assert np.max(np.abs(st.y - ref.run.states[-1])) <= 1e-9

@@ -636,7 +636,8 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     test (h·|λ| from the last two stages, both at t + h, against the bound, checked every `every`
     accepted steps and then at every step while it fires; `hits` firings in a row: STIFF), a step
     size collapsing below `collapse relative`·max(1 s, |t|) for `collapse steps` steps in a row
-    (COLLAPSED), the step budget `max_steps` counted from the start (MAX_STEPS).
+    (COLLAPSED), the step budget `max_steps` of this call (MAX_STEPS: a whole run is one call, a
+    co-simulation step another).
 
     method 0: DOP853 (A, B, C, E5 = E, E3, D = Dm as in scipy), method 1: RK45 (A, B, C, E, P = Pm).
     `work`: scratch from :func:`work_arrays` with rk_stages(A) rows of stages.
@@ -666,6 +667,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         hdr[RK_H_LAST] = 0.0
     h_abs = hdr[RK_H]
     steps = int(hdr[RK_STEPS])
+    steps_before = steps
     evals = int(hdr[RK_EVALS])
     hits = int(hdr[RK_HITS])
     calm = int(hdr[RK_CALM])
@@ -850,7 +852,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         while k < nts and ts[k] <= t + 1e-12 * max(1.0, t):
             _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
             k += 1
-        if steps > max_steps:
+        if steps - steps_before > max_steps:
             status = MAX_STEPS
     hdr[RK_T] = t
     hdr[RK_H] = h_abs

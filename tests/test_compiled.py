@@ -342,3 +342,17 @@ def test_the_compiled_stepper_runs_on_past_the_stop_time_it_was_given():
     assert st.t_bound == np.inf and st.time == 0.1
     ref = model.simulate(stop_time=0.1, output_interval=0.01, metrics=False, path="compiled")
     assert np.max(np.abs(st.y - ref.run.states[-1])) <= 1e-9
+
+
+@needs_numba
+def test_the_step_budget_bounds_each_call_of_the_running_integration():
+    """experiment.max_steps bounds one call of the compiled loop: the whole run, or one
+    communication step. An FMU that runs on across communication points gets the budget afresh at
+    every doStep (a co-simulation hours long must not run out of it), as when it restarted."""
+    model = inerter.load(PAPER[1], **{"experiment.max_steps": 50})
+    whole = model.simulate(stop_time=2.0, output_interval=0.01, metrics=False, path="compiled")
+    assert whole.status == "failed" and "max_steps" in whole.message
+    st = model.stepper(path="compiled", stop_time=2.0)
+    for k in range(1, 201):
+        st.step(0.01 * k)
+    assert st.steps > 50 and st.time == 2.0

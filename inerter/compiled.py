@@ -109,7 +109,7 @@ def _monitor(method) -> np.ndarray:
     """The constants of :class:`inerter.simulation.StepMonitor` for the compiled loop."""
     from . import simulation as sim
     return np.array([sim.STIFFNESS_BOUND.get(method, 0.0), sim.STIFFNESS_EVERY, sim.STIFFNESS_HITS,
-                     sim.COLLAPSE_RELATIVE, sim.COLLAPSE_STEPS], dtype=float)
+                     sim.COLLAPSE_RELATIVE, sim.COLLAPSE_STEPS, sim.TRIAL_SHRINK], dtype=float)
 
 
 _STATUS_TEXT = {

@@ -26,9 +26,6 @@ F_CONSTANT, F_SINE, F_STEP = 0, 1, 2
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED = 0, 1, 2, 3, 4, 5, 6, 7
 
 MIN_LENGTH = 1e-9
-#: A trial step reaching a state where the accelerations cannot be evaluated is tried again this much
-#: shorter (inerter.simulation.TRIAL_SHRINK).
-TRIAL_SHRINK = 0.2
 
 
 # ------------------------------------------------------------------------------------------------
@@ -632,8 +629,8 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     first and, where RK_H is 0, the first step chosen as scipy's select_initial_step does.
 
     Watched as inerter.simulation.StepMonitor watches scipy's integrators, with its constants in
-    `monitor` = (stiffness bound, every, hits, collapse relative, collapse steps): Hairer's stiffness
-    test (h·|λ| from the last two stages, both at t + h, against the bound, checked every `every`
+    `monitor` = (stiffness bound, every, hits, collapse relative, collapse steps, trial shrink):
+    Hairer's stiffness test (h·|λ| from the last two stages, both at t + h, against the bound, checked every `every`
     accepted steps and then at every step while it fires; `hits` firings in a row: STIFF), a step
     size collapsing below `collapse relative`·max(1 s, |t|) for `collapse steps` steps in a row
     (COLLAPSED), the step budget `max_steps` of this call (MAX_STEPS: a whole run is one call, a
@@ -718,10 +715,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
                 evals += 1
             if st == SINGULAR or st == NOT_FINITE:
                 # A stage the accelerations cannot be evaluated at (a wild stage of too long a step,
-                # say): the trial is rejected and tried again TRIAL_SHRINK times as long, as
+                # say): the trial is rejected and tried again `trial shrink` times as long, as
                 # inerter.simulation does with scipy's integrators; fatal below 10 ulp of t.
                 trial_failure = st
-                h_abs *= TRIAL_SHRINK
+                h_abs *= monitor[5]
                 rejected = True
                 continue
             if st != OK:

@@ -55,6 +55,7 @@ from pythonfmu import Boolean, DefaultExperiment, Fmi2Slave, Integer, Real, Stri
 from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability, Fmi2Initial
 
 import inerter
+from inerter import fmu_native
 from inerter.errors import InerterError, SimulationError
 
 STATE_FORMAT = "inerter-fmu-state/1"
@@ -154,12 +155,19 @@ class InerterSlave(Fmi2Slave):
         self._call_rejections: list[str] = []     # values rejected by the last checked call
         self._rejected: list[str] = []            # unreported rejections: the next doStep's
         self._stepper = None
+        self._slave_steps = 0                     # communication steps taken here
+        self._native_steps = 0                    # ... and by the FMU's binary (fmu_native)
         self._getters: dict = {}                  # (class, value references) -> their getter
         # Outputs before initialisation are those of the scene as written (the start values),
         # in the order of _output_names.
         self._outputs = [float(v) for v in model.stepper().output_values()]
 
         self._register(model)
+        # The native doStep (inerter/fmu_native.py): the FMU's binary steps in compiled code
+        # whenever this slave arms it.
+        self._native = fmu_native.NativeLink(
+            {vr: self._output_index[var.name] for vr, var in self.vars.items()
+             if var.causality == Fmi2Causality.output})
         self._warn_if_foreign_package()
 
     # ------------------------------------------------------------------------------------------
@@ -259,6 +267,7 @@ class InerterSlave(Fmi2Slave):
         """Start a call whose status goes to fmi_status (exitInitializationMode, setXxx, doStep,
         setFMUstate). Rejections of the previous call that nobody read are left to the next
         doStep."""
+        self._native.disarm()                     # the next step is taken here, at least
         if self._call_rejections:
             self._rejected.extend(self._call_rejections)
             self._call_rejections = []
@@ -337,6 +346,8 @@ class InerterSlave(Fmi2Slave):
         return self._get(vrs, Real, float, math.nan)
 
     def get_integer(self, vrs):
+        if len(vrs) == 2 and vrs[0] == fmu_native.LINK_VR and vrs[1] == fmu_native.LINK_VR + 1:
+            return self._native.address_words()
         return self._get(vrs, Integer, int, 0)
 
     def get_boolean(self, vrs):
@@ -350,6 +361,9 @@ class InerterSlave(Fmi2Slave):
         self._set(vrs, values, Real)
 
     def set_integer(self, vrs, values):
+        if len(vrs) == 1 and vrs[0] == fmu_native.SYNC_VR:
+            self._native_sync()
+            return
         self._begin_call()
         self._set(vrs, values, Integer)
 
@@ -446,6 +460,7 @@ class InerterSlave(Fmi2Slave):
                  f"changed from the scene: {changed or 'nothing'}", Fmi2Status.ok)
 
     def _fail(self, message: str):
+        self._native.disarm()
         self._status = ERROR
         self._phase = FAILED
         self._failure = message
@@ -516,10 +531,39 @@ class InerterSlave(Fmi2Slave):
             return self._refuse(f"doStep at t = {t!r} s (step {h!r} s) discarded: {exc}; the FMU "
                                 f"stays at t = {stepper.time!r} s", Fmi2Status.discard)
         self._outputs = stepper.output_values()    # floats, in the order of _output_names
+        self._slave_steps += 1
+        self._arm_native(stepper)
         return True
 
+    def _arm_native(self, stepper):
+        """Let the FMU's binary take the next step natively where it can (inerter/fmu_native.py)."""
+        try:
+            self._native.arm(stepper, TIME_TOLERANCE)
+        except Exception as exc:  # the steps go on here, as without the link
+            self._native.turn_off(repr(exc))
+            self.log(f"native doStep turned off, the steps go on in Python: {exc!r}",
+                     Fmi2Status.warning)
+
+    def _native_sync(self):
+        """Take over the steps the FMU's binary took natively since the last step here (the shim
+        asks before any other call enters Python after them)."""
+        try:
+            taken = self._stepper.native_sync() if self._stepper is not None else 0
+            if taken:
+                self._native_steps += taken
+                self._outputs = self._stepper.output_values()
+        except Exception as exc:  # a bug: stop stepping rather than end the importer
+            self._fail(f"taking over the native steps: unexpected error: {exc!r}\n"
+                       f"{traceback.format_exc()}")
+
     def terminate(self):
+        self._native.disarm()
         self._phase = TERMINATED
+        total = self._slave_steps + self._native_steps
+        self.log(f"terminated: {total} communication steps, {self._native_steps} of them taken in "
+                 f"native code by the FMU's binary"
+                 + (f" (native steps off: {self._native.why_off})" if self._native.why_off else ""),
+                 Fmi2Status.ok)
 
     # ------------------------------------------------------------------------------------------
     # FMU state

@@ -10,11 +10,22 @@
  * fmi2GetInteger and returns that status when it is worse than fmi2OK; after fmi2DoStep, when the
  * original returned fmi2Discard, it returns fmi2Error where the slave says so.
  *
- * The component is the original's: every call is forwarded unchanged, and the slave's messages
- * reach the importer through the original's logger calls as before.
+ * The component the importer holds is this library's (struct instance), wrapping the original's:
+ * every call is forwarded with the original's component, and the slave's messages reach the
+ * importer through the original's logger calls as before.
+ *
+ * The native doStep (inerter/fmu_native.py says the protocol). After fmi2Instantiate the shim reads
+ * the slave's context address through the private Integer value references NATIVE_LINK_VR and
+ * NATIVE_LINK_VR + 1. After a doStep the slave took and returned fmi2OK, it arms itself where the
+ * context says so, and then takes the next doStep by calling the context's C function on the
+ * context's table without entering Python, and serves fmi2GetReal of outputs from the context's
+ * values. A step the function declines goes to the slave. Before any other call enters Python after
+ * native steps, the shim sets the private Integer NATIVE_SYNC_VR, and the slave takes them over.
+ * Every call but fmi2DoStep and the getters disarms it until the next step the slave takes.
  *
  * Build (inerter/fmu_build.py does it, with the value reference from modelDescription.xml):
  *   gcc -shared -fPIC -O2 -fvisibility=hidden -pthread -DSTATUS_VR=<n> \
+ *       -DNATIVE_LINK_VR=<n> -DNATIVE_SYNC_VR=<n> -DNATIVE_MAGIC=<n> \
  *       -DORIGINAL_LIBRARY='"<modelIdentifier>.pythonfmu.so"' -o <modelIdentifier>.so \
  *       status_shim.c -ldl
  *
@@ -28,7 +39,9 @@
 #include <dlfcn.h>
 #include <limits.h>
 #include <pthread.h>
+#include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "fmi2_types.h"
@@ -38,6 +51,9 @@
 #endif
 #ifndef ORIGINAL_LIBRARY
 #error "compile with -DORIGINAL_LIBRARY='\"<file name of pythonfmu's binary>\"'"
+#endif
+#if !defined(NATIVE_LINK_VR) || !defined(NATIVE_SYNC_VR) || !defined(NATIVE_MAGIC)
+#error "compile with -DNATIVE_LINK_VR, -DNATIVE_SYNC_VR and -DNATIVE_MAGIC (inerter/fmu_native.py)"
 #endif
 #ifndef PATH_MAX
 #define PATH_MAX 4096
@@ -128,6 +144,58 @@ __attribute__((destructor)) static void unload_original(void)
     }
 }
 
+/* The context's slots (inerter/fmu_native.py: CTX_*). */
+enum { CTX_MAGIC, CTX_ARMED, CTX_FUNCTION, CTX_TABLE, CTX_MAP_SIZE, CTX_MAP, CTX_VALUES };
+
+/* inerter.compiled_kernels.native_step: 1 when it took the step (t, t + h], else 0. */
+typedef int32_t native_step_fn(const int64_t *table, double t, double h);
+
+/* An instance: the original's component and the native link's state. */
+struct instance {
+    fmi2Component inner;      /* the original's */
+    const int64_t *ctx;       /* the slave's context, or NULL: no native steps */
+    int armed;                /* the next doStep may be taken natively */
+    int dirty;                /* native steps (or a declined one) the slave has not taken over */
+};
+
+#define INNER(c) (((struct instance *)(c))->inner)
+
+/* The slave's context address, read through the private value references; NULL when the slave
+ * has none (the link is off, or the slave does not know the value references). */
+static const int64_t *native_context(fmi2Component inner)
+{
+    const fmi2ValueReference vr[2] = {NATIVE_LINK_VR, NATIVE_LINK_VR + 1u};
+    fmi2Integer words[2] = {0, 0};
+    const int64_t *ctx;
+
+    if (original.GetInteger(inner, vr, 2, words) != fmi2OK || words[0] < 0 || words[1] < 0)
+        return NULL;
+    ctx = (const int64_t *)(uintptr_t)((uint64_t)words[0] | ((uint64_t)words[1] << 31));
+    if (ctx == NULL || ctx[CTX_MAGIC] != (int64_t)NATIVE_MAGIC)
+        return NULL;
+    return ctx;
+}
+
+/* The slave takes over the native steps (before any call that enters Python after them). */
+static fmi2Status sync(struct instance *w)
+{
+    const fmi2ValueReference vr = NATIVE_SYNC_VR;
+    const fmi2Integer one = 1;
+
+    if (!w->dirty)
+        return fmi2OK;
+    w->dirty = 0;
+    return original.SetInteger(w->inner, &vr, 1, &one);
+}
+
+/* A call that may change what the slave does: take over the native steps, and disarm. */
+static fmi2Status enter(fmi2Component c)
+{
+    struct instance *w = c;
+    w->armed = 0;
+    return sync(w);
+}
+
 /* The status of a call that the original returned as `status`: the slave's own when the original
  * said fmi2OK and the slave's is worse (fmi2Warning, fmi2Discard or fmi2Error). */
 static fmi2Status checked(fmi2Component c, fmi2Status status)
@@ -164,6 +232,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn)
 {
+    struct instance *w;
+    fmi2Component inner;
+
     if (!loaded()) {
         /* The message is passed as the format, with no argument: some importers (fmpy) show
          * the format as it is. A '%' is doubled for those that format it. */
@@ -181,152 +252,198 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               "logStatusError", message);
         return NULL;
     }
-    return original.Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation, functions,
-                                visible, loggingOn);
+    w = calloc(1, sizeof *w);
+    if (w == NULL) {
+        if (functions != NULL && functions->logger != NULL)
+            functions->logger(functions->componentEnvironment, instanceName, fmi2Error,
+                              "logStatusError", "fmi2Instantiate: out of memory");
+        return NULL;
+    }
+    inner = original.Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation, functions,
+                                 visible, loggingOn);
+    if (inner == NULL) {
+        free(w);
+        return NULL;
+    }
+    w->inner = inner;
+    w->ctx = native_context(inner);
+    return w;
 }
 
 /* Every other function is called with a component from fmi2Instantiate: the original is loaded. */
 #define GUARD                                                                                    \
-    if (handle == NULL)                                                                          \
+    if (handle == NULL || c == NULL)                                                             \
+        return fmi2Error;
+
+/* A call that enters Python and may change what the slave does. */
+#define ENTER                                                                                    \
+    GUARD                                                                                        \
+    if (enter(c) != fmi2OK)                                                                      \
+        return fmi2Error;
+
+/* A call that enters Python to read: the slave takes over the native steps first. */
+#define READ                                                                                     \
+    GUARD                                                                                        \
+    if (sync(c) != fmi2OK)                                                                       \
         return fmi2Error;
 
 void fmi2FreeInstance(fmi2Component c)
 {
-    if (handle != NULL)
-        original.FreeInstance(c);
+    if (handle != NULL && c != NULL) {
+        original.FreeInstance(INNER(c));
+        free(c);
+    }
 }
 
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[])
 {
-    GUARD
-    return original.SetDebugLogging(c, loggingOn, nCategories, categories);
+    ENTER
+    return original.SetDebugLogging(INNER(c), loggingOn, nCategories, categories);
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
-    GUARD
-    return original.SetupExperiment(c, toleranceDefined, tolerance, startTime, stopTimeDefined,
-                                    stopTime);
+    ENTER
+    return original.SetupExperiment(INNER(c), toleranceDefined, tolerance, startTime,
+                                    stopTimeDefined, stopTime);
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
-    GUARD
-    return original.EnterInitializationMode(c);
+    ENTER
+    return original.EnterInitializationMode(INNER(c));
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
-    GUARD
-    return checked(c, original.ExitInitializationMode(c));
+    ENTER
+    return checked(INNER(c), original.ExitInitializationMode(INNER(c)));
 }
 
 fmi2Status fmi2Terminate(fmi2Component c)
 {
-    GUARD
-    return original.Terminate(c);
+    ENTER
+    return original.Terminate(INNER(c));
 }
 
 fmi2Status fmi2Reset(fmi2Component c)
 {
-    GUARD
-    return original.Reset(c);
+    ENTER
+    return original.Reset(INNER(c));
 }
 
+/* Outputs after native steps come from the context's values; anything else from the slave. */
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[])
 {
+    struct instance *w = c;
     GUARD
-    return original.GetReal(c, vr, nvr, value);
+    if (w->dirty && w->ctx != NULL && (vr != NULL || nvr == 0)) {
+        const int64_t *map = (const int64_t *)(uintptr_t)w->ctx[CTX_MAP];
+        const double *values = (const double *)(uintptr_t)w->ctx[CTX_VALUES];
+        const uint64_t size = (uint64_t)w->ctx[CTX_MAP_SIZE];
+        size_t i;
+        for (i = 0; i < nvr; i++)
+            if (vr[i] >= size || map[vr[i]] < 0)
+                break;
+        if (i == nvr) {
+            for (i = 0; i < nvr; i++)
+                value[i] = values[map[vr[i]]];
+            return fmi2OK;
+        }
+    }
+    if (sync(w) != fmi2OK)
+        return fmi2Error;
+    return original.GetReal(INNER(c), vr, nvr, value);
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Integer value[])
 {
-    GUARD
-    return original.GetInteger(c, vr, nvr, value);
+    READ
+    return original.GetInteger(INNER(c), vr, nvr, value);
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[])
 {
-    GUARD
-    return original.GetBoolean(c, vr, nvr, value);
+    READ
+    return original.GetBoolean(INNER(c), vr, nvr, value);
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          fmi2String value[])
 {
-    GUARD
-    return original.GetString(c, vr, nvr, value);
+    READ
+    return original.GetString(INNER(c), vr, nvr, value);
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        const fmi2Real value[])
 {
-    GUARD
-    return checked(c, original.SetReal(c, vr, nvr, value));
+    ENTER
+    return checked(INNER(c), original.SetReal(INNER(c), vr, nvr, value));
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[])
 {
-    GUARD
-    return checked(c, original.SetInteger(c, vr, nvr, value));
+    ENTER
+    return checked(INNER(c), original.SetInteger(INNER(c), vr, nvr, value));
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Boolean value[])
 {
-    GUARD
-    return checked(c, original.SetBoolean(c, vr, nvr, value));
+    ENTER
+    return checked(INNER(c), original.SetBoolean(INNER(c), vr, nvr, value));
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          const fmi2String value[])
 {
-    GUARD
-    return checked(c, original.SetString(c, vr, nvr, value));
+    ENTER
+    return checked(INNER(c), original.SetString(INNER(c), vr, nvr, value));
 }
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
-    GUARD
-    return original.GetFMUstate(c, FMUstate);
+    READ
+    return original.GetFMUstate(INNER(c), FMUstate);
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
-    GUARD
-    return checked(c, original.SetFMUstate(c, FMUstate));
+    ENTER
+    return checked(INNER(c), original.SetFMUstate(INNER(c), FMUstate));
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
-    GUARD
-    return original.FreeFMUstate(c, FMUstate);
+    READ
+    return original.FreeFMUstate(INNER(c), FMUstate);
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
-    GUARD
-    return original.SerializedFMUstateSize(c, FMUstate, size);
+    READ
+    return original.SerializedFMUstateSize(INNER(c), FMUstate, size);
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
                                  fmi2Byte serializedState[], size_t size)
 {
-    GUARD
-    return original.SerializeFMUstate(c, FMUstate, serializedState, size);
+    READ
+    return original.SerializeFMUstate(INNER(c), FMUstate, serializedState, size);
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[],
                                    size_t size, fmi2FMUstate *FMUstate)
 {
-    GUARD
-    return original.DeSerializeFMUstate(c, serializedState, size, FMUstate);
+    READ
+    return original.DeSerializeFMUstate(INNER(c), serializedState, size, FMUstate);
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
@@ -334,9 +451,9 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         size_t nKnown, const fmi2Real dvKnown[],
                                         fmi2Real dvUnknown[])
 {
-    GUARD
-    return original.GetDirectionalDerivative(c, vUnknown_ref, nUnknown, vKnown_ref, nKnown,
-                                             dvKnown, dvUnknown);
+    READ
+    return original.GetDirectionalDerivative(INNER(c), vUnknown_ref, nUnknown, vKnown_ref,
+                                             nKnown, dvKnown, dvUnknown);
 }
 
 /* ---------------------------------------------------------------------------------------------
@@ -346,67 +463,80 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
                                        size_t nvr, const fmi2Integer order[],
                                        const fmi2Real value[])
 {
-    GUARD
-    return original.SetRealInputDerivatives(c, vr, nvr, order, value);
+    ENTER
+    return original.SetRealInputDerivatives(INNER(c), vr, nvr, order, value);
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
                                         size_t nvr, const fmi2Integer order[], fmi2Real value[])
 {
-    GUARD
-    return original.GetRealOutputDerivatives(c, vr, nvr, order, value);
+    READ
+    return original.GetRealOutputDerivatives(INNER(c), vr, nvr, order, value);
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
+    struct instance *w = c;
     fmi2Status status;
 
     GUARD
-    status = original.DoStep(c, currentCommunicationPoint, communicationStepSize,
+    if (w->armed && w->ctx[CTX_ARMED]) {
+        native_step_fn *step = (native_step_fn *)(uintptr_t)w->ctx[CTX_FUNCTION];
+        const int32_t took = step((const int64_t *)(uintptr_t)w->ctx[CTX_TABLE],
+                                  currentCommunicationPoint, communicationStepSize);
+        w->dirty = 1;
+        if (took == 1)
+            return fmi2OK;
+        w->armed = 0; /* declined: the slave restores the integration and takes the step */
+    }
+    if (sync(w) != fmi2OK)
+        return fmi2Error;
+    status = original.DoStep(w->inner, currentCommunicationPoint, communicationStepSize,
                              noSetFMUStatePriorToCurrentPoint);
+    w->armed = status == fmi2OK && w->ctx != NULL && w->ctx[CTX_ARMED];
     /* The slave's do_step returns True (fmi2OK) only with fmi_status fmi2OK, so a step that went
      * well costs no second call into the slave; a refused or failed one (fmi2Discard) says which
      * it was through fmi_status (fmi2Discard or fmi2Error). */
-    if (status != fmi2Discard || c == NULL)
+    if (status != fmi2Discard)
         return status;
-    status = checked(c, fmi2OK);
+    status = checked(w->inner, fmi2OK);
     return status == fmi2OK || status == fmi2Warning ? fmi2Discard : status;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
-    GUARD
-    return original.CancelStep(c);
+    ENTER
+    return original.CancelStep(INNER(c));
 }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
 {
-    GUARD
-    return original.GetStatus(c, s, value);
+    READ
+    return original.GetStatus(INNER(c), s, value);
 }
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
 {
-    GUARD
-    return original.GetRealStatus(c, s, value);
+    READ
+    return original.GetRealStatus(INNER(c), s, value);
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
 {
-    GUARD
-    return original.GetIntegerStatus(c, s, value);
+    READ
+    return original.GetIntegerStatus(INNER(c), s, value);
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
 {
-    GUARD
-    return original.GetBooleanStatus(c, s, value);
+    READ
+    return original.GetBooleanStatus(INNER(c), s, value);
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
 {
-    GUARD
-    return original.GetStringStatus(c, s, value);
+    READ
+    return original.GetStringStatus(INNER(c), s, value);
 }

@@ -570,6 +570,7 @@ class CompiledStepper(Stepper):
         self._rk = None                       # the running integration: [hdr, y, f, y_prev, dense]
         self._rk_inputs = None                # the inputs it runs with
         self._input_moved = False             # an input changed since the last step
+        self._native = None                   # the arrays of native steps (native_table), for self._rk
 
     def _start_rk(self):
         """A fresh integration at (self.time, self.y) with the held inputs and the last step size."""
@@ -661,6 +662,89 @@ class CompiledStepper(Stepper):
                                           self.inputs, self.settings.alpha)
         self._values = values.tolist()
         return self._values
+
+    # The native doStep (inerter.fmu_native): compiled_kernels.native_step takes steps on the running
+    # integration's arrays without entering Python; native_sync takes over what it did.
+    def native_table(self, tolerance: float):
+        """The int64 table of :func:`compiled_kernels.native_step` for the running integration, its
+        clock at the current time (`tolerance`: communication points closer than
+        tolerance·max(1 s, |t|) are equal); None where the next step must be taken here: RK4, no
+        running integration (before the first step, after a failed one), an input changed, outputs
+        the kernels do not evaluate. Valid until the next call of :meth:`step` or :meth:`set_state`."""
+        if self._rk is None or self._order is None or self._input_moved or self._tables is None:
+            return None
+        native = self._native
+        if native is None or native["rk"] is not self._rk:
+            native = self._native = self._native_arrays()
+        clock = native["clock"]
+        clock[_k.CLOCK_TIME] = self.time
+        clock[_k.CLOCK_BOUND] = self.t_bound
+        clock[_k.CLOCK_BUSY] = 0.0
+        clock[_k.CLOCK_TOLERANCE] = tolerance
+        clock[_k.CLOCK_TAKEN] = 0.0
+        native["steps"] = self._rk[0][_k.RK_STEPS]
+        return native["table"]
+
+    def _native_arrays(self) -> dict:
+        s, kernel, rk = self.settings, self.kernel, self._rk
+        ny = len(rk[1])
+        clock = np.zeros(_k.CLOCK_SIZE)
+        clock[_k.CLOCK_RTOL], clock[_k.CLOCK_ATOL] = float(s.rtol), float(s.atol)
+        clock[_k.CLOCK_ALPHA] = float(s.alpha)
+        native = dict(rk=rk, clock=clock, ts=np.zeros(1), out=np.empty((1, ny)), values=np.empty(len(self._order)),
+                      backup=[np.empty_like(a) for a in rk])
+        arrays = dict(zip(("hdr", "y", "f", "y_prev", "dense"), rk))
+        arrays.update(zip(("b_hdr", "b_y", "b_f", "b_y_prev", "b_dense"), native["backup"]))
+        arrays.update(zip(("mass", "pbody", "ploc", "el_int", "el_real", "rot_int", "rot_real", "jt_int", "jt_real",
+                           "fa_int", "fa_real", "pd_int", "pd_real", "in_int", "gravity", "perm", "dims"),
+                          kernel.params))
+        arrays.update(zip(("A", "B", "C", "E", "E3", "D", "Pm"), self._tables))
+        arrays.update(zip(("AB", "rhs", "gen", "acc", "K", "y_new", "f_new", "ys", "sig_acc"), self._work))
+        arrays.update(ts=native["ts"], out=native["out"], inputs=self._rk_inputs, monitor=self._monitor,
+                      raw=self._raw, order=self._order, values=native["values"], clock=clock)
+        table = np.zeros(_k.TABLE_HEAD + 3 * len(_k.NATIVE_SLOTS), dtype=np.int64)
+        table[:_k.TABLE_HEAD] = (len(table), _RK_CODE[s.method], int(s.max_steps), int(self._need_acc))
+        for slot, (name, kind) in enumerate(_k.NATIVE_SLOTS):
+            a = arrays[name]
+            dtype = np.float64 if kind[0] == "f" else np.int64
+            if a.dtype != dtype or a.ndim != int(kind[1]) or not a.flags.c_contiguous or not a.flags.writeable:
+                raise TypeError(f"native step: array {name} is {a.dtype} {a.shape}, expected {kind}")
+            j = _k.TABLE_HEAD + 3 * slot
+            table[j:j + 3] = (a.ctypes.data, a.shape[0], a.shape[1] if a.ndim == 2 else 0)
+        native["table"] = table
+        native["arrays"] = arrays                 # keeps every array the table points to alive
+        return native
+
+    def native_values(self) -> np.ndarray:
+        """The array native steps write the outputs to (in the order of ``signals.names``), for the
+        table :meth:`native_table` returned last."""
+        return self._native["values"]
+
+    def native_sync(self) -> int:
+        """Take over the steps :func:`compiled_kernels.native_step` took since :meth:`native_table`
+        (time, state, step size, counters, outputs), and restore the integration's state from its
+        backup where a native step declined half-way. Returns the number of steps taken over."""
+        native = self._native
+        if native is None or native["rk"] is not self._rk:
+            return 0
+        clock = native["clock"]
+        if clock[_k.CLOCK_BUSY]:
+            for a, backup in zip(self._rk, native["backup"]):
+                a[...] = backup
+            clock[_k.CLOCK_BUSY] = 0.0
+        taken = int(clock[_k.CLOCK_TAKEN])
+        if not taken:
+            return 0
+        hdr = self._rk[0]
+        self.time = float(clock[_k.CLOCK_TIME])
+        self.t_bound = float(clock[_k.CLOCK_BOUND])
+        self.y = native["out"][0].copy()
+        self.h = float(hdr[_k.RK_H])
+        self.steps += int(hdr[_k.RK_STEPS] - native["steps"])
+        native["steps"] = hdr[_k.RK_STEPS]
+        self._values = native["values"].tolist()
+        clock[_k.CLOCK_TAKEN] = 0.0
+        return taken
 
     def get_state(self) -> bytes:
         rk = None if self._rk is None else [a.copy() for a in self._rk]

@@ -12,7 +12,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import carray, cfunc, njit, types
+from numba.extending import intrinsic
 
 # Translational element kinds (column 0 of ``el_int``).
 SPRING, DAMPER, INERTER = 0, 1, 2
@@ -975,3 +976,151 @@ def max_residual(states, n, P):
     for k in range(states.shape[0]):
         worst = max(worst, constraint_residual(states[k, :n], P))
     return worst
+
+
+# ------------------------------------------------------------------------------------------------
+# The co-simulation step as a C function (the FMU's native doStep, see inerter/fmu_native.py)
+# ------------------------------------------------------------------------------------------------
+# The arrays of one running integration are passed as a table of int64: TABLE_HEAD slots (the
+# table's length, method code, max_steps, need_acc), then three per array (address, shape[0],
+# shape[1]) in the order of NATIVE_SLOTS, whose kinds say the dtype (f: float64, i: int64) and the
+# number of dimensions. `clock` holds the floats: the communication time, the step bound, rtol,
+# atol, alpha, whether a step is under way (CLOCK_BUSY: set when a step starts, cleared when it
+# succeeds), the tolerance on communication points, and the number of steps taken.
+TABLE_HEAD = 4
+NATIVE_SLOTS = (
+    ("hdr", "f1"), ("y", "f1"), ("f", "f1"), ("y_prev", "f1"), ("dense", "f2"), ("ts", "f1"), ("out", "f2"),
+    ("inputs", "f1"),
+    ("mass", "f1"), ("pbody", "i1"), ("ploc", "f2"), ("el_int", "i2"), ("el_real", "f2"), ("rot_int", "i2"),
+    ("rot_real", "f2"), ("jt_int", "i2"), ("jt_real", "f2"), ("fa_int", "i2"), ("fa_real", "f2"),
+    ("pd_int", "i2"), ("pd_real", "f2"), ("in_int", "i2"), ("gravity", "f1"), ("perm", "i1"), ("dims", "i1"),
+    ("A", "f2"), ("B", "f1"), ("C", "f1"), ("E", "f1"), ("E3", "f1"), ("D", "f2"), ("Pm", "f2"),
+    ("monitor", "f1"),
+    ("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), ("y_new", "f1"), ("f_new", "f1"),
+    ("ys", "f1"), ("sig_acc", "f1"),
+    ("raw", "f1"), ("order", "i1"), ("values", "f1"), ("clock", "f1"),
+    ("b_hdr", "f1"), ("b_y", "f1"), ("b_f", "f1"), ("b_y_prev", "f1"), ("b_dense", "f2"),
+)
+CLOCK_TIME, CLOCK_BOUND, CLOCK_RTOL, CLOCK_ATOL, CLOCK_ALPHA, CLOCK_BUSY, CLOCK_TOLERANCE, CLOCK_TAKEN = range(8)
+CLOCK_SIZE = 8
+#: What the C function returns when it took the step (anything else: it declined, see below).
+NATIVE_TOOK_STEP = 1
+_SLOT = {name: i for i, (name, _) in enumerate(NATIVE_SLOTS)}
+# native_step reads the slots by number: the blocks it reads must start where NATIVE_SLOTS puts them.
+assert (_SLOT["hdr"], _SLOT["b_hdr"], _SLOT["mass"], _SLOT["A"], _SLOT["AB"], _SLOT["raw"], _SLOT["clock"]) == \
+    (0, 46, 8, 25, 33, 42, 45) and len(NATIVE_SLOTS) == 51
+
+
+@intrinsic
+def _f64_at(typingctx, address):
+    """The int64 `address` as a float64 pointer."""
+    if not isinstance(address, types.Integer):
+        return None
+    sig = types.CPointer(types.float64)(address)
+
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+    return sig, codegen
+
+
+@intrinsic
+def _i64_at(typingctx, address):
+    """The int64 `address` as an int64 pointer."""
+    if not isinstance(address, types.Integer):
+        return None
+    sig = types.CPointer(types.int64)(address)
+
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+    return sig, codegen
+
+
+@njit(cache=True, inline="always")
+def _f1(tab, s):
+    j = TABLE_HEAD + 3 * s
+    return carray(_f64_at(tab[j]), (tab[j + 1],))
+
+
+@njit(cache=True, inline="always")
+def _f2(tab, s):
+    j = TABLE_HEAD + 3 * s
+    return carray(_f64_at(tab[j]), (tab[j + 1], tab[j + 2]))
+
+
+@njit(cache=True, inline="always")
+def _i1(tab, s):
+    j = TABLE_HEAD + 3 * s
+    return carray(_i64_at(tab[j]), (tab[j + 1],))
+
+
+@njit(cache=True, inline="always")
+def _i2(tab, s):
+    j = TABLE_HEAD + 3 * s
+    return carray(_i64_at(tab[j]), (tab[j + 1], tab[j + 2]))
+
+
+@njit(cache=True)
+def native_step(tab, t, h):
+    """One co-simulation step (t, t + h] of the running integration whose arrays `tab` lists: what
+    ``CompiledStepper.step`` does while the inputs hold (:func:`cosim_rk` with the step bound,
+    then every output into `values`). Returns NATIVE_TOOK_STEP, or 0 where it declines and leaves
+    the step to the Python path: a communication point that is not the current one, a step size
+    that is not finite and > 0, a failed step or outputs the kernels cannot evaluate. A declined
+    step leaves CLOCK_BUSY set and the integration's state as it was in the backup arrays (b_*),
+    which the Python path restores before it takes the step itself, so that it gives the
+    messages and the results the Python path always gives."""
+    clock = _f1(tab, 45)
+    now = clock[CLOCK_TIME]
+    if not (math.isfinite(t) and math.isfinite(h) and h > 0.0):
+        return 0
+    if abs(t - now) > clock[CLOCK_TOLERANCE] * max(1.0, abs(t), abs(now)):
+        return 0
+    t_end = t + h
+    if not t_end > now:
+        return 0
+    hdr, y, f, y_prev, dense = _f1(tab, 0), _f1(tab, 1), _f1(tab, 2), _f1(tab, 3), _f2(tab, 4)
+    b_hdr, b_y, b_f, b_y_prev, b_dense = _f1(tab, 46), _f1(tab, 47), _f1(tab, 48), _f1(tab, 49), _f2(tab, 50)
+    b_hdr[:] = hdr
+    b_y[:] = y
+    b_f[:] = f
+    b_y_prev[:] = y_prev
+    b_dense[:, :] = dense
+    clock[CLOCK_BUSY] = 1.0
+    bound = clock[CLOCK_BOUND]
+    if t_end > bound:                           # the importer went past its stop time
+        bound = np.inf
+    ts = _f1(tab, 5)
+    ts[0] = t_end
+    P = (_f1(tab, 8), _i1(tab, 9), _f2(tab, 10), _i2(tab, 11), _f2(tab, 12), _i2(tab, 13), _f2(tab, 14),
+         _i2(tab, 15), _f2(tab, 16), _i2(tab, 17), _f2(tab, 18), _i2(tab, 19), _f2(tab, 20), _i2(tab, 21),
+         _f1(tab, 22), _i1(tab, 23), _i1(tab, 24))
+    work = (_f2(tab, 33), _f1(tab, 34), _f1(tab, 35), _f1(tab, 36), _f2(tab, 37), _f1(tab, 38), _f1(tab, 39),
+            _f1(tab, 40), _f1(tab, 41))
+    st, sst = cosim_rk(tab[1], hdr, y, f, y_prev, dense, ts, _f2(tab, 6), bound, clock[CLOCK_RTOL],
+                       clock[CLOCK_ATOL], tab[2], _f1(tab, 7), clock[CLOCK_ALPHA], P,
+                       _f2(tab, 25), _f1(tab, 26), _f1(tab, 27), _f1(tab, 28), _f1(tab, 29), _f2(tab, 30),
+                       _f2(tab, 31), _f1(tab, 32), work, tab[3] != 0, _f1(tab, 42), _i1(tab, 43), _f1(tab, 44))
+    if st != OK or sst != OK:
+        return 0
+    clock[CLOCK_TIME] = t_end
+    clock[CLOCK_BOUND] = bound
+    clock[CLOCK_BUSY] = 0.0
+    clock[CLOCK_TAKEN] += 1.0
+    return NATIVE_TOOK_STEP
+
+
+def _native_entry(table, t, h):
+    return native_step(carray(table, (table[0],)), t, h)
+
+
+_NATIVE_CFUNC = []
+
+
+def native_step_cfunc():
+    """:func:`native_step` as a C function ``int32 (const int64 *table, double t, double h)``
+    (compiled on first use, cached on disk). A Python exception inside it (none is expected) is
+    printed and the function returns 0: it declines."""
+    if not _NATIVE_CFUNC:
+        sig = types.int32(types.CPointer(types.int64), types.float64, types.float64)
+        _NATIVE_CFUNC.append(cfunc(sig, cache=True)(_native_entry))
+    return _NATIVE_CFUNC[0]

@@ -46,6 +46,7 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from . import fmu_native
 from .errors import InerterError
 
 PACKAGE_DIR = Path(__file__).parent
@@ -387,7 +388,8 @@ def _compile_shim(identifier: str, status_vr: int, work: Path, fmu_name: str) ->
         work.mkdir(parents=True, exist_ok=True)
         out = work / f"{identifier}.so"
         command = [gcc, "-shared", "-fPIC", "-O2", "-fvisibility=hidden", "-pthread",
-                   f"-DSTATUS_VR={status_vr}u",
+                   f"-DSTATUS_VR={status_vr}u", f"-DNATIVE_LINK_VR={fmu_native.LINK_VR}u",
+                   f"-DNATIVE_SYNC_VR={fmu_native.SYNC_VR}u", f"-DNATIVE_MAGIC={fmu_native.MAGIC}LL",
                    f'-DORIGINAL_LIBRARY="{identifier}{ORIGINAL_SUFFIX}"',
                    "-o", str(out), SHIM_FILE, "-ldl"]
         try:

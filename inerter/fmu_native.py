@@ -1,0 +1,107 @@
+"""The FMU's native doStep: co-simulation steps taken by the FMU's binary in compiled code.
+
+Through pythonfmu, every fmi2DoStep and fmi2GetReal enters Python: pythonfmu's own glue, the
+slave's, the stepper's and numba's dispatch of some thirty arguments cost about as much per
+communication step as the model itself on the paper's scenes. On Linux the FMU's binary is the
+status shim (``fmu_src/status_shim.c``); with this link it takes a doStep itself, without
+entering Python, whenever the slave has *armed* it:
+
+- the slave owns a context, an int64 array at a fixed address for the instance's life
+  (CTX_* slots): a magic number, whether the link is armed, the address of the C function
+  :func:`inerter.compiled_kernels.native_step_cfunc`, the address of the running integration's
+  table (:meth:`inerter.compiled.CompiledStepper.native_table`), and the value references of the
+  outputs with the array of their values;
+- the shim asks for the context's address once, after fmi2Instantiate, by reading the Integer
+  value references LINK_VR and LINK_VR + 1 (not in modelDescription.xml; the slave answers 0
+  when the link is off: numba missing, or ``INERTER_FMU_NATIVE=0`` in the environment);
+- after a doStep that the slave took and returned fmi2OK, the shim arms itself when the
+  context says so: the slave arms it after every step on the compiled path with DOP853 or RK45
+  whose outputs the kernels evaluate, and disarms it otherwise;
+- an armed shim calls the C function for the next doStep. It returns 1 when it took the step
+  (fmi2OK; the outputs are in the values array, and fmi2GetReal of outputs is served from it),
+  and 0 when it declines: not the current communication point, a step size not > 0, a failed
+  step, outputs the kernels cannot evaluate. A declined step goes to the slave, which restores the
+  integration from the backup the C function made and takes the step itself, so every message,
+  status and result is the one the slave always gives;
+- before any other call enters Python after native steps, the shim sets the Integer SYNC_VR:
+  the slave takes over the time, state, counters and outputs the native steps left
+  (:meth:`~inerter.compiled.CompiledStepper.native_sync`). Every call but a doStep and the
+  getters disarms the shim until the next doStep the slave takes.
+
+So the native steps are the steps the slave would take, on the same arrays with the same compiled
+code: the results are identical bit for bit (tests/test_fmu_native.py).
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+#: The context's slots.
+CTX_MAGIC, CTX_ARMED, CTX_FUNCTION, CTX_TABLE, CTX_MAP_SIZE, CTX_MAP, CTX_VALUES = range(7)
+CTX_SIZE = 7
+#: CTX_MAGIC's value: the shim takes a context only with it ("inerte" in ASCII).
+MAGIC = 0x696E65727465
+#: Private Integer value references (not in modelDescription.xml): reading LINK_VR and
+#: LINK_VR + 1 gives the context's address (its low 31 bits, then the rest); setting SYNC_VR
+#: makes the slave take over the native steps.
+LINK_VR = 0x7FFFFF00
+SYNC_VR = 0x7FFFFF02
+#: The environment variable that turns the link off ("0").
+SWITCH = "INERTER_FMU_NATIVE"
+
+
+class NativeLink:
+    """The slave's end of the link: the context, armed after a step the slave took."""
+
+    def __init__(self, outputs: dict[int, int]):
+        """`outputs`: value reference -> index of the output in the stepper's output values."""
+        self.ctx = np.zeros(CTX_SIZE, dtype=np.int64)
+        self.ctx[CTX_MAGIC] = MAGIC
+        size = max(outputs, default=-1) + 1
+        self.map = np.full(size, -1, dtype=np.int64)
+        for vr, index in outputs.items():
+            self.map[vr] = index
+        self.ctx[CTX_MAP_SIZE] = size
+        self.ctx[CTX_MAP] = self.map.ctypes.data
+        self.why_off = self._why_off()
+        self._table = None                    # what the context points to, kept alive
+
+    @staticmethod
+    def _why_off() -> str:
+        if os.environ.get(SWITCH, "1").strip() == "0":
+            return f"{SWITCH}=0"
+        from . import compiled
+        return "" if compiled.AVAILABLE else compiled.WHY_NOT
+
+    def address_words(self) -> list[int]:
+        """[low 31 bits, the rest] of the context's address; [0, 0] when the link is off."""
+        if self.why_off:
+            return [0, 0]
+        address = int(self.ctx.ctypes.data)
+        return [address & 0x7FFFFFFF, address >> 31]
+
+    def arm(self, stepper, tolerance: float) -> None:
+        """Arm the link for the stepper's next step, where it can be taken natively."""
+        self.ctx[CTX_ARMED] = 0
+        table = None
+        if not self.why_off and hasattr(stepper, "native_table"):
+            table = stepper.native_table(tolerance)
+        if table is None:
+            return
+        if not self.ctx[CTX_FUNCTION]:
+            from .compiled import _k
+            self.ctx[CTX_FUNCTION] = _k.native_step_cfunc().address
+        values = stepper.native_values()
+        self._table = (table, values)
+        self.ctx[CTX_TABLE] = table.ctypes.data
+        self.ctx[CTX_VALUES] = values.ctypes.data
+        self.ctx[CTX_ARMED] = 1
+
+    def disarm(self) -> None:
+        self.ctx[CTX_ARMED] = 0
+
+    def turn_off(self, why: str) -> None:
+        """No native steps in this instance any more (the shim keeps the context's address)."""
+        self.disarm()
+        self.why_off = why

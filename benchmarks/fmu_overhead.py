@@ -3,19 +3,22 @@
     python benchmarks/fmu_overhead.py [--stop-time 20] [--step 0.01] [--repeats 3] [--chains 8,32]
 
 For each paper scene and each path (numpy; compiled, numba), and for N-link chains
-(benchmarks/chain_scene.py, compiled path only), four ways to produce the same outputs at the same
-communication points, measured side by side (process CPU time, best of
-`--repeats` rounds taken in turn, so drifting load weighs on all alike):
+(benchmarks/chain_scene.py, compiled path only), ways to produce the same outputs at the same
+communication points, measured side by side (process CPU time, best of `--repeats` rounds taken
+in turn, so drifting load weighs on all alike):
 
 - the solver's whole run (`Model.simulate(path=...)`: one integration sampled every step, every
   output evaluated at every sample, no metrics);
 - the solver's co-simulation stepper called directly (`Model.stepper(path=...)`: restarted at each
   communication point as the FMU does, outputs evaluated after each step);
 - the FMU through `fmpy.simulate_fmu` (extraction, instantiation, every step, every output
-  recorded), with its parameter `compiled` set accordingly;
-- the harness floor: a pythonfmu FMU with as many outputs whose doStep does nothing, through the
-  same `fmpy.simulate_fmu` call. What fmpy and pythonfmu cost per step whatever the model does; no
-  FMU built with pythonfmu and driven by fmpy can cost less.
+  recorded), with its parameter `compiled` set accordingly. On the compiled path twice: as shipped
+  (the FMU's binary takes the steps natively, inerter/fmu_native.py) and with native steps off
+  (INERTER_FMU_NATIVE=0: every step through pythonfmu into the slave);
+- two floors, through the same `fmpy.simulate_fmu` call with as many outputs: a pythonfmu FMU whose
+  doStep does nothing (what fmpy and pythonfmu cost per step), and the same FMU with its binary
+  replaced by benchmarks/c_floor_fmu.c, a C binary that does nothing (what fmpy alone costs; no FMU
+  driven by fmpy can cost less).
 
 The compiled kernels are loaded once before timing (their one-off compilation, cached on disk, is
 in the README). Writes docs/fmu_overhead.md.
@@ -23,6 +26,8 @@ in the README). Writes docs/fmu_overhead.md.
 from __future__ import annotations
 
 import argparse
+import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -79,6 +84,18 @@ def floor_fmu(n_outputs: int, folder: Path) -> str:
     return str(FmuBuilder.build_FMU(script, dest=folder))
 
 
+def c_floor_fmu(python_floor: str, folder: Path) -> str:
+    """The extracted `python_floor` FMU with its Linux binary replaced by c_floor_fmu.c."""
+    import fmpy
+    target = folder / (Path(python_floor).stem + "_c")
+    fmpy.extract(python_floor, unzipdir=str(target))
+    identifier = fmpy.read_model_description(python_floor).coSimulation.modelIdentifier
+    binary = target / "binaries" / "linux64" / f"{identifier}.so"
+    subprocess.run(["gcc", "-shared", "-fPIC", "-O2", "-I", str(ROOT / "fmu_src"), "-o", str(binary),
+                    str(Path(__file__).with_name("c_floor_fmu.c"))], check=True)
+    return str(target)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--stop-time", type=float, default=20.0)
@@ -92,8 +109,11 @@ def main(argv=None):
     compiled.warm_up()
     rows = []
     scratch = Path(tempfile.mkdtemp(prefix="inerter_floor_"))
-    cases = [(ROOT / "scenarios" / f"{name}.toml", ("numpy", "compiled")) for name in ("lumped_mass_2d", "two_bar_2d")]
-    cases += [(write_chain(scratch / f"chain_{links}.toml", links), ("compiled",))
+    # (label, solver path, native steps in the FMU)
+    both = (("numpy", "numpy", False), ("compiled, steps in Python", "compiled", False),
+            ("compiled, native steps", "compiled", True))
+    cases = [(ROOT / "scenarios" / f"{name}.toml", both) for name in ("lumped_mass_2d", "two_bar_2d")]
+    cases += [(write_chain(scratch / f"chain_{links}.toml", links), both[1:])
               for links in (int(x) for x in args.chains.split(",") if x.strip())]
     for scene, paths in cases:
         name = scene.stem
@@ -102,6 +122,7 @@ def main(argv=None):
         n = int(round(args.stop_time / args.step))
         lengths = [o["name"] for o in model.output_info() if o["unit"] == "m"]
         floor = floor_fmu(len(model.output_info()), scratch)
+        c_floor = c_floor_fmu(floor, scratch)
 
         def whole(path):
             return model.simulate(stop_time=args.stop_time, output_interval=args.step, metrics=False, path=path)
@@ -114,39 +135,46 @@ def main(argv=None):
                 st.outputs()
             return st
 
-        def fmu_run(path):
-            res = fmpy.simulate_fmu(fmu, stop_time=args.stop_time, output_interval=args.step,
-                                    start_values={"compiled": path == "compiled"})
+        def fmu_run(path, native):
+            os.environ["INERTER_FMU_NATIVE"] = "1" if native else "0"
+            try:
+                res = fmpy.simulate_fmu(fmu, stop_time=args.stop_time, output_interval=args.step,
+                                        start_values={"compiled": path == "compiled"})
+            finally:
+                del os.environ["INERTER_FMU_NATIVE"]
             assert abs(res["time"][-1] - args.stop_time) < 1e-9
             return res
 
-        def floor_run():
-            return fmpy.simulate_fmu(floor, stop_time=args.stop_time, output_interval=args.step)
+        def floor_run(which):
+            return fmpy.simulate_fmu(which, stop_time=args.stop_time, output_interval=args.step)
 
-        fmu_run("compiled")                                  # load the kernels inside the FMU once
-        for path in paths:
-            best = {"whole": np.inf, "stepper": np.inf, "fmu": np.inf, "floor": np.inf}
+        fmu_run("compiled", True)                             # load the kernels inside the FMU once
+        for label, path, native in paths:
+            best = {"whole": np.inf, "stepper": np.inf, "fmu": np.inf, "floor": np.inf, "c_floor": np.inf}
             for _ in range(args.repeats):
                 t, reference = cpu(lambda: whole(path))
                 best["whole"] = min(best["whole"], t)
                 best["stepper"] = min(best["stepper"], cpu(lambda: stepper(path))[0])
-                t, res = cpu(lambda: fmu_run(path))
+                t, res = cpu(lambda: fmu_run(path, native))
                 best["fmu"] = min(best["fmu"], t)
-                best["floor"] = min(best["floor"], cpu(floor_run)[0])
+                best["floor"] = min(best["floor"], cpu(lambda: floor_run(floor))[0])
+                best["c_floor"] = min(best["c_floor"], cpu(lambda: floor_run(c_floor))[0])
                 if path == "numpy" and best["whole"] > 2.0:
                     break                                    # the numpy path is slow: one round is enough
             diff = max(float(np.max(np.abs(res[s] - reference[s]))) for s in lengths)
-            rows.append((name, path, n, best["whole"], best["stepper"], best["fmu"], best["floor"], diff))
+            rows.append((name, label, n, best["whole"], best["stepper"], best["fmu"], best["floor"],
+                         best["c_floor"], diff))
             print(rows[-1], flush=True)
     head = (f"Communication step {args.step:g} s, {args.stop_time:g} s simulated, default scene tolerances, "
             f"process CPU seconds, best of {args.repeats} rounds.\n\n"
             "| scene | path | steps | solver, whole run (s) | solver stepper (s) | FMU via fmpy (s) "
-            "| FMU per step (µs) | harness floor (s) | **FMU / whole run** | FMU / stepper "
-            "| (FMU − floor) / whole run | largest difference of a length, FMU vs whole run (m) |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|---|\n")
-    body = "".join(f"| {a} | {p} | {b} | {c:.3f} | {d:.3f} | {e:.3f} | {1e6 * e / b:.0f} | {g:.3f} "
-                   f"| **{e / c:.2f}** | {e / d:.2f} | {(e - g) / c:.2f} | {f:.2e} |\n"
-                   for a, p, b, c, d, e, g, f in rows)
+            "| FMU per step (µs) | floor: pythonfmu FMU doing nothing (s) | floor: C FMU doing nothing (s) "
+            "| **FMU / whole run** | FMU / stepper | (FMU − C floor) / whole run "
+            "| largest difference of a length, FMU vs whole run (m) |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+    body = "".join(f"| {a} | {p} | {b} | {c:.3f} | {d:.3f} | {e:.3f} | {1e6 * e / b:.0f} | {g:.3f} | {cf:.3f} "
+                   f"| **{e / c:.2f}** | {e / d:.2f} | {(e - cf) / c:.2f} | {f:.2e} |\n"
+                   for a, p, b, c, d, e, g, cf, f in rows)
     print(head + body)
     (ROOT / "docs").mkdir(exist_ok=True)
     (ROOT / "docs" / "fmu_overhead.md").write_text(
@@ -156,10 +184,12 @@ def main(argv=None):
           "running across the communication points (it restarts only where an input changes), so they take "
           "the whole run's steps and give its results bit for bit (difference 0); the numpy stepper restarts "
           "scipy's integrator at every communication point, which changes the result within the tolerance. "
-          "The FMU adds fmpy's and pythonfmu's calls (doStep, and getReal of every output at every step): the "
-          "harness floor column is that cost alone, measured with an FMU that does nothing, and the "
-          "(FMU − floor) column is what this project's FMU costs on top of it, against the whole run.\n")
-
+          "As shipped, the FMU's binary takes those steps itself in compiled code and serves the outputs "
+          "(inerter/fmu_native.py); with native steps off, every doStep and getReal goes through pythonfmu "
+          "into the slave. The two floors are FMUs that do nothing, driven by the same fmpy call: with "
+          "pythonfmu's binary (fmpy's and pythonfmu's cost per step) and with a C binary "
+          "(benchmarks/c_floor_fmu.c: fmpy's own cost, recording every output at every step). "
+          "The (FMU − C floor) column is what the FMU itself costs, against the whole run.\n")
 
 if __name__ == "__main__":
     main()

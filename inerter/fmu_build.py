@@ -13,7 +13,9 @@ On Linux, ``binaries/linux64/<model>.so`` is the status shim compiled from
 ``fmu_src/status_shim.c`` (with gcc, at build time), and pythonfmu's own binary sits beside it as
 ``<model>.pythonfmu.so``. pythonfmu's binary returns fmi2OK from every call but doStep; the shim
 forwards every call to it and returns the slave's status (its variable ``fmi_status``, whose value
-reference is compiled in) from exitInitializationMode, setXxx, doStep and setFMUstate. Without
+reference is compiled in) from exitInitializationMode, setXxx, doStep and setFMUstate. It also
+takes the doSteps of a running compiled integration itself, in compiled code, when the slave arms
+it (``inerter/fmu_native.py``; the private value references are compiled in too). Without
 gcc (or on a host other than Linux x86-64) the FMU is built with pythonfmu's binary alone and the
 build warns (FmuBuildWarning): errors then come as fmi2Discard from the next doStep. The win64
 binary is always pythonfmu's own.

@@ -1,0 +1,184 @@
+"""The FMU's native doStep (inerter/fmu_native.py, fmu_src/status_shim.c).
+
+On the compiled path the FMU's binary takes co-simulation steps in compiled code without entering
+Python, and hands everything else to the slave after it took those steps over. It must change
+nothing but the time a step costs: every output, status and message is compared with an instance
+of the same FMU whose native steps are off (INERTER_FMU_NATIVE=0, the slave takes every step),
+exactly, through importer call sequences that cross the native path at each of its hand-overs
+(outputs read, a parameter read, FMU state got and set, an input set, a step at the wrong time,
+past the stop time, a step that fails).
+"""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from test_fmu import (FMI_DISCARD, FMI_ERROR, INPUT, INPUT_SCENE, SCENE_PARAMS, FMICallException,  # noqa: F401
+                      fmus, instance, needs_shim, unzipped)
+
+import inerter  # noqa: E402
+from inerter import compiled, fmu_native  # noqa: E402
+
+pytestmark = pytest.mark.skipif(not compiled.AVAILABLE, reason="numba is missing: no native steps")
+
+
+def native_scene(scene):
+    """Skip a scene whose steps the compiled path does not take (3D, ...)."""
+    if inerter.load(scene).stepper(path="compiled").path != "compiled":
+        pytest.skip("the compiled stepper does not take this scene: no native steps")
+
+
+@pytest.fixture
+def pair(instance, monkeypatch, needs_shim):
+    """pair(fmu) -> (native instance, instance whose native steps are off)."""
+    def make(fmu):
+        made = []
+        for switch in ("1", "0"):
+            monkeypatch.setenv(fmu_native.SWITCH, switch)
+            made.append(instance(fmu, f"native-{switch}"))
+        monkeypatch.delenv(fmu_native.SWITCH)
+        return made
+    return make
+
+
+class Transcript:
+    """What an instance gives back to a sequence of calls: values, statuses (fmpy raises on a
+    status worse than warning) and the messages logged, in order."""
+
+    def __init__(self, inst):
+        self.inst = inst
+        self.entries = []
+
+    def call(self, label, fn, *args):
+        try:
+            value = fn(*args)
+            status = 0
+        except FMICallException as exc:
+            value, status = None, exc.status
+        self.entries.append((label, status, value))
+        return value
+
+    def step(self, t, h):
+        return self.call(f"doStep({t!r}, {h!r})", self.inst.fmu.doStep, t, h)
+
+    def outputs(self):
+        return self.call("outputs", self.inst.get, self.inst.outputs)
+
+    def messages(self):
+        return [(s, m) for s, m in self.inst.messages if not m.startswith(("initialised", "terminated"))]
+
+
+def native_steps(inst) -> int:
+    """Communication steps the binary took natively, from the slave's message at terminate."""
+    inst.fmu.terminate()
+    [line] = [m for _, m in inst.messages if m.startswith("terminated")]
+    return int(line.split(", ")[1].split()[0])
+
+
+def replay(inst, scene_has_input: bool, stop_time: float):
+    """The call sequence crossing every hand-over of the native path."""
+    tr = Transcript(inst)
+    inst.fmu.setupExperiment(startTime=0.0, stopTime=stop_time)
+    inst.fmu.enterInitializationMode()
+    inst.fmu.exitInitializationMode()
+    h, t = 0.01, 0.0
+    parameter = next(v.name for v in inst.md.modelVariables if v.causality == "parameter"
+                     and v.type == "Real")
+    for k in range(12):                                  # native after the first step
+        tr.step(t, h)
+        t += h
+        tr.outputs()
+    tr.call("parameter", inst.get, [parameter])          # enters Python: the slave takes over
+    tr.outputs()
+    state = inst.fmu.getFMUstate()
+    first = [(tr.step(t + n * h, h), tr.outputs()) for n in range(4)]
+    inst.fmu.setFMUstate(state)
+    again = [(tr.step(t + n * h, h), tr.outputs()) for n in range(4)]
+    assert again == first, "a rolled-back step did not repeat"
+    inst.fmu.freeFMUstate(state)
+    t += 4 * h
+    tr.step(t + 0.5, h)                                  # not the current point: refused
+    tr.step(t, -h)                                       # a step size not > 0: refused
+    if scene_has_input:
+        tr.call("set input", inst.set, INPUT, 3.0)       # the integration restarts
+        for _ in range(3):
+            tr.step(t, h)
+            t += h
+            tr.outputs()
+    while t < stop_time + 3 * h:                          # on past the stop time
+        tr.step(t, h)
+        t += h
+    tr.outputs()
+    return tr
+
+
+@pytest.mark.parametrize("scene", SCENE_PARAMS)
+def test_native_steps_give_what_the_slave_gives_bit_for_bit(fmus, scene, pair):
+    native_scene(scene)
+    native, slave = pair(fmus[scene])
+    has_input = scene == INPUT_SCENE
+    a = replay(native, has_input, stop_time=0.3)
+    b = replay(slave, has_input, stop_time=0.3)
+    assert a.entries == b.entries
+    assert a.messages() == b.messages()
+    assert [s for _, s, _ in a.entries].count(FMI_DISCARD) == 2         # the two refused steps
+    # The native instance took most steps natively; the other none (and says why).
+    assert native_steps(native) >= 30
+    assert native_steps(slave) == 0 and f"{fmu_native.SWITCH}=0" in slave.logged()
+
+
+TERMINALS_MEET = INPUT_SCENE.parent / "hard" / "terminals_meet_2d.toml"
+
+
+def test_a_step_that_fails_natively_is_taken_and_reported_by_the_slave(fmus, pair):
+    """A mass driven into the point its elements are attached to (scenarios/hard): the native step
+    that reaches it fails half-way and declines; the slave restores the integration from the
+    backup and takes the step, which fails the same way: the same fmi2Discard, message and last
+    good state as without native steps, and again when the importer retries it."""
+    native_scene(TERMINALS_MEET)
+    native, slave = pair(fmus[TERMINALS_MEET])
+    transcripts = []
+    for inst in (native, slave):
+        inst.initialise()
+        tr = Transcript(inst)
+        h, t = 0.01, 0.0
+        for _ in range(200):
+            tr.step(t, h)
+            tr.outputs()
+            if tr.entries[-2][1]:
+                break
+            t += h
+        tr.step(t, h)                                    # the same step fails again
+        tr.outputs()
+        transcripts.append(tr)
+    a, b = transcripts
+    assert a.entries == b.entries
+    assert a.messages() == b.messages()
+    failed = [label for label, status, _ in a.entries if status]
+    assert len(failed) == 2 and failed[0] == failed[1], failed
+    # The step that fails is the one holding the closed-form time of impact (the scene's header).
+    t_fail = float(failed[0][len("doStep("):].split(",")[0])
+    assert t_fail <= math.pi * math.sqrt(2) / 4 < t_fail + 0.01
+    assert "terminals O and P meet" in a.messages()[-1][1]
+    assert native_steps(native) == 110
+
+
+def test_outputs_are_served_natively_only_between_native_steps(fmus, pair):
+    """After native steps the binary serves getReal of outputs from the values the step wrote; a
+    mixed request (an output and an input) goes to the slave, which takes the steps over first."""
+    scene = INPUT_SCENE
+    native_scene(scene)
+    native, slave = pair(fmus[scene])
+    results = []
+    for inst in (native, slave):
+        inst.initialise()
+        t, h = 0.0, 0.01
+        for _ in range(5):
+            inst.fmu.doStep(t, h)
+            t += h
+        mixed = inst.get([inst.outputs[0], INPUT, inst.outputs[-1]])
+        inst.fmu.doStep(t, h)
+        results.append((mixed, inst.get(inst.outputs)))
+    assert results[0] == results[1]
+    assert not any(math.isnan(v) for v in results[0][1])

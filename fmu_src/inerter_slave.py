@@ -548,7 +548,7 @@ class InerterSlave(Fmi2Slave):
         """Take over the steps the FMU's binary took natively since the last step here (the shim
         asks before any other call enters Python after them)."""
         try:
-            taken = self._stepper.native_sync() if self._stepper is not None else 0
+            taken = self._native.sync(self._stepper)
             if taken:
                 self._native_steps += taken
                 self._outputs = self._stepper.output_values()

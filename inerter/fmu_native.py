@@ -98,6 +98,13 @@ class NativeLink:
         self.ctx[CTX_VALUES] = values.ctypes.data
         self.ctx[CTX_ARMED] = 1
 
+    @staticmethod
+    def sync(stepper) -> int:
+        """The slave takes over the stepper's native steps (the shim asks before any other call
+        enters Python after them); returns how many there were."""
+        take_over = getattr(stepper, "native_sync", None)
+        return take_over() if take_over is not None else 0
+
     def disarm(self) -> None:
         self.ctx[CTX_ARMED] = 0
 

@@ -1012,23 +1012,11 @@ assert (_SLOT["hdr"], _SLOT["b_hdr"], _SLOT["mass"], _SLOT["A"], _SLOT["AB"], _S
 
 
 @intrinsic
-def _f64_at(typingctx, address):
-    """The int64 `address` as a float64 pointer."""
-    if not isinstance(address, types.Integer):
+def _pointer(typingctx, address, dtype):
+    """The int64 `address` as a pointer to `dtype` (np.float64, np.int64)."""
+    if not isinstance(address, types.Integer) or not isinstance(dtype, types.NumberClass):
         return None
-    sig = types.CPointer(types.float64)(address)
-
-    def codegen(context, builder, signature, args):
-        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
-    return sig, codegen
-
-
-@intrinsic
-def _i64_at(typingctx, address):
-    """The int64 `address` as an int64 pointer."""
-    if not isinstance(address, types.Integer):
-        return None
-    sig = types.CPointer(types.int64)(address)
+    sig = types.CPointer(dtype.instance_type)(address, dtype)
 
     def codegen(context, builder, signature, args):
         return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
@@ -1038,25 +1026,25 @@ def _i64_at(typingctx, address):
 @njit(cache=True, inline="always")
 def _f1(tab, s):
     j = TABLE_HEAD + 3 * s
-    return carray(_f64_at(tab[j]), (tab[j + 1],))
+    return carray(_pointer(tab[j], np.float64), (tab[j + 1],))
 
 
 @njit(cache=True, inline="always")
 def _f2(tab, s):
     j = TABLE_HEAD + 3 * s
-    return carray(_f64_at(tab[j]), (tab[j + 1], tab[j + 2]))
+    return carray(_pointer(tab[j], np.float64), (tab[j + 1], tab[j + 2]))
 
 
 @njit(cache=True, inline="always")
 def _i1(tab, s):
     j = TABLE_HEAD + 3 * s
-    return carray(_i64_at(tab[j]), (tab[j + 1],))
+    return carray(_pointer(tab[j], np.int64), (tab[j + 1],))
 
 
 @njit(cache=True, inline="always")
 def _i2(tab, s):
     j = TABLE_HEAD + 3 * s
-    return carray(_i64_at(tab[j]), (tab[j + 1], tab[j + 2]))
+    return carray(_pointer(tab[j], np.int64), (tab[j + 1], tab[j + 2]))
 
 
 @njit(cache=True)

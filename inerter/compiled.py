@@ -648,6 +648,7 @@ class CompiledStepper(Stepper):
         self.time = t_end
         self.steps += int(steps)
         self._values = None
+        self._input_moved = False
 
     def output_values(self) -> list:
         """The outputs at the current time, in the order of ``signals.names``."""
@@ -666,44 +667,61 @@ class CompiledStepper(Stepper):
     # The native doStep (inerter.fmu_native): compiled_kernels.native_step takes steps on the running
     # integration's arrays without entering Python; native_sync takes over what it did.
     def native_table(self, tolerance: float):
-        """The int64 table of :func:`compiled_kernels.native_step` for the running integration, its
-        clock at the current time (`tolerance`: communication points closer than
-        tolerance·max(1 s, |t|) are equal); None where the next step must be taken here: RK4, no
-        running integration (before the first step, after a failed one), an input changed, outputs
-        the kernels do not evaluate. Valid until the next call of :meth:`step` or :meth:`set_state`."""
-        if self._rk is None or self._order is None or self._input_moved or self._tables is None:
+        """The int64 table of :func:`compiled_kernels.native_step` for the next step, its clock at the
+        current time (`tolerance`: communication points closer than tolerance·max(1 s, |t|) are
+        equal); None where the next step must be taken here: no running integration (DOP853, RK45:
+        before the first step, after a failed one), an input changed, outputs the kernels do not
+        evaluate. Valid until the next call of :meth:`step` or :meth:`set_state`."""
+        if self._order is None or self._input_moved:
             return None
-        native = self._native
-        if native is None or native["rk"] is not self._rk:
-            native = self._native = self._native_arrays()
+        if self.settings.method == "RK4":
+            native = self._native
+            if native is None:
+                ny = 2 * self.kernel.n
+                rk = [np.zeros(_k.RK_HEADER), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros((7, ny))]
+                native = self._native = self._native_arrays(
+                    rk, np.empty(len(self.kernel._inputs(self.inputs))), 2,
+                    (np.zeros((1, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 1)),
+                     np.zeros((1, 1))), _k.work_arrays(self.kernel.params, ny, 1))
+            native["rk"][1][:] = self.y                 # RK4 restarts at every communication point
+            native["inputs"][:] = self.kernel._inputs(self.inputs)
+        else:
+            if self._rk is None:
+                return None
+            native = self._native
+            if native is None or native["rk"] is not self._rk:
+                native = self._native = self._native_arrays(self._rk, self._rk_inputs, 1, self._tables, self._work)
         clock = native["clock"]
         clock[_k.CLOCK_TIME] = self.time
         clock[_k.CLOCK_BOUND] = self.t_bound
         clock[_k.CLOCK_BUSY] = 0.0
         clock[_k.CLOCK_TOLERANCE] = tolerance
         clock[_k.CLOCK_TAKEN] = 0.0
-        native["steps"] = self._rk[0][_k.RK_STEPS]
+        native["steps"] = native["rk"][0][_k.RK_STEPS]
         return native["table"]
 
-    def _native_arrays(self) -> dict:
-        s, kernel, rk = self.settings, self.kernel, self._rk
+    def _native_arrays(self, rk, inputs, samples, tables, work) -> dict:
+        """The table of native_step over the integration's arrays `rk` ([hdr, y, f, y_prev, dense]),
+        with `samples` rows of output states (2 for RK4: the step's start and end)."""
+        s, kernel = self.settings, self.kernel
         ny = len(rk[1])
         clock = np.zeros(_k.CLOCK_SIZE)
         clock[_k.CLOCK_RTOL], clock[_k.CLOCK_ATOL] = float(s.rtol), float(s.atol)
-        clock[_k.CLOCK_ALPHA] = float(s.alpha)
-        native = dict(rk=rk, clock=clock, ts=np.zeros(1), out=np.empty((1, ny)), values=np.empty(len(self._order)),
-                      backup=[np.empty_like(a) for a in rk])
+        clock[_k.CLOCK_ALPHA], clock[_k.CLOCK_STEP] = float(s.alpha), float(s.step or 0.0)
+        native = dict(rk=rk, inputs=inputs, clock=clock, ts=np.zeros(samples), out=np.empty((samples, ny)),
+                      values=np.empty(len(self._order)), backup=[np.empty_like(a) for a in rk])
         arrays = dict(zip(("hdr", "y", "f", "y_prev", "dense"), rk))
         arrays.update(zip(("b_hdr", "b_y", "b_f", "b_y_prev", "b_dense"), native["backup"]))
         arrays.update(zip(("mass", "pbody", "ploc", "el_int", "el_real", "rot_int", "rot_real", "jt_int", "jt_real",
                            "fa_int", "fa_real", "pd_int", "pd_real", "in_int", "gravity", "perm", "dims"),
                           kernel.params))
-        arrays.update(zip(("A", "B", "C", "E", "E3", "D", "Pm"), self._tables))
-        arrays.update(zip(("AB", "rhs", "gen", "acc", "K", "y_new", "f_new", "ys", "sig_acc"), self._work))
-        arrays.update(ts=native["ts"], out=native["out"], inputs=self._rk_inputs, monitor=self._monitor,
+        arrays.update(zip(("A", "B", "C", "E", "E3", "D", "Pm"), tables))
+        arrays.update(zip(("AB", "rhs", "gen", "acc", "K", "y_new", "f_new", "ys", "sig_acc"), work))
+        arrays.update(ts=native["ts"], out=native["out"], inputs=inputs, monitor=self._monitor,
                       raw=self._raw, order=self._order, values=native["values"], clock=clock)
+        code = _k.NATIVE_RK4 if s.method == "RK4" else _RK_CODE[s.method]
         table = np.zeros(_k.TABLE_HEAD + 3 * len(_k.NATIVE_SLOTS), dtype=np.int64)
-        table[:_k.TABLE_HEAD] = (len(table), _RK_CODE[s.method], int(s.max_steps), int(self._need_acc))
+        table[:_k.TABLE_HEAD] = (len(table), code, int(s.max_steps), int(self._need_acc))
         for slot, (name, kind) in enumerate(_k.NATIVE_SLOTS):
             a = arrays[name]
             dtype = np.float64 if kind[0] == "f" else np.int64
@@ -725,21 +743,25 @@ class CompiledStepper(Stepper):
         (time, state, step size, counters, outputs), and restore the integration's state from its
         backup where a native step declined half-way. Returns the number of steps taken over."""
         native = self._native
-        if native is None or native["rk"] is not self._rk:
+        rk4 = self.settings.method == "RK4"
+        if native is None or not (rk4 or native["rk"] is self._rk):
             return 0
         clock = native["clock"]
         if clock[_k.CLOCK_BUSY]:
-            for a, backup in zip(self._rk, native["backup"]):
+            for a, backup in zip(native["rk"], native["backup"]):
                 a[...] = backup
             clock[_k.CLOCK_BUSY] = 0.0
         taken = int(clock[_k.CLOCK_TAKEN])
         if not taken:
             return 0
-        hdr = self._rk[0]
+        hdr = native["rk"][0]
         self.time = float(clock[_k.CLOCK_TIME])
         self.t_bound = float(clock[_k.CLOCK_BOUND])
-        self.y = native["out"][0].copy()
-        self.h = float(hdr[_k.RK_H])
+        if rk4:
+            self.y = native["rk"][1].copy()
+        else:
+            self.y = native["out"][0].copy()
+            self.h = float(hdr[_k.RK_H])
         self.steps += int(hdr[_k.RK_STEPS] - native["steps"])
         native["steps"] = hdr[_k.RK_STEPS]
         self._values = native["values"].tolist()

@@ -986,7 +986,9 @@ def max_residual(states, n, P):
 # shape[1]) in the order of NATIVE_SLOTS, whose kinds say the dtype (f: float64, i: int64) and the
 # number of dimensions. `clock` holds the floats: the communication time, the step bound, rtol,
 # atol, alpha, whether a step is under way (CLOCK_BUSY: set when a step starts, cleared when it
-# succeeds), the tolerance on communication points, and the number of steps taken.
+# succeeds), the tolerance on communication points, the number of steps taken, and RK4's step.
+# Method codes: 0 DOP853, 1 RK45 (a running integration, cosim_rk), NATIVE_RK4 (integrate_rk4 from
+# the communication point, `y` the state there and `ts`, `out` two rows; the tableau slots unused).
 TABLE_HEAD = 4
 NATIVE_SLOTS = (
     ("hdr", "f1"), ("y", "f1"), ("f", "f1"), ("y_prev", "f1"), ("dense", "f2"), ("ts", "f1"), ("out", "f2"),
@@ -1001,8 +1003,10 @@ NATIVE_SLOTS = (
     ("raw", "f1"), ("order", "i1"), ("values", "f1"), ("clock", "f1"),
     ("b_hdr", "f1"), ("b_y", "f1"), ("b_f", "f1"), ("b_y_prev", "f1"), ("b_dense", "f2"),
 )
-CLOCK_TIME, CLOCK_BOUND, CLOCK_RTOL, CLOCK_ATOL, CLOCK_ALPHA, CLOCK_BUSY, CLOCK_TOLERANCE, CLOCK_TAKEN = range(8)
-CLOCK_SIZE = 8
+CLOCK_TIME, CLOCK_BOUND, CLOCK_RTOL, CLOCK_ATOL, CLOCK_ALPHA, CLOCK_BUSY, CLOCK_TOLERANCE, CLOCK_TAKEN, \
+    CLOCK_STEP = range(9)
+CLOCK_SIZE = 9
+NATIVE_RK4 = 2
 #: What the C function returns when it took the step (anything else: it declined, see below).
 NATIVE_TOOK_STEP = 1
 _SLOT = {name: i for i, (name, _) in enumerate(NATIVE_SLOTS)}
@@ -1051,7 +1055,8 @@ def _i2(tab, s):
 def native_step(tab, t, h):
     """One co-simulation step (t, t + h] of the running integration whose arrays `tab` lists: what
     ``CompiledStepper.step`` does while the inputs hold (:func:`cosim_rk` with the step bound,
-    then every output into `values`). Returns NATIVE_TOOK_STEP, or 0 where it declines and leaves
+    then every output into `values`; RK4: :func:`integrate_rk4` from the communication point, then
+    the outputs). Returns NATIVE_TOOK_STEP, or 0 where it declines and leaves
     the step to the Python path: a communication point that is not the current one, a step size
     that is not finite and > 0, a failed step or outputs the kernels cannot evaluate. A declined
     step leaves CLOCK_BUSY set and the integration's state as it was in the backup arrays (b_*),
@@ -1075,21 +1080,40 @@ def native_step(tab, t, h):
     b_dense[:, :] = dense
     clock[CLOCK_BUSY] = 1.0
     bound = clock[CLOCK_BOUND]
-    if t_end > bound:                           # the importer went past its stop time
-        bound = np.inf
-    ts = _f1(tab, 5)
-    ts[0] = t_end
+    ts, out, inputs, alpha = _f1(tab, 5), _f2(tab, 6), _f1(tab, 7), clock[CLOCK_ALPHA]
     P = (_f1(tab, 8), _i1(tab, 9), _f2(tab, 10), _i2(tab, 11), _f2(tab, 12), _i2(tab, 13), _f2(tab, 14),
          _i2(tab, 15), _f2(tab, 16), _i2(tab, 17), _f2(tab, 18), _i2(tab, 19), _f2(tab, 20), _i2(tab, 21),
          _f1(tab, 22), _i1(tab, 23), _i1(tab, 24))
     work = (_f2(tab, 33), _f1(tab, 34), _f1(tab, 35), _f1(tab, 36), _f2(tab, 37), _f1(tab, 38), _f1(tab, 39),
             _f1(tab, 40), _f1(tab, 41))
-    st, sst = cosim_rk(tab[1], hdr, y, f, y_prev, dense, ts, _f2(tab, 6), bound, clock[CLOCK_RTOL],
-                       clock[CLOCK_ATOL], tab[2], _f1(tab, 7), clock[CLOCK_ALPHA], P,
-                       _f2(tab, 25), _f1(tab, 26), _f1(tab, 27), _f1(tab, 28), _f1(tab, 29), _f2(tab, 30),
-                       _f2(tab, 31), _f1(tab, 32), work, tab[3] != 0, _f1(tab, 42), _i1(tab, 43), _f1(tab, 44))
-    if st != OK or sst != OK:
-        return 0
+    raw, order, values = _f1(tab, 42), _i1(tab, 43), _f1(tab, 44)
+    if tab[1] == NATIVE_RK4:
+        ts[0] = now
+        ts[1] = t_end
+        st, k, steps, evals, t_reached = integrate_rk4(y, now, t_end, ts, out, clock[CLOCK_STEP], tab[2], inputs,
+                                                       alpha, P)
+        if st != OK:
+            return 0
+        y_end = out[1]
+        for i in range(y_end.shape[0]):
+            if not math.isfinite(y_end[i]):
+                return 0
+        if _signals_at(t_end, y_end, inputs, alpha, tab[3] != 0, P, work, raw) != OK:
+            return 0
+        for i in range(order.shape[0]):
+            values[i] = raw[order[i]]
+        y[:] = y_end
+        hdr[RK_STEPS] += steps
+    else:
+        if t_end > bound:                       # the importer went past its stop time
+            bound = np.inf
+        ts[0] = t_end
+        st, sst = cosim_rk(tab[1], hdr, y, f, y_prev, dense, ts, out, bound, clock[CLOCK_RTOL],
+                           clock[CLOCK_ATOL], tab[2], inputs, alpha, P,
+                           _f2(tab, 25), _f1(tab, 26), _f1(tab, 27), _f1(tab, 28), _f1(tab, 29), _f2(tab, 30),
+                           _f2(tab, 31), _f1(tab, 32), work, tab[3] != 0, raw, order, values)
+        if st != OK or sst != OK:
+            return 0
     clock[CLOCK_TIME] = t_end
     clock[CLOCK_BOUND] = bound
     clock[CLOCK_BUSY] = 0.0

@@ -20,6 +20,10 @@ in turn, so drifting load weighs on all alike):
   replaced by benchmarks/c_floor_fmu.c, a C binary that does nothing, alone in the FMU (what fmpy
   alone costs, extraction included; no FMU driven by fmpy can cost less).
 
+A second table runs the compiled-path FMUs and the C floor through libcosimpy (the Open Simulation
+Platform's C++ engine, when installed) with a last-value observer, which reads every variable of
+the FMU at every step; its process time includes the engine's worker threads.
+
 The compiled kernels are loaded once before timing (their one-off compilation, cached on disk, is
 in the README). Writes docs/fmu_overhead.md.
 """
@@ -100,6 +104,38 @@ def c_floor_fmu(python_floor: str, folder: Path) -> str:
     return str(target)
 
 
+COSIM_RUN = r"""
+import sys, time
+from libcosimpy.CosimExecution import CosimExecution
+from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+from libcosimpy.CosimObserver import CosimObserver
+from libcosimpy.CosimSlave import CosimLocalSlave
+log_output_level(CosimLogLevel.ERROR)
+fmu, stop, step, repeats = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), int(sys.argv[4])
+best = float("inf")
+for _ in range(repeats + 1):                      # the first run loads the kernels
+    t0 = time.process_time()
+    execution = CosimExecution.from_step_size(step_size=round(step * 1e9))
+    execution.add_local_slave(CosimLocalSlave(fmu_path=fmu, instance_name="fmu"))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    assert execution.simulate_until(target_time=round(stop * 1e9))
+    best = min(best, time.process_time() - t0)
+print(best)
+"""
+
+
+def cosim_cpu(fmu: str, args, native: bool) -> float:
+    """Best process time of a libcosimpy run of `fmu` (in a process of its own: libcosim keeps
+    worker threads), with native steps on or off."""
+    env = dict(os.environ, INERTER_FMU_NATIVE="1" if native else "0")
+    proc = subprocess.run([sys.executable, "-c", COSIM_RUN, fmu, str(args.stop_time), str(args.step),
+                           str(args.repeats)], env=env, capture_output=True, text=True, timeout=600)
+    if proc.returncode:
+        raise RuntimeError(proc.stderr[-2000:])
+    return float(proc.stdout.strip().splitlines()[-1])
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--stop-time", type=float, default=20.0)
@@ -111,7 +147,12 @@ def main(argv=None):
     if not compiled.AVAILABLE:
         raise SystemExit(f"the compiled path is not available: {compiled.WHY_NOT}")
     compiled.warm_up()
-    rows = []
+    rows, cosim_rows = [], []
+    try:
+        import libcosimpy  # noqa: F401
+        has_cosim = True
+    except ImportError:
+        has_cosim = False
     scratch = Path(tempfile.mkdtemp(prefix="inerter_floor_"))
     # (label, solver path, native steps in the FMU)
     both = (("numpy", "numpy", False), ("compiled, steps in Python", "compiled", False),
@@ -153,6 +194,13 @@ def main(argv=None):
             return fmpy.simulate_fmu(which, stop_time=args.stop_time, output_interval=args.step)
 
         fmu_run("compiled", True)                             # load the kernels inside the FMU once
+        if has_cosim:
+            reference = cpu(lambda: whole("compiled"))[0]
+            native, python, floor_ = (cosim_cpu(fmu, args, True), cosim_cpu(fmu, args, False),
+                                      cosim_cpu(c_floor, args, True))
+            reference = min(reference, cpu(lambda: whole("compiled"))[0])
+            cosim_rows.append((name, reference, native, python, floor_))
+            print(cosim_rows[-1], flush=True)
         for label, path, native in paths:
             best = {"whole": np.inf, "stepper": np.inf, "fmu": np.inf, "floor": np.inf, "c_floor": np.inf}
             for _ in range(args.repeats):
@@ -179,6 +227,14 @@ def main(argv=None):
     body = "".join(f"| {a} | {p} | {b} | {c:.3f} | {d:.3f} | {e:.3f} | {1e6 * e / b:.0f} | {g:.3f} | {cf:.3f} "
                    f"| **{e / c:.2f}** | {e / d:.2f} | {(e - cf) / c:.2f} | {f:.2e} |\n"
                    for a, p, b, c, d, e, g, cf, f in rows)
+    if cosim_rows:
+        body += ("\nThrough libcosimpy (last-value observer: every variable read at every step), compiled path, "
+                 "process CPU seconds, best of {r}:\n\n"
+                 "| scene | solver, whole run (s) | FMU, native steps (s) | FMU, steps in Python (s) "
+                 "| floor: C FMU doing nothing (s) | **FMU / whole run** | steps in Python / whole run "
+                 "| (FMU − C floor) / whole run |\n|---|---|---|---|---|---|---|---|\n").format(r=args.repeats)
+        body += "".join(f"| {a} | {w:.3f} | {n:.3f} | {p:.3f} | {f:.3f} | **{n / w:.2f}** | {p / w:.2f} "
+                        f"| {(n - f) / w:.2f} |\n" for a, w, n, p, f in cosim_rows)
     print(head + body)
     (ROOT / "docs").mkdir(exist_ok=True)
     (ROOT / "docs" / "fmu_overhead.md").write_text(

@@ -165,9 +165,13 @@ class InerterSlave(Fmi2Slave):
         self._register(model)
         # The native doStep (inerter/fmu_native.py): the FMU's binary steps in compiled code
         # whenever this slave arms it.
+        kinds = ((Real, fmu_native.REAL), (Integer, fmu_native.INTEGER),
+                 (Boolean, fmu_native.BOOLEAN), (String, fmu_native.STRING))
         self._native = fmu_native.NativeLink(
             {vr: self._output_index[var.name] for vr, var in self.vars.items()
-             if var.causality == Fmi2Causality.output})
+             if var.causality == Fmi2Causality.output},
+            {vr: (next(kind for cls, kind in kinds if isinstance(var, cls)), var.getter)
+             for vr, var in self.vars.items() if var.causality != Fmi2Causality.output})
         self._warn_if_foreign_package()
 
     # ------------------------------------------------------------------------------------------
@@ -333,6 +337,7 @@ class InerterSlave(Fmi2Slave):
         return lambda: [kind(g()) for g in getters]
 
     def _set(self, vrs, values, cls):
+        self._native.stale = True
         for vr, value in zip(vrs, values):
             var = self.vars.get(vr)
             try:
@@ -452,6 +457,7 @@ class InerterSlave(Fmi2Slave):
                        f"{changed or 'none'}{origin}]")
             return
         self._stepper, self._outputs, self._phase = stepper, outputs, STEPPING
+        self._native.stale = True
         self._inputs_pending = True
         changed = ", ".join(f"{k} = {v!r}" for k, v in settings.items()
                             if not _same(v, self._defaults[k]))
@@ -617,6 +623,7 @@ class InerterSlave(Fmi2Slave):
             stepper = self._new_stepper(effective)
             stepper.set_state(state["stepper"])
         # Everything checked: commit.
+        self._native.stale = True
         self._settings = settings
         self._explicit = set(state["explicit"])
         self._phase = state["phase"]

@@ -18,8 +18,9 @@
  * the slave's context address through the private Integer value references NATIVE_LINK_VR and
  * NATIVE_LINK_VR + 1. After a doStep the slave took and returned fmi2OK, it arms itself where the
  * context says so, and then takes the next doStep by calling the context's C function on the
- * context's table without entering Python, and serves fmi2GetReal of outputs from the context's
- * values. A step the function declines goes to the slave. Before any other call enters Python after
+ * context's table without entering Python, and serves every getter from the context's map until a
+ * call enters Python (outputs from the values the function wrote, every other variable from arrays
+ * the slave filled when it armed the link). A step the function declines goes to the slave. Before any other call enters Python after
  * native steps, the shim sets the private Integer NATIVE_SYNC_VR, and the slave takes them over.
  * Every call but fmi2DoStep and the getters disarms it until the next step the slave takes.
  *
@@ -144,8 +145,12 @@ __attribute__((destructor)) static void unload_original(void)
     }
 }
 
-/* The context's slots (inerter/fmu_native.py: CTX_*). */
-enum { CTX_MAGIC, CTX_ARMED, CTX_FUNCTION, CTX_TABLE, CTX_MAP_SIZE, CTX_MAP, CTX_VALUES };
+/* The context's slots and the kinds of variables in its map (inerter/fmu_native.py). */
+enum {
+    CTX_MAGIC, CTX_ARMED, CTX_FUNCTION, CTX_TABLE, CTX_MAP_SIZE, CTX_MAP, CTX_VALUES, CTX_REALS,
+    CTX_INTEGERS, CTX_BOOLEANS, CTX_STRINGS
+};
+enum { KIND_OUTPUT, KIND_REAL, KIND_INTEGER, KIND_BOOLEAN, KIND_STRING };
 
 /* inerter.compiled_kernels.native_step: 1 when it took the step (t, t + h], else 0. */
 typedef int32_t native_step_fn(const int64_t *table, double t, double h);
@@ -195,6 +200,55 @@ static fmi2Status enter(fmi2Component c)
     w->armed = 0;
     return sync(w);
 }
+
+/* Where the value of each of vr[0..nvr) is, as (kind << 32) + index (inerter/fmu_native.py), when
+ * native steps were taken since the slave last ran and every one of them is of kind `kind` (or
+ * KIND_OUTPUT, where `kind` is KIND_REAL); else 0, and the getter goes to the slave. */
+static int served(const struct instance *w, const fmi2ValueReference vr[], size_t nvr, int kind,
+                  int64_t where[])
+{
+    const int64_t *map;
+    uint64_t size;
+    size_t i;
+
+    if (!w->dirty || w->ctx == NULL || (vr == NULL && nvr > 0))
+        return 0;
+    map = (const int64_t *)(uintptr_t)w->ctx[CTX_MAP];
+    size = (uint64_t)w->ctx[CTX_MAP_SIZE];
+    for (i = 0; i < nvr; i++) {
+        int64_t entry;
+        int entry_kind;
+        if (vr[i] >= size || (entry = map[vr[i]]) < 0)
+            return 0;
+        entry_kind = (int)(entry >> 32);
+        if (entry_kind != kind && !(kind == KIND_REAL && entry_kind == KIND_OUTPUT))
+            return 0;
+        where[i] = entry;
+    }
+    return 1;
+}
+
+/* An array of the context. */
+#define CONTEXT_ARRAY(w, type, slot) ((const type *)(uintptr_t)(w)->ctx[slot])
+#define INDEX(entry) ((size_t)((entry) & 0xFFFFFFFF))
+
+/* A getter served from the context: `where` on the stack for small requests. */
+#define SERVE(kind, ...)                                                                         \
+    {                                                                                            \
+        int64_t stack[64];                                                                       \
+        int64_t *where = nvr <= 64 ? stack : malloc(nvr * sizeof *where);                        \
+        size_t i;                                                                                \
+        if (where != NULL && served(w, vr, nvr, kind, where)) {                                  \
+            for (i = 0; i < nvr; i++) {                                                          \
+                __VA_ARGS__;                                                                     \
+            }                                                                                    \
+            if (where != stack)                                                                  \
+                free(where);                                                                     \
+            return fmi2OK;                                                                       \
+        }                                                                                        \
+        if (where != stack)                                                                      \
+            free(where);                                                                         \
+    }
 
 /* The status of a call that the original returned as `status`: the slave's own when the original
  * said fmi2OK and the slave's is worse (fmi2Warning, fmi2Discard or fmi2Error). */
@@ -334,50 +388,54 @@ fmi2Status fmi2Reset(fmi2Component c)
     return original.Reset(INNER(c));
 }
 
-/* Outputs after native steps come from the context's values; anything else from the slave. */
+/* After native steps, the getters are served from the context (see served); else by the slave. */
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[])
 {
     struct instance *w = c;
     GUARD
-    if (w->dirty && w->ctx != NULL && (vr != NULL || nvr == 0)) {
-        const int64_t *map = (const int64_t *)(uintptr_t)w->ctx[CTX_MAP];
-        const double *values = (const double *)(uintptr_t)w->ctx[CTX_VALUES];
-        const uint64_t size = (uint64_t)w->ctx[CTX_MAP_SIZE];
-        size_t i;
-        for (i = 0; i < nvr; i++)
-            if (vr[i] >= size || map[vr[i]] < 0)
-                break;
-        if (i == nvr) {
-            for (i = 0; i < nvr; i++)
-                value[i] = values[map[vr[i]]];
-            return fmi2OK;
-        }
-    }
+    SERVE(KIND_REAL, value[i] = (where[i] >> 32) == KIND_OUTPUT
+                                    ? CONTEXT_ARRAY(w, double, CTX_VALUES)[INDEX(where[i])]
+                                    : CONTEXT_ARRAY(w, double, CTX_REALS)[INDEX(where[i])])
     if (sync(w) != fmi2OK)
         return fmi2Error;
-    return original.GetReal(INNER(c), vr, nvr, value);
+    return original.GetReal(w->inner, vr, nvr, value);
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Integer value[])
 {
-    READ
-    return original.GetInteger(INNER(c), vr, nvr, value);
+    struct instance *w = c;
+    GUARD
+    SERVE(KIND_INTEGER,
+          value[i] = (fmi2Integer)CONTEXT_ARRAY(w, int64_t, CTX_INTEGERS)[INDEX(where[i])])
+    if (sync(w) != fmi2OK)
+        return fmi2Error;
+    return original.GetInteger(w->inner, vr, nvr, value);
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[])
 {
-    READ
-    return original.GetBoolean(INNER(c), vr, nvr, value);
+    struct instance *w = c;
+    GUARD
+    SERVE(KIND_BOOLEAN,
+          value[i] = CONTEXT_ARRAY(w, int64_t, CTX_BOOLEANS)[INDEX(where[i])] ? fmi2True : fmi2False)
+    if (sync(w) != fmi2OK)
+        return fmi2Error;
+    return original.GetBoolean(w->inner, vr, nvr, value);
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          fmi2String value[])
 {
-    READ
-    return original.GetString(INNER(c), vr, nvr, value);
+    struct instance *w = c;
+    GUARD
+    SERVE(KIND_STRING, value[i] = (fmi2String)(uintptr_t)CONTEXT_ARRAY(w, int64_t,
+                                                                       CTX_STRINGS)[INDEX(where[i])])
+    if (sync(w) != fmi2OK)
+        return fmi2Error;
+    return original.GetString(w->inner, vr, nvr, value);
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,

@@ -9,8 +9,11 @@ entering Python, whenever the slave has *armed* it:
 - the slave owns a context, an int64 array at a fixed address for the instance's life
   (CTX_* slots): a magic number, whether the link is armed, the address of the C function
   :func:`inerter.compiled_kernels.native_step_cfunc`, the address of the running integration's
-  table (:meth:`inerter.compiled.CompiledStepper.native_table`), and the value references of the
-  outputs with the array of their values;
+  table (:meth:`inerter.compiled.CompiledStepper.native_table`), and a map from every value
+  reference to where its value is: the outputs in the array the C function writes, every other
+  variable (parameters, inputs, the solver settings, ``fmi_status``) in arrays the slave fills
+  when it arms the link (none of them can change between native steps: fixed parameters are
+  refused after initialisation, and a set disarms the link);
 - the shim asks for the context's address once, after fmi2Instantiate, by reading the Integer
   value references LINK_VR and LINK_VR + 1 (not in modelDescription.xml; the slave answers 0
   when the link is off: numba missing, or ``INERTER_FMU_NATIVE=0`` in the environment);
@@ -18,7 +21,8 @@ entering Python, whenever the slave has *armed* it:
   context says so: the slave arms it after every step on the compiled path with DOP853 or RK45
   whose outputs the kernels evaluate, and disarms it otherwise;
 - an armed shim calls the C function for the next doStep. It returns 1 when it took the step
-  (fmi2OK; the outputs are in the values array, and fmi2GetReal of outputs is served from it),
+  (fmi2OK; the outputs are in the values array, and every fmi2GetReal/Integer/Boolean/String is
+  served from the map until a call enters Python),
   and 0 when it declines: not the current communication point, a step size not > 0, a failed
   step, outputs the kernels cannot evaluate. A declined step goes to the slave, which restores the
   integration from the backup the C function made and takes the step itself, so every message,
@@ -33,13 +37,20 @@ code: the results are identical bit for bit (tests/test_fmu_native.py).
 """
 from __future__ import annotations
 
+import ctypes
 import os
 
 import numpy as np
 
-#: The context's slots.
-CTX_MAGIC, CTX_ARMED, CTX_FUNCTION, CTX_TABLE, CTX_MAP_SIZE, CTX_MAP, CTX_VALUES = range(7)
-CTX_SIZE = 7
+#: The context's slots: CTX_MAP points to one int64 per value reference, -1 or
+#: (kind << 32) + index into the array of that kind (CTX_VALUES for OUTPUT, CTX_REALS, ...).
+CTX_MAGIC, CTX_ARMED, CTX_FUNCTION, CTX_TABLE, CTX_MAP_SIZE, CTX_MAP, CTX_VALUES, CTX_REALS, CTX_INTEGERS, \
+    CTX_BOOLEANS, CTX_STRINGS = range(11)
+CTX_SIZE = 11
+#: Kinds of variables in the map: an output (float64 values the C function writes), another Real
+#: (float64), an Integer or a Boolean (int64), a String (int64: the address of a NUL-terminated
+#: UTF-8 string).
+OUTPUT, REAL, INTEGER, BOOLEAN, STRING = range(5)
 #: CTX_MAGIC's value: the shim takes a context only with it ("inerte" in ASCII).
 MAGIC = 0x696E65727465
 #: Private Integer value references (not in modelDescription.xml): reading LINK_VR and
@@ -54,18 +65,42 @@ SWITCH = "INERTER_FMU_NATIVE"
 class NativeLink:
     """The slave's end of the link: the context, armed after a step the slave took."""
 
-    def __init__(self, outputs: dict[int, int]):
-        """`outputs`: value reference -> index of the output in the stepper's output values."""
+    def __init__(self, outputs: dict[int, int], others: dict[int, tuple[int, object]]):
+        """`outputs`: value reference -> index of the output in the stepper's output values;
+        `others`: value reference -> (kind, a function returning its value) for every other
+        variable."""
         self.ctx = np.zeros(CTX_SIZE, dtype=np.int64)
         self.ctx[CTX_MAGIC] = MAGIC
-        size = max(outputs, default=-1) + 1
+        size = max(list(outputs) + list(others), default=-1) + 1
         self.map = np.full(size, -1, dtype=np.int64)
         for vr, index in outputs.items():
-            self.map[vr] = index
+            self.map[vr] = (OUTPUT << 32) + index
+        self._getters = {kind: [] for kind in (REAL, INTEGER, BOOLEAN, STRING)}
+        for vr, (kind, getter) in others.items():
+            self.map[vr] = (kind << 32) + len(self._getters[kind])
+            self._getters[kind].append(getter)
+        self._buffers = {REAL: np.zeros(len(self._getters[REAL])),
+                         **{kind: np.zeros(len(self._getters[kind]), dtype=np.int64)
+                            for kind in (INTEGER, BOOLEAN, STRING)}}
+        for kind, slot in ((REAL, CTX_REALS), (INTEGER, CTX_INTEGERS), (BOOLEAN, CTX_BOOLEANS),
+                           (STRING, CTX_STRINGS)):
+            self.ctx[slot] = self._buffers[kind].ctypes.data
+        self._strings = []                    # the strings CTX_STRINGS points to, kept alive
         self.ctx[CTX_MAP_SIZE] = size
         self.ctx[CTX_MAP] = self.map.ctypes.data
         self.why_off = self._why_off()
+        self.stale = True                     # the values of the other variables may have changed
         self._table = None                    # what the context points to, kept alive
+
+    def _refresh(self) -> None:
+        """The other variables' values into their arrays."""
+        self._buffers[REAL][:] = [float(get()) for get in self._getters[REAL]]
+        self._buffers[INTEGER][:] = [int(get()) for get in self._getters[INTEGER]]
+        self._buffers[BOOLEAN][:] = [1 if get() else 0 for get in self._getters[BOOLEAN]]
+        self._strings = [ctypes.create_string_buffer(str(get()).encode("utf-8"))
+                         for get in self._getters[STRING]]
+        self._buffers[STRING][:] = [ctypes.addressof(text) for text in self._strings]
+        self.stale = False
 
     @staticmethod
     def _why_off() -> str:
@@ -89,6 +124,8 @@ class NativeLink:
             table = stepper.native_table(tolerance)
         if table is None:
             return
+        if self.stale:
+            self._refresh()
         if not self.ctx[CTX_FUNCTION]:
             from .compiled import _k
             self.ctx[CTX_FUNCTION] = _k.native_step_cfunc().address

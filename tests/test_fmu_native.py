@@ -91,7 +91,17 @@ def replay(inst, scene_has_input: bool, stop_time: float, solver: str | None = N
         tr.step(t, h)
         t += h
         tr.outputs()
-    tr.call("parameter", inst.get, [parameter])          # enters Python: the slave takes over
+    # Every variable is served between native steps; each kind as the slave gives it.
+    tr.call("parameter", inst.get, [parameter])
+    tr.call("solver", inst.fmu.getString, [inst.vr["solver"]])
+    tr.call("compiled", inst.fmu.getBoolean, [inst.vr["compiled"]])
+    tr.call("fmi_status", inst.fmu.getInteger, [inst.vr["fmi_status"]])
+    tr.call("mixed", inst.get, [inst.outputs[0], parameter, inst.outputs[-1]])
+    tr.step(t, h)
+    t += h
+    tr.call("all reals", inst.fmu.getReal, [v.valueReference for v in inst.md.modelVariables
+                                            if v.type == "Real"])
+    tr.call("unknown", lambda: math.isnan(inst.fmu.getReal([10_000])[0]))   # the slave logs it
     tr.outputs()
     state = inst.fmu.getFMUstate()
     first = [(tr.step(t + n * h, h), tr.outputs()) for n in range(4)]
@@ -179,9 +189,9 @@ def test_a_step_that_fails_natively_is_taken_and_reported_by_the_slave(fmus, pai
     assert native_steps(native) == 110
 
 
-def test_outputs_are_served_natively_only_between_native_steps(fmus, pair):
-    """After native steps the binary serves getReal of outputs from the values the step wrote; a
-    mixed request (an output and an input) goes to the slave, which takes the steps over first."""
+def test_outputs_and_inputs_read_between_native_steps_are_the_slaves(fmus, pair):
+    """After native steps the binary serves getReal from the values the step wrote (outputs) and
+    those the slave left when it armed the link (inputs)."""
     scene = INPUT_SCENE
     native_scene(scene)
     native, slave = pair(fmus[scene])

@@ -2,7 +2,7 @@
 
 Through pythonfmu, every fmi2DoStep and fmi2GetReal enters Python: pythonfmu's own glue, the
 slave's, the stepper's and numba's dispatch of some thirty arguments cost about as much per
-communication step as the model itself on the paper's scenes. On Linux the FMU's binary is the
+communication step as the model itself on the paper's scenes (docs/fmu_overhead.md). On Linux the FMU's binary is the
 status shim (``fmu_src/status_shim.c``); with this link it takes a doStep itself, without
 entering Python, whenever the slave has *armed* it:
 
@@ -18,15 +18,15 @@ entering Python, whenever the slave has *armed* it:
   value references LINK_VR and LINK_VR + 1 (not in modelDescription.xml; the slave answers 0
   when the link is off: numba missing, or ``INERTER_FMU_NATIVE=0`` in the environment);
 - after a doStep that the slave took and returned fmi2OK, the shim arms itself when the
-  context says so: the slave arms it after every step on the compiled path with DOP853 or RK45
+  context says so: the slave arms it after every step on the compiled path (DOP853, RK45, RK4)
   whose outputs the kernels evaluate, and disarms it otherwise;
 - an armed shim calls the C function for the next doStep. It returns 1 when it took the step
   (fmi2OK; the outputs are in the values array, and every fmi2GetReal/Integer/Boolean/String is
-  served from the map until a call enters Python),
-  and 0 when it declines: not the current communication point, a step size not > 0, a failed
-  step, outputs the kernels cannot evaluate. A declined step goes to the slave, which restores the
-  integration from the backup the C function made and takes the step itself, so every message,
-  status and result is the one the slave always gives;
+  served from the map until a call enters Python), and 0 when it declines: not the current
+  communication point, a step size not > 0, a failed step, outputs the kernels cannot evaluate.
+  A declined step goes to the slave, which restores the integration from the backup the C
+  function made and takes the step itself, so every message, status and result is the one the
+  slave always gives;
 - before any other call enters Python after native steps, the shim sets the Integer SYNC_VR:
   the slave takes over the time, state, counters and outputs the native steps left
   (:meth:`~inerter.compiled.CompiledStepper.native_sync`). Every call but a doStep and the

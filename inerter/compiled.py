@@ -710,13 +710,10 @@ class CompiledStepper(Stepper):
         clock[_k.CLOCK_ALPHA], clock[_k.CLOCK_STEP] = float(s.alpha), float(s.step or 0.0)
         native = dict(rk=rk, inputs=inputs, clock=clock, ts=np.zeros(samples), out=np.empty((samples, ny)),
                       values=np.empty(len(self._order)), backup=[np.empty_like(a) for a in rk])
-        arrays = dict(zip(("hdr", "y", "f", "y_prev", "dense"), rk))
-        arrays.update(zip(("b_hdr", "b_y", "b_f", "b_y_prev", "b_dense"), native["backup"]))
-        arrays.update(zip(("mass", "pbody", "ploc", "el_int", "el_real", "rot_int", "rot_real", "jt_int", "jt_real",
-                           "fa_int", "fa_real", "pd_int", "pd_real", "in_int", "gravity", "perm", "dims"),
-                          kernel.params))
-        arrays.update(zip(("A", "B", "C", "E", "E3", "D", "Pm"), tables))
-        arrays.update(zip(("AB", "rhs", "gen", "acc", "K", "y_new", "f_new", "ys", "sig_acc"), work))
+        arrays = {}
+        for group, values in ((_k.RK_STATE, rk), (_k.PARAMS, kernel.params), (_k.TABLEAU, tables), (_k.WORK, work)):
+            arrays.update(zip((name for name, _ in group), values, strict=True))
+        arrays.update(zip(("b_" + name for name, _ in _k.RK_STATE), native["backup"], strict=True))
         arrays.update(ts=native["ts"], out=native["out"], inputs=inputs, monitor=self._monitor,
                       raw=self._raw, order=self._order, values=native["values"], clock=clock)
         code = _k.NATIVE_RK4 if s.method == "RK4" else _RK_CODE[s.method]

@@ -990,19 +990,21 @@ def max_residual(states, n, P):
 # Method codes: 0 DOP853, 1 RK45 (a running integration, cosim_rk), NATIVE_RK4 (integrate_rk4 from
 # the communication point, `y` the state there and `ts`, `out` two rows; the tableau slots unused).
 TABLE_HEAD = 4
-NATIVE_SLOTS = (
-    ("hdr", "f1"), ("y", "f1"), ("f", "f1"), ("y_prev", "f1"), ("dense", "f2"), ("ts", "f1"), ("out", "f2"),
-    ("inputs", "f1"),
-    ("mass", "f1"), ("pbody", "i1"), ("ploc", "f2"), ("el_int", "i2"), ("el_real", "f2"), ("rot_int", "i2"),
-    ("rot_real", "f2"), ("jt_int", "i2"), ("jt_real", "f2"), ("fa_int", "i2"), ("fa_real", "f2"),
-    ("pd_int", "i2"), ("pd_real", "f2"), ("in_int", "i2"), ("gravity", "f1"), ("perm", "i1"), ("dims", "i1"),
-    ("A", "f2"), ("B", "f1"), ("C", "f1"), ("E", "f1"), ("E3", "f1"), ("D", "f2"), ("Pm", "f2"),
-    ("monitor", "f1"),
-    ("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), ("y_new", "f1"), ("f_new", "f1"),
-    ("ys", "f1"), ("sig_acc", "f1"),
-    ("raw", "f1"), ("order", "i1"), ("values", "f1"), ("clock", "f1"),
-    ("b_hdr", "f1"), ("b_y", "f1"), ("b_f", "f1"), ("b_y_prev", "f1"), ("b_dense", "f2"),
-)
+#: The groups of arrays, in the order they are passed: the running integration's state (as
+#: rk_advance takes it), the mechanism's arrays (Kernel.params), the tableau (A, B, C, E, E3, D, P),
+#: the scratch (work_arrays).
+RK_STATE = (("hdr", "f1"), ("y", "f1"), ("f", "f1"), ("y_prev", "f1"), ("dense", "f2"))
+PARAMS = (("mass", "f1"), ("pbody", "i1"), ("ploc", "f2"), ("el_int", "i2"), ("el_real", "f2"),
+          ("rot_int", "i2"), ("rot_real", "f2"), ("jt_int", "i2"), ("jt_real", "f2"), ("fa_int", "i2"),
+          ("fa_real", "f2"), ("pd_int", "i2"), ("pd_real", "f2"), ("in_int", "i2"), ("gravity", "f1"),
+          ("perm", "i1"), ("dims", "i1"))
+TABLEAU = (("A", "f2"), ("B", "f1"), ("C", "f1"), ("E", "f1"), ("E3", "f1"), ("D", "f2"), ("Pm", "f2"))
+WORK = (("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), ("y_new", "f1"), ("f_new", "f1"),
+        ("ys", "f1"), ("sig_acc", "f1"))
+NATIVE_SLOTS = (RK_STATE + (("ts", "f1"), ("out", "f2"), ("inputs", "f1")) + PARAMS + TABLEAU
+                + (("monitor", "f1"),) + WORK
+                + (("raw", "f1"), ("order", "i1"), ("values", "f1"), ("clock", "f1"))
+                + tuple(("b_" + name, kind) for name, kind in RK_STATE))
 CLOCK_TIME, CLOCK_BOUND, CLOCK_RTOL, CLOCK_ATOL, CLOCK_ALPHA, CLOCK_BUSY, CLOCK_TOLERANCE, CLOCK_TAKEN, \
     CLOCK_STEP = range(9)
 CLOCK_SIZE = 9

@@ -65,8 +65,8 @@ STATE_FORMAT = "inerter-fmu-state/1"
 STATUS_VARIABLE = "fmi_status"
 OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
 
-#: The FMU setting name -> the override key that ``inerter.load`` takes for it.
-SOLVER_SETTINGS = {"solver": "experiment.method", "rtol": "experiment.rtol", "atol": "experiment.atol"}
+#: The FMU's solver settings -> the scene's ``[experiment]`` fields they set.
+SOLVER_SETTINGS = {"solver": "method", "rtol": "rtol", "atol": "atol"}
 #: The Boolean parameter choosing the compiled path (not a scene setting).
 PATH_SETTING = "compiled"
 
@@ -406,9 +406,11 @@ class InerterSlave(Fmi2Slave):
         return settings
 
     def _overrides(self, settings: dict) -> dict:
-        """The `inerter.load` overrides for the settings that differ from the scene's."""
-        return {SOLVER_SETTINGS.get(name, name): value for name, value in settings.items()
-                if name != PATH_SETTING and not _same(value, self._defaults[name])}
+        """The `inerter.load` overrides for the parameters and effects that differ from the scene's
+        (the solver settings need no new load: see _new_stepper)."""
+        return {name: value for name, value in settings.items()
+                if name != PATH_SETTING and name not in SOLVER_SETTINGS
+                and not _same(value, self._defaults[name])}
 
     def _model_for(self, overrides: dict):
         key = tuple(sorted(overrides.items(), key=lambda kv: kv[0]))
@@ -427,9 +429,12 @@ class InerterSlave(Fmi2Slave):
                 raise ValueError(f"{self.scene_file}: {name}: not finite (got {value!r}; "
                                  f"expected a finite number)")
         model = self._model_for(self._overrides(settings))
-        experiment = model.experiment
-        return model.stepper(method=experiment["method"], rtol=experiment["rtol"],
-                             atol=experiment["atol"],
+        # The solver settings that differ from the scene's, read and checked as a load with
+        # experiment.method/rtol/atol overrides would read them (same defaults, same errors).
+        experiment = model.scene.experiment_with(
+            {field: settings[name] for name, field in SOLVER_SETTINGS.items()
+             if not _same(settings[name], self._defaults[name])})
+        return model.stepper(method=experiment.method, rtol=experiment.rtol, atol=experiment.atol,
                              path="compiled" if settings[PATH_SETTING] else "numpy",
                              stop_time=self._stop_time)
 
@@ -461,8 +466,9 @@ class InerterSlave(Fmi2Slave):
         self._inputs_pending = True
         changed = ", ".join(f"{k} = {v!r}" for k, v in settings.items()
                             if not _same(v, self._defaults[k]))
-        self.log(f"initialised at t = 0 s with solver {settings['solver']}, "
-                 f"rtol {settings['rtol']:g}, atol {settings['atol']:g}, {stepper.path} path; "
+        used = stepper.settings          # atol follows rtol where the scene states no atol
+        self.log(f"initialised at t = 0 s with solver {used.method}, "
+                 f"rtol {used.rtol:g}, atol {used.atol:g}, {stepper.path} path; "
                  f"changed from the scene: {changed or 'nothing'}", Fmi2Status.ok)
 
     def _fail(self, message: str):

@@ -157,6 +157,12 @@ class Scene:
     def centripetal(self) -> bool:
         return bool(self.effects.get("centripetal", True))
 
+    def experiment_with(self, overrides: Mapping[str, Any]) -> Experiment:
+        """The experiment with `overrides` (``{"rtol": 1e-6}``), read and checked as a load with
+        ``experiment.NAME`` overrides would (same defaults, same errors), without rebuilding the scene."""
+        r = _Reader(self.source, {n: p.value for n, p in self.parameters.items()})
+        return _read_experiment(r, self.raw.get("experiment", {}), overrides)
+
     @property
     def data_files(self) -> list[str]:
         """Files the scene reads besides itself (paths relative to the scene file)."""

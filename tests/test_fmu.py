@@ -750,6 +750,27 @@ def test_tolerance_from_setup_experiment_is_used_unless_rtol_is_set(fmus, scene,
     assert "rtol 1e-09" in other.logged()
 
 
+def test_solver_settings_reach_the_stepper_as_a_load_with_them_reads_them(instance, tmp_path):
+    """The FMU's solver, rtol and atol are read as ``inerter.load(..., experiment.NAME=...)`` reads
+    them, without a new load: where the scene states no atol, atol follows an rtol the importer sets
+    (rtol/100, the scene format's default). Reference: the loaded model's settings."""
+    text = INPUT_SCENE.read_text()
+    assert "\natol = 1e-12\n" in text and '\nname = "two_bar_2d"\n' in text
+    scene = tmp_path / "two_bar_no_atol.toml"       # an FMU of its own name, beside no other
+    scene.write_text(text.replace("\natol = 1e-12\n", "\n")
+                     .replace('\nname = "two_bar_2d"\n', '\nname = "two_bar_no_atol"\n'))
+    fmu = fmu_build.build(scene, tmp_path / "fmu")
+    cases = [({"rtol": 1e-6}, {}), ({"rtol": 1e-6, "atol": 1e-11}, {"solver": "RK45"}), ({}, {"solver": "Radau"})]
+    for i, (reals, strings) in enumerate(cases):
+        inst = instance(fmu, f"settings {i}")
+        inst.initialise(reals, strings)
+        overrides = {f"experiment.{'method' if k == 'solver' else k}": v for k, v in {**reals, **strings}.items()}
+        want = inerter.load(scene, **overrides).settings()
+        assert (f"with solver {want.method}, rtol {want.rtol:g}, atol {want.atol:g}," in inst.logged()), \
+            (overrides, inst.logged())
+    assert want.method == "Radau" and inerter.load(scene, **{"experiment.rtol": 1e-6}).settings().atol == 1e-8
+
+
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
 def test_misuse_of_value_references_is_an_error_not_fatal(fmus, scene, instance, needs_shim):
     inst = instance(fmus[scene])

@@ -135,8 +135,8 @@ class Model:
     def stepper(self, method=None, rtol=None, atol=None, path="numpy", stop_time=None) -> Stepper:
         """A co-simulation stepper at t = 0. `path` = "compiled": each step one call of the compiled
         integrator loop where :func:`inerter.compiled.compiled_stepper` can take the scene (the numpy
-        stepper otherwise; ``stepper.path`` says which); its adaptive integrators run on across
-        communication points, their steps clipped to `stop_time` where it is given."""
+        stepper otherwise; ``stepper.path`` says which). On both paths the adaptive integrators run
+        on across communication points, their steps clipped to `stop_time` where it is given."""
         s = self.settings(method=method, rtol=rtol, atol=atol)
         if path == "compiled" and not self.is_oracle:
             from . import compiled
@@ -145,7 +145,7 @@ class Model:
                 return stepper
         elif path != "numpy" and path != "compiled":
             raise ValueError(f"path = {path!r}; expected 'numpy' or 'compiled'")
-        return Stepper(self.mechanism, s, self.signals)
+        return Stepper(self.mechanism, s, self.signals, stop_time)
 
 
 class Result:

@@ -7,8 +7,12 @@ and projects (q, q̇) back onto the constraints at every output point (the integ
 """
 from __future__ import annotations
 
+import bisect
+import copy
+import functools
 import pickle
 import time as _time
+import types
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -45,9 +49,10 @@ class Settings:
 
 
 def derivative(mech, inputs, alpha, jump=None):
-    """y = [q, v] ↦ [q̇ = B(q) v, v̇ from Eq. (33)]. `jump`: a time where a step force switches,
-    ending the segment integrated: it is evaluated just before (one ulp), so that stages at the
-    segment's end see the value the force had over the segment."""
+    """y = [q, v] ↦ [q̇ = B(q) v, v̇ from Eq. (33)]. `jump`: a time where the right-hand side is not
+    smooth (a step force switches, a ground record's sample), ending the segment integrated: it is
+    evaluated just before (one ulp), so that stages at the segment's end see the values the forces
+    had over the segment."""
     nq = mech.nq
     before = None if jump is None else float(np.nextafter(jump, -np.inf))
 
@@ -61,9 +66,10 @@ def derivative(mech, inputs, alpha, jump=None):
 
 
 def jumps(mech, t0, t1):
-    """Times in (t0, t1] where a step force switches (the integrators restart there)."""
+    """Times in (t0, t1] where the right-hand side is not smooth (``mech.discontinuities``: a step
+    force switching, a ground record's sample); the integrators restart there."""
     times = getattr(mech, "discontinuities", ())
-    return [t for t in times if t0 < t <= t1]
+    return times[bisect.bisect_right(times, t0):bisect.bisect_right(times, t1)]
 
 
 #: Hairer's stiffness test for the explicit Runge–Kutta pairs (DOP853 and DOPRI5 in Hairer and
@@ -255,13 +261,29 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
     return Run(grid[:k].copy(), out[:k].copy(), dense, status, message, steps, evaluations, cpu, max_drift)
 
 
+#: Methods whose integration a :class:`Stepper` keeps running across communication points (the
+#: others restart at every point: RK4, whose last step lands on it, and LSODA, whose state is
+#: Fortran's).
+RUNS_ON = ("DOP853", "RK45", "Radau", "BDF")
+
+
 class Stepper:
     """Co-simulation stepping: inputs held over each step; `step(t_end)` advances the state and,
-    on failure, leaves it exactly as before. The integrator is restarted at each communication
-    point with the last accepted step size, so (time, state, step size, inputs) is the complete
-    state and a rolled-back step repeats bit for bit."""
+    on failure, leaves (time, state) exactly as before.
 
-    def __init__(self, mech, settings: Settings, signals):
+    DOP853, RK45, Radau and BDF keep one scipy integration running across communication points: a
+    step advances it until its last step covers the point and takes the state there from that
+    step's dense output, as :func:`integrate` samples its output grid. Its steps are bounded by the
+    experiment's stop time (`stop_time`, where the importer gave one; dropped if it steps past it)
+    and by step-force switching times, where it restarts as the whole run does; so while the
+    inputs hold, the states equal the whole run's bit for bit. An input that changes is a
+    discontinuity: the integration restarts at that point with the step size the error control
+    proposed last, and that segment lands on the next point. RK4, LSODA and the projection
+    treatment restart at every point (projection projects the state there). (time, state, inputs,
+    the running integration's own state) is the complete state: a rolled-back step repeats bit for
+    bit."""
+
+    def __init__(self, mech, settings: Settings, signals, stop_time=None):
         self.mech = mech
         self.settings = settings
         self.signals = signals
@@ -272,53 +294,111 @@ class Stepper:
         self.input_index = {name: i for i, name in enumerate(mech.input_names)}
         self.steps = 0
         self.path = "numpy"
+        self.t_bound = float(stop_time) if stop_time is not None and stop_time > 0 else np.inf
+        self._runs_on = settings.method in RUNS_ON and settings.constraint != "projection"
+        self._solver = None                   # the running integration (scipy OdeSolver)
+        self._segment = None                  # its (t_bound, ends at a step force's switch)
+        self._dense = None                    # the dense output of its last step, once asked for
+        self._input_moved = False             # an input changed since the last step
 
     def set_input(self, name, value):
         value = float(value)
         if not np.isfinite(value):
             raise SimulationError(f"input {name} = {value!r} is not finite; expected a finite force in N; "
                                   "the input keeps its previous value", self.time)
-        self.inputs[self.input_index[name]] = value
+        i = self.input_index[name]
+        if self.inputs[i] != value:
+            self._solver = None               # a discontinuity: the integration restarts here
+            self._input_moved = True
+        self.inputs[i] = value
 
     def step(self, t_end):
-        n = self.mech.nq
+        t_end = float(t_end)
         if not t_end > self.time:
             raise SimulationError(f"step to t = {t_end!r} is not after the current time", self.time)
-        s = self.settings
-        inputs = self.inputs.copy()
-        monitor = StepMonitor(self.mech, s.method, s.max_steps)
-        t0, y, h = self.time, self.y, self.h
-        # A step force switching within the step (or at its end) ends a segment: the integrator
-        # restarts there, so that the solution is the same as the solver's whole run.
-        eps = 1e-12 * max(1.0, abs(t_end))
-        ends = [t for t in jumps(self.mech, t0 + eps, t_end - eps)] + [float(t_end)]
+        monitor = StepMonitor(self.mech, self.settings.method, self.settings.max_steps)
         try:
-            for end in ends:
-                jump = end if jumps(self.mech, end - eps, end + eps) else None
-                fun = derivative(self.mech, inputs, s.alpha, jump)
-                solver = make_solver(s.method, fun, t0, y, end, s.rtol, s.atol, s.step, h)
-                previous = y
-                while solver.status == "running":
-                    _step(solver, s.method)
-                    monitor.after_step(solver, previous)
-                    previous = solver.y.copy()
-                t0, y, h = solver.t, solver.y, getattr(solver, "h_abs", None)
-                if jump is not None:        # the derivative jumps here: a fresh start after it
-                    h = None
-            steps = monitor.steps
-            if s.constraint == "projection":
-                q, v = self.mech.project(y[:n], y[n:])
-                y = np.concatenate((q, v))
+            if self._runs_on:
+                y = self._run_on(t_end, monitor)
+                h = getattr(self._solver, "h_abs", self.h)
+            else:
+                y, h = self._restarted(t_end, monitor)
             if not np.all(np.isfinite(y)):
-                raise SimulationError("the state became non-finite", solver.t)
+                raise SimulationError("the state became non-finite", t_end)
         except SimulationError:
+            self._solver = None               # the next step restarts at (time, y), left as they were
             raise
         except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            self._solver = None
             raise SimulationError(f"the step could not be completed: {exc}", self.time) from None
         self.y = y
-        self.time = float(t_end)
+        self.time = t_end
         self.h = h
-        self.steps += steps
+        self.steps += monitor.steps
+        self._input_moved = False
+
+    def _start(self, t0, y0, h, bound):
+        """A new segment of the integration from (t0, y0), to `bound` or to the first step-force
+        switch before it (with the force's value from before the switch, as :func:`integrate`)."""
+        s = self.settings
+        switch = jumps(self.mech, t0, bound)
+        end = switch[0] if switch else bound
+        fun = derivative(self.mech, self.inputs.copy(), s.alpha, end if switch else None)
+        self._solver = make_solver(s.method, fun, t0, np.array(y0, dtype=float), end, s.rtol, s.atol, s.step, h)
+        self._segment = (end, bool(switch))
+        self._dense = None
+        return self._solver
+
+    def _run_on(self, t_end, monitor):
+        """Advance the running integration until its last step covers t_end; the state there."""
+        s = self.settings
+        if t_end > self.t_bound:               # the importer went past its stop time
+            self.t_bound = np.inf
+        # Right after an input changed, the segment lands on t_end; otherwise it runs on.
+        bound = t_end if self._input_moved else self.t_bound
+        solver = self._solver
+        if solver is None:
+            solver = self._start(self.time, self.y, self.h, bound)
+        while True:
+            covered = solver.t_old is not None and t_end <= solver.t + 1e-12 * max(1.0, solver.t)
+            if covered:
+                break
+            if solver.status == "finished":    # at a switch, or at a stop time the importer passed
+                end, switched = self._segment
+                solver = self._start(solver.t, solver.y, None if switched else getattr(solver, "h_abs", None),
+                                     max(bound, t_end))
+            previous = solver.y.copy()
+            _step(solver, s.method)
+            monitor.after_step(solver, previous)
+            self._dense = None
+        if self._dense is None:
+            self._dense = solver.dense_output()
+        return self._dense(t_end)
+
+    def _restarted(self, t_end, monitor):
+        """RK4, LSODA, projection: the integration restarts at the communication point, with the
+        last step size, and its last step lands on t_end (a step-force switch inside ends a segment).
+        The state at t_end and the step size to restart with."""
+        s, n = self.settings, self.mech.nq
+        t0, y, h = self.time, self.y, self.h
+        eps = 1e-12 * max(1.0, abs(t_end))
+        ends = [t for t in jumps(self.mech, t0 + eps, t_end - eps)] + [t_end]
+        for end in ends:
+            jump = end if jumps(self.mech, end - eps, end + eps) else None
+            fun = derivative(self.mech, self.inputs.copy(), s.alpha, jump)
+            solver = make_solver(s.method, fun, t0, y, end, s.rtol, s.atol, s.step, h)
+            previous = y
+            while solver.status == "running":
+                _step(solver, s.method)
+                monitor.after_step(solver, previous)
+                previous = solver.y.copy()
+            t0, y, h = solver.t, solver.y, getattr(solver, "h_abs", None)
+            if jump is not None:        # the derivative jumps here: a fresh start after it
+                h = None
+        if s.constraint == "projection":
+            q, v = self.mech.project(y[:n], y[n:])
+            y = np.concatenate((q, v))
+        return y, h
 
     def output_values(self) -> list:
         """The outputs at the current time, in the order of ``signals.names``."""
@@ -329,9 +409,39 @@ class Stepper:
         return dict(zip(self.signals.names, self.output_values()))
 
     def get_state(self) -> bytes:
-        return pickle.dumps((self.time, self.y.copy(), self.h, self.inputs.copy(), self.steps))
+        running = None if self._solver is None else (self._segment, solver_state(self._solver))
+        return pickle.dumps((self.time, self.y.copy(), self.h, self.inputs.copy(), self.steps, self.t_bound,
+                             self._input_moved, running))
 
     def set_state(self, blob: bytes):
-        self.time, y, self.h, inputs, self.steps = pickle.loads(blob)
+        (self.time, y, self.h, inputs, self.steps, self.t_bound, self._input_moved, running) = pickle.loads(blob)
         self.y = np.array(y)
         self.inputs = np.array(inputs)
+        self._solver = self._dense = None
+        if running is not None:
+            (end, switched), state = running
+            solver = self._start(state["t"], state["y"], None, end)
+            restore_solver_state(solver, state)
+            self._segment = (end, switched)
+
+
+#: Attributes of a scipy solver that are its code, not its state (rebuilt with the solver).
+_CODE = (types.FunctionType, types.MethodType, types.BuiltinFunctionType, functools.partial)
+
+
+def solver_state(solver) -> dict:
+    """A scipy OdeSolver's own state (every attribute but its functions), copied."""
+    return copy.deepcopy({k: v for k, v in vars(solver).items() if not isinstance(v, _CODE)})
+
+
+def restore_solver_state(solver, state: dict):
+    """Make a solver built for the same problem continue as the one `state` was taken from: arrays
+    are copied into the solver's own where they match (some are views of others: DOP853's K of
+    K_extended), the rest replaced."""
+    for key, value in state.items():
+        mine = getattr(solver, key, None)
+        if isinstance(mine, np.ndarray) and isinstance(value, np.ndarray) and mine.shape == value.shape \
+                and mine.dtype == value.dtype:
+            mine[...] = value
+        else:
+            setattr(solver, key, copy.deepcopy(value))

@@ -1,0 +1,128 @@
+"""The numpy co-simulation stepper (inerter.simulation.Stepper), which the FMU uses for every scene
+the compiled path does not take (3D scenes, implicit methods, step forces, projection): its running
+integration against the whole run, rollback through its state, failures, and stepping past the
+stop time. References: the numpy whole run (`integrate`) and the closed-form impact time of
+scenarios/hard/terminals_meet_2d.toml."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import inerter
+from inerter.errors import SimulationError
+
+ROOT = Path(__file__).resolve().parents[1]
+PLANAR = ROOT / "scenarios" / "two_bar_2d.toml"
+SPATIAL = ROOT / "scenarios" / "spherical_pendulum_3d.toml"
+STEP_FORCE = ROOT / "scenarios" / "hard" / "step_force_1dof_2d.toml"
+TERMINALS_MEET = ROOT / "scenarios" / "hard" / "terminals_meet_2d.toml"
+STOP, STEP = 0.5, 0.01
+
+
+@pytest.mark.parametrize("method", ["DOP853", "RK45", "Radau", "BDF"])
+@pytest.mark.parametrize("path", [PLANAR, SPATIAL, STEP_FORCE], ids=lambda p: p.stem)
+def test_with_inputs_held_the_numpy_stepper_is_the_whole_run(path, method):
+    """One scipy integration runs on across the communication points, bounded by the stop time and
+    restarted at a step force's switching time as the whole run is, and the state at each point
+    comes from the dense output of the step covering it, as the whole run samples its grid: the
+    same steps, and at every point the whole run's state bit for bit."""
+    model = inerter.load(path)
+    whole = model.simulate(stop_time=STOP, output_interval=STEP, method=method, metrics=False)
+    assert whole.status == "ok", whole.message
+    st = model.stepper(method=method, stop_time=STOP)
+    assert st.path == "numpy"
+    for k in range(1, len(whole.time)):
+        st.step(whole.time[k])
+        assert np.array_equal(st.y, whole.run.states[k]), (k, np.max(np.abs(st.y - whole.run.states[k])))
+    assert st.steps == whole.run.steps
+
+
+@pytest.mark.parametrize("method", ["DOP853", "RK45", "Radau", "BDF", "RK4", "LSODA"])
+@pytest.mark.parametrize("path", [SPATIAL, STEP_FORCE], ids=lambda p: p.stem)
+def test_the_numpy_stepper_rolls_back_bit_for_bit(path, method):
+    """get_state holds the running integration (scipy's solver state): the steps repeated after
+    set_state, on the same stepper or on a new one, give the same states bit for bit. The step
+    force of STEP_FORCE switches inside the repeated steps."""
+    model = inerter.load(path)
+    st = model.stepper(method=method, stop_time=1.0)
+    for k in range(1, 31):
+        st.step(k * STEP)
+    blob = st.get_state()
+
+    def run_on(stepper):
+        out = []
+        for k in range(31, 71):
+            stepper.step(k * STEP)
+            out.append(stepper.y.copy())
+        return np.array(out), stepper.steps
+
+    first = run_on(st)
+    st.set_state(blob)
+    again = run_on(st)
+    other = model.stepper(method=method, stop_time=1.0)
+    other.set_state(blob)
+    restored = run_on(other)
+    assert np.array_equal(first[0], again[0]) and first[1] == again[1]
+    assert np.array_equal(first[0], restored[0]) and first[1] == restored[1]
+
+
+@pytest.mark.parametrize("method", ["DOP853", "Radau"])
+def test_the_numpy_stepper_runs_on_past_its_stop_time(method):
+    """An importer that steps past the stop time it gave: the bound is dropped and the integration
+    goes on (restarted at the old bound with the proposed step size). Against a whole run to the
+    later time: 1e-9 (m, rad, m/s, quaternion) at the scene's rtol 1e-10."""
+    model = inerter.load(SPATIAL)
+    whole = model.simulate(stop_time=2 * STOP, output_interval=STEP, method=method, metrics=False)
+    st = model.stepper(method=method, stop_time=STOP)
+    for k in range(1, len(whole.time)):
+        st.step(whole.time[k])
+    assert st.time == whole.time[-1]
+    assert np.max(np.abs(st.y - whole.run.states[-1])) <= 1e-9
+
+
+def test_an_input_that_changes_restarts_the_numpy_integration_there():
+    """An input set to a new value is a discontinuity: the integration restarts at that point (the
+    segment after it lands on the next point) and runs on after it. Reference: a stepper whose
+    first step to the change is taken, then resumed from get_state with the input set — the same
+    restart; and the state differs from the run without the change."""
+    model = inerter.load(ROOT / "scenarios" / "two_bar_2d_pd.toml")
+    name = model.mechanism.input_names[0]
+    held = model.stepper(stop_time=STOP)
+    moved = model.stepper(stop_time=STOP)
+    for k in range(1, 21):
+        held.step(k * STEP)
+        moved.step(k * STEP)
+    moved.set_input(name, 2.0)
+    replay = model.stepper(stop_time=STOP)
+    replay.set_state(moved.get_state())
+    for k in range(21, 51):
+        held.step(k * STEP)
+        moved.step(k * STEP)
+        replay.step(k * STEP)
+    assert np.array_equal(moved.y, replay.y)
+    assert np.max(np.abs(moved.y - held.y)) > 1e-6
+
+
+def test_a_failed_numpy_step_leaves_the_state_and_fails_again():
+    """Terminals meeting at the closed-form time π√2/4 s (the scene's comment): the step holding it
+    fails naming the elements and a time in that step; time, state and outputs are as before. The
+    failure drops the running integration, so the retried step restarts from the communication
+    point (as on the compiled path) and fails again in the same step."""
+    model = inerter.load(TERMINALS_MEET)
+    st = model.stepper(stop_time=2.0)
+    impact = math.pi * math.sqrt(2) / 4
+    k = 1
+    while (k + 1) * STEP < impact:
+        st.step(k * STEP)
+        k += 1
+    before = (st.time, list(st.y), st.output_values())
+    for _ in range(2):
+        with pytest.raises(SimulationError) as failed:
+            st.step((k + 1) * STEP)
+        assert (st.time, list(st.y), st.output_values()) == before
+        assert "terminals O and P meet" in str(failed.value)
+        assert st.time <= failed.value.time < (k + 1) * STEP
+    assert st.time < impact <= (k + 1) * STEP

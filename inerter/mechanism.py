@@ -141,8 +141,7 @@ class Mechanism:
         self.feedback = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "pd"]
         self.input_forces = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "input"]
         self.input_names = [f"{f.point}.f[{i + 1}]" for f, _ in self.input_forces for i in range(dim)]
-        #: Times where a step force switches: the integrators restart there (module simulation).
-        self.discontinuities = sorted({f.time for f in scene.forces.values() if f.function == "step" and f.time > 0})
+        switches = {f.time for f in scene.forces.values() if f.function == "step" and f.time > 0}
 
         g = scene.effects.get("gravity")
         self.gravity = None
@@ -152,6 +151,14 @@ class Mechanism:
                 self.gravity[self.v_index[i]:self.v_index[i] + dim] = b.mass * np.asarray(g)
         self.masses = np.array([b.mass for b in scene.bodies.values()])
         self.ground_motion = scene.effects.get("ground_acceleration")
+        if self.ground_motion is not None and self.ground_motion.record is not None:
+            # A record is interpolated linearly: its slope jumps at every sample (and its value at
+            # the ends, zero outside), so each sample ends a smooth segment of the motion.
+            switches.update(float(t) for t in self.ground_motion.record[0] if t > 0)
+        #: Times where the right-hand side is not smooth (a step force switches, a ground record's
+        #: sample): the integrators restart there (module simulation), so every step integrates a
+        #: smooth right-hand side and the methods keep their order.
+        self.discontinuities = sorted(switches)
         if self.ground_motion is not None and self.ground_motion.input:
             self.input_names += [f"ground.a[{i + 1}]" for i in range(dim)]
         self.q0, self.v0 = self.assemble_initial(q0, v0)

@@ -78,34 +78,35 @@ class Study:
         return list(dict.fromkeys(p.series for p in self.points))
 
 
-def signal_extractor(kernel_or_flat, signal: str | None) -> Callable[[np.ndarray], np.ndarray]:
-    """states (T × 2n) → positions (T × k) of the signal (``P.r[i]``) or of every named point."""
-    from .compiled import flatten
-
-    flat = kernel_or_flat if isinstance(kernel_or_flat, dict) else flatten(kernel_or_flat)
-    names = flat["point_names"]
-    pbody, ploc = flat["pbody"], flat["ploc"]
+def signal_columns(mech, signal: str | None) -> list[tuple[str, int]]:
+    """(point, axis from 0) of each column compared with the oracle: the signal ``P.r[i]``, or every
+    coordinate of every point on a body (2D or 3D)."""
+    names, d = list(mech.point_names), mech.dim
     if signal:
         name, _, rest = signal.partition(".r[")
-        if name not in names or not rest.endswith("]"):
-            raise ValueError(f"--signal {signal!r}: expected P.r[1] or P.r[2] with P one of {', '.join(names)}")
-        chosen, axes = [names.index(name)], [int(rest[:-1]) - 1]
-    else:
-        chosen = [i for i in range(len(names)) if pbody[i] >= 0]
-        axes = [0, 1]
+        axis = rest[:-1] if rest.endswith("]") else ""
+        if name not in names or axis not in [str(i) for i in range(1, d + 1)]:
+            axes = " or ".join(f"P.r[{i}]" for i in range(1, d + 1))
+            raise ValueError(f"--signal {signal!r}: expected {axes} with P one of {', '.join(names)}")
+        return [(name, int(axis) - 1)]
+    return [(name, a) for name in names if mech.points[name].body >= 0 for a in range(d)]
+
+
+def signal_extractor(mech, signal: str | None) -> Callable[[np.ndarray], np.ndarray]:
+    """states (T × (nq + nv)) → positions (T × k) of :func:`signal_columns`, from the mechanism's
+    own point kinematics (any dimension, any orientation coordinates)."""
+    columns = signal_columns(mech, signal)
+    points = [mech.points[name] for name, _ in columns]
+    nq = mech.nq
 
     def extract(states):
         states = np.atleast_2d(states)
-        cols = []
-        for i in chosen:
-            b, (lx, ly) = pbody[i], ploc[i]
-            if b < 0:
-                continue
-            th = states[:, 3 * b + 2]
-            c, s = np.cos(th), np.sin(th)
-            xy = (states[:, 3 * b] + c * lx - s * ly, states[:, 3 * b + 1] + s * lx + c * ly)
-            cols += [xy[a] for a in axes]
-        return np.column_stack(cols)
+        out = np.empty((len(states), len(columns)))
+        for k, y in enumerate(states):
+            q, v = y[:nq], y[nq:]
+            for j, (point, (_, axis)) in enumerate(zip(points, columns)):
+                out[k, j] = point.evaluate(q, v)[0][axis]
+        return out
     return extract
 
 
@@ -150,8 +151,9 @@ def sweep(study: Study, model, reference, extract, paths, methods, sweeps, budge
     for path in paths:
         for method in methods:
             label = f"{path} {method}"
-            if path == "compiled" and not compiled.AVAILABLE:
-                study.notes.append(f"{label}: skipped, {compiled.WHY_NOT}")
+            why_not = compiled.unsupported(model.mechanism) if path == "compiled" else ""
+            if why_not:
+                study.notes.append(f"{label}: skipped, {why_not}")
                 continue
             for setting in sweeps[method]:
                 kw = dict(stop_time=study.stop_time, method=method)
@@ -181,14 +183,9 @@ FMU_STEPS = (0.01, 0.002)
 FMU_METHODS = ("DOP853", "RK45")
 
 
-def signal_names(kernel_or_flat, signal: str | None) -> list[str]:
+def signal_names(mech, signal: str | None) -> list[str]:
     """The output names of the columns :func:`signal_extractor` gives, in its order."""
-    from .compiled import flatten
-
-    if signal:
-        return [signal]
-    flat = kernel_or_flat if isinstance(kernel_or_flat, dict) else flatten(kernel_or_flat)
-    return [f"{name}.r[{a}]" for name, b in zip(flat["point_names"], flat["pbody"]) if b >= 0 for a in (1, 2)]
+    return [f"{name}.r[{axis + 1}]" for name, axis in signal_columns(mech, signal)]
 
 
 def fmu_sweep(study: Study, scene, overrides, reference, names, interval, methods, sweeps, steps, budget,

@@ -9,8 +9,8 @@ in turn, so drifting load weighs on all alike):
 
 - the solver's whole run (`Model.simulate(path=...)`: one integration sampled every step, every
   output evaluated at every sample, no metrics);
-- the solver's co-simulation stepper called directly (`Model.stepper(path=...)`: restarted at each
-  communication point as the FMU does, outputs evaluated after each step);
+- the solver's co-simulation stepper called directly (`Model.stepper(path=...)`, as the FMU calls it:
+  one integration running across the communication points, outputs evaluated after each step);
 - the FMU through `fmpy.simulate_fmu` (extraction, instantiation, every step, every output
   recorded), with its parameter `compiled` set accordingly. On the compiled path twice: as shipped
   (the FMU's binary takes the steps natively, inerter/fmu_native.py) and with native steps off
@@ -251,8 +251,8 @@ def main(argv=None):
         + "\nEach row produces the same outputs at the same communication points. The whole run integrates once "
           "and samples its dense output. On the compiled path the stepper and the FMU keep one integration "
           "running across the communication points (it restarts only where an input changes), so they take "
-          "the whole run's steps and give its results bit for bit (difference 0); the numpy stepper restarts "
-          "scipy's integrator at every communication point, which changes the result within the tolerance. "
+          "the whole run's steps and give its results bit for bit (difference 0); so does the numpy stepper, "
+          "which keeps scipy's integrator running in the same way. "
           "As shipped, the FMU's binary takes those steps itself in compiled code and serves the outputs "
           "(inerter/fmu_native.py); with native steps off, every doStep and getReal goes through pythonfmu "
           "into the slave. The two floors are FMUs that do nothing, driven by the same fmpy call: with "

@@ -5,18 +5,22 @@
     qdd, lam = kernel.accelerations(t, q, v, inputs, alpha)      # = Mechanism.accelerations
     run = integrate_compiled(model.mechanism, model.settings())   # an inerter.simulation.Run
 
-A 2D :class:`~inerter.mechanism.Mechanism` is flattened once into arrays (bodies' masses; points
-as body index and body-frame coordinates; joints; translational elements with coefficient, free
-length and centripetal flag; rotational elements; point forces with their time functions; gravity
-when declared). The kernels in :mod:`inerter.compiled_kernels` evaluate the mass matrix with
-M_I, the constraint Jacobian, γ, the forces and Q_Iv from these arrays (the same formulas as
-``elements.py``, ``joints.py``, ``planar.py``) and solve the augmented system with a band LU
-with partial pivoting after a reverse Cuthill-McKee ordering, so a chain's cost grows linearly
-with its length.
+A :class:`~inerter.mechanism.Mechanism` is flattened once into arrays (bodies' masses and, in 3D,
+inertia tensors; points as body index and body-frame coordinates; joints; translational elements
+with coefficient, free length and centripetal flag; rotational elements; point forces with their
+time functions; gravity and the ground motion when declared): :func:`flatten` for 2D scenes,
+:func:`inerter.compiled_spatial.flatten3` for 3D scenes with quaternion orientations (Z-X-Z Euler
+angles stay on the numpy path, which watches their singularity). The kernels in
+:mod:`inerter.compiled_kernels` evaluate the mass matrix with M_I, the constraint Jacobian, γ, the
+forces and Q_Iv from these arrays (the same formulas as ``elements.py``, ``joints.py``,
+``planar.py``, ``spatial.py``) and solve the augmented system with a band LU with partial
+pivoting after a reverse Cuthill-McKee ordering, so a chain's cost grows linearly with its length.
+The state is y = [q, v] with q̇ = B(q) v (the identity in 2D, the quaternion rates in 3D).
 
 Integrators: DOP853 and RK45 with scipy's error control, step-size rule and dense output (the
 same steps as the numpy path at the same tolerances), and RK4 with a fixed step, each in one
-compiled loop that writes the samples at the output grid. Radau, BDF and LSODA, and the
+compiled loop that writes the samples at the output grid, restarted at each discontinuity of the
+right-hand side (a step force's switch, a ground record's sample). Radau, BDF and LSODA, and the
 ``projection`` constraint treatment, run scipy's integrators (``inerter.simulation.integrate``)
 on the compiled right-hand side.
 
@@ -223,7 +227,7 @@ def flatten(mech) -> dict:
     def arr(rows, width, dtype):
         return np.array(rows, dtype=dtype).reshape(-1, width)
 
-    return dict(n=n, m=2 * len(jt_int), mass=mass, pbody=pbody, ploc=ploc,
+    return dict(n=n, nq=n, dim=2, m=2 * len(jt_int), mass=mass, pbody=pbody, ploc=ploc,
                 el_int=arr(el_int, 4, np.int64), el_real=arr(el_real, 2, float),
                 rot_int=arr(rot_int, 3, np.int64), rot_real=arr(rot_real, 2, float),
                 jt_int=arr(jt_int, 3, np.int64), jt_real=arr(jt_real, 3, float),
@@ -235,6 +239,9 @@ def flatten(mech) -> dict:
 
 def signal_layout(flat) -> list[str]:
     """The names of the values :func:`compiled_kernels.signal_values` writes, in its order."""
+    if flat["dim"] == 3:
+        from .compiled_spatial import signal_layout3
+        return signal_layout3(flat)
     names = [f"{p}.{x}" for p in flat["point_names"] for x in ("r[1]", "r[2]", "v[1]", "v[2]")]
     names += [f"{e}.{x}" for e in flat["el_names"] for x in ("s_rel", "v_rel", "f")]
     names += [f"{e}.{x}" for e in flat["rot_names"] for x in ("phi_rel", "w_rel", "tau")]
@@ -297,6 +304,22 @@ def ordering(S):
 # ------------------------------------------------------------------------------------------------
 # The kernel
 # ------------------------------------------------------------------------------------------------
+def ground_arrays(mech):
+    """(mode, input offset, ground_t, ground_a) of the mechanism's ground motion for
+    :func:`compiled_kernels.ground_acceleration`."""
+    g = getattr(mech, "ground_motion", None)
+    if g is None:
+        return _k.GROUND_NONE, 0, np.zeros(1), np.zeros((1, 1))
+    if g.input:
+        return _k.GROUND_INPUT, mech.dim * len(mech.input_forces), np.zeros(1), np.full((1, 1), g.scale)
+    if g.record is not None:
+        times, values = g.record
+        return (_k.GROUND_RECORD, 0, np.ascontiguousarray(times, dtype=float),
+                np.ascontiguousarray(g.scale * np.asarray(values, dtype=float).reshape(mech.dim, -1)))
+    return (_k.GROUND_SINE, 0, np.array([float(g.frequency)]),
+            np.ascontiguousarray((g.scale * g.amplitude).reshape(mech.dim, 1)))
+
+
 class Kernel:
     """Eq. (33) for one mechanism in compiled code: :meth:`accelerations` matches
     ``Mechanism.accelerations`` to round-off."""
@@ -305,15 +328,20 @@ class Kernel:
 
     def __init__(self, mech):
         self.mech = mech
-        flat = flatten(mech)
+        spatial = mech.scene.dimension == 3
+        if spatial:
+            from .compiled_spatial import flatten3, sparsity3
+        flat = flatten3(mech) if spatial else flatten(mech)
         self.flat = flat
-        self.n, self.m = flat["n"], flat["m"]
-        self.perm, self.kl, self.ku = ordering(sparsity(flat))
-        dims = np.array([self.n, self.m, self.kl, self.ku, int(flat["has_gravity"])], dtype=np.int64)
+        self.n, self.m, self.nq = flat["n"], flat["m"], flat["nq"]
+        self.perm, self.kl, self.ku = ordering(sparsity3(flat) if spatial else sparsity(flat))
+        mode, offset, ground_t, ground_a = ground_arrays(mech)
+        dims = np.array([self.n, self.m, self.kl, self.ku, int(flat["has_gravity"]), flat["dim"], self.nq, mode,
+                         offset], dtype=np.int64)
         self.params = (flat["mass"], flat["pbody"], flat["ploc"], flat["el_int"], flat["el_real"],
                        flat["rot_int"], flat["rot_real"], flat["jt_int"], flat["jt_real"], flat["fa_int"],
                        flat["fa_real"], flat["pd_int"], flat["pd_real"], flat["in_int"], flat["gravity"],
-                       self.perm, dims)
+                       self.perm, dims, ground_t, ground_a)
         N = self.n + self.m
         self._AB = np.empty((2 * self.kl + self.ku + 1, N))
         self._rhs = np.empty(N)
@@ -329,7 +357,7 @@ class Kernel:
         return self.kl, self.ku, self.n + self.m
 
     def _inputs(self, inputs):
-        if inputs is None or not len(self.flat["in_int"]):
+        if inputs is None or not len(self.input_names):
             return self._no_inputs
         return np.ascontiguousarray(inputs, dtype=float)
 
@@ -344,17 +372,18 @@ class Kernel:
 
     def derivative(self, inputs=None, alpha=0.0):
         """f(t, y) = [q̇, q̈] for scipy's integrators."""
-        n = self.n
+        n, nq = self.n, self.nq
         inp = self._inputs(inputs)
         P, AB, rhs, gen = self.params, self._AB, self._rhs, self._gen
-        acc_fn = _k.accelerations
+        rhs_fn = _k._rhs
+        acc = np.empty(n + self.m)
 
         def fun(t, y):
-            out = np.empty(n + self.m)
-            st = acc_fn(float(t), y[:n], y[n:], inp, alpha, P, AB, rhs, gen, out)
+            dy = np.empty(nq + n)
+            st = rhs_fn(float(t), np.ascontiguousarray(y, dtype=float), inp, alpha, P, AB, rhs, gen, acc, dy)
             if st:
                 raise SimulationError(_STATUS_TEXT[st], t)
-            return np.concatenate((y[n:], out[:n]))
+            return dy
         return fun
 
     def constraint_residual(self, q) -> float:
@@ -393,17 +422,32 @@ class Kernel:
         return raw[:k][:, order], int(k)
 
     def point_positions(self, states) -> dict:
-        """Global positions (time × 2) of every named point along a state history (rows [q, v])."""
+        """Global positions (time × dimension) of every named point along a state history (rows
+        [q, v])."""
         states = np.atleast_2d(states)
         out = {}
-        for name, b, (lx, ly) in zip(self.flat["point_names"], self.flat["pbody"], self.flat["ploc"]):
+        spatial = self.flat["dim"] == 3
+        for name, b, local in zip(self.flat["point_names"], self.flat["pbody"], self.flat["ploc"]):
             if b < 0:
-                out[name] = np.tile((lx, ly), (len(states), 1))
-                continue
-            x, y, th = states[:, 3 * b], states[:, 3 * b + 1], states[:, 3 * b + 2]
-            c, s = np.cos(th), np.sin(th)
-            out[name] = np.column_stack((x + c * lx - s * ly, y + s * lx + c * ly))
+                out[name] = np.tile(local, (len(states), 1))
+            elif spatial:                                     # r = R + A(p) ū, Eq. (15)
+                k = 7 * b
+                out[name] = states[:, k:k + 3] + np.einsum("tij,j->ti", _quat_matrices(states[:, k + 3:k + 7]), local)
+            else:
+                lx, ly = local
+                x, y, th = states[:, 3 * b], states[:, 3 * b + 1], states[:, 3 * b + 2]
+                c, s = np.cos(th), np.sin(th)
+                out[name] = np.column_stack((x + c * lx - s * ly, y + s * lx + c * ly))
         return out
+
+
+def _quat_matrices(p):
+    """Rotation matrices (time × 3 × 3) of a history of quaternions, as ``spatial.quat_matrix``."""
+    w, x, y, z = p.T
+    s = 2.0 / (w * w + x * x + y * y + z * z)
+    return np.stack((np.stack((1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)), -1),
+                     np.stack((s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)), -1),
+                     np.stack((s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)), -1)), 1)
 
 
 class NumpyKernel:
@@ -501,28 +545,51 @@ def integrate_compiled(mech, settings, inputs=None):
         run.extra.update(path="scipy integrator, compiled right-hand side", kernel=kernel)
         return run
 
-    n = kernel.n
     grid = np.arange(0.0, settings.stop_time + 0.5 * settings.output_interval, settings.output_interval)
     grid[-1] = min(grid[-1], settings.stop_time)
-    out = np.empty((len(grid), 2 * n))
+    out = np.empty((len(grid), kernel.nq + kernel.n))
     y0 = np.concatenate((kernel.q0, kernel.v0))
     out[0] = y0
     inp = kernel._inputs(inputs)
     alpha = float(settings.alpha)
+    # One integration per smooth segment: it restarts at each discontinuity of the right-hand side
+    # (a step force's switch, a ground record's sample; Mechanism.discontinuities), as the numpy
+    # path's does, with the step size the error control proposed last.
+    stop = float(settings.stop_time)
+    ends = [float(d) for d in getattr(mech, "discontinuities", ()) if 0.0 < d < stop] + [stop]
+    steps = evals = 0
+    h, t0, k, status, t_reached = 0.0, 0.0, 1, 0, 0.0
+    tables = None if settings.method == "RK4" else _tables(settings.method)
     start = _time.process_time()
-    if settings.method == "RK4":
-        status, k, steps, evals, t_reached = _k.integrate_rk4(
-            y0, 0.0, float(settings.stop_time), grid, out, float(settings.step), int(settings.max_steps), inp,
-            alpha, kernel.params)
-    else:
-        A, B, C, E, E3, D, Pm = _tables(settings.method)
-        status, k, steps, evals, t_reached, h = _k.integrate_rk(
-            _RK_CODE[settings.method], y0, 0.0, float(settings.stop_time), grid, out, float(settings.rtol),
-            float(settings.atol), 0.0, int(settings.max_steps), inp, alpha, kernel.params, A, B, C, E, E3, D, Pm,
-            _monitor(settings.method))
+    y = y0
+    for t1 in ends:
+        last = int(np.searchsorted(grid, t1, side="right"))      # grid[k:last] lie in (t0, t1]
+        seg = np.concatenate(([t0], grid[k:last]))
+        if seg[-1] != t1:
+            seg = np.append(seg, t1)
+        seg_out = np.empty((len(seg), len(y0)))
+        seg_out[0] = y
+        if settings.method == "RK4":
+            status, done, s_steps, s_evals, t_reached = _k.integrate_rk4(
+                y, t0, t1, seg, seg_out, float(settings.step), int(settings.max_steps) - steps, inp, alpha,
+                kernel.params)
+        else:
+            A, B, C, E, E3, D, Pm = tables
+            status, done, s_steps, s_evals, t_reached, h = _k.integrate_rk(
+                _RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol), float(settings.atol), h,
+                int(settings.max_steps) - steps, inp, alpha, kernel.params, A, B, C, E, E3, D, Pm,
+                _monitor(settings.method))
+        steps += int(s_steps)
+        evals += int(s_evals)
+        written = min(done - 1, last - k)                         # grid samples among seg_out[1:done]
+        out[k:k + written] = seg_out[1:1 + written]
+        k += written
+        if status != 0:
+            break
+        y, t0 = seg_out[-1].copy(), t1
     cpu = _time.process_time() - start
     states = out[:k].copy()
-    max_drift = float(_k.max_residual(states, n, kernel.params)) if kernel.m else 0.0
+    max_drift = float(_k.max_residual(states, kernel.params)) if kernel.m else 0.0
     if status == 0:
         message = "completed"
     else:
@@ -562,7 +629,7 @@ class CompiledStepper(Stepper):
         self._need_acc = bool(signals.needs_accelerations)
         self._tables = _tables(settings.method) if settings.method in _RK_CODE else None
         self._work = (None if self._tables is None else
-                      _k.work_arrays(kernel.params, 2 * kernel.n, _k.rk_stages(self._tables[0])))
+                      _k.work_arrays(kernel.params, kernel.nq + kernel.n, _k.rk_stages(self._tables[0])))
         self._monitor = _monitor(settings.method)
         self._tol = (float(settings.rtol), float(settings.atol), int(settings.max_steps))
         self._raw = np.empty(len(signal_layout(kernel.flat)))
@@ -574,7 +641,7 @@ class CompiledStepper(Stepper):
 
     def _start_rk(self):
         """A fresh integration at (self.time, self.y) with the held inputs and the last step size."""
-        ny = 2 * self.kernel.n
+        ny = self.kernel.nq + self.kernel.n
         hdr = np.zeros(_k.RK_HEADER)
         hdr[_k.RK_T] = self.time
         hdr[_k.RK_H] = self.h or 0.0
@@ -610,7 +677,7 @@ class CompiledStepper(Stepper):
         # every point gets the numpy stepper's steps); otherwise it runs on towards the stop time.
         bound = t_end if self._input_moved else self.t_bound
         steps_before = hdr[_k.RK_STEPS]
-        out = np.empty((1, 2 * kernel.n))
+        out = np.empty((1, kernel.nq + kernel.n))
         order = self._order if self._order is not None else _NO_ORDER
         values = np.empty(len(order))
         A, B, C, E, E3, D, Pm = self._tables
@@ -633,7 +700,7 @@ class CompiledStepper(Stepper):
     def _step_rk4(self, t_end):
         s, kernel = self.settings, self.kernel
         grid = np.array([self.time, t_end])
-        out = np.empty((2, 2 * kernel.n))
+        out = np.empty((2, kernel.nq + kernel.n))
         y0 = np.ascontiguousarray(self.y, dtype=float)
         status, k, steps, evals, t_reached = _k.integrate_rk4(
             y0, self.time, t_end, grid, out, float(s.step), int(s.max_steps), kernel._inputs(self.inputs.copy()),
@@ -654,7 +721,7 @@ class CompiledStepper(Stepper):
         """The outputs at the current time, in the order of ``signals.names``."""
         if self._values is not None:
             return self._values
-        n, kernel = self.kernel.n, self.kernel
+        n, kernel = self.kernel.nq, self.kernel
         if self._order is None:
             values = self.signals.evaluate(self.time, self.y[:n], self.y[n:], self.inputs, self.settings.alpha,
                                            kernel.accelerations)
@@ -677,7 +744,7 @@ class CompiledStepper(Stepper):
         if self.settings.method == "RK4":
             native = self._native
             if native is None:
-                ny = 2 * self.kernel.n
+                ny = self.kernel.nq + self.kernel.n
                 rk = [np.zeros(_k.RK_HEADER), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros((7, ny))]
                 native = self._native = self._native_arrays(
                     rk, np.empty(len(self.kernel._inputs(self.inputs))), 2,
@@ -790,11 +857,11 @@ def failure_text(kernel, status, method, h, y_last, t_last) -> str:
         return text.format(method=method, h=h, steps=sim.COLLAPSE_STEPS, relative=sim.COLLAPSE_RELATIVE)
     names = kernel.flat["el_names"]
     if status == 5 and names:
-        n = kernel.n
+        nq = kernel.nq
         y = np.ascontiguousarray(y_last, dtype=float)
         raw = np.empty(len(signal_layout(kernel.flat)))
-        _k.signal_values(y[:n].copy(), y[n:].copy(), np.zeros(n + kernel.m), kernel.params, raw)
-        first = 4 * len(kernel.flat["point_names"])
+        _k.signal_values(y[:nq].copy(), y[nq:].copy(), np.zeros(kernel.n + kernel.m), kernel.params, raw)
+        first = 2 * kernel.flat["dim"] * len(kernel.flat["point_names"])
         lengths = raw[first:first + 3 * len(names):3]
         closest = float(np.min(lengths))
         which = [name for name, L in zip(names, lengths) if L <= closest * (1.0 + 1e-9)]
@@ -817,14 +884,13 @@ def compiled_stepper(mech, settings, signals, stop_time=None):
 
 
 def unsupported(mech) -> str:
-    """Why the compiled kernels cannot take `mech` ("" when they can): numba missing, a 3D scene,
-    ground motion (not in the kernels)."""
+    """Why the compiled kernels cannot take `mech` ("" when they can): numba missing, Z-X-Z Euler
+    angles (the kernels take quaternions; the numpy path checks the Euler singularity)."""
     if not AVAILABLE:
         return WHY_NOT
-    if getattr(mech.scene, "dimension", 2) != 2:
-        return "the compiled path is planar"
-    if getattr(mech, "ground_motion", None) is not None:
-        return "ground motion is computed on the numpy path only"
+    orientation = getattr(mech, "orientation", None)
+    if orientation is not None and orientation.kind != "quaternion":
+        return f"the compiled path takes quaternion orientations (the scene has {orientation.kind})"
     return ""
 
 

@@ -23,6 +23,8 @@ ROT_SPRING, ROT_DAMPER = 0, 1
 REVOLUTE, PRISMATIC = 0, 1
 # Time functions of applied forces.
 F_CONSTANT, F_SINE, F_STEP = 0, 1, 2
+# Ground motion (dims[7]): none, a record (linearly interpolated, zero outside), a sine, FMU inputs.
+GROUND_NONE, GROUND_RECORD, GROUND_SINE, GROUND_INPUT = 0, 1, 2, 3
 # Status codes of the integrators.
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED = 0, 1, 2, 3, 4, 5, 6, 7
 
@@ -104,7 +106,7 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
 
     gen: work vector of length n for the generalised forces. Returns a status code."""
     (mass, pbody, ploc, el_int, el_real, rot_int, rot_real, jt_int, jt_real,
-     fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims) = P
+     fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims, ground_t, ground_a) = P
     n = dims[0]
     kl = dims[2]
     ku = dims[3]
@@ -219,6 +221,13 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
             p = in_int[f, 0]
             _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], inputs[2 * f], inputs[2 * f + 1], gen)
 
+    # -- ground motion: coordinates relative to the moving ground, −m a_g on every body
+    if dims[7] != GROUND_NONE:
+        agx, agy, agz = ground_acceleration(t, inputs, P)
+        for k in range(0, n, 3):
+            gen[k] -= mass[k] * agx
+            gen[k + 1] -= mass[k] * agy
+
     for i in range(n):
         rhs[perm[i]] = gen[i]
 
@@ -288,6 +297,42 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
             rhs[perm[row + 1]] = gamma2 - 2.0 * alpha * cd2 - alpha * alpha * c2
         row += 2
     return status
+
+
+@njit(cache=True)
+def ground_acceleration(t, inputs, P):
+    """The ground's acceleration a_g(t) (3 components; the third 0 in 2D), as
+    ``GroundMotion.acceleration``: `ground_t` holds a record's sample times (a sine: its frequency),
+    `ground_a` the scaled values, one row per axis (a sine: its scaled amplitude per axis in column
+    0; inputs: the scale in [0, 0]), dims[8] the offset of ``ground.a[1]`` among the inputs."""
+    dims = P[16]
+    ground_t = P[17]
+    ground_a = P[18]
+    dim = dims[5]
+    mode = dims[7]
+    a = np.zeros(3)
+    if mode == GROUND_INPUT:
+        off = dims[8]
+        if inputs.shape[0] >= off + dim:
+            for i in range(dim):
+                a[i] = ground_a[0, 0] * inputs[off + i]
+    elif mode == GROUND_SINE:
+        s = math.sin(2.0 * math.pi * ground_t[0] * t)
+        for i in range(dim):
+            a[i] = ground_a[i, 0] * s
+    elif mode == GROUND_RECORD:
+        last = ground_t.shape[0] - 1
+        if ground_t[0] <= t <= ground_t[last]:
+            j = np.searchsorted(ground_t, t, side="right") - 1
+            if j >= last:
+                for i in range(dim):
+                    a[i] = ground_a[i, last]
+            else:
+                x = t - ground_t[j]
+                width = ground_t[j + 1] - ground_t[j]
+                for i in range(dim):
+                    a[i] = ground_a[i, j] + x * (ground_a[i, j + 1] - ground_a[i, j]) / width
+    return a[0], a[1], a[2]
 
 
 @njit(cache=True, inline="always")
@@ -363,7 +408,10 @@ def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
     """Eq. (33): out[:n] = q̈, out[n:] = λ (original ordering). Returns a status code."""
     perm = P[15]
     dims = P[16]
-    status = assemble(t, q, v, inputs, alpha, P, AB, rhs, gen)
+    if dims[5] == 3:
+        status = assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen)
+    else:
+        status = assemble(t, q, v, inputs, alpha, P, AB, rhs, gen)
     if not band_solve(AB, rhs, dims[2], dims[3]):
         return SINGULAR
     for i in range(out.shape[0]):
@@ -374,6 +422,8 @@ def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
 @njit(cache=True)
 def constraint_residual(q, P):
     """Largest |C_i| over the joints."""
+    if P[16][5] == 3:
+        return constraint_residual3(q, P)
     pbody = P[1]
     ploc = P[2]
     jt_int = P[7]
@@ -409,8 +459,10 @@ def signal_values(q, v, qdd, P, out):
     v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd), every
     rotational element's φ_rel, ω_rel and torque (3 each), the energy (as ``Mechanism.energy``)
     and the largest constraint residual. Returns a status code."""
+    if P[16][5] == 3:
+        return signal_values3(q, v, qdd, P, out)
     (mass, pbody, ploc, el_int, el_real, rot_int, rot_real, jt_int, jt_real,
-     fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims) = P
+     fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims, ground_t, ground_a) = P
     n = dims[0]
     status = OK
     k = 0
@@ -495,13 +547,13 @@ def work_arrays(P, ny, stages):
 @njit(cache=True)
 def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
     """`signal_values` at one state y = [q, v]; accelerations from Eq. (33) only when `need_acc`."""
-    n = P[16][0]
+    nq = P[16][6]
     AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = work
     if need_acc:
-        st = accelerations(t, y[:n], y[n:], inputs, alpha, P, AB, rhs, gen, sig_acc)
+        st = accelerations(t, y[:nq], y[nq:], inputs, alpha, P, AB, rhs, gen, sig_acc)
         if st != OK:
             return st
-    return signal_values(y[:n], y[n:], sig_acc, P, out)
+    return signal_values(y[:nq], y[nq:], sig_acc, P, out)
 
 
 @njit(cache=True)
@@ -517,20 +569,622 @@ def signal_history(times, states, inputs, alpha, need_acc, P, out):
 
 
 # ------------------------------------------------------------------------------------------------
+# 3D scenes with quaternion orientations: Eq. (33), q̇ = B(q) v, the residual and the outputs
+# ------------------------------------------------------------------------------------------------
+# Each body has the coordinates q = [R(3), p(4)] (p a quaternion, normalised on the fly as
+# ``spatial.quat_matrix``) and the velocity coordinates v = [Ṙ(3), ω(3)], ω in the body frame
+# (``Mechanism.q_index``, ``v_index``); the arrays, with the 3D meaning of each column, come from
+# :func:`inerter.compiled_spatial.flatten3`. Point kinematics (Sec. 3.2, Eqs. 15, 22, 25):
+# r = R + A ū, ṙ = Ṙ + A(ω × ū), r̈ = R̈ − A ũ ω̇ + A(ω × (ω × ū)). A global vector s projected on a
+# point's H = [I, −A ũ] gives sᵀH = [sᵀ, (ū × Aᵀs)ᵀ]; :func:`_wcol` computes the second part, which
+# is also the ω-columns of ∂(s·(A s̄))/∂ω of the dot-1 and dot-2 joint rows.
+
+# Joint kinds (column 0 of ``jt_int`` in 3D; every kind is evaluated from the row counts in columns 3-5).
+SPHERICAL, REVOLUTE3, FIXED, PRISMATIC3 = 0, 1, 2, 3
+# Offset of the dot-2 vectors in a row of ``jt_real`` (after three dot-1 pairs).
+DOT2 = 18
+
+
+# ------------------------------------------------------------------------------------------------
+# Small vector helpers on scalar triples and row-major 3×3 tuples
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _rot(q, body):
+    """A body's rotation matrix A (row-major 9-tuple) from its quaternion q[7b+3:7b+7], normalised
+    on the fly with s = 2/(w² + x² + y² + z²) as ``spatial.quat_matrix``; the identity for the ground."""
+    if body < 0:
+        return (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    k = 7 * body + 3
+    w = q[k]
+    x = q[k + 1]
+    y = q[k + 2]
+    z = q[k + 3]
+    s = 2.0 / (w * w + x * x + y * y + z * z)
+    return (1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y),
+            s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x),
+            s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y))
+
+
+@njit(cache=True, inline="always")
+def _omega(v, body):
+    """A body's angular velocity in its own frame (zero for the ground)."""
+    if body < 0:
+        return 0.0, 0.0, 0.0
+    k = 6 * body + 3
+    return v[k], v[k + 1], v[k + 2]
+
+
+@njit(cache=True, inline="always")
+def _mul(A, x, y, z):
+    """A (x, y, z)."""
+    return (A[0] * x + A[1] * y + A[2] * z, A[3] * x + A[4] * y + A[5] * z, A[6] * x + A[7] * y + A[8] * z)
+
+
+@njit(cache=True, inline="always")
+def _tmul(A, x, y, z):
+    """Aᵀ (x, y, z)."""
+    return (A[0] * x + A[3] * y + A[6] * z, A[1] * x + A[4] * y + A[7] * z, A[2] * x + A[5] * y + A[8] * z)
+
+
+@njit(cache=True, inline="always")
+def _cross(ax, ay, az, bx, by, bz):
+    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+
+
+@njit(cache=True, inline="always")
+def _wcol(A, lx, ly, lz, sx, sy, sz):
+    """ū × (Aᵀ s): the ω-columns of sᵀ H for a point ū (H = [I, −A ũ], Eq. 22 with body-frame ω)."""
+    tx, ty, tz = _tmul(A, sx, sy, sz)
+    return _cross(lx, ly, lz, tx, ty, tz)
+
+
+@njit(cache=True, inline="always")
+def _vector(A, wx, wy, wz, sx, sy, sz):
+    """A body-fixed vector s = A s̄, its rate A(ω × s̄) and its acceleration at ω̇ = 0, A(ω × (ω × s̄))."""
+    s0, s1, s2 = _mul(A, sx, sy, sz)
+    cx, cy, cz = _cross(wx, wy, wz, sx, sy, sz)
+    d0, d1, d2 = _mul(A, cx, cy, cz)
+    ex, ey, ez = _cross(wx, wy, wz, cx, cy, cz)
+    a0, a1, a2 = _mul(A, ex, ey, ez)
+    return s0, s1, s2, d0, d1, d2, a0, a1, a2
+
+
+# ------------------------------------------------------------------------------------------------
+# Kinematics (Eqs. 15, 22, 25)
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _point3(q, v, body, A, lx, ly, lz):
+    """(r, ṙ, acc) of a point ū on a body with rotation A: r = R + A ū, ṙ = Ṙ + A(ω × ū),
+    acc = A(ω × (ω × ū)) (the point's part of a_n, Eq. 25). A ground point is fixed at ū."""
+    if body < 0:
+        return lx, ly, lz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    wx, wy, wz = _omega(v, body)
+    u0, u1, u2, d0, d1, d2, a0, a1, a2 = _vector(A, wx, wy, wz, lx, ly, lz)
+    k = 6 * body
+    j = 7 * body
+    return q[j] + u0, q[j + 1] + u1, q[j + 2] + u2, v[k] + d0, v[k + 1] + d1, v[k + 2] + d2, a0, a1, a2
+
+
+@njit(cache=True, inline="always")
+def _pair3(q, v, pa, pb, pbody, ploc):
+    """Relative kinematics b − a of two points (Eqs. 18, 19, 25): the bodies, their rotations,
+    r, ṙ and a_n = acc_b − acc_a."""
+    ba = pbody[pa]
+    bb = pbody[pb]
+    Aa = _rot(q, ba)
+    Ab = _rot(q, bb)
+    rax, ray, raz, vax, vay, vaz, aax, aay, aaz = _point3(q, v, ba, Aa, ploc[pa, 0], ploc[pa, 1], ploc[pa, 2])
+    rbx, rby, rbz, vbx, vby, vbz, abx, aby, abz = _point3(q, v, bb, Ab, ploc[pb, 0], ploc[pb, 1], ploc[pb, 2])
+    return (ba, bb, Aa, Ab, rbx - rax, rby - ray, rbz - raz, vbx - vax, vby - vay, vbz - vaz,
+            abx - aax, aby - aay, abz - aaz)
+
+
+@njit(cache=True, inline="always")
+def _element3(q, v, e, el_int, pbody, ploc, ga, gb):
+    """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, L, r̂, whether the terminals
+    meet), with g = Hᵀ r̂ written to ga (a's six coordinates) and gb (b's); L is held at MIN_LENGTH
+    where the terminals meet."""
+    pa = el_int[e, 1]
+    pb = el_int[e, 2]
+    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
+    L = math.sqrt(rx * rx + ry * ry + rz * rz)
+    meets = not L > MIN_LENGTH
+    if meets:
+        L = MIN_LENGTH
+    ex = rx / L
+    ey = ry / L
+    ez = rz / L
+    # g = Hᵀ r̂ = [−r̂, −ū_a × (A_aᵀ r̂), r̂, ū_b × (A_bᵀ r̂)] (H = [−H_a, H_b], Eq. 18)
+    wx, wy, wz = _wcol(Aa, ploc[pa, 0], ploc[pa, 1], ploc[pa, 2], ex, ey, ez)
+    ga[0] = -ex
+    ga[1] = -ey
+    ga[2] = -ez
+    ga[3] = -wx
+    ga[4] = -wy
+    ga[5] = -wz
+    wx, wy, wz = _wcol(Ab, ploc[pb, 0], ploc[pb, 1], ploc[pb, 2], ex, ey, ez)
+    gb[0] = ex
+    gb[1] = ey
+    gb[2] = ez
+    gb[3] = wx
+    gb[4] = wy
+    gb[5] = wz
+    return el_int[e, 0], ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets
+
+
+@njit(cache=True, inline="always")
+def _rel(Aa, Ab, rot_real, e, i, j):
+    """D[i, j] of D = (A_aᵀ A_b) rel0ᵀ, rel0 row-major in rot_real[e, 5:14]."""
+    x = 0.0
+    for k in range(3):
+        x += (Aa[i] * Ab[k] + Aa[3 + i] * Ab[3 + k] + Aa[6 + i] * Ab[6 + k]) * rot_real[e, 5 + 3 * j + k]
+    return x
+
+
+@njit(cache=True, inline="always")
+def _rotational3(q, v, e, rot_int, rot_real):
+    """A 3D rotational element (``elements.SpatialRotationalElement``): φ about the axis n̄ (fixed in
+    body a) since the initial relative orientation rel0, its rate n·(A_b ω_b − A_a ω_a), the torque
+    (restoring positive) and the axis in the global frame n = A_a n̄, with A_a, A_b."""
+    ia = rot_int[e, 1]
+    ib = rot_int[e, 2]
+    Aa = _rot(q, ia)
+    Ab = _rot(q, ib)
+    nx = rot_real[e, 2]
+    ny = rot_real[e, 3]
+    nz = rot_real[e, 4]
+    # D = (A_aᵀ A_b) rel0ᵀ: the rotation since t = 0, in a's frame
+    d00 = _rel(Aa, Ab, rot_real, e, 0, 0)
+    d01 = _rel(Aa, Ab, rot_real, e, 0, 1)
+    d02 = _rel(Aa, Ab, rot_real, e, 0, 2)
+    d10 = _rel(Aa, Ab, rot_real, e, 1, 0)
+    d11 = _rel(Aa, Ab, rot_real, e, 1, 1)
+    d12 = _rel(Aa, Ab, rot_real, e, 1, 2)
+    d20 = _rel(Aa, Ab, rot_real, e, 2, 0)
+    d21 = _rel(Aa, Ab, rot_real, e, 2, 1)
+    d22 = _rel(Aa, Ab, rot_real, e, 2, 2)
+    s = 0.5 * (nx * (d21 - d12) + ny * (d02 - d20) + nz * (d10 - d01))
+    nDn = (nx * (d00 * nx + d01 * ny + d02 * nz) + ny * (d10 * nx + d11 * ny + d12 * nz)
+           + nz * (d20 * nx + d21 * ny + d22 * nz))
+    c = 0.5 * (d00 + d11 + d22 - nDn)
+    phi = math.atan2(s, c)
+    gx, gy, gz = _mul(Aa, nx, ny, nz)
+    wax, way, waz = _omega(v, ia)
+    wbx, wby, wbz = _omega(v, ib)
+    ox, oy, oz = _mul(Ab, wbx, wby, wbz)
+    px, py, pz = _mul(Aa, wax, way, waz)
+    w = gx * (ox - px) + gy * (oy - py) + gz * (oz - pz)
+    if rot_int[e, 0] == ROT_SPRING:
+        tau = rot_real[e, 0] * (phi - rot_real[e, 1])
+    else:
+        tau = rot_real[e, 0] * w
+    return ia, ib, Aa, Ab, phi, w, tau, gx, gy, gz
+
+
+@njit(cache=True, inline="always")
+def _point_force3(q, body, lx, ly, lz, Fx, Fy, Fz, gen):
+    """A force F at a point ū: Hᵀ F (virtual work, δr = H δv): F into Ṙ's and ū × (Aᵀ F) into ω's."""
+    if body < 0:
+        return
+    A = _rot(q, body)
+    mx, my, mz = _wcol(A, lx, ly, lz, Fx, Fy, Fz)
+    k = 6 * body
+    gen[k] += Fx
+    gen[k + 1] += Fy
+    gen[k + 2] += Fz
+    gen[k + 3] += mx
+    gen[k + 4] += my
+    gen[k + 5] += mz
+
+
+@njit(cache=True, inline="always")
+def _jrow(AB, perm, off, row, v, body, A, lx, ly, lz, sx, sy, sz):
+    """Row `row` of C_v += sᵀ H over a point's body (and the transpose); returns its part of Ċ = C_v v."""
+    if body < 0:
+        return 0.0
+    k = 6 * body
+    wx, wy, wz = _wcol(A, lx, ly, lz, sx, sy, sz)
+    _sym(AB, perm, off, row, k, sx)
+    _sym(AB, perm, off, row, k + 1, sy)
+    _sym(AB, perm, off, row, k + 2, sz)
+    _sym(AB, perm, off, row, k + 3, wx)
+    _sym(AB, perm, off, row, k + 4, wy)
+    _sym(AB, perm, off, row, k + 5, wz)
+    return sx * v[k] + sy * v[k + 1] + sz * v[k + 2] + wx * v[k + 3] + wy * v[k + 4] + wz * v[k + 5]
+
+
+@njit(cache=True, inline="always")
+def _wrow(AB, perm, off, row, v, body, A, sx, sy, sz, tx, ty, tz):
+    """Row `row` of C_v += ∂(t·(A s̄))/∂ω over a body's ω-columns: s̄ × (Aᵀ t) (∂(A s̄)˙/∂ω = −A s̄~);
+    returns its part of Ċ."""
+    if body < 0:
+        return 0.0
+    k = 6 * body + 3
+    wx, wy, wz = _wcol(A, sx, sy, sz, tx, ty, tz)
+    _sym(AB, perm, off, row, k, wx)
+    _sym(AB, perm, off, row, k + 1, wy)
+    _sym(AB, perm, off, row, k + 2, wz)
+    return wx * v[k] + wy * v[k + 1] + wz * v[k + 2]
+
+
+# ------------------------------------------------------------------------------------------------
+# Assembly of the augmented system of Eq. (33) in band storage
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
+    """Fill AB (band storage of the permuted augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]]) and rhs
+    (permuted [Q_e + Q_Iv, γ − 2αĊ − α²C]) at (t, q, v) for a 3D mechanism, as ``Mechanism.assemble``
+    and ``Mechanism.constraints``. gen: work vector of length n. Returns a status code."""
+    # P by slot
+    mass, pbody, ploc, el_int, el_real = P[0], P[1], P[2], P[3], P[4]
+    rot_int, rot_real, jt_int, jt_real = P[5], P[6], P[7], P[8]
+    fa_int, fa_real, pd_int, pd_real, in_int = P[9], P[10], P[11], P[12], P[13]
+    gravity, perm, dims = P[14], P[15], P[16]
+    n = dims[0]
+    kl = dims[2]
+    ku = dims[3]
+    has_gravity = dims[4]
+    off = kl + ku
+    nb = n // 6
+    AB[:, :] = 0.0
+    for i in range(n):
+        gen[i] = 0.0
+    if has_gravity:
+        for i in range(n):
+            gen[i] += gravity[i]
+
+    # -- mass matrix diag(m I, J) per body and the gyroscopic term −ω × Jω (body frame)
+    for b in range(nb):
+        k = 6 * b
+        for i in range(3):
+            _addK(AB, perm, off, k + i, k + i, mass[k + i])
+        J = n + 9 * b
+        for i in range(3):
+            for j in range(3):
+                _addK(AB, perm, off, k + 3 + i, k + 3 + j, mass[J + 3 * i + j])
+        wx = v[k + 3]
+        wy = v[k + 4]
+        wz = v[k + 5]
+        hx = mass[J] * wx + mass[J + 1] * wy + mass[J + 2] * wz
+        hy = mass[J + 3] * wx + mass[J + 4] * wy + mass[J + 5] * wz
+        hz = mass[J + 6] * wx + mass[J + 7] * wy + mass[J + 8] * wz
+        cx, cy, cz = _cross(wx, wy, wz, hx, hy, hz)
+        gen[k + 3] -= cx
+        gen[k + 4] -= cy
+        gen[k + 5] -= cz
+
+    status = OK
+    # -- translational elements (spring, damper, inerter), Eqs. (5), (7), (9)/(8), (29), (31), (33)
+    ga = np.empty(6)
+    gb = np.empty(6)
+    for e in range(el_int.shape[0]):
+        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
+            q, v, e, el_int, pbody, ploc, ga, gb)
+        if meets:
+            status = TERMINALS_MEET
+        coef = el_real[e, 0]
+        if kind == SPRING:
+            F = coef * (L - el_real[e, 1])
+        elif kind == DAMPER:
+            F = coef * (rdx * ex + rdy * ey + rdz * ez)
+        else:
+            term = anx * ex + any_ * ey + anz * ez
+            if el_int[e, 3]:
+                along = rdx * ex + rdy * ey + rdz * ez
+                term += (rdx * rdx + rdy * rdy + rdz * rdz - along * along) / L
+            F = coef * term
+            # M_I = b (Hᵀ r̂)(Hᵀ r̂)ᵀ
+            if ba >= 0:
+                ka = 6 * ba
+                for i in range(6):
+                    for j in range(6):
+                        _addK(AB, perm, off, ka + i, ka + j, coef * ga[i] * ga[j])
+            if bb >= 0:
+                kb = 6 * bb
+                for i in range(6):
+                    for j in range(6):
+                        _addK(AB, perm, off, kb + i, kb + j, coef * gb[i] * gb[j])
+            if ba >= 0 and bb >= 0:
+                ka = 6 * ba
+                kb = 6 * bb
+                for i in range(6):
+                    for j in range(6):
+                        x = coef * ga[i] * gb[j]
+                        _addK(AB, perm, off, ka + i, kb + j, x)
+                        _addK(AB, perm, off, kb + j, ka + i, x)
+        # Q = −F Hᵀ r̂, Eq. (29) (the inerter's Q_Iv, Eq. 31)
+        if ba >= 0:
+            ka = 6 * ba
+            for i in range(6):
+                gen[ka + i] -= F * ga[i]
+        if bb >= 0:
+            kb = 6 * bb
+            for i in range(6):
+                gen[kb + i] -= F * gb[i]
+
+    # -- rotational springs and dampers about an axis fixed in body a
+    for e in range(rot_int.shape[0]):
+        ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
+        if ib >= 0:
+            tx, ty, tz = _tmul(Ab, nx, ny, nz)
+            k = 6 * ib + 3
+            gen[k] -= tau * tx
+            gen[k + 1] -= tau * ty
+            gen[k + 2] -= tau * tz
+        if ia >= 0:
+            tx, ty, tz = _tmul(Aa, nx, ny, nz)
+            k = 6 * ia + 3
+            gen[k] += tau * tx
+            gen[k + 1] += tau * ty
+            gen[k + 2] += tau * tz
+
+    # -- applied point forces with time functions
+    for f in range(fa_int.shape[0]):
+        p = fa_int[f, 0]
+        code = fa_int[f, 1]
+        # real columns: dx, dy, dz, value, amplitude, frequency, phase, offset, time, initial
+        if code == F_CONSTANT:
+            mag = fa_real[f, 3]
+        elif code == F_SINE:
+            mag = fa_real[f, 7] + fa_real[f, 4] * math.sin(2.0 * math.pi * fa_real[f, 5] * t + fa_real[f, 6])
+        else:
+            mag = fa_real[f, 3] if t >= fa_real[f, 8] else fa_real[f, 9]
+        _point_force3(q, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
+                      mag * fa_real[f, 0], mag * fa_real[f, 1], mag * fa_real[f, 2], gen)
+
+    # -- grounded PD actuators: F = −[kp (d·r − ref) + kd d·ṙ] d
+    for f in range(pd_int.shape[0]):
+        p = pd_int[f, 0]
+        b = pbody[p]
+        A = _rot(q, b)
+        rx, ry, rz, vx, vy, vz, ax, ay, az = _point3(q, v, b, A, ploc[p, 0], ploc[p, 1], ploc[p, 2])
+        dx = pd_real[f, 0]
+        dy = pd_real[f, 1]
+        dz = pd_real[f, 2]
+        along = dx * rx + dy * ry + dz * rz - pd_real[f, 5]
+        rate = dx * vx + dy * vy + dz * vz
+        mag = -(pd_real[f, 3] * along + pd_real[f, 4] * rate)
+        _point_force3(q, b, ploc[p, 0], ploc[p, 1], ploc[p, 2], mag * dx, mag * dy, mag * dz, gen)
+
+    # -- held inputs (three force components per input force, in in_int order)
+    if inputs.shape[0] > 0:
+        for f in range(in_int.shape[0]):
+            p = in_int[f, 0]
+            _point_force3(q, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
+                          inputs[3 * f], inputs[3 * f + 1], inputs[3 * f + 2], gen)
+
+    # -- ground motion: coordinates relative to the moving ground, −m a_g on every body's Ṙ
+    if dims[7] != GROUND_NONE:
+        agx, agy, agz = ground_acceleration(t, inputs, P)
+        for k in range(0, n, 6):
+            gen[k] -= mass[k] * agx
+            gen[k + 1] -= mass[k] * agy
+            gen[k + 2] -= mass[k] * agz
+
+    for i in range(n):
+        rhs[perm[i]] = gen[i]
+
+    # -- joints (joints.py): C_v (and its transpose) and γ − 2αĊ − α²C, Ċ = C_v v
+    row = n
+    for jn in range(jt_int.shape[0]):
+        pa = jt_int[jn, 1]
+        pb = jt_int[jn, 2]
+        ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
+        lax = ploc[pa, 0]
+        lay = ploc[pa, 1]
+        laz = ploc[pa, 2]
+        lbx = ploc[pb, 0]
+        lby = ploc[pb, 1]
+        lbz = ploc[pb, 2]
+        if jt_int[jn, 3]:
+            # coincident points: C = r, C_v = H, γ = −a_n (Eqs. 18-19, 25)
+            for i in range(3):
+                sx = 1.0 if i == 0 else 0.0
+                sy = 1.0 if i == 1 else 0.0
+                sz = 1.0 if i == 2 else 0.0
+                cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, -sx, -sy, -sz)
+                cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, sx, sy, sz)
+                c = sx * rx + sy * ry + sz * rz
+                gamma = -(sx * anx + sy * any_ + sz * anz)
+                rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
+                row += 1
+        wax, way, waz = _omega(v, ba)
+        wbx, wby, wbz = _omega(v, bb)
+        for d in range(jt_int[jn, 4]):
+            # dot-1: s_a·s_b = 0 for body-fixed s_a = A_a s̄_a, s_b = A_b s̄_b
+            j = 6 * d
+            sax = jt_real[jn, j]
+            say = jt_real[jn, j + 1]
+            saz = jt_real[jn, j + 2]
+            sbx = jt_real[jn, j + 3]
+            sby = jt_real[jn, j + 4]
+            sbz = jt_real[jn, j + 5]
+            a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, sax, say, saz)
+            b0, b1, b2, bd0, bd1, bd2, bb0, bb1, bb2 = _vector(Ab, wbx, wby, wbz, sbx, sby, sbz)
+            cd = _wrow(AB, perm, off, row, v, ba, Aa, sax, say, saz, b0, b1, b2)
+            cd += _wrow(AB, perm, off, row, v, bb, Ab, sbx, sby, sbz, a0, a1, a2)
+            c = a0 * b0 + a1 * b1 + a2 * b2
+            gamma = -((aa0 * b0 + aa1 * b1 + aa2 * b2) + 2.0 * (ad0 * bd0 + ad1 * bd1 + ad2 * bd2)
+                      + (a0 * bb0 + a1 * bb1 + a2 * bb2))
+            rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
+            row += 1
+        for d in range(jt_int[jn, 5]):
+            # dot-2: s_a·(r_b − r_a) = 0
+            j = DOT2 + 3 * d
+            sax = jt_real[jn, j]
+            say = jt_real[jn, j + 1]
+            saz = jt_real[jn, j + 2]
+            a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, sax, say, saz)
+            cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, -a0, -a1, -a2)
+            cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, a0, a1, a2)
+            cd += _wrow(AB, perm, off, row, v, ba, Aa, sax, say, saz, rx, ry, rz)
+            c = a0 * rx + a1 * ry + a2 * rz
+            gamma = -((aa0 * rx + aa1 * ry + aa2 * rz) + 2.0 * (ad0 * rdx + ad1 * rdy + ad2 * rdz)
+                      + (a0 * anx + a1 * any_ + a2 * anz))
+            rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
+            row += 1
+    return status
+
+
+# ------------------------------------------------------------------------------------------------
+# q̇ = B(q) v and the constraint residual
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def qdot3(q, v, P, out):
+    """out = q̇ = B(q) v: Ṙ, and the quaternion rate ṗ = ½ p ⊗ (0, ω) (``spatial.quat_rate``, p not
+    normalised)."""
+    nb = P[16][0] // 6
+    for b in range(nb):
+        j = 7 * b
+        k = 6 * b
+        out[j] = v[k]
+        out[j + 1] = v[k + 1]
+        out[j + 2] = v[k + 2]
+        w = q[j + 3]
+        x = q[j + 4]
+        y = q[j + 5]
+        z = q[j + 6]
+        a = v[k + 3]
+        bb = v[k + 4]
+        c = v[k + 5]
+        out[j + 3] = 0.5 * (-x * a - y * bb - z * c)
+        out[j + 4] = 0.5 * (w * a + y * c - z * bb)
+        out[j + 5] = 0.5 * (w * bb + z * a - x * c)
+        out[j + 6] = 0.5 * (w * c + x * bb - y * a)
+
+
+@njit(cache=True)
+def constraint_residual3(q, P):
+    """Largest |C_i| over the joints' rows (coincident, dot-1, dot-2)."""
+    pbody = P[1]
+    ploc = P[2]
+    jt_int = P[7]
+    jt_real = P[8]
+    worst = 0.0
+    z = np.zeros(P[16][0])
+    for jn in range(jt_int.shape[0]):
+        ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(
+            q, z, jt_int[jn, 1], jt_int[jn, 2], pbody, ploc)
+        if jt_int[jn, 3]:
+            worst = max(worst, abs(rx), abs(ry), abs(rz))
+        for d in range(jt_int[jn, 4]):
+            j = 6 * d
+            a0, a1, a2 = _mul(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
+            b0, b1, b2 = _mul(Ab, jt_real[jn, j + 3], jt_real[jn, j + 4], jt_real[jn, j + 5])
+            worst = max(worst, abs(a0 * b0 + a1 * b1 + a2 * b2))
+        for d in range(jt_int[jn, 5]):
+            j = DOT2 + 3 * d
+            a0, a1, a2 = _mul(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
+            worst = max(worst, abs(a0 * rx + a1 * ry + a2 * rz))
+    return worst
+
+
+# ------------------------------------------------------------------------------------------------
+# Output signals (the same values as inerter.outputs.Signals, in the layout of `signal_layout3`)
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def signal_values3(q, v, qdd, P, out):
+    """Every point's position and velocity (6 per point), every translational element's s_rel,
+    v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd), every
+    rotational element's φ_rel, ω_rel and torque (3 each), the energy (as ``Mechanism.energy``)
+    and the largest constraint residual. Returns a status code."""
+    mass, pbody, ploc, el_int, el_real = P[0], P[1], P[2], P[3], P[4]
+    rot_int, rot_real, jt_int, gravity, dims = P[5], P[6], P[7], P[14], P[16]
+    n = dims[0]
+    nb = n // 6
+    status = OK
+    k = 0
+    for p in range(pbody.shape[0]):
+        b = pbody[p]
+        A = _rot(q, b)
+        rx, ry, rz, vx, vy, vz, ax, ay, az = _point3(q, v, b, A, ploc[p, 0], ploc[p, 1], ploc[p, 2])
+        out[k] = rx
+        out[k + 1] = ry
+        out[k + 2] = rz
+        out[k + 3] = vx
+        out[k + 4] = vy
+        out[k + 5] = vz
+        k += 6
+    # T = ½ vᵀ M0 v with M0 = diag(m I, J) per body
+    energy = 0.0
+    for b in range(nb):
+        i = 6 * b
+        J = n + 9 * b
+        energy += 0.5 * mass[i] * (v[i] * v[i] + v[i + 1] * v[i + 1] + v[i + 2] * v[i + 2])
+        for r in range(3):
+            for c in range(3):
+                energy += 0.5 * v[i + 3 + r] * mass[J + 3 * r + c] * v[i + 3 + c]
+    if dims[4]:
+        for b in range(nb):
+            for i in range(3):
+                energy -= gravity[6 * b + i] * q[7 * b + i]
+    ga = np.empty(6)
+    gb = np.empty(6)
+    for e in range(el_int.shape[0]):
+        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
+            q, v, e, el_int, pbody, ploc, ga, gb)
+        if meets:
+            status = TERMINALS_MEET
+        along = rdx * ex + rdy * ey + rdz * ez
+        coef = el_real[e, 0]
+        if kind == SPRING:
+            F = coef * (L - el_real[e, 1])
+            energy += 0.5 * coef * (L - el_real[e, 1]) ** 2
+        elif kind == DAMPER:
+            F = coef * along
+        else:
+            # r̈·r̂ = (H q̈ + a_n)·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 19, 25); F = b (r̈·r̂ [+ |ṙ⊥|²/L]), Eq. (9) / (8)
+            term = anx * ex + any_ * ey + anz * ez
+            if ba >= 0:
+                ka = 6 * ba
+                for i in range(6):
+                    term += ga[i] * qdd[ka + i]
+            if bb >= 0:
+                kb = 6 * bb
+                for i in range(6):
+                    term += gb[i] * qdd[kb + i]
+            if el_int[e, 3]:
+                term += (rdx * rdx + rdy * rdy + rdz * rdz - along * along) / L
+            F = coef * term
+            energy += 0.5 * coef * along * along
+        out[k] = L
+        out[k + 1] = along
+        out[k + 2] = F
+        k += 3
+    for e in range(rot_int.shape[0]):
+        ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
+        if rot_int[e, 0] == ROT_SPRING:
+            energy += 0.5 * rot_real[e, 0] * (phi - rot_real[e, 1]) ** 2
+        out[k] = phi
+        out[k + 1] = w
+        out[k + 2] = tau
+        k += 3
+    out[k] = energy
+    out[k + 1] = constraint_residual3(q, P) if jt_int.shape[0] else 0.0
+    return status
+
+
+# ------------------------------------------------------------------------------------------------
 # Integrators: DOP853 and RK45 (scipy's error control, step-size rule and dense output, sampled
 # at the output grid) and the classical RK4 with a fixed step (cubic Hermite between nodes).
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
+    """dy = [q̇, v̇] at y = [q, v]: q̇ = B(q) v (the identity in 2D), v̇ from Eq. (33)."""
     n = P[16][0]
-    q = y[:n]
-    v = y[n:]
+    nq = P[16][6]
+    q = y[:nq]
+    v = y[nq:]
     st = accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, acc)
+    if P[16][5] == 3:
+        qdot3(q, v, P, dy[:nq])
+    else:
+        for i in range(n):
+            dy[i] = v[i]
     for i in range(n):
-        dy[i] = y[n + i]
-        dy[n + i] = acc[i]
+        dy[nq + i] = acc[i]
     if st == OK:
-        for i in range(2 * n):
+        for i in range(nq + n):
             if not math.isfinite(dy[i]):
                 return NOT_FINITE
     return st
@@ -971,10 +1625,12 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P):
 
 
 @njit(cache=True)
-def max_residual(states, n, P):
+def max_residual(states, P):
+    """The largest constraint residual over a history (rows [q, v])."""
+    nq = P[16][6]
     worst = 0.0
     for k in range(states.shape[0]):
-        worst = max(worst, constraint_residual(states[k, :n], P))
+        worst = max(worst, constraint_residual(states[k, :nq], P))
     return worst
 
 
@@ -997,7 +1653,7 @@ RK_STATE = (("hdr", "f1"), ("y", "f1"), ("f", "f1"), ("y_prev", "f1"), ("dense",
 PARAMS = (("mass", "f1"), ("pbody", "i1"), ("ploc", "f2"), ("el_int", "i2"), ("el_real", "f2"),
           ("rot_int", "i2"), ("rot_real", "f2"), ("jt_int", "i2"), ("jt_real", "f2"), ("fa_int", "i2"),
           ("fa_real", "f2"), ("pd_int", "i2"), ("pd_real", "f2"), ("in_int", "i2"), ("gravity", "f1"),
-          ("perm", "i1"), ("dims", "i1"))
+          ("perm", "i1"), ("dims", "i1"), ("ground_t", "f1"), ("ground_a", "f2"))
 TABLEAU = (("A", "f2"), ("B", "f1"), ("C", "f1"), ("E", "f1"), ("E3", "f1"), ("D", "f2"), ("Pm", "f2"))
 WORK = (("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), ("y_new", "f1"), ("f_new", "f1"),
         ("ys", "f1"), ("sig_acc", "f1"))
@@ -1014,7 +1670,7 @@ NATIVE_TOOK_STEP = 1
 _SLOT = {name: i for i, (name, _) in enumerate(NATIVE_SLOTS)}
 # native_step reads the slots by number: the blocks it reads must start where NATIVE_SLOTS puts them.
 assert (_SLOT["hdr"], _SLOT["b_hdr"], _SLOT["mass"], _SLOT["A"], _SLOT["AB"], _SLOT["raw"], _SLOT["clock"]) == \
-    (0, 46, 8, 25, 33, 42, 45) and len(NATIVE_SLOTS) == 51
+    (0, 48, 8, 27, 35, 44, 47) and len(NATIVE_SLOTS) == 53
 
 
 @intrinsic
@@ -1064,7 +1720,7 @@ def native_step(tab, t, h):
     step leaves CLOCK_BUSY set and the integration's state as it was in the backup arrays (b_*),
     which the Python path restores before it takes the step itself, so that it gives the
     messages and the results the Python path always gives."""
-    clock = _f1(tab, 45)
+    clock = _f1(tab, 47)
     now = clock[CLOCK_TIME]
     if not (math.isfinite(t) and math.isfinite(h) and h > 0.0):
         return 0
@@ -1074,7 +1730,7 @@ def native_step(tab, t, h):
     if not t_end > now:
         return 0
     hdr, y, f, y_prev, dense = _f1(tab, 0), _f1(tab, 1), _f1(tab, 2), _f1(tab, 3), _f2(tab, 4)
-    b_hdr, b_y, b_f, b_y_prev, b_dense = _f1(tab, 46), _f1(tab, 47), _f1(tab, 48), _f1(tab, 49), _f2(tab, 50)
+    b_hdr, b_y, b_f, b_y_prev, b_dense = _f1(tab, 48), _f1(tab, 49), _f1(tab, 50), _f1(tab, 51), _f2(tab, 52)
     b_hdr[:] = hdr
     b_y[:] = y
     b_f[:] = f
@@ -1085,10 +1741,10 @@ def native_step(tab, t, h):
     ts, out, inputs, alpha = _f1(tab, 5), _f2(tab, 6), _f1(tab, 7), clock[CLOCK_ALPHA]
     P = (_f1(tab, 8), _i1(tab, 9), _f2(tab, 10), _i2(tab, 11), _f2(tab, 12), _i2(tab, 13), _f2(tab, 14),
          _i2(tab, 15), _f2(tab, 16), _i2(tab, 17), _f2(tab, 18), _i2(tab, 19), _f2(tab, 20), _i2(tab, 21),
-         _f1(tab, 22), _i1(tab, 23), _i1(tab, 24))
-    work = (_f2(tab, 33), _f1(tab, 34), _f1(tab, 35), _f1(tab, 36), _f2(tab, 37), _f1(tab, 38), _f1(tab, 39),
-            _f1(tab, 40), _f1(tab, 41))
-    raw, order, values = _f1(tab, 42), _i1(tab, 43), _f1(tab, 44)
+         _f1(tab, 22), _i1(tab, 23), _i1(tab, 24), _f1(tab, 25), _f2(tab, 26))
+    work = (_f2(tab, 35), _f1(tab, 36), _f1(tab, 37), _f1(tab, 38), _f2(tab, 39), _f1(tab, 40), _f1(tab, 41),
+            _f1(tab, 42), _f1(tab, 43))
+    raw, order, values = _f1(tab, 44), _i1(tab, 45), _f1(tab, 46)
     if tab[1] == NATIVE_RK4:
         ts[0] = now
         ts[1] = t_end
@@ -1112,8 +1768,8 @@ def native_step(tab, t, h):
         ts[0] = t_end
         st, sst = cosim_rk(tab[1], hdr, y, f, y_prev, dense, ts, out, bound, clock[CLOCK_RTOL],
                            clock[CLOCK_ATOL], tab[2], inputs, alpha, P,
-                           _f2(tab, 25), _f1(tab, 26), _f1(tab, 27), _f1(tab, 28), _f1(tab, 29), _f2(tab, 30),
-                           _f2(tab, 31), _f1(tab, 32), work, tab[3] != 0, raw, order, values)
+                           _f2(tab, 27), _f1(tab, 28), _f1(tab, 29), _f1(tab, 30), _f1(tab, 31), _f2(tab, 32),
+                           _f2(tab, 33), _f1(tab, 34), work, tab[3] != 0, raw, order, values)
         if st != OK or sst != OK:
             return 0
     clock[CLOCK_TIME] = t_end
@@ -1138,3 +1794,4 @@ def native_step_cfunc():
         sig = types.int32(types.CPointer(types.int64), types.float64, types.float64)
         _NATIVE_CFUNC.append(cfunc(sig, cache=True)(_native_entry))
     return _NATIVE_CFUNC[0]
+

@@ -16,6 +16,7 @@ from inerter.simulation import integrate
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = sorted((ROOT / "scenarios").glob("*.toml"))
 PLANAR = [p for p in SCENES if inerter.load(p).scene.dimension == 2]
+SPATIAL = [p for p in SCENES if inerter.load(p).scene.dimension == 3]
 PAPER = [ROOT / "scenarios" / "lumped_mass_2d.toml", ROOT / "scenarios" / "two_bar_2d.toml"]
 
 needs_numba = pytest.mark.skipif(not compiled.AVAILABLE, reason=compiled.WHY_NOT or "numba missing")
@@ -31,17 +32,21 @@ def test_numba_missing_falls_back_to_numpy():
 
 
 def _random_states(mech, rng, count=12):
+    """Random (t, q, v, inputs, α); in 3D the quaternions are perturbed off unit length too (the
+    kernels, as the numpy path, normalise them inside the rotation matrix only)."""
     for _ in range(count):
-        q = mech.q0 + 0.2 * rng.standard_normal(mech.n)
+        q = mech.q0 + 0.2 * rng.standard_normal(mech.nq)
         v = 2.0 * rng.standard_normal(mech.n)
         inputs = 5.0 * rng.standard_normal(len(mech.input_names)) if mech.input_names else None
         yield float(rng.uniform(0.0, 10.0)), q, v, inputs, float(rng.choice([0.0, rng.uniform(0.0, 50.0)]))
 
 
 @needs_numba
-@pytest.mark.parametrize("path", PLANAR, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
 @pytest.mark.parametrize("centripetal", [True, False])
 def test_kernel_matches_numpy_path(path, centripetal):
+    """Eq. (33) from the kernels equals Mechanism.accelerations (q̈ and λ) to 1e-12 relative at
+    random states, on every scene (2D and 3D, with the ground motion where the scene has it)."""
     model = inerter.load(path, **{"effects.centripetal": centripetal})
     mech = model.mechanism
     kernel = compiled.compile_mechanism(mech)
@@ -80,6 +85,51 @@ def test_gravity_and_step_force_and_chain(tmp_path):
             assert np.max(np.abs(got - ref)) <= 1e-12 * np.max(np.abs(ref))
 
 
+GROUND_MOTIONS = {
+    "sine": "{ amplitude = [1.5, -0.8], frequency = 1.7, scale = 0.9 }",
+    "record": '{ file = "ground.csv", scale = 2.0 }',
+    "input": "{ input = true, scale = 1.5 }",
+}
+
+
+def _two_bar_on_moving_ground(tmp_path, kind):
+    """The paper's two-bar scene with its ground moved: a sine, a short CSV record (zero after it
+    ends) or FMU inputs ground.a[i]."""
+    text = PAPER[1].read_text().replace("[effects]\n", f"[effects]\nground_acceleration = {GROUND_MOTIONS[kind]}\n", 1)
+    (tmp_path / "ground.csv").write_text("# t, a_x, a_y\n0,0,0\n0.05,1.0,-0.5\n0.12,-0.7,0.4\n0.2,0.3,0.9\n0.31,0,0\n")
+    path = tmp_path / f"two_bar_ground_{kind}.toml"
+    path.write_text(text)
+    return inerter.load(path)
+
+
+@needs_numba
+@pytest.mark.parametrize("kind", sorted(GROUND_MOTIONS))
+def test_ground_motion_on_the_compiled_path(tmp_path, kind):
+    """Ground motion (−m a_g on every body, coordinates relative to the ground) in the kernels:
+    Eq. (33) equals Mechanism.accelerations to 1e-12 relative at random states and at the record's
+    samples and between them; a whole compiled DOP853 run at rtol 1e-11 (restarting at the
+    record's samples, as the numpy path) within 1e-9 m of the numpy path's at the same tolerance."""
+    model = _two_bar_on_moving_ground(tmp_path, kind)
+    mech = model.mechanism
+    assert mech.ground_motion is not None and not compiled.unsupported(mech)
+    kernel = compiled.compile_mechanism(mech)
+    rng = np.random.default_rng(11)
+    states = list(_random_states(mech, rng, 6))
+    states += [(t, mech.q0, mech.v0, states[0][3], 0.0) for t in (0.0, 0.05, 0.08, 0.2, 0.31, 0.4)]
+    for t, q, v, inputs, alpha in states:
+        ref = np.concatenate(mech.accelerations(t, q, v, inputs, alpha))
+        got = np.concatenate(kernel.accelerations(t, q, v, inputs, alpha))
+        assert np.max(np.abs(got - ref)) <= 1e-12 * np.max(np.abs(ref)), t
+    inputs = np.array([0.4, -0.3, 2.0, -1.0]) if kind == "input" else None
+    if inputs is not None:
+        assert mech.input_names[-2:] == ["ground.a[1]", "ground.a[2]"]
+    s = model.settings(method="DOP853", stop_time=0.5, rtol=1e-11, atol=1e-13)
+    a = compiled.integrate_compiled(mech, s, inputs)
+    b = integrate(mech, s, inputs)
+    assert a.extra["path"] == "compiled" and a.status == b.status == "ok"
+    assert np.max(np.abs(a.states - b.states)) <= 1e-9
+
+
 @needs_numba
 @pytest.mark.parametrize("method", ["DOP853", "RK45"])
 def test_compiled_integrator_takes_scipys_steps(method):
@@ -105,18 +155,20 @@ def test_compiled_rk4_matches_numpy_rk4():
 
 
 @needs_numba
-@pytest.mark.parametrize("path", PLANAR, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
 @pytest.mark.parametrize("centripetal", [True, False])
 def test_compiled_integration_against_oracle(path, centripetal):
-    """Compiled DOP853 at tight tolerance within 1e-9 m of the oracle (positions of all points), on
-    every planar scene (the 3D scenes run the numpy path, tested against the oracle in test_3d)."""
+    """Compiled DOP853 at tight tolerance (rtol 1e-11) within 1e-9 m of the oracle (rtol 1e-12;
+    positions of all points), on every scene, 2D and 3D. The braced frame runs 0.5 s (50 samples
+    of its ground record, each a restart): its oracle costs 14 s per simulated second."""
     model = inerter.load(path, **{"effects.centripetal": centripetal})
-    stop = 2.0
+    stop = 0.5 if model.mechanism.ground_motion is not None else 2.0
     run = compiled.integrate_compiled(model.mechanism, model.settings(method="DOP853", stop_time=stop, rtol=1e-11,
                                                                       atol=1e-13))
     oracle = model.oracle()
     ref = integrate(oracle.mechanism, oracle.settings(stop_time=stop, rtol=1e-12, atol=1e-14))
     assert run.status == "ok" and len(run.time) == len(ref.time)
+    assert run.extra["path"] == "compiled"
     kernel = compiled.compile_mechanism(model.mechanism)
     pa, pb = kernel.point_positions(run.states), kernel.point_positions(ref.states)
     err = max(np.max(np.abs(pa[k] - pb[k])) for k in pa)
@@ -180,7 +232,7 @@ def test_bench_measures_the_fmu_path_against_the_oracle(tmp_path):
 # Outputs, co-simulation stepping and the kernels' on-disk cache
 # ----------------------------------------------------------------------------------------------
 @needs_numba
-@pytest.mark.parametrize("path", PLANAR, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
 def test_compiled_outputs_match_the_numpy_signals(path):
     """Every output (positions, velocities, element s_rel/v_rel/f with the inerter's Eq. 9 force,
     energy, constraint residual) from the kernels equals inerter.outputs.Signals to round-off
@@ -233,7 +285,8 @@ def test_where_inputs_change_the_compiled_stepper_restarts_as_the_numpy_stepper(
 
 @needs_numba
 @pytest.mark.parametrize("method", ["DOP853", "RK45"])
-@pytest.mark.parametrize("path", PAPER + [ROOT / "scenarios" / "two_bar_2d_pd.toml"], ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", PAPER + [ROOT / "scenarios" / "two_bar_2d_pd.toml",
+                                  ROOT / "scenarios" / "double_pendulum_3d.toml"], ids=lambda p: p.stem)
 def test_with_inputs_held_the_compiled_stepper_is_the_whole_run(path, method):
     """Inputs that do not change: the compiled stepper keeps one integration running across the
     communication points, its steps clipped to the stop time only, and takes the state at each
@@ -282,10 +335,16 @@ def test_compiled_stepper_rolls_back_bit_for_bit(change_input):
 
 
 def test_the_compiled_stepper_falls_back_where_the_loop_cannot_go():
-    """Implicit methods, projection, step forces, 3D scenes and a missing numba: the numpy stepper."""
+    """Implicit methods, projection, step forces and ground records (discontinuities), Z-X-Z Euler
+    angles and a missing numba: the numpy stepper. 3D scenes with quaternions run compiled."""
     two_bar = inerter.load(PAPER[1])
     assert two_bar.stepper(method="Radau", path="compiled").path == "numpy"
-    assert inerter.load(ROOT / "scenarios" / "two_bar_2d_as_3d.toml").stepper(path="compiled").path == "numpy"
+    as_3d = ROOT / "scenarios" / "two_bar_2d_as_3d.toml"
+    assert inerter.load(as_3d).stepper(path="compiled").path == ("compiled" if compiled.AVAILABLE else "numpy")
+    euler = inerter.load(ROOT / "scenarios" / "gimbal_lock_3d.toml", **{"scene.orientation": "euler_zxz"})
+    assert euler.stepper(path="compiled").path == "numpy"
+    assert "quaternion" in compiled.unsupported(euler.mechanism) or not compiled.AVAILABLE
+    assert inerter.load(ROOT / "scenarios" / "braced_frame_3d.toml").stepper(path="compiled").path == "numpy"
     assert inerter.load(ROOT / "scenarios" / "hard" / "step_force_1dof_2d.toml").stepper(path="compiled").path \
         == "numpy"
     assert two_bar.stepper(path="compiled").path == ("compiled" if compiled.AVAILABLE else "numpy")

@@ -1,0 +1,193 @@
+"""Flattening a 3D mechanism (quaternion orientation) for the 3D section of
+:mod:`inerter.compiled_kernels`: the arrays (the slots of the planar ones, with 3D column
+meanings), the output layout and the structural pattern of Eq. (33); ``compiled.Kernel`` builds
+the parameter tuple from them.
+
+    flat = flatten3(model.mechanism)
+
+The initial-pose constants (spring free lengths, joint vectors expressed in body b's frame,
+rotational elements' initial relative orientation and free angle, the inertia tensors) are read
+from the mechanism's own objects, so the kernels use the same numbers as the numpy path.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .joints import Coincident, SpatialJoint
+
+# Joint kinds (column 0 of ``jt_int``), as in :mod:`inerter.compiled_kernels` (its 3D section).
+_JOINT_KIND = {"spherical": 0, "revolute": 1, "fixed": 2, "prismatic": 3}
+_ELEMENT_KIND = {"spring": 0, "damper": 1, "inerter": 2}
+_FORCE_CODE = {"constant": 0, "sine": 1, "step": 2}
+#: Width of a ``jt_real`` row: three dot-1 pairs (s̄_a, s̄_b) and two dot-2 vectors s̄_a.
+JOINT_WIDTH = 24
+DOT2 = 18
+
+
+def _by_name(objects):
+    return {getattr(o, "name", None): o for o in objects}
+
+
+def flatten3(mech) -> dict:
+    """The arrays the 3D kernels run on, from a 3D mechanism with quaternion orientation (index
+    maps in ``mech.scene`` order: bodies, points, joints, elements, forces).
+
+    Coordinates: q = [R(3), p(4)] per body (nq = 7 per body), v = [Ṙ(3), ω(3)] per body with ω in
+    the body frame (n = 6 per body), as ``Mechanism.q_index`` / ``v_index``. Bodies are numbered
+    in scene order, −1 is the ground. Columns of the arrays:
+
+    * ``mass`` (n + 9·bodies): [m, m, m, J11, J22, J33] per body (the diagonal of M0), then each
+      body's full inertia tensor J (body frame) row-major, body b's at n + 9b.
+    * ``pbody`` (points): the point's body; ``ploc`` (points, 3): ū in the body frame (the global
+      position for a ground point).
+    * ``el_int`` (elements, 4): kind (0 spring, 1 damper, 2 inerter), point a, point b,
+      centripetal term (1: Eq. 9, 0: Eq. 8); ``el_real`` (elements, 2): coefficient (k, c or b),
+      spring free length (0 otherwise).
+    * ``rot_int`` (rotational elements, 3): kind (0 spring, 1 damper), body a, body b;
+      ``rot_real`` (rotational elements, 14): coefficient (k or d), free angle, axis n̄ in body a's
+      frame (3), rel0 = A_aᵀA_b at the initial pose (9, row-major).
+    * ``jt_int`` (joints, 6): kind (0 spherical, 1 revolute, 2 fixed, 3 prismatic), point a,
+      point b, coincident rows (1: three rows r_b − r_a = 0), number of dot-1 rows, number of
+      dot-2 rows; the joint's rows are in that order. ``jt_real`` (joints, 24): the dot-1 pairs
+      (s̄_a in a's frame, s̄_b in b's frame) at columns 6k..6k+5 (k < 3), the dot-2 vectors s̄_a
+      at columns 18 + 3k (k < 2); unused columns are 0.
+    * ``fa_int`` (forces, 2): point, time function (0 constant, 1 sine, 2 step); ``fa_real``
+      (forces, 10): direction (3), value, amplitude, frequency, phase, offset, time, initial.
+    * ``pd_int`` (pd forces, 1): point; ``pd_real`` (pd forces, 6): direction (3), kp, kd, reference.
+    * ``in_int`` (input forces, 1): point; the inputs hold three force components per input force.
+    * ``gravity`` (n): m·g on each body's Ṙ coordinates (zero on ω).
+    """
+    scene = mech.scene
+    if scene.dimension != 3:
+        raise ValueError(f"flatten3 takes 3D scenes; scene {scene.name!r} has dimension {scene.dimension}")
+    if mech.orientation.kind != "quaternion":
+        raise ValueError(f"flatten3 takes quaternion orientation; scene {scene.name!r} uses {mech.orientation.kind!r}")
+    body_names = list(mech.body_names)
+    bidx = {name: i for i, name in enumerate(body_names)}
+    nb = len(body_names)
+    n, nq = 6 * nb, 7 * nb
+    point_names = list(scene.points)
+    pidx = {name: i for i, name in enumerate(point_names)}
+    pbody = np.array([bidx.get(p.body, -1) for p in scene.points.values()], dtype=np.int64)
+    ploc = np.array([list(p.local)[:3] for p in scene.points.values()], dtype=float).reshape(-1, 3)
+
+    M0 = np.asarray(mech.M0, dtype=float)
+    mass = np.zeros(n + 9 * nb)
+    mass[:n] = np.diag(M0)
+    for i in range(nb):
+        k = 6 * i + 3
+        mass[n + 9 * i:n + 9 * i + 9] = M0[k:k + 3, k:k + 3].ravel()
+
+    mech_joints = _by_name(mech.joints)
+    jt_int, jt_real = [], []
+    for j in scene.joints.values():
+        mj = mech_joints[j.name]
+        real = np.zeros(JOINT_WIDTH)
+        if isinstance(mj, Coincident):
+            coincident, dot1, dot2 = True, [], []
+        elif isinstance(mj, SpatialJoint):
+            coincident, dot1, dot2 = mj.coincident, mj.dot1, mj.dot2
+        else:
+            raise ValueError(f"joint {j.name!r}: {type(mj).__name__} is not a 3D joint")
+        if len(dot1) > 3 or len(dot2) > 2:
+            raise ValueError(f"joint {j.name!r}: more dot-1/dot-2 rows than the kernels take")
+        for k, (va, vb) in enumerate(dot1):
+            real[6 * k:6 * k + 3] = va.local
+            real[6 * k + 3:6 * k + 6] = vb.local
+        for k, va in enumerate(dot2):
+            real[DOT2 + 3 * k:DOT2 + 3 * k + 3] = va.local
+        jt_int.append((_JOINT_KIND[j.type], pidx[j.point_a], pidx[j.point_b], int(bool(coincident)),
+                       len(dot1), len(dot2)))
+        jt_real.append(real)
+    m = sum(3 * c + d1 + d2 for _, _, _, c, d1, d2 in jt_int)
+
+    mech_elements = _by_name(mech.elements)
+    el_int, el_real, rot_int, rot_real, el_names, rot_names = [], [], [], [], [], []
+    for e in scene.elements.values():
+        me = mech_elements[e.name]
+        if e.type in ("rotational_spring", "rotational_damper"):
+            rot_int.append((0 if e.type == "rotational_spring" else 1, me.fa.body, me.fb.body))
+            rot_real.append([float(me.coefficient), float(me.free_angle), *np.asarray(me.axis, dtype=float),
+                             *np.asarray(me.rel0, dtype=float).ravel()])
+            rot_names.append(e.name)
+            continue
+        free = 0.0
+        if e.type == "spring":
+            free = getattr(me, "free_length", None)
+            if free is None:
+                raise ValueError(f"spring {e.name}: no free length on the mechanism")
+        el_int.append((_ELEMENT_KIND[e.type], pidx[e.point_a], pidx[e.point_b], int(bool(scene.centripetal))))
+        el_real.append((float(e.coefficient), float(free)))
+        el_names.append(e.name)
+
+    fa_int, fa_real, pd_int, pd_real, in_int = [], [], [], [], []
+    for f in scene.forces.values():
+        p = pidx[f.point]
+        if f.function in _FORCE_CODE:
+            d = [float(x) for x in f.direction]
+            fa_int.append((p, _FORCE_CODE[f.function]))
+            fa_real.append((*d, f.value, f.amplitude, f.frequency, f.phase, f.offset, f.time, f.initial))
+        elif f.function == "pd":
+            d = [float(x) for x in f.direction]
+            pd_int.append((p,))
+            pd_real.append((*d, f.kp, f.kd, f.reference))
+        elif f.function == "input":
+            in_int.append((p,))
+
+    has_gravity = mech.gravity is not None
+    gravity = np.array(mech.gravity, dtype=float) if has_gravity else np.zeros(n)
+
+    def arr(rows, width, dtype):
+        return np.ascontiguousarray(np.array(rows, dtype=dtype).reshape(-1, width))
+
+    return dict(n=n, m=m, nq=nq, dim=3, mass=mass, pbody=pbody, ploc=np.ascontiguousarray(ploc),
+                el_int=arr(el_int, 4, np.int64), el_real=arr(el_real, 2, float),
+                rot_int=arr(rot_int, 3, np.int64), rot_real=arr(rot_real, 14, float),
+                jt_int=arr(jt_int, 6, np.int64), jt_real=arr(jt_real, JOINT_WIDTH, float),
+                fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 10, float),
+                pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 6, float),
+                in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
+                point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names)
+
+
+def signal_layout3(flat) -> list[str]:
+    """The names of the values :func:`compiled_kernels.signal_values3` writes, in its order."""
+    axes = ("r[1]", "r[2]", "r[3]", "v[1]", "v[2]", "v[3]")
+    names = [f"{p}.{x}" for p in flat["point_names"] for x in axes]
+    names += [f"{e}.{x}" for e in flat["el_names"] for x in ("s_rel", "v_rel", "f")]
+    names += [f"{e}.{x}" for e in flat["rot_names"] for x in ("phi_rel", "w_rel", "tau")]
+    return names + ["energy", "constraint_residual"]
+
+
+def _joint_rows(flat):
+    """Number of constraint rows of each joint, in order."""
+    return [3 * c + d1 + d2 for _, _, _, c, d1, d2 in flat["jt_int"]]
+
+
+def sparsity3(flat) -> np.ndarray:
+    """Structural pattern of the augmented matrix of Eq. (33) for a 3D mechanism (boolean,
+    (n + m)²): a full 6×6 block per body (m I and J), the couplings of the two bodies of each
+    inerter (M_I), and each joint's rows against both bodies' six velocity coordinates."""
+    n, m = flat["n"], flat["m"]
+    N = n + m
+    S = np.zeros((N, N), dtype=bool)
+    S[np.arange(N), np.arange(N)] = True
+    for i in range(0, n, 6):
+        S[i:i + 6, i:i + 6] = True
+    pbody = flat["pbody"]
+
+    def dofs(*points):
+        return [d for p in points if pbody[p] >= 0 for d in range(6 * pbody[p], 6 * pbody[p] + 6)]
+
+    for kind, a, b, _ in flat["el_int"]:
+        if kind == _ELEMENT_KIND["inerter"]:
+            d = dofs(a, b)
+            S[np.ix_(d, d)] = True
+    row = n
+    for (_, a, b, *_), k in zip(flat["jt_int"], _joint_rows(flat)):
+        d = dofs(a, b)
+        rows = list(range(row, row + k))
+        S[np.ix_(rows, d)] = True
+        S[np.ix_(d, rows)] = True
+        row += k
+    return S

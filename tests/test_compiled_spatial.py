@@ -1,0 +1,412 @@
+"""The 3D compiled kernels (inerter.compiled_kernels' 3D section, inerter.compiled_spatial) against the numpy
+Mechanism: Eq. (33)'s accelerations and multipliers, q̇ = B(q) v, the constraint residual and the
+output signals, at the initial state and at random states (unnormalised quaternions, joints
+violated, Baumgarte stabilisation on and off)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import inerter
+from inerter import compiled
+from inerter.elements import TerminalsMeet
+from inerter.outputs import Signals
+from inerter.spatial import axis_angle_matrix, euler_matrix
+
+pytestmark = pytest.mark.skipif(not compiled.AVAILABLE, reason=compiled.WHY_NOT or "numba missing")
+if compiled.AVAILABLE:
+    from inerter.compiled_spatial import flatten3, signal_layout3, sparsity3
+    ck = compiled._k                  # the kernels as the package loads them (their on-disk cache)
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES_3D = [p for p in sorted((ROOT / "scenarios").glob("*_3d.toml"))
+             if inerter.load(p).mechanism.orientation.kind == "quaternion"]
+
+#: Accelerations and multipliers: largest deviation relative to the largest magnitude.
+TOL_ACC = 1e-10
+#: Signals: relative to max(1, |value|).
+TOL_SIG = 1e-10
+
+
+# ------------------------------------------------------------------------------------------------
+# A scene with every branch of assemble3: revolute, prismatic, fixed and spherical joints; springs
+# (free length given and from the initial pose), a damper, inerters to the ground and between
+# bodies; rotational springs (free angle given and not) and a rotational damper, between bodies
+# and to the ground; constant, sine, step, pd and input forces; gravity; a full inertia tensor.
+# ------------------------------------------------------------------------------------------------
+A1 = ([1, 0, 0], 0.3)
+E2 = [0.2, 0.7, -0.4]
+A3 = ([0, 1, 1], 0.5)
+A4 = ([1, 2, 3], 1.0)
+TOP, S1, T2, F2, F3, K3, H4 = ([0, 0, 0.5], [0, 0, -0.5], [0, 0, 0.2], [0.3, 0, 0], [-0.2, 0, 0.1],
+                               [0.1, 0.1, 0.1], [0, 0, 0.15])
+G = [0.5, 0.5, -1.0]
+P4 = [0.1, -0.1, 0.0]
+
+
+def _vec(x):
+    return "[" + ", ".join(repr(float(c)) for c in x) + "]"
+
+
+def _every_branch_scene(tmp_path) -> Path:
+    """Write the scene; the bodies' positions put every joint at its initial pose."""
+    M1 = axis_angle_matrix(np.array(A1[0], float) / np.linalg.norm(A1[0]), A1[1])
+    M2 = euler_matrix(E2)
+    M3 = axis_angle_matrix(np.array(A3[0], float) / np.linalg.norm(A3[0]), A3[1])
+    M4 = axis_angle_matrix(np.array(A4[0], float) / np.linalg.norm(A4[0]), A4[1])
+    R1 = -M1 @ TOP                                         # revolute at the origin
+    rS = R1 + M1 @ S1
+    rT = rS + 0.1 * M1 @ np.array([0.0, 0.0, 1.0])        # on the slider's line, 0.1 along it
+    R2 = rT - M2 @ T2
+    R3 = R2 + M2 @ F2 - M3 @ F3                            # fixed joint F2 = F3
+    R4 = R3 + M3 @ K3 - M4 @ H4                            # spherical joint K3 = H4
+    text = f"""
+[scene]
+name = "every_branch_3d"
+dimension = 3
+orientation = "quaternion"
+[parameters]
+g = 9.81
+[effects]
+centripetal = true
+gravity = [0, 0, "-g"]
+[ground.points]
+O = [0, 0, 0]
+G = {_vec(G)}
+[bodies.arm]
+mass = 1.5
+inertia = [0.12, 0.11, 0.02]
+position = {_vec(R1)}
+axis = {_vec(A1[0])}
+angle = {A1[1]!r}
+angular_velocity = [0.7, 0, 0]
+points = {{ top = {_vec(TOP)}, S = {_vec(S1)}, D1 = [0.1, 0, 0], F1 = [0, 0.1, -0.2] }}
+[bodies.slider]
+mass = 0.8
+inertia = [0.05, 0.06, 0.07]
+position = {_vec(R2)}
+euler = {_vec(E2)}
+velocity = [0.1, -0.2, 0.3]
+points = {{ T = {_vec(T2)}, F2 = {_vec(F2)}, G2 = [0.1, 0.2, 0] }}
+[bodies.block]
+mass = 1.2
+inertia = [[0.3, 0.01, 0.02], [0.01, 0.2, 0.0], [0.02, 0.0, 0.25]]
+position = {_vec(R3)}
+axis = {_vec(A3[0])}
+angle = {A3[1]!r}
+points = {{ F3 = {_vec(F3)}, K3 = {_vec(K3)} }}
+[bodies.ball]
+mass = 0.6
+inertia = [0.01, 0.012, 0.014]
+position = {_vec(R4)}
+axis = {_vec(A4[0])}
+angle = {A4[1]!r}
+angular_velocity = [0.5, -1.0, 2.0]
+points = {{ H4 = {_vec(H4)}, P4 = {_vec(P4)} }}
+[joints.hinge]
+type = "revolute"
+between = ["O", "top"]
+axis = {_vec(A1[0])}
+[joints.rail]
+type = "prismatic"
+between = ["S", "T"]
+axis = [0, 0, 1]
+[joints.weld]
+type = "fixed"
+between = ["F2", "F3"]
+[joints.ball_joint]
+type = "spherical"
+between = ["K3", "H4"]
+[elements.spring]
+type = "spring"
+between = ["D1", "P4"]
+k = 40.0
+length = 0.3
+[elements.anchor]
+type = "spring"
+between = ["G", "G2"]
+k = 25.0
+[elements.damper]
+type = "damper"
+between = ["D1", "P4"]
+c = 2.0
+[elements.ground_inerter]
+type = "inerter"
+between = ["G", "P4"]
+b = 0.7
+[elements.body_inerter]
+type = "inerter"
+between = ["D1", "G2"]
+b = 0.4
+[elements.hinge_spring]
+type = "rotational_spring"
+bodies = ["ground", "arm"]
+axis = {_vec(A1[0])}
+k = 5.0
+angle = 0.1
+[elements.arm_ball_spring]
+type = "rotational_spring"
+bodies = ["arm", "ball"]
+axis = [0, 1, 0]
+k = 3.0
+[elements.ball_damper]
+type = "rotational_damper"
+bodies = ["block", "ball"]
+axis = [0, 0, 1]
+d = 0.3
+[forces.push]
+point = "P4"
+function = "constant"
+direction = [0, 0, 1]
+value = 2.0
+[forces.shake]
+point = "G2"
+function = "sine"
+direction = [1, 1, 0]
+amplitude = 3.0
+frequency = 0.7
+phase = 0.2
+offset = 0.5
+[forces.kick]
+point = "K3"
+function = "step"
+direction = [0, 1, 0]
+value = 4.0
+time = 0.5
+initial = -1.0
+[forces.servo]
+point = "P4"
+function = "pd"
+direction = [1, 0, 0]
+kp = 20.0
+kd = 3.0
+reference = 0.2
+[forces.hand]
+point = "F1"
+function = "input"
+[experiment]
+stop_time = 1.0
+output_interval = 0.01
+"""
+    path = tmp_path / "every_branch_3d.toml"
+    path.write_text(text)
+    return path
+
+
+# ------------------------------------------------------------------------------------------------
+# Helpers
+# ------------------------------------------------------------------------------------------------
+class Kernel3:
+    """The 3D kernels called one by one on compiled.Kernel's arrays."""
+
+    def __init__(self, mech):
+        self.mech = mech
+        kernel = compiled.Kernel(mech)
+        self.flat, self.P, self.kl, self.ku = kernel.flat, kernel.params, kernel.kl, kernel.ku
+        self.n, self.m = self.flat["n"], self.flat["m"]
+        N = self.n + self.m
+        self.AB = np.empty((2 * self.kl + self.ku + 1, N))
+        self.rhs = np.empty(N)
+        self.gen = np.empty(self.n)
+        self.layout = signal_layout3(self.flat)
+
+    def accelerations(self, t, q, v, inputs, alpha):
+        """(status, q̈, λ): assemble3, band_solve, un-permuted (as compiled_kernels.accelerations)."""
+        inp = np.zeros(0) if inputs is None else np.ascontiguousarray(inputs, dtype=float)
+        status = ck.assemble3(float(t), q, v, inp, float(alpha), self.P, self.AB, self.rhs, self.gen)
+        assert ck.band_solve(self.AB, self.rhs, self.kl, self.ku)
+        perm = self.P[15]
+        out = np.empty(self.n + self.m)
+        for i in range(len(out)):
+            out[i] = self.rhs[perm[i]]
+        return status, out[:self.n], out[self.n:]
+
+    def qdot(self, q, v):
+        out = np.empty(self.flat["nq"])
+        ck.qdot3(q, v, self.P, out)
+        return out
+
+    def signals(self, q, v, a, names):
+        raw = np.empty(len(self.layout))
+        status = ck.signal_values3(q, v, np.concatenate((a, np.zeros(self.m))), self.P, raw)
+        index = {name: i for i, name in enumerate(self.layout)}
+        return status, raw[[index[name] for name in names]]
+
+
+def _states(mech, rng, count=8):
+    """The initial state, then random ones: positions moved, quaternions perturbed (not unit),
+    random velocities, inputs and times, α = 0 or random."""
+    yield 0.0, mech.q0.copy(), mech.v0.copy(), _inputs(mech, rng), 0.0
+    for _ in range(count):
+        q = mech.q0.copy()
+        for k in mech.q_index:
+            q[k:k + 3] += 0.2 * rng.standard_normal(3)
+            q[k + 3:k + 7] += 0.1 * rng.standard_normal(4)
+        v = 2.0 * rng.standard_normal(mech.n)
+        alpha = float(rng.choice([0.0, rng.uniform(0.0, 50.0)]))
+        yield float(rng.uniform(0.0, 2.0)), q, v, _inputs(mech, rng), alpha
+
+
+def _inputs(mech, rng):
+    return 5.0 * rng.standard_normal(len(mech.input_names)) if mech.input_names else None
+
+
+def _load(path, centripetal):
+    """A fresh mechanism (with its ground motion, where the scene has one)."""
+    return inerter.load(path, **{"effects.centripetal": centripetal}).mechanism
+
+
+def _compare(mech, seed, count=8):
+    """Every kernel against the numpy Mechanism over `_states`; returns the largest deviations."""
+    kern = Kernel3(mech)
+    signals = Signals(mech)
+    assert set(kern.layout) == set(signals.names) and len(kern.layout) == len(signals.names)
+    rng = np.random.default_rng(seed)
+    worst = dict(acc=0.0, qdot=0.0, residual=0.0, signals=0.0)
+    for t, q, v, inputs, alpha in _states(mech, rng, count):
+        a_ref, lam_ref = mech.accelerations(t, q, v, inputs, alpha)
+        status, a, lam = kern.accelerations(t, q, v, inputs, alpha)
+        assert status == ck.OK
+        ref = np.concatenate((a_ref, lam_ref))
+        dev = np.max(np.abs(np.concatenate((a, lam)) - ref)) / np.max(np.abs(ref)) if np.any(ref) else \
+            np.max(np.abs(np.concatenate((a, lam))))
+        assert dev <= TOL_ACC, (t, alpha, dev)
+        worst["acc"] = max(worst["acc"], dev)
+
+        qd_ref = mech.qdot(q, v)
+        dev = np.max(np.abs(kern.qdot(q, v) - qd_ref)) / max(1.0, np.max(np.abs(qd_ref)))
+        assert dev <= 1e-14
+        worst["qdot"] = max(worst["qdot"], dev)
+
+        res = ck.constraint_residual3(q, kern.P)
+        assert res == pytest.approx(mech.constraint_residual(q), rel=1e-12, abs=1e-15)
+        worst["residual"] = max(worst["residual"], abs(res - mech.constraint_residual(q)))
+
+        sig_ref = signals.values(t, q, v, a_ref)
+        status, sig = kern.signals(q, v, a_ref, signals.names)
+        assert status == ck.OK
+        dev = np.abs(sig - sig_ref) / np.maximum(1.0, np.abs(sig_ref))
+        assert np.max(dev) <= TOL_SIG, signals.names[int(np.argmax(dev))]
+        worst["signals"] = max(worst["signals"], float(np.max(dev)))
+    return worst
+
+
+# ------------------------------------------------------------------------------------------------
+# Tests
+# ------------------------------------------------------------------------------------------------
+def test_scenes_found():
+    """The 3D quaternion scenes of scenarios/ are the ones the comparisons below run on."""
+    assert {p.stem for p in SCENES_3D} >= {"double_pendulum_3d", "spherical_pendulum_3d", "two_bar_2d_as_3d",
+                                           "gimbal_lock_3d", "braced_frame_3d"}
+
+
+@pytest.mark.parametrize("path", SCENES_3D, ids=lambda p: p.stem)
+@pytest.mark.parametrize("centripetal", [True, False])
+def test_scene_matches_numpy_mechanism(path, centripetal):
+    """Reference: the numpy Mechanism of the same scene (Mechanism.accelerations for q̈ and λ,
+    Mechanism.qdot, Mechanism.constraint_residual, Signals.values with Mechanism.accelerations'
+    q̈), with the centripetal term on and off. braced_frame_3d's ground motion is removed on both
+    sides (the kernels leave it to the caller)."""
+    _compare(_load(path, centripetal), seed=11 if centripetal else 12)
+
+
+@pytest.mark.parametrize("centripetal", [True, False])
+def test_every_branch_matches_numpy_mechanism(tmp_path, centripetal):
+    """Reference: the numpy Mechanism of a scene with every term assemble3 has (revolute,
+    prismatic, fixed and spherical joints, springs, a damper, inerters to the ground and between
+    bodies, rotational springs and a damper, constant/sine/step/pd/input forces, gravity, a full
+    inertia tensor), at times before and after the step force switches."""
+    mech = _load(_every_branch_scene(tmp_path), centripetal)
+    assert [j.kind for j in mech.joints] == ["revolute", "prismatic", "fixed", "spherical"]
+    assert mech.input_names == ["F1.f[1]", "F1.f[2]", "F1.f[3]"]
+    worst = _compare(mech, seed=3 if centripetal else 4, count=16)
+    assert worst["acc"] <= TOL_ACC
+
+
+def test_every_branch_without_inputs_and_at_the_step(tmp_path):
+    """Reference: the numpy Mechanism. No inputs given (the input force is then absent on both
+    sides), and the step force exactly at its switching time (t ≥ time: the new value)."""
+    mech = _load(_every_branch_scene(tmp_path), True)
+    kern = Kernel3(mech)
+    for t in (0.0, 0.5, 0.5 - 1e-9, 1.5):
+        ref = np.concatenate(mech.accelerations(t, mech.q0, mech.v0, None, 3.0))
+        status, a, lam = kern.accelerations(t, mech.q0, mech.v0, None, 3.0)
+        assert status == ck.OK
+        assert np.max(np.abs(np.concatenate((a, lam)) - ref)) <= TOL_ACC * np.max(np.abs(ref))
+
+
+def test_parameter_tuple_matches_planar_contract(tmp_path):
+    """Reference: the planar kernel's P (compiled.Kernel on two_bar_2d): the same slots with the
+    same dtypes, dimensions and C-contiguity, so the integrators and the FMU's native step compile
+    once for both; dims = [n, m, kl, ku, has_gravity, 3, nq, ground mode, input offset] and the flat
+    dict has the planar keys."""
+    planar_mech = inerter.load(ROOT / "scenarios" / "two_bar_2d.toml").mechanism
+    planar = compiled.Kernel(planar_mech).params
+    mech = _load(_every_branch_scene(tmp_path), True)
+    kernel = compiled.Kernel(mech)
+    P, flat = kernel.params, kernel.flat
+    assert len(P) == len(planar) == len(ck.PARAMS)
+    for a, b in zip(P, planar):
+        assert a.dtype == b.dtype and a.ndim == b.ndim and a.flags.c_contiguous
+    assert list(P[16]) == [flat["n"], flat["m"], kernel.kl, kernel.ku, 1, 3, flat["nq"], ck.GROUND_NONE, 0]
+    assert flat["n"] == mech.n and flat["m"] == mech.m and flat["nq"] == mech.nq and flat["dim"] == 3
+    assert set(compiled.flatten(planar_mech)) <= set(flat)
+
+
+def test_sparsity_covers_the_augmented_matrix(tmp_path):
+    """Reference: the numpy Mechanism's augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]] at random
+    states: every non-zero lies in sparsity3's pattern (so the band after ordering holds it)."""
+    paths = SCENES_3D + [_every_branch_scene(tmp_path)]
+    rng = np.random.default_rng(5)
+    for path in paths:
+        mech = _load(path, True)
+        S = sparsity3(flatten3(mech))
+        for _, q, v, _, _ in _states(mech, rng, 3):
+            K = np.zeros((mech.n + mech.m,) * 2)
+            K[:mech.n, :mech.n] = mech.mass_matrix(q, v)
+            if mech.m:
+                Cq = mech.constraints(q, v)[1]
+                K[:mech.n, mech.n:] = Cq.T
+                K[mech.n:, :mech.n] = Cq
+            assert not np.any((K != 0) & ~S), path.stem
+
+
+def test_terminals_meet_is_reported(tmp_path):
+    """Reference: the numpy element's TerminalsMeet (elements.py): with the ground inerter's
+    terminals G and P4 together, assemble3 and signal_values3 return TERMINALS_MEET."""
+    mech = _load(_every_branch_scene(tmp_path), True)
+    kern = Kernel3(mech)
+    q = mech.q0.copy()
+    k = mech.q_index[mech.body_index["ball"]]
+    A = np.asarray(mech.orientation.matrix(q[k + 3:k + 7]))
+    q[k:k + 3] = np.asarray(G) - A @ np.asarray(P4)
+    with pytest.raises(TerminalsMeet):
+        mech.accelerations(0.0, q, mech.v0)
+    status = ck.assemble3(0.0, q, mech.v0, np.zeros(3), 0.0, kern.P, kern.AB, kern.rhs, kern.gen)
+    assert status == ck.TERMINALS_MEET
+    raw = np.empty(len(kern.layout))
+    assert ck.signal_values3(q, mech.v0, np.zeros(kern.n + kern.m), kern.P, raw) == ck.TERMINALS_MEET
+
+
+def test_flatten3_rejects_other_scenes():
+    """flatten3 takes 3D quaternion scenes only: a planar scene and Z-X-Z Euler angles are refused."""
+    with pytest.raises(ValueError):
+        flatten3(inerter.load(ROOT / "scenarios" / "two_bar_2d.toml").mechanism)
+    euler = inerter.load(ROOT / "scenarios" / "gimbal_lock_3d.toml", **{"scene.orientation": "euler_zxz"})
+    with pytest.raises(ValueError):
+        flatten3(euler.mechanism)
+
+
+def test_signal_layout3_order():
+    """The layout is points (r, v: 6 each), translational elements, rotational elements, then
+    energy and constraint_residual (the order signal_values3 writes)."""
+    mech = _load(ROOT / "scenarios" / "two_bar_2d_as_3d.toml", True)
+    layout = signal_layout3(flatten3(mech))
+    first = mech.point_names[0]
+    assert layout[:6] == [f"{first}.r[1]", f"{first}.r[2]", f"{first}.r[3]", f"{first}.v[1]", f"{first}.v[2]",
+                          f"{first}.v[3]"]
+    assert layout[-2:] == ["energy", "constraint_residual"]
+    assert layout[-5:-2] == ["kr.phi_rel", "kr.w_rel", "kr.tau"]
+    assert len(layout) == 6 * len(mech.point_names) + 3 * len(mech.elements) + 2

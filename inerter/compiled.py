@@ -553,12 +553,14 @@ def integrate_compiled(mech, settings, inputs=None):
     inp = kernel._inputs(inputs)
     alpha = float(settings.alpha)
     # One integration per smooth segment: it restarts at each discontinuity of the right-hand side
-    # (a step force's switch, a ground record's sample; Mechanism.discontinuities), as the numpy
-    # path's does, with the step size the error control proposed last.
+    # (a step force's switch, a ground record's sample; Mechanism.discontinuities) with a fresh
+    # first step, the forces evaluated up to it with their values over the segment, as the numpy
+    # path's does.
     stop = float(settings.stop_time)
     ends = [float(d) for d in getattr(mech, "discontinuities", ()) if 0.0 < d < stop] + [stop]
     steps = evals = 0
     h, t0, k, status, t_reached = 0.0, 0.0, 1, 0, 0.0
+    jumps = set(ends[:-1])
     tables = None if settings.method == "RK4" else _tables(settings.method)
     start = _time.process_time()
     y = y0
@@ -572,13 +574,13 @@ def integrate_compiled(mech, settings, inputs=None):
         if settings.method == "RK4":
             status, done, s_steps, s_evals, t_reached = _k.integrate_rk4(
                 y, t0, t1, seg, seg_out, float(settings.step), int(settings.max_steps) - steps, inp, alpha,
-                kernel.params)
+                kernel.params, t1 if t1 in jumps else 0.0)
         else:
             A, B, C, E, E3, D, Pm = tables
             status, done, s_steps, s_evals, t_reached, h = _k.integrate_rk(
-                _RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol), float(settings.atol), h,
+                _RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol), float(settings.atol), 0.0,
                 int(settings.max_steps) - steps, inp, alpha, kernel.params, A, B, C, E, E3, D, Pm,
-                _monitor(settings.method))
+                _monitor(settings.method), t1 if t1 in jumps else 0.0)
         steps += int(s_steps)
         evals += int(s_evals)
         written = min(done - 1, last - k)                         # grid samples among seg_out[1:done]
@@ -614,7 +616,10 @@ class CompiledStepper(Stepper):
     communication step shorter than the integrator's costs no extra evaluations. An input that
     changes is a discontinuity of the right-hand side: the integrator restarts at that
     communication point, with the step size the error control proposed last, and its last step in
-    that communication step lands on the next point (as the numpy stepper's always do).
+    that communication step lands on the next point (as the numpy stepper's always do). A
+    discontinuity of the right-hand side (a step force's switch, a ground record's sample) ends a
+    segment of the integration, which starts afresh there (:func:`compiled_kernels.cosim_step`), as
+    the whole run's does.
 
     RK4 (fixed step) restarts at every communication point, its last step shortened to land on it.
     The outputs are evaluated in the same compiled call. (time, state, inputs, the integrator's
@@ -631,6 +636,7 @@ class CompiledStepper(Stepper):
         self._work = (None if self._tables is None else
                       _k.work_arrays(kernel.params, kernel.nq + kernel.n, _k.rk_stages(self._tables[0])))
         self._monitor = _monitor(settings.method)
+        self._jumps = np.array(getattr(mech, "discontinuities", ()), dtype=float)
         self._tol = (float(settings.rtol), float(settings.atol), int(settings.max_steps))
         self._raw = np.empty(len(signal_layout(kernel.flat)))
         self._values = None                   # the outputs at self.time, when the last step made them
@@ -639,14 +645,18 @@ class CompiledStepper(Stepper):
         self._input_moved = False             # an input changed since the last step
         self._native = None                   # the arrays of native steps (native_table), for self._rk
 
-    def _start_rk(self):
-        """A fresh integration at (self.time, self.y) with the held inputs and the last step size."""
+    def _start_rk(self, t, y, h):
+        """A fresh integration at (t, y) with the held inputs and the step size h (0: chosen as
+        scipy does), its segment ending at the next discontinuity after t (RK_JUMP, 0: none)."""
         ny = self.kernel.nq + self.kernel.n
         hdr = np.zeros(_k.RK_HEADER)
-        hdr[_k.RK_T] = self.time
-        hdr[_k.RK_H] = self.h or 0.0
+        hdr[_k.RK_T] = t
+        hdr[_k.RK_H] = h or 0.0
+        hdr[_k.RK_JUMP] = _k.next_jump(self._jumps, float(t))
         self._rk_inputs = self.kernel._inputs(self.inputs.copy())
-        return [hdr, np.array(self.y, dtype=float), np.empty(ny), np.array(self.y, dtype=float), np.zeros((7, ny))]
+        return [hdr, np.array(y, dtype=float), np.empty(ny), np.array(y, dtype=float), np.zeros((7, ny))]
+
+
 
     def set_input(self, name, value):
         old = self.inputs[self.input_index[name]]
@@ -666,26 +676,26 @@ class CompiledStepper(Stepper):
             return
         rk = self._rk
         if rk is None:
-            rk = self._start_rk()
+            rk = self._start_rk(self.time, self.y, self.h)
         # The integration runs on in place; a failed step drops it, and the next one restarts at
         # (self.time, self.y), which a failure leaves as they were.
         self._rk = None
-        hdr = rk[0]
         if t_end > self.t_bound:               # the importer went past its stop time
             self.t_bound = np.inf
         # Right after an input changed, the step lands on t_end (an importer that moves its inputs at
         # every point gets the numpy stepper's steps); otherwise it runs on towards the stop time.
         bound = t_end if self._input_moved else self.t_bound
-        steps_before = hdr[_k.RK_STEPS]
         out = np.empty((1, kernel.nq + kernel.n))
         order = self._order if self._order is not None else _NO_ORDER
         values = np.empty(len(order))
         A, B, C, E, E3, D, Pm = self._tables
         rtol, atol, max_steps = self._tol
-        status, signal_status = _k.cosim_rk(
-            _RK_CODE[s.method], hdr, rk[1], rk[2], rk[3], rk[4], np.array([t_end]), out, bound, rtol, atol,
+        hdr = rk[0]
+        total_before = hdr[_k.RK_TOTAL]
+        status, signal_status = _k.cosim_step(
+            _RK_CODE[s.method], hdr, rk[1], rk[2], rk[3], rk[4], t_end, np.zeros(1), out, bound, rtol, atol,
             max_steps, self._rk_inputs, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm, self._monitor,
-            self._work, self._need_acc, self._raw, order, values)
+            self._work, self._need_acc, self._raw, order, values, self._jumps)
         if status:
             why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk[1], hdr[_k.RK_T])
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(hdr[_k.RK_T]))
@@ -694,26 +704,32 @@ class CompiledStepper(Stepper):
         self.y = out[0]
         self.time = t_end
         self.h = float(hdr[_k.RK_H])
-        self.steps += int(hdr[_k.RK_STEPS] - steps_before)
+        self.steps += int(hdr[_k.RK_TOTAL] - total_before)
         self._values = None if signal_status or self._order is None else values.tolist()
 
     def _step_rk4(self, t_end):
+        """RK4 from the communication point, its last step shortened to land on t_end; a
+        discontinuity inside (or at t_end) ends a segment there, as the numpy stepper's."""
+        from .simulation import jumps
         s, kernel = self.settings, self.kernel
-        grid = np.array([self.time, t_end])
-        out = np.empty((2, kernel.nq + kernel.n))
-        y0 = np.ascontiguousarray(self.y, dtype=float)
-        status, k, steps, evals, t_reached = _k.integrate_rk4(
-            y0, self.time, t_end, grid, out, float(s.step), int(s.max_steps), kernel._inputs(self.inputs.copy()),
-            float(s.alpha), kernel.params)
-        if status:
-            why = failure_text(kernel, status, s.method, s.step, y0, self.time)
-            raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
-        y = out[1].copy()
+        eps = 1e-12 * max(1.0, abs(t_end))
+        t0, y = self.time, np.ascontiguousarray(self.y, dtype=float)
+        inputs = kernel._inputs(self.inputs.copy())
+        for end in list(jumps(self.mech, t0 + eps, t_end - eps)) + [t_end]:
+            jump = end if jumps(self.mech, end - eps, end + eps) else 0.0
+            out = np.empty((2, kernel.nq + kernel.n))
+            status, k, steps, evals, t_reached = _k.integrate_rk4(
+                y, t0, end, np.array([t0, end]), out, float(s.step), int(s.max_steps), inputs, float(s.alpha),
+                kernel.params, float(jump))
+            if status:
+                why = failure_text(kernel, status, s.method, s.step, y, t0)
+                raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
+            self.steps += int(steps)
+            t0, y = end, out[1].copy()
         if not np.isfinite(y).all():
             raise SimulationError("the state became non-finite", t_end)
         self.y = y
         self.time = t_end
-        self.steps += int(steps)
         self._values = None
         self._input_moved = False
 
@@ -742,6 +758,8 @@ class CompiledStepper(Stepper):
         if self._order is None or self._input_moved:
             return None
         if self.settings.method == "RK4":
+            if getattr(self.mech, "discontinuities", ()):
+                return None                               # segments at the discontinuities: stepped here
             native = self._native
             if native is None:
                 ny = self.kernel.nq + self.kernel.n
@@ -764,7 +782,7 @@ class CompiledStepper(Stepper):
         clock[_k.CLOCK_BUSY] = 0.0
         clock[_k.CLOCK_TOLERANCE] = tolerance
         clock[_k.CLOCK_TAKEN] = 0.0
-        native["steps"] = native["rk"][0][_k.RK_STEPS]
+        native["steps"] = native["rk"][0][_k.RK_TOTAL]
         return native["table"]
 
     def _native_arrays(self, rk, inputs, samples, tables, work) -> dict:
@@ -782,7 +800,7 @@ class CompiledStepper(Stepper):
             arrays.update(zip((name for name, _ in group), values, strict=True))
         arrays.update(zip(("b_" + name for name, _ in _k.RK_STATE), native["backup"], strict=True))
         arrays.update(ts=native["ts"], out=native["out"], inputs=inputs, monitor=self._monitor,
-                      raw=self._raw, order=self._order, values=native["values"], clock=clock)
+                      raw=self._raw, order=self._order, values=native["values"], clock=clock, jumps=self._jumps)
         code = _k.NATIVE_RK4 if s.method == "RK4" else _RK_CODE[s.method]
         table = np.zeros(_k.TABLE_HEAD + 3 * len(_k.NATIVE_SLOTS), dtype=np.int64)
         table[:_k.TABLE_HEAD] = (len(table), code, int(s.max_steps), int(self._need_acc))
@@ -826,8 +844,8 @@ class CompiledStepper(Stepper):
         else:
             self.y = native["out"][0].copy()
             self.h = float(hdr[_k.RK_H])
-        self.steps += int(hdr[_k.RK_STEPS] - native["steps"])
-        native["steps"] = hdr[_k.RK_STEPS]
+        self.steps += int(hdr[_k.RK_TOTAL] - native["steps"])
+        native["steps"] = hdr[_k.RK_TOTAL]
         self._values = native["values"].tolist()
         clock[_k.CLOCK_TAKEN] = 0.0
         return taken
@@ -875,10 +893,8 @@ def failure_text(kernel, status, method, h, y_last, t_last) -> str:
 
 def compiled_stepper(mech, settings, signals, stop_time=None):
     """A :class:`CompiledStepper`, or None where the compiled loop cannot take the scene: see
-    :func:`unsupported`; an implicit method or the projection treatment; a step force (the numpy
-    stepper restarts the integrator at its switching time)."""
-    if unsupported(mech) or settings.method not in COMPILED_METHODS or settings.constraint == "projection" \
-            or getattr(mech, "discontinuities", ()):
+    :func:`unsupported`; an implicit method or the projection treatment."""
+    if unsupported(mech) or settings.method not in COMPILED_METHODS or settings.constraint == "projection":
         return None
     return CompiledStepper(mech, settings, signals, _kernel_for(mech), stop_time)
 

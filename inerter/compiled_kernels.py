@@ -1199,7 +1199,7 @@ def _rms(x):
 
 
 @njit(cache=True)
-def _initial_step(t0, y0, f0, t_bound, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc):
+def _initial_step(t0, y0, f0, t_bound, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc, before):
     """scipy.integrate._ivp.common.select_initial_step (one extra evaluation)."""
     ny = y0.shape[0]
     interval = abs(t_bound - t0)
@@ -1215,7 +1215,7 @@ def _initial_step(t0, y0, f0, t_bound, order, rtol, atol, inputs, alpha, P, AB, 
     h0 = min(h0, interval)
     y1 = y0 + h0 * f0
     f1 = np.empty(ny)
-    _rhs(t0 + h0, y1, inputs, alpha, P, AB, rhs, gen, acc, f1)
+    _rhs(min(t0 + h0, before), y1, inputs, alpha, P, AB, rhs, gen, acc, f1)
     d2 = _rms((f1 - f0) / scale) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
@@ -1232,8 +1232,20 @@ def rk_stages(A):
 
 
 # Header of the resumable adaptive Runge-Kutta state (``rk_advance``): float slots.
-RK_T, RK_H, RK_T_PREV, RK_H_LAST, RK_DENSE, RK_STEPS, RK_EVALS, RK_HITS, RK_CALM, RK_SMALL, RK_STARTED = range(11)
-RK_HEADER = 11
+# RK_STEPS counts the steps of the current segment (the stiffness test's cadence), RK_TOTAL every
+# step since the integration started; RK_JUMP is the discontinuity the segment ends at (0: none).
+RK_T, RK_H, RK_T_PREV, RK_H_LAST, RK_DENSE, RK_STEPS, RK_EVALS, RK_HITS, RK_CALM, RK_SMALL, RK_STARTED, \
+    RK_JUMP, RK_TOTAL = range(13)
+RK_HEADER = 13
+
+
+@njit(cache=True, inline="always")
+def _before(jump):
+    """The last time the right-hand side is evaluated at in a segment that ends at a discontinuity
+    `jump` (a step force's switch, a ground record's sample; 0: none): one ulp before it, so that
+    stages at the segment's end see the values the forces had over the segment (as
+    ``simulation.derivative``)."""
+    return np.nextafter(jump, -np.inf) if jump > 0.0 else np.inf
 
 
 @njit(cache=True, inline="always")
@@ -1305,13 +1317,15 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         order = 4
     err_exp = -1.0 / (order + 1)
     t = hdr[RK_T]
+    before = _before(hdr[RK_JUMP])
     if hdr[RK_STARTED] == 0.0:
-        st = _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, f)
+        st = _rhs(min(t, before), y, inputs, alpha, P, AB, rhs, gen, acc, f)
         hdr[RK_EVALS] += 1
         if st != OK:
             return st, k0
         if not hdr[RK_H] > 0.0:
-            hdr[RK_H] = _initial_step(t, y, f, t_bound, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc)
+            hdr[RK_H] = _initial_step(t, y, f, t_bound, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc,
+                                      before)
             hdr[RK_EVALS] += 1
         hdr[RK_STARTED] = 1.0
         hdr[RK_DENSE] = 0.0
@@ -1356,7 +1370,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
                     for j in range(s):
                         acc_s += K[j, i] * A[s, j]
                     ys[i] = y[i] + acc_s * h
-                st = _rhs(t + C[s] * h, ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
+                st = _rhs(min(t + C[s] * h, before), ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
                 evals += 1
                 if st != OK:
                     break
@@ -1366,7 +1380,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
                     for j in range(n_stages):
                         acc_s += K[j, i] * B[j]
                     y_new[i] = y[i] + h * acc_s
-                st = _rhs(t + h, y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new)
+                st = _rhs(min(t + h, before), y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new)
                 evals += 1
             if st == SINGULAR or st == NOT_FINITE:
                 # A stage the accelerations cannot be evaluated at (a wild stage of too long a step,
@@ -1469,7 +1483,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
                         for j in range(s):
                             acc_s += K[j, i] * A[s, j]
                         ys[i] = y[i] + acc_s * h
-                    st = _rhs(t + C[s] * h, ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
+                    st = _rhs(min(t + C[s] * h, before), ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
                     evals += 1
                     if st != OK:
                         status = st
@@ -1508,6 +1522,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
             status = MAX_STEPS
     hdr[RK_T] = t
     hdr[RK_H] = h_abs
+    hdr[RK_TOTAL] += steps - steps_before
     hdr[RK_STEPS] = steps
     hdr[RK_EVALS] = evals
     hdr[RK_HITS] = hits
@@ -1518,7 +1533,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
 
 @njit(cache=True)
 def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_steps, inputs, alpha, P,
-                 A, B, C, E, E3, Dm, Pm, monitor):
+                 A, B, C, E, E3, Dm, Pm, monitor, jump):
     """One integration from t0 to t_end with :func:`rk_advance`, sampling `out[k] = y(grid[k])` for
     k ≥ 1 (grid[-1] = t_end). Returns (status, samples written, steps, evaluations, t reached, next
     step size): the last is the step size the error control proposes after the last accepted step
@@ -1527,6 +1542,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     hdr = np.zeros(RK_HEADER)
     hdr[RK_T] = t0
     hdr[RK_H] = first_step
+    hdr[RK_JUMP] = jump
     y = y0.copy()
     f = np.empty(ny)
     y_prev = y0.copy()
@@ -1559,8 +1575,50 @@ def cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, t_bound, rtol, atol, max
 
 
 @njit(cache=True)
-def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P):
-    """Classical RK4 with a fixed step (the last one shortened), cubic Hermite between nodes."""
+def next_jump(jumps, t):
+    """The first of the increasing discontinuities `jumps` after t (0.0: none)."""
+    i = np.searchsorted(jumps, t, side="right")
+    return jumps[i] if i < jumps.shape[0] else 0.0
+
+
+@njit(cache=True)
+def cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol, atol, max_steps, inputs, alpha, P,
+               A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, jumps):
+    """A co-simulation step to t_end on the running integration (:func:`cosim_rk`), segment by
+    segment: a segment ends at its discontinuity (RK_JUMP: a step force's switch, a ground record's
+    sample, of the increasing `jumps`), where the integration starts afresh, with the step size
+    chosen as scipy does, from the state there, as :func:`integrate_rk` over the segments of a whole
+    run. Steps are clipped to the segment's end and to `t_bound`. `ts` (one slot) and `out` (one
+    row) take the sample. Returns (integrator status, signal status)."""
+    while True:
+        jump = hdr[RK_JUMP]
+        if jump > 0.0 and hdr[RK_T] >= jump and t_end > jump:
+            hdr[RK_H] = 0.0
+            hdr[RK_STARTED] = 0.0
+            hdr[RK_DENSE] = 0.0
+            hdr[RK_T_PREV] = hdr[RK_T]
+            hdr[RK_H_LAST] = 0.0
+            hdr[RK_STEPS] = 0.0
+            hdr[RK_EVALS] = 0.0
+            hdr[RK_HITS] = 0.0
+            hdr[RK_CALM] = 0.0
+            hdr[RK_SMALL] = 0.0
+            hdr[RK_JUMP] = next_jump(jumps, jump)
+            y_prev[:] = y
+            continue
+        ts[0] = min(t_end, jump) if jump > 0.0 else t_end
+        st, sst = cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, min(t_bound, jump) if jump > 0.0 else t_bound,
+                           rtol, atol, max_steps, inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work, need_acc,
+                           raw, order, values)
+        if st != OK or ts[0] == t_end:
+            return st, sst
+
+
+@njit(cache=True)
+def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump):
+    """Classical RK4 with a fixed step (the last one shortened), cubic Hermite between nodes; `jump`:
+    a discontinuity the integration ends at (0: none), see :func:`_before`."""
+    before = _before(jump)
     n = P[16][0]
     m = P[16][1]
     N = n + m
@@ -1581,7 +1639,7 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P):
     f_new = np.empty(ny)
     t = t0
     evals = 1
-    st = _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, f)
+    st = _rhs(min(t, before), y, inputs, alpha, P, AB, rhs, gen, acc, f)
     if st != OK:
         return st, 1, 0, evals, t
     k = 1
@@ -1591,17 +1649,17 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P):
         h = min(step, abs(t_end - t))
         for i in range(ny):
             ys[i] = y[i] + h / 2 * f[i]
-        st = _rhs(t + h / 2, ys, inputs, alpha, P, AB, rhs, gen, acc, k2)
+        st = _rhs(min(t + h / 2, before), ys, inputs, alpha, P, AB, rhs, gen, acc, k2)
         for i in range(ny):
             ys[i] = y[i] + h / 2 * k2[i]
-        st = max(st, _rhs(t + h / 2, ys, inputs, alpha, P, AB, rhs, gen, acc, k3))
+        st = max(st, _rhs(min(t + h / 2, before), ys, inputs, alpha, P, AB, rhs, gen, acc, k3))
         for i in range(ny):
             ys[i] = y[i] + h * k3[i]
-        st = max(st, _rhs(t + h, ys, inputs, alpha, P, AB, rhs, gen, acc, k4))
+        st = max(st, _rhs(min(t + h, before), ys, inputs, alpha, P, AB, rhs, gen, acc, k4))
         for i in range(ny):
             y_new[i] = y[i] + h / 6 * (f[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
         t_new = t + h
-        st = max(st, _rhs(t_new, y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new))
+        st = max(st, _rhs(min(t_new, before), y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new))
         evals += 4
         if st != OK:
             return st, k, steps, evals, t
@@ -1660,7 +1718,7 @@ WORK = (("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), 
 NATIVE_SLOTS = (RK_STATE + (("ts", "f1"), ("out", "f2"), ("inputs", "f1")) + PARAMS + TABLEAU
                 + (("monitor", "f1"),) + WORK
                 + (("raw", "f1"), ("order", "i1"), ("values", "f1"), ("clock", "f1"))
-                + tuple(("b_" + name, kind) for name, kind in RK_STATE))
+                + tuple(("b_" + name, kind) for name, kind in RK_STATE) + (("jumps", "f1"),))
 CLOCK_TIME, CLOCK_BOUND, CLOCK_RTOL, CLOCK_ATOL, CLOCK_ALPHA, CLOCK_BUSY, CLOCK_TOLERANCE, CLOCK_TAKEN, \
     CLOCK_STEP = range(9)
 CLOCK_SIZE = 9
@@ -1670,7 +1728,7 @@ NATIVE_TOOK_STEP = 1
 _SLOT = {name: i for i, (name, _) in enumerate(NATIVE_SLOTS)}
 # native_step reads the slots by number: the blocks it reads must start where NATIVE_SLOTS puts them.
 assert (_SLOT["hdr"], _SLOT["b_hdr"], _SLOT["mass"], _SLOT["A"], _SLOT["AB"], _SLOT["raw"], _SLOT["clock"]) == \
-    (0, 48, 8, 27, 35, 44, 47) and len(NATIVE_SLOTS) == 53
+    (0, 48, 8, 27, 35, 44, 47) and _SLOT["jumps"] == 53 and len(NATIVE_SLOTS) == 54
 
 
 @intrinsic
@@ -1712,7 +1770,7 @@ def _i2(tab, s):
 @njit(cache=True)
 def native_step(tab, t, h):
     """One co-simulation step (t, t + h] of the running integration whose arrays `tab` lists: what
-    ``CompiledStepper.step`` does while the inputs hold (:func:`cosim_rk` with the step bound,
+    ``CompiledStepper.step`` does while the inputs hold (:func:`cosim_step` with the step bound,
     then every output into `values`; RK4: :func:`integrate_rk4` from the communication point, then
     the outputs). Returns NATIVE_TOOK_STEP, or 0 where it declines and leaves
     the step to the Python path: a communication point that is not the current one, a step size
@@ -1749,7 +1807,7 @@ def native_step(tab, t, h):
         ts[0] = now
         ts[1] = t_end
         st, k, steps, evals, t_reached = integrate_rk4(y, now, t_end, ts, out, clock[CLOCK_STEP], tab[2], inputs,
-                                                       alpha, P)
+                                                       alpha, P, 0.0)
         if st != OK:
             return 0
         y_end = out[1]
@@ -1761,15 +1819,14 @@ def native_step(tab, t, h):
         for i in range(order.shape[0]):
             values[i] = raw[order[i]]
         y[:] = y_end
-        hdr[RK_STEPS] += steps
+        hdr[RK_TOTAL] += steps
     else:
         if t_end > bound:                       # the importer went past its stop time
             bound = np.inf
-        ts[0] = t_end
-        st, sst = cosim_rk(tab[1], hdr, y, f, y_prev, dense, ts, out, bound, clock[CLOCK_RTOL],
-                           clock[CLOCK_ATOL], tab[2], inputs, alpha, P,
-                           _f2(tab, 27), _f1(tab, 28), _f1(tab, 29), _f1(tab, 30), _f1(tab, 31), _f2(tab, 32),
-                           _f2(tab, 33), _f1(tab, 34), work, tab[3] != 0, raw, order, values)
+        st, sst = cosim_step(tab[1], hdr, y, f, y_prev, dense, t_end, ts, out, bound,
+                             clock[CLOCK_RTOL], clock[CLOCK_ATOL], tab[2], inputs, alpha, P,
+                             _f2(tab, 27), _f1(tab, 28), _f1(tab, 29), _f1(tab, 30), _f1(tab, 31), _f2(tab, 32),
+                             _f2(tab, 33), _f1(tab, 34), work, tab[3] != 0, raw, order, values, _f1(tab, 53))
         if st != OK or sst != OK:
             return 0
     clock[CLOCK_TIME] = t_end

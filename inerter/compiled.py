@@ -560,7 +560,7 @@ def integrate_compiled(mech, settings, inputs=None):
     ends = [float(d) for d in getattr(mech, "discontinuities", ()) if 0.0 < d < stop] + [stop]
     steps = evals = 0
     h, t0, k, status, t_reached = 0.0, 0.0, 1, 0, 0.0
-    jumps = set(ends[:-1])
+    jumps = {float(d) for d in getattr(mech, "discontinuities", ()) if 0.0 < d <= stop}
     tables = None if settings.method == "RK4" else _tables(settings.method)
     start = _time.process_time()
     y = y0

@@ -1251,9 +1251,12 @@ def _before(jump):
 @njit(cache=True, inline="always")
 def _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out):
     """out[k] = y(ts[k]) for a sample covered by the last step (within 1e-12·max(1 s, t) of its end
-    node t): the step's own solution at the node, its dense output inside the step."""
+    node t): the step's own solution at the node, its dense output inside the step. A node at the
+    segment's discontinuity (RK_JUMP) also takes the samples within that tolerance before it, so
+    that a communication point one ulp off a record's sample time (t + h of the importer against
+    the whole run's grid) gets the same state."""
     ny = y.shape[0]
-    if ts[k] >= t or hdr[RK_DENSE] == 0.0:
+    if ts[k] >= t or hdr[RK_DENSE] == 0.0 or (t == hdr[RK_JUMP] and ts[k] >= t - 1e-12 * max(1.0, t)):
         for i in range(ny):
             out[k, i] = y[i]
         return

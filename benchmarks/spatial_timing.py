@@ -37,7 +37,7 @@ def timed(model, path):
 def main():
     if not compiled.AVAILABLE:
         raise SystemExit(f"numba is not available: {compiled.WHY_NOT}")
-    warm = compiled.warm_up()
+    warm = compiled.warm_up(spatial=True)
     rows = []
     for path in sorted((ROOT / "scenarios").glob("*_3d.toml")):
         model = inerter.load(path)

@@ -147,7 +147,7 @@ def sweep(study: Study, model, reference, extract, paths, methods, sweeps, budge
 
     ref = extract(reference)
     if "compiled" in paths:
-        compiled.warm_up()
+        compiled.warm_up(spatial=model.mechanism.dim == 3)
     for path in paths:
         for method in methods:
             label = f"{path} {method}"

@@ -341,7 +341,8 @@ class Kernel:
         self.params = (flat["mass"], flat["pbody"], flat["ploc"], flat["el_int"], flat["el_real"],
                        flat["rot_int"], flat["rot_real"], flat["jt_int"], flat["jt_real"], flat["fa_int"],
                        flat["fa_real"], flat["pd_int"], flat["pd_real"], flat["in_int"], flat["gravity"],
-                       self.perm, dims, ground_t, ground_a)
+                       self.perm, dims, ground_t, ground_a) + ((np.ones(1, dtype=np.int64),) if spatial else ())
+        self.spatial = spatial                # P has the slot `spatial`: the kernels compile its 3D code
         N = self.n + self.m
         self._AB = np.empty((2 * self.kl + self.ku + 1, N))
         self._rhs = np.empty(N)
@@ -796,8 +797,10 @@ class CompiledStepper(Stepper):
         native = dict(rk=rk, inputs=inputs, clock=clock, ts=np.zeros(samples), out=np.empty((samples, ny)),
                       values=np.empty(len(self._order)), backup=[np.empty_like(a) for a in rk])
         arrays = {}
-        for group, values in ((_k.RK_STATE, rk), (_k.PARAMS, kernel.params), (_k.TABLEAU, tables), (_k.WORK, work)):
+        params = kernel.params[:len(_k.PARAMS)]
+        for group, values in ((_k.RK_STATE, rk), (_k.PARAMS, params), (_k.TABLEAU, tables), (_k.WORK, work)):
             arrays.update(zip((name for name, _ in group), values, strict=True))
+        arrays["spatial"] = kernel.params[-1] if kernel.spatial else np.zeros(0, dtype=np.int64)
         arrays.update(zip(("b_" + name for name, _ in _k.RK_STATE), native["backup"], strict=True))
         arrays.update(ts=native["ts"], out=native["out"], inputs=inputs, monitor=self._monitor,
                       raw=self._raw, order=self._order, values=native["values"], clock=clock, jumps=self._jumps)
@@ -814,6 +817,10 @@ class CompiledStepper(Stepper):
         native["table"] = table
         native["arrays"] = arrays                 # keeps every array the table points to alive
         return native
+
+    def native_function(self):
+        """The C function of the native steps for this scene's dimension (numba cfunc)."""
+        return _k.native_step_cfunc(self.kernel.spatial)
 
     def native_values(self) -> np.ndarray:
         """The array native steps write the outputs to (in the order of ``signals.names``), for the
@@ -910,17 +917,19 @@ def unsupported(mech) -> str:
     return ""
 
 
-def warm_up():
-    """Compile (or load from numba's cache) every kernel once, so timings exclude compilation.
-    Returns the seconds it took."""
+def warm_up(spatial: bool = False):
+    """Compile (or load from numba's cache) every kernel once for 2D scenes (`spatial`: for 3D
+    scenes too), so timings exclude compilation. Returns the seconds it took."""
     if not AVAILABLE:
         return 0.0
     from .model import load
 
     t0 = _time.perf_counter()
-    scene = Path(__file__).resolve().parents[1] / "scenarios" / "two_bar_2d.toml"
-    if scene.exists():
-        model = load(scene)
+    folder = Path(__file__).resolve().parents[1] / "scenarios"
+    for name in ("two_bar_2d.toml", "two_bar_2d_as_3d.toml")[:2 if spatial else 1]:
+        if not (folder / name).exists():
+            continue
+        model = load(folder / name)
         for method in COMPILED_METHODS:
             integrate_compiled(model.mechanism, model.settings(method=method, stop_time=0.05, step=1e-2))
         kernel = _kernel_for(model.mechanism)
@@ -929,6 +938,5 @@ def warm_up():
             stepper = model.stepper(method=method, path="compiled", stop_time=0.05)
             stepper.step(0.01)
             stepper.output_values()
-        _k.native_step_cfunc()                                # the FMU's native step (fmu_native)
+        _k.native_step_cfunc(kernel.spatial)                  # the FMU's native step (fmu_native)
     return _time.perf_counter() - t0
-

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 from numba import carray, cfunc, njit, types
-from numba.extending import intrinsic
+from numba.extending import intrinsic, overload
 
 # Translational element kinds (column 0 of ``el_int``).
 SPRING, DAMPER, INERTER = 0, 1, 2
@@ -408,10 +408,7 @@ def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
     """Eq. (33): out[:n] = q̈, out[n:] = λ (original ordering). Returns a status code."""
     perm = P[15]
     dims = P[16]
-    if dims[5] == 3:
-        status = assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen)
-    else:
-        status = assemble(t, q, v, inputs, alpha, P, AB, rhs, gen)
+    status = _assemble_of(t, q, v, inputs, alpha, P, AB, rhs, gen)
     if not band_solve(AB, rhs, dims[2], dims[3]):
         return SINGULAR
     for i in range(out.shape[0]):
@@ -422,8 +419,12 @@ def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
 @njit(cache=True)
 def constraint_residual(q, P):
     """Largest |C_i| over the joints."""
-    if P[16][5] == 3:
-        return constraint_residual3(q, P)
+    return _residual_of(q, P)
+
+
+@njit(cache=True)
+def constraint_residual2(q, P):
+    """Largest |C_i| over the joints of a 2D scene."""
     pbody = P[1]
     ploc = P[2]
     jt_int = P[7]
@@ -455,12 +456,17 @@ def constraint_residual(q, P):
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def signal_values(q, v, qdd, P, out):
+    """Every output at one state (:func:`signal_values2`, :func:`signal_values3`). Returns a status
+    code."""
+    return _signals_of(q, v, qdd, P, out)
+
+
+@njit(cache=True)
+def signal_values2(q, v, qdd, P, out):
     """Every point's position and velocity (4 per point), every translational element's s_rel,
     v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd), every
     rotational element's φ_rel, ω_rel and torque (3 each), the energy (as ``Mechanism.energy``)
-    and the largest constraint residual. Returns a status code."""
-    if P[16][5] == 3:
-        return signal_values3(q, v, qdd, P, out)
+    and the largest constraint residual of a 2D scene. Returns a status code."""
     (mass, pbody, ploc, el_int, el_real, rot_int, rot_real, jt_int, jt_real,
      fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims, ground_t, ground_a) = P
     n = dims[0]
@@ -528,8 +534,69 @@ def signal_values(q, v, qdd, P, out):
         out[k + 2] = tau
         k += 3
     out[k] = energy
-    out[k + 1] = constraint_residual(q, P) if jt_int.shape[0] else 0.0
+    out[k + 1] = constraint_residual2(q, P) if jt_int.shape[0] else 0.0
     return status
+
+
+# ------------------------------------------------------------------------------------------------
+# Dimension: picked by the type of P when a kernel is compiled for it (a 3D scene's P has one slot
+# more than PARAMS, ``spatial``: an int64 array), so that a scene's compiled code holds its own dimension's kernels only: a 2D
+# scene compiles no 3D code, and the other way round.
+# ------------------------------------------------------------------------------------------------
+def is_spatial(P) -> bool:
+    """Whether P (a tuple, or its numba type) is a 3D scene's."""
+    return len(P) > len(PARAMS)
+
+
+def _assemble_of(t, q, v, inputs, alpha, P, AB, rhs, gen):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_assemble_of)
+def _assemble_by_dimension(t, q, v, inputs, alpha, P, AB, rhs, gen):
+    if is_spatial(P):
+        return lambda t, q, v, inputs, alpha, P, AB, rhs, gen: assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen)
+    return lambda t, q, v, inputs, alpha, P, AB, rhs, gen: assemble(t, q, v, inputs, alpha, P, AB, rhs, gen)
+
+
+def _residual_of(q, P):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_residual_of)
+def _residual_by_dimension(q, P):
+    if is_spatial(P):
+        return lambda q, P: constraint_residual3(q, P)
+    return lambda q, P: constraint_residual2(q, P)
+
+
+def _signals_of(q, v, qdd, P, out):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_signals_of)
+def _signals_by_dimension(q, v, qdd, P, out):
+    if is_spatial(P):
+        return lambda q, v, qdd, P, out: signal_values3(q, v, qdd, P, out)
+    return lambda q, v, qdd, P, out: signal_values2(q, v, qdd, P, out)
+
+
+def _qdot_of(q, v, P, out):
+    raise NotImplementedError("compiled code only")
+
+
+@njit(cache=True, inline="always")
+def _copy(q, v, P, out):
+    for i in range(out.shape[0]):
+        out[i] = v[i]
+
+
+@overload(_qdot_of)
+def _qdot_by_dimension(q, v, P, out):
+    """q̇ = B(q) v: the identity in 2D, the quaternion rates in 3D."""
+    if is_spatial(P):
+        return lambda q, v, P, out: qdot3(q, v, P, out)
+    return lambda q, v, P, out: _copy(q, v, P, out)
 
 
 @njit(cache=True)
@@ -1176,11 +1243,7 @@ def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
     q = y[:nq]
     v = y[nq:]
     st = accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, acc)
-    if P[16][5] == 3:
-        qdot3(q, v, P, dy[:nq])
-    else:
-        for i in range(n):
-            dy[i] = v[i]
+    _qdot_of(q, v, P, dy[:nq])
     for i in range(n):
         dy[nq + i] = acc[i]
     if st == OK:
@@ -1721,7 +1784,7 @@ WORK = (("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), 
 NATIVE_SLOTS = (RK_STATE + (("ts", "f1"), ("out", "f2"), ("inputs", "f1")) + PARAMS + TABLEAU
                 + (("monitor", "f1"),) + WORK
                 + (("raw", "f1"), ("order", "i1"), ("values", "f1"), ("clock", "f1"))
-                + tuple(("b_" + name, kind) for name, kind in RK_STATE) + (("jumps", "f1"),))
+                + tuple(("b_" + name, kind) for name, kind in RK_STATE) + (("jumps", "f1"), ("spatial", "i1")))
 CLOCK_TIME, CLOCK_BOUND, CLOCK_RTOL, CLOCK_ATOL, CLOCK_ALPHA, CLOCK_BUSY, CLOCK_TOLERANCE, CLOCK_TAKEN, \
     CLOCK_STEP = range(9)
 CLOCK_SIZE = 9
@@ -1731,7 +1794,8 @@ NATIVE_TOOK_STEP = 1
 _SLOT = {name: i for i, (name, _) in enumerate(NATIVE_SLOTS)}
 # native_step reads the slots by number: the blocks it reads must start where NATIVE_SLOTS puts them.
 assert (_SLOT["hdr"], _SLOT["b_hdr"], _SLOT["mass"], _SLOT["A"], _SLOT["AB"], _SLOT["raw"], _SLOT["clock"]) == \
-    (0, 48, 8, 27, 35, 44, 47) and _SLOT["jumps"] == 53 and len(NATIVE_SLOTS) == 54
+    (0, 48, 8, 27, 35, 44, 47) and _SLOT["jumps"] == 53 and _SLOT["spatial"] == 54 \
+    and len(NATIVE_SLOTS) == 55
 
 
 @intrinsic
@@ -1770,8 +1834,28 @@ def _i2(tab, s):
     return carray(_pointer(tab[j], np.int64), (tab[j + 1], tab[j + 2]))
 
 
+@njit(cache=True, inline="always")
+def _native_params(tab):
+    """P of a 2D scene from the table (slots 8-26: PARAMS)."""
+    return (_f1(tab, 8), _i1(tab, 9), _f2(tab, 10), _i2(tab, 11), _f2(tab, 12), _i2(tab, 13), _f2(tab, 14),
+            _i2(tab, 15), _f2(tab, 16), _i2(tab, 17), _f2(tab, 18), _i2(tab, 19), _f2(tab, 20), _i2(tab, 21),
+            _f1(tab, 22), _i1(tab, 23), _i1(tab, 24), _f1(tab, 25), _f2(tab, 26))
+
+
 @njit(cache=True)
 def native_step(tab, t, h):
+    """:func:`native_step_on` a 2D scene's table."""
+    return native_step_on(tab, t, h, _native_params(tab))
+
+
+@njit(cache=True)
+def native_step3(tab, t, h):
+    """:func:`native_step_on` a 3D scene's table (P with its ``spatial`` slot, table slot 54)."""
+    return native_step_on(tab, t, h, _native_params(tab) + (_i1(tab, 54),))
+
+
+@njit(cache=True)
+def native_step_on(tab, t, h, P):
     """One co-simulation step (t, t + h] of the running integration whose arrays `tab` lists: what
     ``CompiledStepper.step`` does while the inputs hold (:func:`cosim_step` with the step bound,
     then every output into `values`; RK4: :func:`integrate_rk4` from the communication point, then
@@ -1800,9 +1884,6 @@ def native_step(tab, t, h):
     clock[CLOCK_BUSY] = 1.0
     bound = clock[CLOCK_BOUND]
     ts, out, inputs, alpha = _f1(tab, 5), _f2(tab, 6), _f1(tab, 7), clock[CLOCK_ALPHA]
-    P = (_f1(tab, 8), _i1(tab, 9), _f2(tab, 10), _i2(tab, 11), _f2(tab, 12), _i2(tab, 13), _f2(tab, 14),
-         _i2(tab, 15), _f2(tab, 16), _i2(tab, 17), _f2(tab, 18), _i2(tab, 19), _f2(tab, 20), _i2(tab, 21),
-         _f1(tab, 22), _i1(tab, 23), _i1(tab, 24), _f1(tab, 25), _f2(tab, 26))
     work = (_f2(tab, 35), _f1(tab, 36), _f1(tab, 37), _f1(tab, 38), _f2(tab, 39), _f1(tab, 40), _f1(tab, 41),
             _f1(tab, 42), _f1(tab, 43))
     raw, order, values = _f1(tab, 44), _i1(tab, 45), _f1(tab, 46)
@@ -1843,15 +1924,20 @@ def _native_entry(table, t, h):
     return native_step(carray(table, (table[0],)), t, h)
 
 
-_NATIVE_CFUNC = []
+def _native_entry3(table, t, h):
+    return native_step3(carray(table, (table[0],)), t, h)
 
 
-def native_step_cfunc():
-    """:func:`native_step` as a C function ``int32 (const int64 *table, double t, double h)``
-    (compiled on first use, cached on disk). A Python exception inside it (none is expected) is
-    printed and the function returns 0: it declines."""
-    if not _NATIVE_CFUNC:
+_NATIVE_CFUNC = {}
+
+
+def native_step_cfunc(spatial: bool = False):
+    """:func:`native_step` (``spatial``: :func:`native_step3`) as a C function
+    ``int32 (const int64 *table, double t, double h)`` (compiled on first use, cached on disk). A
+    Python exception inside it (none is expected) is printed and the function returns 0: it
+    declines."""
+    spatial = bool(spatial)
+    if spatial not in _NATIVE_CFUNC:
         sig = types.int32(types.CPointer(types.int64), types.float64, types.float64)
-        _NATIVE_CFUNC.append(cfunc(sig, cache=True)(_native_entry))
-    return _NATIVE_CFUNC[0]
-
+        _NATIVE_CFUNC[spatial] = cfunc(sig, cache=True)(_native_entry3 if spatial else _native_entry)
+    return _NATIVE_CFUNC[spatial]

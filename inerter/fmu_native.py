@@ -8,8 +8,8 @@ entering Python, whenever the slave has *armed* it:
 
 - the slave owns a context, an int64 array at a fixed address for the instance's life
   (CTX_* slots): a magic number, whether the link is armed, the address of the C function
-  :func:`inerter.compiled_kernels.native_step_cfunc`, the address of the running integration's
-  table (:meth:`inerter.compiled.CompiledStepper.native_table`), and a map from every value
+  :func:`inerter.compiled_kernels.native_step_cfunc` for the scene's dimension, the address of
+  the running integration's table (:meth:`inerter.compiled.CompiledStepper.native_table`), and a map from every value
   reference to where its value is: the outputs in the array the C function writes, every other
   variable (parameters, inputs, the solver settings, ``fmi_status``) in arrays the slave fills
   when it arms the link (none of them can change between native steps: fixed parameters are
@@ -127,8 +127,7 @@ class NativeLink:
         if self.stale:
             self._refresh()
         if not self.ctx[CTX_FUNCTION]:
-            from .compiled import _k
-            self.ctx[CTX_FUNCTION] = _k.native_step_cfunc().address
+            self.ctx[CTX_FUNCTION] = stepper.native_function().address
         values = stepper.native_values()
         self._table = (table, values)
         self.ctx[CTX_TABLE] = table.ctypes.data

@@ -339,15 +339,17 @@ def test_every_branch_without_inputs_and_at_the_step(tmp_path):
 
 def test_parameter_tuple_matches_planar_contract(tmp_path):
     """Reference: the planar kernel's P (compiled.Kernel on two_bar_2d): the same slots with the
-    same dtypes, dimensions and C-contiguity, so the integrators and the FMU's native step compile
-    once for both; dims = [n, m, kl, ku, has_gravity, 3, nq, ground mode, input offset] and the flat
-    dict has the planar keys."""
+    same dtypes, dimensions and C-contiguity (the FMU's native table holds both), and one more,
+    `spatial`, by whose presence the kernels compile the 3D code only for 3D scenes;
+    dims = [n, m, kl, ku, has_gravity, 3, nq, ground mode, input offset]; the flat dict has the
+    planar keys."""
     planar_mech = inerter.load(ROOT / "scenarios" / "two_bar_2d.toml").mechanism
     planar = compiled.Kernel(planar_mech).params
     mech = _load(_every_branch_scene(tmp_path), True)
     kernel = compiled.Kernel(mech)
     P, flat = kernel.params, kernel.flat
-    assert len(P) == len(planar) == len(ck.PARAMS)
+    assert len(P) == len(planar) + 1 == len(ck.PARAMS) + 1       # the slot `spatial` picks the 3D kernels
+    assert ck.is_spatial(P) and not ck.is_spatial(planar)
     for a, b in zip(P, planar):
         assert a.dtype == b.dtype and a.ndim == b.ndim and a.flags.c_contiguous
     assert list(P[16]) == [flat["n"], flat["m"], kernel.kl, kernel.ku, 1, 3, flat["nq"], ck.GROUND_NONE, 0]

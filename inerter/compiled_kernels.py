@@ -100,6 +100,40 @@ def _addK(AB, perm, off, i, j, x):
     AB[off + pi - pj, pj] += x
 
 
+@njit(cache=True, inline="always")
+def _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, width):
+    """A translational element's terms on its bodies' `width` velocity coordinates (3 in 2D, 6 in
+    3D), with g = Hᵀ r̂ over a's (ga) and b's (gb): Q −= F g (Eq. 29; an inerter's Q_Iv, Eq. 31)
+    and, for an inerter of inertance b (0 for the other elements), M_I += b g gᵀ (Eq. 33)."""
+    if b != 0.0:
+        if ba >= 0:
+            ka = width * ba
+            for i in range(width):
+                for j in range(width):
+                    _addK(AB, perm, off, ka + i, ka + j, b * ga[i] * ga[j])
+        if bb >= 0:
+            kb = width * bb
+            for i in range(width):
+                for j in range(width):
+                    _addK(AB, perm, off, kb + i, kb + j, b * gb[i] * gb[j])
+        if ba >= 0 and bb >= 0:
+            ka = width * ba
+            kb = width * bb
+            for i in range(width):
+                for j in range(width):
+                    x = b * ga[i] * gb[j]
+                    _addK(AB, perm, off, ka + i, kb + j, x)
+                    _addK(AB, perm, off, kb + j, ka + i, x)
+    if ba >= 0:
+        ka = width * ba
+        for i in range(width):
+            gen[ka + i] -= F * ga[i]
+    if bb >= 0:
+        kb = width * bb
+        for i in range(width):
+            gen[kb + i] -= F * gb[i]
+
+
 @njit(cache=True)
 def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix) and rhs (permuted) at (t, q, v).
@@ -148,33 +182,7 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
                 along = rdx * ex + rdy * ey
                 term += (rdx * rdx + rdy * rdy - along * along) / L
             F = coef * term
-            # M_I = b (Hᵀ r̂)(Hᵀ r̂)ᵀ
-            if ba >= 0:
-                ka = 3 * ba
-                for i in range(3):
-                    for j in range(3):
-                        _addK(AB, perm, off, ka + i, ka + j, coef * ga[i] * ga[j])
-            if bb >= 0:
-                kb = 3 * bb
-                for i in range(3):
-                    for j in range(3):
-                        _addK(AB, perm, off, kb + i, kb + j, coef * gb[i] * gb[j])
-            if ba >= 0 and bb >= 0:
-                ka = 3 * ba
-                kb = 3 * bb
-                for i in range(3):
-                    for j in range(3):
-                        x = coef * ga[i] * gb[j]
-                        _addK(AB, perm, off, ka + i, kb + j, x)
-                        _addK(AB, perm, off, kb + j, ka + i, x)
-        if ba >= 0:
-            ka = 3 * ba
-            for i in range(3):
-                gen[ka + i] -= F * ga[i]
-        if bb >= 0:
-            kb = 3 * bb
-            for i in range(3):
-                gen[kb + i] -= F * gb[i]
+        _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, coef if kind == INERTER else 0.0, 3)
 
     # -- rotational springs and dampers
     for e in range(rot_int.shape[0]):
@@ -552,7 +560,7 @@ def _assemble_of(t, q, v, inputs, alpha, P, AB, rhs, gen):
     raise NotImplementedError("compiled code only")
 
 
-@overload(_assemble_of)
+@overload(_assemble_of, inline="always")
 def _assemble_by_dimension(t, q, v, inputs, alpha, P, AB, rhs, gen):
     if is_spatial(P):
         return lambda t, q, v, inputs, alpha, P, AB, rhs, gen: assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen)
@@ -563,7 +571,7 @@ def _residual_of(q, P):
     raise NotImplementedError("compiled code only")
 
 
-@overload(_residual_of)
+@overload(_residual_of, inline="always")
 def _residual_by_dimension(q, P):
     if is_spatial(P):
         return lambda q, P: constraint_residual3(q, P)
@@ -574,7 +582,7 @@ def _signals_of(q, v, qdd, P, out):
     raise NotImplementedError("compiled code only")
 
 
-@overload(_signals_of)
+@overload(_signals_of, inline="always")
 def _signals_by_dimension(q, v, qdd, P, out):
     if is_spatial(P):
         return lambda q, v, qdd, P, out: signal_values3(q, v, qdd, P, out)
@@ -591,7 +599,7 @@ def _copy(q, v, P, out):
         out[i] = v[i]
 
 
-@overload(_qdot_of)
+@overload(_qdot_of, inline="always")
 def _qdot_by_dimension(q, v, P, out):
     """q̇ = B(q) v: the identity in 2D, the quaternion rates in 3D."""
     if is_spatial(P):
@@ -940,34 +948,7 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
                 along = rdx * ex + rdy * ey + rdz * ez
                 term += (rdx * rdx + rdy * rdy + rdz * rdz - along * along) / L
             F = coef * term
-            # M_I = b (Hᵀ r̂)(Hᵀ r̂)ᵀ
-            if ba >= 0:
-                ka = 6 * ba
-                for i in range(6):
-                    for j in range(6):
-                        _addK(AB, perm, off, ka + i, ka + j, coef * ga[i] * ga[j])
-            if bb >= 0:
-                kb = 6 * bb
-                for i in range(6):
-                    for j in range(6):
-                        _addK(AB, perm, off, kb + i, kb + j, coef * gb[i] * gb[j])
-            if ba >= 0 and bb >= 0:
-                ka = 6 * ba
-                kb = 6 * bb
-                for i in range(6):
-                    for j in range(6):
-                        x = coef * ga[i] * gb[j]
-                        _addK(AB, perm, off, ka + i, kb + j, x)
-                        _addK(AB, perm, off, kb + j, ka + i, x)
-        # Q = −F Hᵀ r̂, Eq. (29) (the inerter's Q_Iv, Eq. 31)
-        if ba >= 0:
-            ka = 6 * ba
-            for i in range(6):
-                gen[ka + i] -= F * ga[i]
-        if bb >= 0:
-            kb = 6 * bb
-            for i in range(6):
-                gen[kb + i] -= F * gb[i]
+        _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, coef if kind == INERTER else 0.0, 6)
 
     # -- rotational springs and dampers about an axis fixed in body a
     for e in range(rot_int.shape[0]):

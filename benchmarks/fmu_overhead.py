@@ -18,7 +18,10 @@ in turn, so drifting load weighs on all alike):
 - two floors, through the same `fmpy.simulate_fmu` call with as many outputs: a pythonfmu FMU whose
   doStep does nothing (what fmpy and pythonfmu cost per step), and the same FMU with its binary
   replaced by benchmarks/c_floor_fmu.c, a C binary that does nothing, alone in the FMU (what fmpy
-  alone costs, extraction included; no FMU driven by fmpy can cost less).
+  alone costs, extraction included; no FMU driven by fmpy can cost less);
+- on the compiled path, the FMU binary's own work without an importer: the stepper's first step,
+  then the native step's C function (inerter.compiled_kernels.native_step_cfunc) called through
+  ctypes for every further step, on the table the slave gives the FMU's binary.
 
 A second table runs the compiled-path FMUs and the C floor through libcosimpy (the Open Simulation
 Platform's C++ engine, when installed) with a last-value observer, which reads every variable of
@@ -30,6 +33,7 @@ in the README). Writes docs/fmu_overhead.md.
 from __future__ import annotations
 
 import argparse
+import ctypes
 import gc
 import os
 import subprocess
@@ -127,8 +131,18 @@ for _ in range(repeats + 1):                      # the first run loads the kern
     execution.add_observer(observer)
     assert execution.simulate_until(target_time=round(stop * 1e9))
     best = min(best, time.process_time() - t0)
+    del observer, execution                    # torn down here, not while the interpreter finalizes
 print(best)
 """
+
+
+def _or_dash(x: float, fmt: str) -> str:
+    """x in `fmt`, or a dash where it was not measured (inf)."""
+    return format(x, fmt) if np.isfinite(x) else "–"
+
+
+#: The native step's C signature: int32 (const int64 *table, double t, double h).
+NATIVE_C = ctypes.CFUNCTYPE(ctypes.c_int32, ctypes.c_void_p, ctypes.c_double, ctypes.c_double)
 
 
 def cosim_cpu(fmu: str, args, native: bool) -> float:
@@ -138,7 +152,9 @@ def cosim_cpu(fmu: str, args, native: bool) -> float:
     proc = subprocess.run([sys.executable, "-c", COSIM_RUN, fmu, str(args.stop_time), str(args.step),
                            str(args.repeats)], env=env, capture_output=True, text=True, timeout=600)
     if proc.returncode:
-        raise RuntimeError(proc.stderr[-2000:])
+        raise RuntimeError(f"libcosimpy run of {fmu} (native steps {'on' if native else 'off'}) ended with exit "
+                           f"status {proc.returncode}; its output: {proc.stdout[-500:]!r}; its errors: "
+                           f"{proc.stderr[-2000:]}")
     return float(proc.stdout.strip().splitlines()[-1])
 
 
@@ -196,6 +212,18 @@ def main(argv=None):
             assert abs(res["time"][-1] - args.stop_time) < 1e-9
             return res
 
+        def native_direct():
+            st = model.stepper(path="compiled", stop_time=args.stop_time)
+            st.step(args.step)
+            st.outputs()
+            table = st.native_table(1e-9)
+            fn = NATIVE_C(st.native_function().address)
+            address = table.ctypes.data
+            for k in range(2, n + 1):
+                if not fn(address, (k - 1) * args.step, args.step):
+                    raise RuntimeError(f"{name}: the native step declined at step {k}")
+            return st
+
         def floor_run(which):
             return fmpy.simulate_fmu(which, stop_time=args.stop_time, output_interval=args.step)
 
@@ -208,31 +236,36 @@ def main(argv=None):
             cosim_rows.append((name, whole_cpu, native, python, cosim_floor))
             print(cosim_rows[-1], flush=True)
         for label, path, native in paths:
-            best = {"whole": np.inf, "stepper": np.inf, "fmu": np.inf, "floor": np.inf, "c_floor": np.inf}
+            best = {"whole": np.inf, "stepper": np.inf, "fmu": np.inf, "floor": np.inf, "c_floor": np.inf,
+                    "direct": np.inf}
             for _ in range(args.repeats):
                 t, reference = cpu(lambda: whole(path))
                 best["whole"] = min(best["whole"], t)
                 best["stepper"] = min(best["stepper"], cpu(lambda: stepper(path))[0])
                 t, res = cpu(lambda: fmu_run(path, native))
                 best["fmu"] = min(best["fmu"], t)
+                if native:
+                    best["direct"] = min(best["direct"], cpu(native_direct)[0])
                 best["floor"] = min(best["floor"], cpu(lambda: floor_run(floor))[0])
                 best["c_floor"] = min(best["c_floor"], cpu(lambda: floor_run(c_floor))[0])
                 if path == "numpy" and best["whole"] > 2.0:
                     break                                    # the numpy path is slow: one round is enough
             diff = max(float(np.max(np.abs(res[s] - reference[s]))) for s in lengths)
             rows.append((name, label, n, best["whole"], best["stepper"], best["fmu"], best["floor"],
-                         best["c_floor"], diff))
+                         best["c_floor"], diff, best["direct"]))
             print(rows[-1], flush=True)
     head = (f"Communication step {args.step:g} s, {args.stop_time:g} s simulated, default scene tolerances, "
             f"process CPU seconds, best of {args.repeats} rounds.\n\n"
             "| scene | path | steps | solver, whole run (s) | solver stepper (s) | FMU via fmpy (s) "
             "| FMU per step (µs) | floor: pythonfmu FMU doing nothing (s) | floor: C FMU doing nothing (s) "
             "| **FMU / whole run** | FMU / stepper | (FMU − C floor) / whole run "
+            "| native steps called directly (s) | native steps called directly / whole run "
             "| largest difference of a length, FMU vs whole run (m) |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
     body = "".join(f"| {a} | {p} | {b} | {c:.3f} | {d:.3f} | {e:.3f} | {1e6 * e / b:.0f} | {g:.3f} | {cf:.3f} "
-                   f"| **{e / c:.2f}** | {e / d:.2f} | {(e - cf) / c:.2f} | {f:.2e} |\n"
-                   for a, p, b, c, d, e, g, cf, f in rows)
+                   f"| **{e / c:.2f}** | {e / d:.2f} | {(e - cf) / c:.2f} | {_or_dash(x, '.3f')} "
+                   f"| {_or_dash(x / c, '.2f')} "
+                   f"| {f:.2e} |\n" for a, p, b, c, d, e, g, cf, f, x in rows)
     if cosim_rows:
         body += ("\nThrough libcosimpy (last-value observer: every variable read at every step), compiled path, "
                  "process CPU seconds, best of {r}:\n\n"
@@ -258,7 +291,8 @@ def main(argv=None):
           "into the slave. The two floors are FMUs that do nothing, driven by the same fmpy call: with "
           "pythonfmu's binary (fmpy's and pythonfmu's cost per step) and with a C binary "
           "(benchmarks/c_floor_fmu.c: fmpy's own cost, recording every output at every step). "
-          "The (FMU − C floor) column is what the FMU itself costs, against the whole run.\n")
+          "The (FMU − C floor) column is what the FMU itself costs, against the whole run; the native steps "
+          "called directly are the FMU binary's own work, without an importer.\n")
 
 if __name__ == "__main__":
     main()

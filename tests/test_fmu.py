@@ -508,7 +508,10 @@ for name, value in job["start_values"].items():
     execution.real_initial_value(index, vr[name], value)
 assert execution.simulate_until(target_time=round(job["stop_time"] * 1e9))
 print(json.dumps({"time": execution.status().current_time / 1e9,
-                  "values": observer.last_real_values(index, [vr[n] for n in job["outputs"]])}))
+                  "values": observer.last_real_values(index, [vr[n] for n in job["outputs"]])}), flush=True)
+# The execution (and with it the FMU instance) goes before the interpreter finalizes: an FMU that
+# embeds Python must not be torn down while Python is shutting down.
+del observer, execution
 """
 
 

@@ -31,6 +31,19 @@ OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLL
 MIN_LENGTH = 1e-9
 
 
+@njit(cache=True, inline="always")
+def _force_magnitude(fa_real, f, code, value, t):
+    """The magnitude of applied force f at time t: row f of `fa_real` holds, from column `value`
+    on, value, amplitude, frequency, phase, offset, time, initial (after the direction's 2 or 3
+    components)."""
+    if code == F_CONSTANT:
+        return fa_real[f, value]
+    if code == F_SINE:
+        return fa_real[f, value + 4] + fa_real[f, value + 1] * math.sin(
+            2.0 * math.pi * fa_real[f, value + 2] * t + fa_real[f, value + 3])
+    return fa_real[f, value] if t >= fa_real[f, value + 5] else fa_real[f, value + 6]
+
+
 # ------------------------------------------------------------------------------------------------
 # Kinematics (Eqs. 15-19)
 # ------------------------------------------------------------------------------------------------
@@ -202,14 +215,7 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     # -- applied point forces with time functions
     for f in range(fa_int.shape[0]):
         p = fa_int[f, 0]
-        code = fa_int[f, 1]
-        # real columns: dx, dy, value, amplitude, frequency, phase, offset, time, initial
-        if code == F_CONSTANT:
-            mag = fa_real[f, 2]
-        elif code == F_SINE:
-            mag = fa_real[f, 6] + fa_real[f, 3] * math.sin(2.0 * math.pi * fa_real[f, 4] * t + fa_real[f, 5])
-        else:
-            mag = fa_real[f, 2] if t >= fa_real[f, 7] else fa_real[f, 8]
+        mag = _force_magnitude(fa_real, f, fa_int[f, 1], 2, t)     # columns: dx, dy, value, ...
         _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], mag * fa_real[f, 0], mag * fa_real[f, 1], gen)
 
     # -- grounded PD actuators
@@ -969,14 +975,7 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
     # -- applied point forces with time functions
     for f in range(fa_int.shape[0]):
         p = fa_int[f, 0]
-        code = fa_int[f, 1]
-        # real columns: dx, dy, dz, value, amplitude, frequency, phase, offset, time, initial
-        if code == F_CONSTANT:
-            mag = fa_real[f, 3]
-        elif code == F_SINE:
-            mag = fa_real[f, 7] + fa_real[f, 4] * math.sin(2.0 * math.pi * fa_real[f, 5] * t + fa_real[f, 6])
-        else:
-            mag = fa_real[f, 3] if t >= fa_real[f, 8] else fa_real[f, 9]
+        mag = _force_magnitude(fa_real, f, fa_int[f, 1], 3, t)     # columns: dx, dy, dz, value, ...
         _point_force3(q, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
                       mag * fa_real[f, 0], mag * fa_real[f, 1], mag * fa_real[f, 2], gen)
 

@@ -21,7 +21,8 @@ in turn, so drifting load weighs on all alike):
   alone costs, extraction included; no FMU driven by fmpy can cost less);
 - on the compiled path, the FMU binary's own work without an importer: the stepper's first step,
   then the native step's C function (inerter.compiled_kernels.native_step_cfunc) called through
-  ctypes for every further step, on the table the slave gives the FMU's binary.
+  ctypes for every further step, on the table the slave gives the FMU's binary (its lengths at the
+  stop time must equal the whole run's, bit for bit).
 
 A second table runs the compiled-path FMUs and the C floor through libcosimpy (the Open Simulation
 Platform's C++ engine, when installed) with a last-value observer, which reads every variable of
@@ -245,7 +246,14 @@ def main(argv=None):
                 t, res = cpu(lambda: fmu_run(path, native))
                 best["fmu"] = min(best["fmu"], t)
                 if native:
-                    best["direct"] = min(best["direct"], cpu(native_direct)[0])
+                    t, direct = cpu(native_direct)
+                    best["direct"] = min(best["direct"], t)
+                    direct.native_sync()                    # the native steps' last outputs, as the FMU's
+                    last = direct.outputs()
+                    direct_diff = max(abs(last[s] - reference[s][-1]) for s in lengths)
+                    if direct_diff != 0.0:
+                        raise RuntimeError(f"{name}: native steps called directly differ from the whole run "
+                                           f"by {direct_diff:.3e} m at the stop time")
                 best["floor"] = min(best["floor"], cpu(lambda: floor_run(floor))[0])
                 best["c_floor"] = min(best["c_floor"], cpu(lambda: floor_run(c_floor))[0])
                 if path == "numpy" and best["whole"] > 2.0:

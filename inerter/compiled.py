@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SimulationError
-from .simulation import Stepper
+from .simulation import Stepper, jumps
 
 
 
@@ -138,6 +138,45 @@ def _by_name(objects):
     return {getattr(o, "name", None): o for o in objects}
 
 
+#: Column 0 of ``el_int`` and column 1 of ``fa_int``, as in :mod:`inerter.compiled_kernels`.
+ELEMENT_KIND = {"spring": 0, "damper": 1, "inerter": 2}
+FORCE_CODE = {"constant": 0, "sine": 1, "step": 2}
+
+
+def element_row(e, me, pidx, centripetal) -> tuple[tuple, tuple]:
+    """The ``el_int`` and ``el_real`` rows of translational element `e` of the scene (`me`: the
+    mechanism's element of that name, whose free length a spring takes, else the scene's)."""
+    free = 0.0
+    if e.type == "spring":
+        free = getattr(me, "free_length", None)
+        if free is None:
+            free = e.free_length
+        if free is None:
+            raise ValueError(f"spring {e.name}: no free length on the compiled mechanism")
+    return ((ELEMENT_KIND[e.type], pidx[e.point_a], pidx[e.point_b], int(bool(centripetal))),
+            (float(e.coefficient), float(free)))
+
+
+def force_rows(scene, pidx, dim) -> tuple[list, list, list, list, list]:
+    """(fa_int, fa_real, pd_int, pd_real, in_int): the scene's applied point forces with time
+    functions (point, code; direction's `dim` components, value, amplitude, frequency, phase,
+    offset, time, initial), grounded PD actuators (point; direction, kp, kd, reference) and input
+    forces (point)."""
+    fa_int, fa_real, pd_int, pd_real, in_int = [], [], [], [], []
+    for f in scene.forces.values():
+        p = pidx[f.point]
+        d = [float(x) for x in f.direction[:dim]] if f.direction is not None else None
+        if f.function in FORCE_CODE:
+            fa_int.append((p, FORCE_CODE[f.function]))
+            fa_real.append((*d, f.value, f.amplitude, f.frequency, f.phase, f.offset, f.time, f.initial))
+        elif f.function == "pd":
+            pd_int.append((p,))
+            pd_real.append((*d, f.kp, f.kd, f.reference))
+        elif f.function == "input":
+            in_int.append((p,))
+    return fa_int, fa_real, pd_int, pd_real, in_int
+
+
 def flatten(mech) -> dict:
     """The arrays the kernels run on, from a 2D mechanism and its scene (index maps in
     ``mech.scene`` order: bodies, points, joints, elements, forces)."""
@@ -177,7 +216,6 @@ def flatten(mech) -> dict:
 
     mech_elements = _by_name(getattr(mech, "elements", []))
     el_int, el_real, rot_int, rot_real, el_names, rot_names = [], [], [], [], [], []
-    kinds = {"spring": 0, "damper": 1, "inerter": 2}
     for e in scene.elements.values():
         me = mech_elements.get(e.name)
         if e.type in ("rotational_spring", "rotational_damper"):
@@ -190,32 +228,12 @@ def flatten(mech) -> dict:
             rot_real.append((float(e.coefficient), float(free)))
             rot_names.append(e.name)
             continue
-        free = 0.0
-        if e.type == "spring":
-            free = getattr(me, "free_length", None)
-            if free is None:
-                free = e.free_length
-            if free is None:
-                raise ValueError(f"spring {e.name}: no free length on the compiled mechanism")
-        el_int.append((kinds[e.type], pidx[e.point_a], pidx[e.point_b], int(bool(scene.centripetal))))
-        el_real.append((float(e.coefficient), float(free)))
+        row_int, row_real = element_row(e, me, pidx, scene.centripetal)
+        el_int.append(row_int)
+        el_real.append(row_real)
         el_names.append(e.name)
 
-    fa_int, fa_real, pd_int, pd_real, in_int = [], [], [], [], []
-    codes = {"constant": 0, "sine": 1, "step": 2}
-    for f in scene.forces.values():
-        p = pidx[f.point]
-        if f.function in codes:
-            d = f.direction
-            fa_int.append((p, codes[f.function]))
-            fa_real.append((float(d[0]), float(d[1]), f.value, f.amplitude, f.frequency, f.phase, f.offset,
-                            f.time, f.initial))
-        elif f.function == "pd":
-            d = f.direction
-            pd_int.append((p,))
-            pd_real.append((float(d[0]), float(d[1]), f.kp, f.kd, f.reference))
-        elif f.function == "input":
-            in_int.append((p,))
+    fa_int, fa_real, pd_int, pd_real, in_int = force_rows(scene, pidx, 2)
 
     g = scene.effects.get("gravity")
     has_gravity = g is not None and any(g)
@@ -558,10 +576,10 @@ def integrate_compiled(mech, settings, inputs=None):
     # first step, the forces evaluated up to it with their values over the segment, as the numpy
     # path's does.
     stop = float(settings.stop_time)
-    ends = [float(d) for d in getattr(mech, "discontinuities", ()) if 0.0 < d < stop] + [stop]
+    switches = {float(d) for d in jumps(mech, 0.0, stop)}
+    ends = sorted(d for d in switches if d < stop) + [stop]
     steps = evals = 0
     h, t0, k, status, t_reached = 0.0, 0.0, 1, 0, 0.0
-    jumps = {float(d) for d in getattr(mech, "discontinuities", ()) if 0.0 < d <= stop}
     tables = None if settings.method == "RK4" else _tables(settings.method)
     start = _time.process_time()
     y = y0
@@ -575,13 +593,13 @@ def integrate_compiled(mech, settings, inputs=None):
         if settings.method == "RK4":
             status, done, s_steps, s_evals, t_reached = _k.integrate_rk4(
                 y, t0, t1, seg, seg_out, float(settings.step), int(settings.max_steps) - steps, inp, alpha,
-                kernel.params, t1 if t1 in jumps else 0.0)
+                kernel.params, t1 if t1 in switches else 0.0)
         else:
             A, B, C, E, E3, D, Pm = tables
             status, done, s_steps, s_evals, t_reached, h = _k.integrate_rk(
                 _RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol), float(settings.atol), 0.0,
                 int(settings.max_steps) - steps, inp, alpha, kernel.params, A, B, C, E, E3, D, Pm,
-                _monitor(settings.method), t1 if t1 in jumps else 0.0)
+                _monitor(settings.method), t1 if t1 in switches else 0.0)
         steps += int(s_steps)
         evals += int(s_evals)
         written = min(done - 1, last - k)                         # grid samples among seg_out[1:done]
@@ -646,18 +664,16 @@ class CompiledStepper(Stepper):
         self._input_moved = False             # an input changed since the last step
         self._native = None                   # the arrays of native steps (native_table), for self._rk
 
-    def _start_rk(self, t, y, h):
-        """A fresh integration at (t, y) with the held inputs and the step size h (0: chosen as
-        scipy does), its segment ending at the next discontinuity after t (RK_JUMP, 0: none)."""
+    def _start_rk(self):
+        """A fresh integration at (self.time, self.y) with the held inputs and the last step size
+        (0: chosen as scipy does), its segment ending at the next discontinuity (RK_JUMP, 0: none)."""
         ny = self.kernel.nq + self.kernel.n
         hdr = np.zeros(_k.RK_HEADER)
-        hdr[_k.RK_T] = t
-        hdr[_k.RK_H] = h or 0.0
-        hdr[_k.RK_JUMP] = _k.next_jump(self._jumps, float(t))
+        hdr[_k.RK_T] = self.time
+        hdr[_k.RK_H] = self.h or 0.0
+        hdr[_k.RK_JUMP] = _k.next_jump(self._jumps, float(self.time))
         self._rk_inputs = self.kernel._inputs(self.inputs.copy())
-        return [hdr, np.array(y, dtype=float), np.empty(ny), np.array(y, dtype=float), np.zeros((7, ny))]
-
-
+        return [hdr, np.array(self.y, dtype=float), np.empty(ny), np.array(self.y, dtype=float), np.zeros((7, ny))]
 
     def set_input(self, name, value):
         old = self.inputs[self.input_index[name]]
@@ -677,7 +693,7 @@ class CompiledStepper(Stepper):
             return
         rk = self._rk
         if rk is None:
-            rk = self._start_rk(self.time, self.y, self.h)
+            rk = self._start_rk()
         # The integration runs on in place; a failed step drops it, and the next one restarts at
         # (self.time, self.y), which a failure leaves as they were.
         self._rk = None
@@ -711,7 +727,6 @@ class CompiledStepper(Stepper):
     def _step_rk4(self, t_end):
         """RK4 from the communication point, its last step shortened to land on t_end; a
         discontinuity inside (or at t_end) ends a segment there, as the numpy stepper's."""
-        from .simulation import jumps
         s, kernel = self.settings, self.kernel
         eps = 1e-12 * max(1.0, abs(t_end))
         t0, y = self.time, np.ascontiguousarray(self.y, dtype=float)

@@ -147,6 +147,15 @@ def _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, width):
             gen[kb + i] -= F * gb[i]
 
 
+@njit(cache=True, inline="always")
+def _start_assembly(AB, gen, gravity, n, has_gravity):
+    """An empty augmented matrix, and the generalised forces of gravity where it is declared (else
+    zero): where :func:`assemble` and :func:`assemble3` start."""
+    AB[:, :] = 0.0
+    for i in range(n):
+        gen[i] = gravity[i] if has_gravity else 0.0
+
+
 @njit(cache=True)
 def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix) and rhs (permuted) at (t, q, v).
@@ -159,12 +168,7 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     ku = dims[3]
     has_gravity = dims[4]
     off = kl + ku
-    AB[:, :] = 0.0
-    for i in range(n):
-        gen[i] = 0.0
-    if has_gravity:
-        for i in range(n):
-            gen[i] += gravity[i]
+    _start_assembly(AB, gen, gravity, n, has_gravity)
     for i in range(n):
         _addK(AB, perm, off, i, i, mass[i])
 
@@ -907,12 +911,7 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
     has_gravity = dims[4]
     off = kl + ku
     nb = n // 6
-    AB[:, :] = 0.0
-    for i in range(n):
-        gen[i] = 0.0
-    if has_gravity:
-        for i in range(n):
-            gen[i] += gravity[i]
+    _start_assembly(AB, gen, gravity, n, has_gravity)
 
     # -- mass matrix diag(m I, J) per body and the gyroscopic term −ω × Jω (body frame)
     for b in range(nb):

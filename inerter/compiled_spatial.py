@@ -13,19 +13,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from .compiled import ELEMENT_KIND, _by_name, element_row, force_rows
 from .joints import Coincident, SpatialJoint
 
 # Joint kinds (column 0 of ``jt_int``), as in :mod:`inerter.compiled_kernels` (its 3D section).
 _JOINT_KIND = {"spherical": 0, "revolute": 1, "fixed": 2, "prismatic": 3}
-_ELEMENT_KIND = {"spring": 0, "damper": 1, "inerter": 2}
-_FORCE_CODE = {"constant": 0, "sine": 1, "step": 2}
 #: Width of a ``jt_real`` row: three dot-1 pairs (s̄_a, s̄_b) and two dot-2 vectors s̄_a.
 JOINT_WIDTH = 24
 DOT2 = 18
-
-
-def _by_name(objects):
-    return {getattr(o, "name", None): o for o in objects}
 
 
 def flatten3(mech) -> dict:
@@ -111,28 +106,12 @@ def flatten3(mech) -> dict:
                              *np.asarray(me.rel0, dtype=float).ravel()])
             rot_names.append(e.name)
             continue
-        free = 0.0
-        if e.type == "spring":
-            free = getattr(me, "free_length", None)
-            if free is None:
-                raise ValueError(f"spring {e.name}: no free length on the mechanism")
-        el_int.append((_ELEMENT_KIND[e.type], pidx[e.point_a], pidx[e.point_b], int(bool(scene.centripetal))))
-        el_real.append((float(e.coefficient), float(free)))
+        row_int, row_real = element_row(e, me, pidx, scene.centripetal)
+        el_int.append(row_int)
+        el_real.append(row_real)
         el_names.append(e.name)
 
-    fa_int, fa_real, pd_int, pd_real, in_int = [], [], [], [], []
-    for f in scene.forces.values():
-        p = pidx[f.point]
-        if f.function in _FORCE_CODE:
-            d = [float(x) for x in f.direction]
-            fa_int.append((p, _FORCE_CODE[f.function]))
-            fa_real.append((*d, f.value, f.amplitude, f.frequency, f.phase, f.offset, f.time, f.initial))
-        elif f.function == "pd":
-            d = [float(x) for x in f.direction]
-            pd_int.append((p,))
-            pd_real.append((*d, f.kp, f.kd, f.reference))
-        elif f.function == "input":
-            in_int.append((p,))
+    fa_int, fa_real, pd_int, pd_real, in_int = force_rows(scene, pidx, 3)
 
     has_gravity = mech.gravity is not None
     gravity = np.array(mech.gravity, dtype=float) if has_gravity else np.zeros(n)
@@ -180,7 +159,7 @@ def sparsity3(flat) -> np.ndarray:
         return [d for p in points if pbody[p] >= 0 for d in range(6 * pbody[p], 6 * pbody[p] + 6)]
 
     for kind, a, b, _ in flat["el_int"]:
-        if kind == _ELEMENT_KIND["inerter"]:
+        if kind == ELEMENT_KIND["inerter"]:
             d = dofs(a, b)
             S[np.ix_(d, d)] = True
     row = n

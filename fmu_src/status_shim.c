@@ -32,6 +32,27 @@
  *
  * The original is loaded at the first call (fmi2Instantiate, or fmi2GetVersion /
  * fmi2GetTypesPlatform before it) and unloaded when this library is.
+ *
+ * The exit of a process that loaded the original. pythonfmu 0.7.0's binary holds its Python state
+ * in a global std::shared_ptr (`pyState`), releases it in its exported finalizePythonInterpreter(),
+ * and calls that from a destructor function (.fini_array). When the binary is unloaded by dlclose,
+ * that runs before the shared_ptr's own C++ destructor, and all is well. When the binary is still
+ * loaded at exit(), the order is reversed: exit() runs the C++ destructor first (registered with
+ * __cxa_atexit when the binary was loaded), which frees the state, and the destructor function
+ * afterwards (_dl_fini), whose release finds the pointers the C++ destructor left behind and
+ * decrements a word of the freed block. That write to freed heap memory is reported later, or not,
+ * depending on what the block has become (glibc: "corrupted double-linked list" at exit). The first
+ * pythonfmu binary a process loads is always still loaded at exit: it defines STB_GNU_UNIQUE
+ * symbols of libstdc++, so glibc never unloads it. So the shim has the original release its state
+ * before exit() reaches that C++ destructor:
+ *   - while this library is loaded, with an exit handler registered after the original was loaded
+ *     (exit handlers run last registered first): release_python_state;
+ *   - when this library is unloaded (unload_original), right then where the state owns no
+ *     interpreter (Python was running when the original was loaded afresh: a Python importer, or
+ *     an earlier FMU's Python); where it may (the original started Python, which pythonfmu keeps
+ *     running until exit, or was loaded before), the original is kept loaded and its
+ *     finalizePythonInterpreter itself becomes an exit handler.
+ * A second release finds the pointer null and does nothing.
  */
 #ifndef _GNU_SOURCE
 #define _GNU_SOURCE /* dladdr */
@@ -84,8 +105,34 @@ FMI2_FUNCTIONS(DECLARE)
 #undef DECLARE
 
 static void *handle;                /* the original, once loaded */
+static char original_path[PATH_MAX]; /* where it was loaded from */
 static char load_error[PATH_MAX + 512];
 static pthread_once_t load_once = PTHREAD_ONCE_INIT;
+
+/* The original's finalizePythonInterpreter (pythonfmu's binary), or NULL; whether its state may
+ * own the interpreter: no Python was running when the original was loaded, or it was loaded already
+ * (by an earlier load of this library, which may have started Python through it). */
+typedef void finalize_fn(void);
+typedef int is_initialized_fn(void);
+static finalize_fn *finalize_python;
+static int may_own_python;
+/* LOADED until the process exits (release_python_state ran) or this library is unloaded
+ * (unload_original ran): whichever comes first. */
+static enum { LOADED, EXITING, UNLOADED } phase = LOADED;
+
+extern int __cxa_atexit(void (*function)(void *), void *argument, void *dso_handle);
+
+/* At exit(), before the original's C++ destructors: it releases its Python state (see the top).
+ * Registered with atexit(), so it also runs when this library is unloaded, after unload_original:
+ * then it does nothing. */
+static void release_python_state(void)
+{
+    if (phase != LOADED)
+        return;
+    phase = EXITING;
+    if (finalize_python != NULL)
+        finalize_python();
+}
 
 /* dlopen the original from this library's own directory, RTLD_LOCAL so that its symbols do not
  * meet this library's, and look up every function. */
@@ -96,6 +143,7 @@ static void load_original(void)
     const char *slash;
     int written;
     void *lib;
+    is_initialized_fn *is_initialized;
 
     if (!dladdr((void *)&handle, &self) || self.dli_fname == NULL) {
         snprintf(load_error, sizeof load_error, "cannot locate the FMU's binary (dladdr failed)");
@@ -112,6 +160,12 @@ static void load_original(void)
         return;
     }
 
+    memcpy(original_path, path, (size_t)written + 1);
+    *(void **)&is_initialized = dlsym(RTLD_DEFAULT, "Py_IsInitialized");
+    lib = dlopen(path, RTLD_LOCAL | RTLD_NOW | RTLD_NOLOAD);
+    may_own_python = lib != NULL || is_initialized == NULL || !is_initialized();
+    if (lib != NULL)
+        dlclose(lib);
     lib = dlopen(path, RTLD_LOCAL | RTLD_NOW);
     if (lib == NULL) {
         snprintf(load_error, sizeof load_error, "cannot load pythonfmu's binary %s: %s", path,
@@ -129,6 +183,9 @@ static void load_original(void)
     FMI2_FUNCTIONS(LOOKUP)
 #undef LOOKUP
     handle = lib;
+    *(void **)&finalize_python = dlsym(lib, "finalizePythonInterpreter");
+    if (finalize_python != NULL)
+        atexit(release_python_state); /* after the original's own exit-time destructors */
 }
 
 static int loaded(void)
@@ -137,12 +194,30 @@ static int loaded(void)
     return handle != NULL;
 }
 
+/* When this library is unloaded: the original releases its state (or is kept loaded to release it
+ * at exit, see the top), and is unloaded too. At exit, after release_python_state, there is
+ * nothing to do. */
 __attribute__((destructor)) static void unload_original(void)
 {
-    if (handle != NULL) {
-        dlclose(handle);
-        handle = NULL;
+    void *pin;
+
+    if (phase != LOADED)
+        return;
+    phase = UNLOADED;
+    if (handle == NULL)
+        return;
+    if (finalize_python != NULL && !may_own_python) {
+        finalize_python();
+    } else if (finalize_python != NULL) {
+        pin = dlopen(original_path, RTLD_LOCAL | RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+        if (pin != NULL) {
+            /* The cast is the one glibc's atexit() makes: a function of no argument called with one. */
+            __cxa_atexit((void (*)(void *))finalize_python, NULL, NULL);
+            dlclose(pin);
+        }
     }
+    dlclose(handle);
+    handle = NULL;
 }
 
 /* The context's slots and the kinds of variables in its map (inerter/fmu_native.py). */

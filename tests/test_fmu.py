@@ -595,7 +595,8 @@ def test_a_c_importer_loads_the_fmu_three_times_and_exits_cleanly(input_fmu, unz
                                                                    needs_shim, tmp_path):
     """tests/native/c_importer.c, a host without Python of its own (libpython preloaded): there
     pythonfmu's binary starts the interpreter, which stays running across the three loads of the
-    binary until the process exits. Every load gives the solver's result."""
+    binary until the process exits (the first two loads are unloaded, the last one stays loaded
+    until exit). Every load gives the solver's result."""
     import site
     import sysconfig
     if not sysconfig.get_config_var("Py_ENABLE_SHARED"):

@@ -4,8 +4,9 @@
  *   c_importer <unpacked FMU folder> <modelIdentifier> <guid> <loads> <steps> <step size> <vr>
  *
  * Loads the binary <loads> times one after the other; each time it instantiates, initialises, takes
- * <steps> steps, prints the Real <vr> ("load <k>: <value>"), terminates, frees the instance and
- * unloads the binary. Exits with 0 when every call returned fmi2OK, else with 1 and a message. */
+ * <steps> steps, prints the Real <vr> ("load <k>: <value>"), terminates and frees the instance, and
+ * unloads the binary, except after the last load: that one stays loaded until the process exits.
+ * Exits with 0 when every call returned fmi2OK, else with 1 and a message. */
 #include <dlfcn.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -36,7 +37,7 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status
     }
 
 static int run(const char *folder, const char *id, const char *guid, int steps, double h,
-               fmi2ValueReference vr, int load)
+               fmi2ValueReference vr, int load, int unload)
 {
     char path[4096], resources[4096];
     const fmi2CallbackFunctions functions = {logger, calloc, free, NULL, NULL};
@@ -73,20 +74,22 @@ static int run(const char *folder, const char *id, const char *guid, int steps, 
         CHECK(Terminate(c))
         FreeInstance(c);
     }
-    dlclose(lib);
+    if (unload)
+        dlclose(lib);
     return 0;
 }
 
 int main(int argc, char **argv)
 {
-    int load;
+    int load, loads;
     if (argc != 8) {
         fprintf(stderr, "usage: c_importer FOLDER ID GUID LOADS STEPS H VR\n");
         return 2;
     }
-    for (load = 1; load <= atoi(argv[4]); load++)
+    loads = atoi(argv[4]);
+    for (load = 1; load <= loads; load++)
         if (run(argv[1], argv[2], argv[3], atoi(argv[5]), atof(argv[6]),
-                (fmi2ValueReference)strtoul(argv[7], NULL, 10), load))
+                (fmi2ValueReference)strtoul(argv[7], NULL, 10), load, load < loads))
             return 1;
     return 0;
 }

@@ -20,9 +20,10 @@
  * context says so, and then takes the next doStep by calling the context's C function on the
  * context's table without entering Python, and serves every getter from the context's map until a
  * call enters Python (outputs from the values the function wrote, every other variable from arrays
- * the slave filled when it armed the link). A step the function declines goes to the slave. Before any other call enters Python after
- * native steps, the shim sets the private Integer NATIVE_SYNC_VR, and the slave takes them over.
- * Every call but fmi2DoStep and the getters disarms it until the next step the slave takes.
+ * the slave filled when it armed the link). A step the function declines goes to the slave. Before
+ * any other call enters Python after native steps, the shim sets the private Integer
+ * NATIVE_SYNC_VR, and the slave takes them over. Every call but fmi2DoStep and the getters disarms
+ * it until the next step the slave takes.
  *
  * Build (inerter/fmu_build.py does it, with the value reference from modelDescription.xml):
  *   gcc -shared -fPIC -O2 -fvisibility=hidden -pthread -DSTATUS_VR=<n> \
@@ -161,6 +162,7 @@ static void load_original(void)
     }
 
     memcpy(original_path, path, (size_t)written + 1);
+    /* Whether its state may own the interpreter (see the top): loaded already, or no Python. */
     *(void **)&is_initialized = dlsym(RTLD_DEFAULT, "Py_IsInitialized");
     lib = dlopen(path, RTLD_LOCAL | RTLD_NOW | RTLD_NOLOAD);
     may_own_python = lib != NULL || is_initialized == NULL || !is_initialized();
@@ -185,7 +187,7 @@ static void load_original(void)
     handle = lib;
     *(void **)&finalize_python = dlsym(lib, "finalizePythonInterpreter");
     if (finalize_python != NULL)
-        atexit(release_python_state); /* after the original's own exit-time destructors */
+        atexit(release_python_state); /* after the original's C++ destructors: runs before them */
 }
 
 static int loaded(void)
@@ -211,7 +213,7 @@ __attribute__((destructor)) static void unload_original(void)
     } else if (finalize_python != NULL) {
         pin = dlopen(original_path, RTLD_LOCAL | RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
         if (pin != NULL) {
-            /* The cast is the one glibc's atexit() makes: a function of no argument called with one. */
+            /* The cast glibc's atexit() makes: a function of no argument, called with one. */
             __cxa_atexit((void (*)(void *))finalize_python, NULL, NULL);
             dlclose(pin);
         }

@@ -542,8 +542,9 @@ def _compile(tmp: Path, source: str, shared: bool) -> Path:
     if gcc is None or sys.platform != "linux":
         pytest.skip("needs gcc on Linux")
     out = tmp / Path(source).stem
-    command = [gcc, "-O2", "-I", str(ROOT / "fmu_src"), "-o", str(out), str(NATIVE / source), "-ldl"]
-    subprocess.run(command[:1] + (["-shared", "-fPIC"] if shared else []) + command[1:], check=True)
+    library = ["-shared", "-fPIC"] if shared else []
+    subprocess.run([gcc, *library, "-O2", "-I", str(ROOT / "fmu_src"), "-o", str(out),
+                    str(NATIVE / source), "-ldl"], check=True)
     return out
 
 

@@ -362,7 +362,7 @@ class Kernel:
                        self.perm, dims, ground_t, ground_a) + ((np.ones(1, dtype=np.int64),) if spatial else ())
         self.spatial = spatial                # P has the slot `spatial`: the kernels compile its 3D code
         N = self.n + self.m
-        self._AB = np.empty((2 * self.kl + self.ku + 1, N))
+        self._AB = _k.band_storage(self.kl, self.ku, N)
         self._rhs = np.empty(N)
         self._gen = np.empty(self.n)
         self._no_inputs = np.zeros(0)

@@ -105,12 +105,20 @@ def _element(q, v, e, el_int, pbody, ploc):
 # ------------------------------------------------------------------------------------------------
 # Assembly of the augmented system of Eq. (33) in band storage
 # ------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def band_storage(kl, ku, N):
+    """Row-wise band storage of an N × N matrix with kl sub- and ku super-diagonals, with room for
+    the kl extra super-diagonals that partial pivoting fills: row i holds columns i − kl …
+    i + kl + ku, so K[i, j] is AB[i, kl + j − i] (see :func:`band_solve`)."""
+    return np.empty((N, 2 * kl + ku + 1))
+
+
 @njit(cache=True, inline="always")
 def _addK(AB, perm, off, i, j, x):
-    """K[i, j] += x in LAPACK band storage of the permuted matrix (row off + pi − pj, column pj)."""
+    """K[i, j] += x in the band storage of the permuted matrix (row pi, column off + pj − pi; off = kl)."""
     pi = perm[i]
     pj = perm[j]
-    AB[off + pi - pj, pj] += x
+    AB[pi, off + pj - pi] += x
 
 
 @njit(cache=True, inline="always")
@@ -167,7 +175,7 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     kl = dims[2]
     ku = dims[3]
     has_gravity = dims[4]
-    off = kl + ku
+    off = kl
     _start_assembly(AB, gen, gravity, n, has_gravity)
     for i in range(n):
         _addK(AB, perm, off, i, i, mass[i])
@@ -377,47 +385,74 @@ def _point_force(q, v, body, lx, ly, Fx, Fy, gen):
 
 
 # ------------------------------------------------------------------------------------------------
-# Band LU with partial pivoting (LAPACK gbsv layout): O(N kl (kl + ku)) for a banded system
+# Band LU with partial pivoting, stored by rows: O(N kl (kl + ku)), less where rows are sparse
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def band_solve(AB, b, kl, ku):
-    """Solve A x = b in place (b becomes x); A in LAPACK band storage with kl extra rows for the
-    fill. Returns False when A is singular."""
+    """Solve A x = b in place (b becomes x); A in the row-wise band storage of :func:`band_storage`
+    (destroyed). Returns False when A is singular.
+
+    Gaussian elimination with partial pivoting (the first largest |pivot| in the column, as
+    LAPACK's gbtf2; multipliers by division), with two savings that leave the result bit for bit
+    that of the plain elimination (tests/test_compiled.py): rows are stored contiguously, so that
+    the inner loop, row i −= l · row k, runs over contiguous memory; and each row's last nonzero
+    column is tracked (the row's profile), so that the loop stops there instead of at the band's
+    edge (an N-link chain's augmented matrix, benchmarks/chain_scene.py, holds 5–6 nonzeros per
+    row in a band of 17)."""
     N = b.shape[0]
-    off = kl + ku
+    W = AB.shape[1]
+    last = np.empty(N, dtype=np.int64)          # last[i]: no nonzero right of column last[i] in row i
+    for i in range(N):
+        ri = AB[i]
+        j = min(W - 1, kl + N - 1 - i)
+        while j > kl and ri[j] == 0.0:
+            j -= 1
+        last[i] = i + j - kl
     for k in range(N):
         imax = min(N - 1, k + kl)
         p = k
-        best = abs(AB[off, k])
+        best = abs(AB[k, kl])
         for i in range(k + 1, imax + 1):
-            a = abs(AB[off + i - k, k])
+            a = abs(AB[i, kl + k - i])
             if a > best:
                 best = a
                 p = i
         if best == 0.0:
             return False
-        jmax = min(N - 1, k + kl + ku)
+        rk = AB[k]
+        sk = kl - k                     # column j of row k is rk[sk + j]
         if p != k:
-            for j in range(k, jmax + 1):
-                tmp = AB[off + k - j, j]
-                AB[off + k - j, j] = AB[off + p - j, j]
-                AB[off + p - j, j] = tmp
+            rp = AB[p]
+            sp = kl - p
+            for j in range(k, max(last[k], last[p]) + 1):
+                tmp = rk[sk + j]
+                rk[sk + j] = rp[sp + j]
+                rp[sp + j] = tmp
+            tmp = last[k]
+            last[k] = last[p]
+            last[p] = tmp
             tmp = b[k]
             b[k] = b[p]
             b[p] = tmp
-        piv = AB[off, k]
+        piv = rk[kl]
+        jmax = last[k]
         for i in range(k + 1, imax + 1):
-            l = AB[off + i - k, k] / piv
+            ri = AB[i]
+            si = kl - i
+            l = ri[si + k] / piv
             if l != 0.0:
                 for j in range(k + 1, jmax + 1):
-                    AB[off + i - j, j] -= l * AB[off + k - j, j]
+                    ri[si + j] -= l * rk[sk + j]
                 b[i] -= l * b[k]
+                if jmax > last[i]:
+                    last[i] = jmax
     for i in range(N - 1, -1, -1):
+        ri = AB[i]
+        si = kl - i
         s = b[i]
-        jmax = min(N - 1, i + kl + ku)
-        for j in range(i + 1, jmax + 1):
-            s -= AB[off + i - j, j] * b[j]
-        b[i] = s / AB[off, i]
+        for j in range(i + 1, last[i] + 1):
+            s -= ri[si + j] * b[j]
+        b[i] = s / ri[kl]
     return True
 
 
@@ -625,7 +660,7 @@ def work_arrays(P, ny, stages):
     outputs are evaluated with, zero where they need none)."""
     n = P[16][0]
     N = n + P[16][1]
-    return (np.empty((2 * P[16][2] + P[16][3] + 1, N)), np.empty(N), np.empty(n), np.empty(N),
+    return (band_storage(P[16][2], P[16][3], N), np.empty(N), np.empty(n), np.empty(N),
             np.zeros((stages, ny)), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros(N))
 
 
@@ -909,7 +944,7 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
     kl = dims[2]
     ku = dims[3]
     has_gravity = dims[4]
-    off = kl + ku
+    off = kl
     nb = n // 6
     _start_assembly(AB, gen, gravity, n, has_gravity)
 
@@ -1669,7 +1704,7 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, j
     N = n + m
     kl = P[16][2]
     ku = P[16][3]
-    AB = np.empty((2 * kl + ku + 1, N))
+    AB = band_storage(kl, ku, N)
     rhs = np.empty(N)
     gen = np.empty(n)
     acc = np.empty(N)

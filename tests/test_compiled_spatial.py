@@ -207,7 +207,7 @@ class Kernel3:
         self.flat, self.P, self.kl, self.ku = kernel.flat, kernel.params, kernel.kl, kernel.ku
         self.n, self.m = self.flat["n"], self.flat["m"]
         N = self.n + self.m
-        self.AB = np.empty((2 * self.kl + self.ku + 1, N))
+        self.AB = ck.band_storage(self.kl, self.ku, N)
         self.rhs = np.empty(N)
         self.gen = np.empty(self.n)
         self.layout = signal_layout3(self.flat)

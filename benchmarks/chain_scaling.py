@@ -5,13 +5,14 @@ and how it compares with MuJoCo on the same chain (benchmarks/chain_mujoco.py), 
 
 (`flock` keeps timing runs on a shared machine from overlapping.)
 
-Scaling: CPU time per simulated second (process time, best of 3 for runs under 3 s) on the
-compiled path (RK4 with a fixed 1 ms step: the evaluation cost alone; DOP853 at rtol 1e-8:
-including how the step size changes with N), on the numpy path (RK4, 1 ms, over a shorter span,
-scaled to one second) and in MuJoCo (RK4, 1 ms, the tip force applied at every stage), with the
-growth exponent fitted on log-log between successive N. MuJoCo's cost per step is also given
-without the forcing callback (from an initial velocity), and each N uses the faster of MuJoCo's
-dense and sparse Jacobians. Target: compiled time per simulated second grows no faster than N^1.3.
+Scaling: CPU time per simulated second (process time, the best of --rounds round-robin rounds over
+every N, see interleaved_timings) on the compiled path (RK4 with a fixed 1 ms step: the evaluation
+cost alone; DOP853 at rtol 1e-8: including how the step size changes with N), on the numpy path
+(RK4, 1 ms, over a shorter span, scaled to one second) and in MuJoCo (RK4, 1 ms, the tip force
+applied at every stage), with the growth exponent fitted on log-log between successive N. MuJoCo's
+cost per step is also given without the forcing callback (from an initial velocity), and each N
+uses the faster of MuJoCo's dense and sparse Jacobians. Target: compiled time per simulated
+second grows no faster than N^1.3.
 
 Matched accuracy: reference = compiled DOP853 at rtol 1e-12, atol 1e-14 over 0-2 s (--span);
 error = max over the 10 ms samples of |tip position − reference| (m, the free end P_Nb). Sweeps:
@@ -80,17 +81,45 @@ def run_compiled(model, **kw):
     return compiled.integrate_compiled(model.mechanism, s)
 
 
-def scaling_row(n, model, mj, numpy_budget, log):
+def interleaved_timings(models, mjs, rounds, log):
+    """CPU time per simulated second of the compiled RK4 (1 ms) and DOP853 (rtol 1e-8) runs and of
+    MuJoCo RK4 (1 ms), over 1 s, for every N, measured in `rounds` round-robin rounds (every N once
+    per round; a MuJoCo run that costs 3 CPU s or more only in the first): the machine's slow and fast
+    spells then fall on every N alike, and the growth exponents compare runs taken side by side.
+    Returns ({N: {key: best time}}, {N: the last runs}, {key: [per-round times per N]})."""
+    span = 1.0
+    keys = ("rk4", "dop") + (("mujoco",) if all(mj is not None for mj in mjs.values()) else ())
+    best = {n: {} for n in models}
+    runs = {n: {} for n in models}
+    per_round = {k: [] for k in keys}
+    for r in range(rounds):
+        times = {k: {} for k in keys}
+        for n, model in models.items():
+            run4 = run_compiled(model, method="RK4", step=1e-3, stop_time=span)
+            rund = run_compiled(model, method="DOP853", rtol=1e-8, atol=1e-10, stop_time=span)
+            for x in (run4, rund):
+                if x.status != "ok":
+                    raise RuntimeError(x.message)
+            times["rk4"][n], times["dop"][n] = run4.cpu_time / span, rund.cpu_time / span
+            runs[n].update(rk4=run4, dop=rund)
+            if "mujoco" in keys and best[n].get("mujoco", 0.0) * span < 3.0:
+                _, _, cpu, steps = mjs[n].simulate(span, INTERVAL, 1e-3)
+                times["mujoco"][n] = cpu / (steps * 1e-3)
+                runs[n]["mujoco_steps"] = steps
+        for k in keys:
+            for n, t in times[k].items():
+                best[n][k] = min(best[n].get(k, math.inf), t)
+            per_round[k].append(times[k])
+        log(f"round {r + 1}: " + "; ".join(f"{k} " + ", ".join(f"{n}: {t:.4g}" for n, t in times[k].items())
+                                            for k in keys))
+    return best, runs, per_round
+
+
+def scaling_row(n, model, mj, best, runs, numpy_budget, log):
     mech = model.mechanism
     kernel = compiled.compile_mechanism(mech)
     kl, ku, N = kernel.band
-    span = 1.0
-    run4, rk4 = best_of(lambda: run_compiled(model, method="RK4", step=1e-3, stop_time=span), lambda r: r.cpu_time)
-    rund, dop = best_of(lambda: run_compiled(model, method="DOP853", rtol=1e-8, atol=1e-10, stop_time=span),
-                        lambda r: r.cpu_time)
-    for r in (run4, rund):
-        if r.status != "ok":
-            raise RuntimeError(r.message)
+    run4, rund = runs["rk4"], runs["dop"]
     # numpy path: one evaluation's cost sets the span so the run stays within the budget
     t0 = time.process_time()
     for _ in range(3):
@@ -99,12 +128,13 @@ def scaling_row(n, model, mj, numpy_budget, log):
     np_span = min(1.0, max(0.005, numpy_budget / (4000 * per_eval * 1.2)))
     np_span = round(np_span / 1e-3) * 1e-3 or 1e-3
     npy = integrate(mech, model.settings(method="RK4", step=1e-3, stop_time=np_span, max_steps=10 ** 7)).cpu_time
-    row = dict(N=n, unknowns=N, band=f"{kl}+{ku}", rk4=rk4 / span, rk4_eval=rk4 / run4.evaluations,
-               rk4_step=rk4 / run4.steps, dop=dop / span, dop_steps=rund.steps, numpy=npy / np_span,
+    row = dict(N=n, unknowns=N, band=f"{kl}+{ku}", rk4=best["rk4"], rk4_eval=best["rk4"] / run4.evaluations,
+               rk4_step=best["rk4"] / run4.steps, dop=best["dop"], dop_steps=rund.steps, numpy=npy / np_span,
                numpy_span=np_span)
     if mj is not None:
-        (_, _, _, steps), cpu = best_of(lambda: mj.simulate(span, INTERVAL, 1e-3), lambda r: r[2])
-        row.update(mujoco=cpu / (steps * 1e-3), mujoco_step=cpu / steps,
+        steps = runs["mujoco_steps"]
+        cpu = best["mujoco"] * steps * 1e-3
+        row.update(mujoco=best["mujoco"], mujoco_step=cpu / steps,
                    mujoco_bare=mj.step_cost(max(20, min(1000, int(0.3 / (cpu / steps)))), forcing=False),
                    jacobian=mj.jacobian, jacobian_costs=mj.jacobian_costs)
     log(f"N = {n}: " + ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()))
@@ -296,6 +326,7 @@ def main(argv=None):
     p.add_argument("--span", type=float, default=2.0, help="simulated seconds of the matched-accuracy runs")
     p.add_argument("--budget", type=float, default=30.0, help="CPU s per sweep run, at most (then no finer)")
     p.add_argument("--numpy-budget", type=float, default=20.0, help="CPU s per numpy-path run, at most")
+    p.add_argument("--rounds", type=int, default=7, help="round-robin rounds of the scaling runs (best kept)")
     a = p.parse_args(argv)
     if not compiled.AVAILABLE:
         raise SystemExit(f"the compiled path is not available: {compiled.WHY_NOT}")
@@ -313,11 +344,14 @@ def main(argv=None):
     acc_links = [int(x) for x in (a.accuracy_links or a.links).split(",")]
     tmp = Path(tempfile.mkdtemp())
     rows, points, notes = [], [], []
-    for n in sorted(set(links) | set(acc_links)):
-        model = inerter.load(write_chain(tmp / f"chain_{n}.toml", n))
-        mj = mujoco_chain(n) if mujoco else None
-        if n in links:
-            rows.append(scaling_row(n, model, mj, a.numpy_budget, log))
+    models = {n: inerter.load(write_chain(tmp / f"chain_{n}.toml", n)) for n in sorted(set(links) | set(acc_links))}
+    mjs = {n: mujoco_chain(n) if mujoco else None for n in models}
+    best, runs, per_round = interleaved_timings({n: models[n] for n in links}, {n: mjs[n] for n in links},
+                                                a.rounds, log)
+    for n in links:
+        rows.append(scaling_row(n, models[n], mjs[n], best[n], runs[n], a.numpy_budget, log))
+    for n in models:
+        model, mj = models[n], mjs[n]
         if n in acc_links:
             pts, nts = accuracy_sweep(n, model, mj, a.span, a.budget, log)
             points += pts
@@ -335,7 +369,9 @@ def main(argv=None):
              "+ damper + inerter between neighbouring midpoints, sine force at the tip); the same chain in MuJoCo "
              "(benchmarks/chain_mujoco.py: hinges with stiffness and damping, spatial tendons with stiffness, damping "
              "and armature = b, the force applied at every RK4 stage). CPU seconds (process time) per simulated "
-             "second, best of 3 for runs under 3 s.", ""]
+             f"second; in the scaling table the best of {a.rounds} round-robin rounds over every N (a MuJoCo run of 3 s or "
+             "more once), so that the ratios between N compare runs taken side by side; in the matched-accuracy "
+             "table the best of 3 consecutive runs for runs under 3 s.", ""]
     if rows:
         head = ("| N links | unknowns n+m | band kl+ku | compiled RK4 1 ms | per evaluation (µs) | per RK4 step (µs) | "
                 "compiled DOP853 rtol 1e-8 (steps/s) | numpy RK4 1 ms (span) |")
@@ -362,6 +398,13 @@ def main(argv=None):
         if has_mj:
             lines.append(f"* MuJoCo RK4: {fmt(exponent(ns, [r['mujoco'] for r in rows]))}; {ns[0]}→{ns[-1]}: "
                          f"{overall('mujoco'):.2f}")
+        spread = []
+        for key, what in (("rk4", "compiled RK4"), ("dop", "compiled DOP853")):
+            each = [exponent(ns, [rd[n] for n in ns]) for rd in per_round[key] if all(n in rd for n in ns)]
+            if each:
+                spread.append(f"* {what}, exponent between successive N in each round (the machine's noise): "
+                              + "; ".join(fmt(e) for e in each))
+        lines += [""] + spread
         lines += ["", f"Target ≤ N^1.3 for the compiled path: fixed step {'met' if max(e_rk4) <= 1.3 else 'NOT met'} "
                   f"(largest {max(e_rk4):.2f}); adaptive {'met' if max(e_dop) <= 1.3 else 'NOT met'} "
                   f"(largest {max(e_dop):.2f}).", "", "![scaling](chain_scaling.png)", ""]

@@ -220,8 +220,9 @@ def main(argv=None):
             table = st.native_table(1e-9)
             fn = NATIVE_C(st.native_function().address)
             address = table.ctypes.data
-            for k in range(2, n + 1):
-                if not fn(address, (k - 1) * args.step, args.step):
+            for k in range(2, n + 1):       # the communication points as fmpy computes them
+                t0, t1 = (k - 1) * args.step, k * args.step
+                if not fn(address, t0, t1 - t0):
                     raise RuntimeError(f"{name}: the native step declined at step {k}")
             return st
 

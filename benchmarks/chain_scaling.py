@@ -105,7 +105,6 @@ def interleaved_timings(models, mjs, rounds, log):
             if "mujoco" in keys and best[n].get("mujoco", 0.0) * span < 3.0:
                 _, _, cpu, steps = mjs[n].simulate(span, INTERVAL, 1e-3)
                 times["mujoco"][n] = cpu / (steps * 1e-3)
-                runs[n]["mujoco_steps"] = steps
         for k in keys:
             for n, t in times[k].items():
                 best[n][k] = min(best[n].get(k, math.inf), t)
@@ -132,10 +131,9 @@ def scaling_row(n, model, mj, best, runs, numpy_budget, log):
                rk4_step=best["rk4"] / run4.steps, dop=best["dop"], dop_steps=rund.steps, numpy=npy / np_span,
                numpy_span=np_span)
     if mj is not None:
-        steps = runs["mujoco_steps"]
-        cpu = best["mujoco"] * steps * 1e-3
-        row.update(mujoco=best["mujoco"], mujoco_step=cpu / steps,
-                   mujoco_bare=mj.step_cost(max(20, min(1000, int(0.3 / (cpu / steps)))), forcing=False),
+        per_step = best["mujoco"] * 1e-3
+        row.update(mujoco=best["mujoco"], mujoco_step=per_step,
+                   mujoco_bare=mj.step_cost(max(20, min(1000, int(0.3 / per_step))), forcing=False),
                    jacobian=mj.jacobian, jacobian_costs=mj.jacobian_costs)
     log(f"N = {n}: " + ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()))
     return row

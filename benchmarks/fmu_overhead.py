@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import argparse
 import ctypes
-import gc
 import os
 import subprocess
 import sys
@@ -48,6 +47,7 @@ import numpy as np
 
 import inerter
 from inerter import compiled
+from inerter.bench import settle
 from inerter.fmu_build import build
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,11 +57,9 @@ from chain_scene import write_chain  # noqa: E402
 
 
 def cpu(fn):
-    """(process time of fn(), its value). Objects left by earlier measurements are collected, and
-    the survivors frozen, first: the garbage collections during fn() traverse fn's own objects
-    only, not the results of every row before it."""
-    gc.collect()
-    gc.freeze()
+    """(process time of fn(), its value), settled first (inerter.bench.settle): the garbage
+    collections during fn() traverse fn's own objects only, not the results of every row before it."""
+    settle()
     t0 = time.process_time()
     value = fn()
     return time.process_time() - t0, value

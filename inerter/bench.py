@@ -130,13 +130,18 @@ REPEATS = ((0.05, 7), (0.3, 3), (5.0, 2))
 REPEATS_TEXT = "best of 7 for runs under 0.05 s, of 3 under 0.3 s, of 2 under 5 s"
 
 
+def settle():
+    """Collect the objects earlier runs left and freeze the survivors, so that the garbage
+    collections during the next run traverse that run's own objects only. Call before timing."""
+    gc.collect()
+    gc.freeze()
+
+
 def best_time(fn, cpu_of=lambda out: out[1]):
     """Run fn() → out; repeat it as REPEATS says for its CPU time cpu_of(out); (out, smallest time).
-    Before each run, objects left by earlier runs are collected and the survivors frozen, so that
-    the garbage collector does not traverse them during the run."""
+    Each run starts settled (:func:`settle`)."""
     def once():
-        gc.collect()
-        gc.freeze()
+        settle()
         return fn()
 
     out = once()

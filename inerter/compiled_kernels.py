@@ -172,10 +172,8 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     (mass, pbody, ploc, el_int, el_real, rot_int, rot_real, jt_int, jt_real,
      fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims, ground_t, ground_a) = P
     n = dims[0]
-    kl = dims[2]
-    ku = dims[3]
     has_gravity = dims[4]
-    off = kl
+    off = dims[2]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
     _start_assembly(AB, gen, gravity, n, has_gravity)
     for i in range(n):
         _addK(AB, perm, off, i, i, mass[i])
@@ -388,9 +386,10 @@ def _point_force(q, v, body, lx, ly, Fx, Fy, gen):
 # Band LU with partial pivoting, stored by rows: O(N kl (kl + ku)), less where rows are sparse
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
-def band_solve(AB, b, kl, ku):
+def band_solve(AB, b, kl):
     """Solve A x = b in place (b becomes x); A in the row-wise band storage of :func:`band_storage`
-    (destroyed). Returns False when A is singular.
+    with kl sub-diagonals (destroyed; the storage's width gives the rest). Returns False when A is
+    singular.
 
     Gaussian elimination with partial pivoting (the first largest |pivot| in the column, as
     LAPACK's gbtf2; multipliers by division), with two savings that leave the result bit for bit
@@ -462,7 +461,7 @@ def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
     perm = P[15]
     dims = P[16]
     status = _assemble_of(t, q, v, inputs, alpha, P, AB, rhs, gen)
-    if not band_solve(AB, rhs, dims[2], dims[3]):
+    if not band_solve(AB, rhs, dims[2]):
         return SINGULAR
     for i in range(out.shape[0]):
         out[i] = rhs[perm[i]]
@@ -941,10 +940,8 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
     fa_int, fa_real, pd_int, pd_real, in_int = P[9], P[10], P[11], P[12], P[13]
     gravity, perm, dims = P[14], P[15], P[16]
     n = dims[0]
-    kl = dims[2]
-    ku = dims[3]
     has_gravity = dims[4]
-    off = kl
+    off = dims[2]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
     nb = n // 6
     _start_assembly(AB, gen, gravity, n, has_gravity)
 

@@ -73,6 +73,7 @@ def test_band_solve_is_partial_pivoting_bit_for_bit(kl, ku, N):
     from inerter import compiled_kernels as ck
 
     rng = np.random.default_rng(kl * 100 + ku * 10 + N)
+    solved = 0
     for trial in range(20):
         A = np.zeros((N, N))
         for i in range(N):
@@ -92,16 +93,16 @@ def test_band_solve_is_partial_pivoting_bit_for_bit(kl, ku, N):
             for j in range(max(0, i - kl), min(N, i + ku + 1)):
                 AB[i, kl + j - i] = A[i, j]
         x = b.copy()
-        assert ck.band_solve(AB, x, kl, ku)
+        assert ck.band_solve(AB, x, kl)
         assert np.array_equal(x, _dense_partial_pivoting(A, b)), trial
         assert np.max(np.abs(A @ x - b)) <= 1e-12 * np.max(np.abs(A)) * np.max(np.abs(x)) * N
+        solved += 1
+    assert solved >= 10, f"only {solved} of 20 random matrices were well enough conditioned"
     singular = ck.band_storage(kl, ku, N)
     singular[:] = 0.0
     singular[:, kl] = 1.0
-    singular[N // 2, kl] = 0.0
-    if kl:
-        singular[N // 2 + 1, kl - 1] = 0.0
-    assert not ck.band_solve(singular, np.ones(N), kl, ku)
+    singular[N // 2, kl] = 0.0                          # diagonal with one zero: column N // 2 is empty
+    assert not ck.band_solve(singular, np.ones(N), kl)
 
 
 @needs_numba

@@ -216,7 +216,7 @@ class Kernel3:
         """(status, q̈, λ): assemble3, band_solve, un-permuted (as compiled_kernels.accelerations)."""
         inp = np.zeros(0) if inputs is None else np.ascontiguousarray(inputs, dtype=float)
         status = ck.assemble3(float(t), q, v, inp, float(alpha), self.P, self.AB, self.rhs, self.gen)
-        assert ck.band_solve(self.AB, self.rhs, self.kl, self.ku)
+        assert ck.band_solve(self.AB, self.rhs, self.kl)
         perm = self.P[15]
         out = np.empty(self.n + self.m)
         for i in range(len(out)):

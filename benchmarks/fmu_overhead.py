@@ -24,7 +24,10 @@ in turn, so drifting load weighs on all alike):
   ctypes for every further step, on the table the slave gives the FMU's binary (its lengths at the
   stop time must equal the whole run's, bit for bit).
 
-A second table runs the compiled-path FMUs and the C floor through libcosimpy (the Open Simulation
+braced_frame_3d runs a second time with RK4 (1 ms steps; `--no-rk4-frame` leaves it out): its ground
+record puts a discontinuity at every communication point, where RK4 restarts, in the native step too.
+
+A second table runs the compiled-path FMUs (at their scenes' own solver) and the C floor through libcosimpy (the Open Simulation
 Platform's C++ engine, when installed) with a last-value observer, which reads every variable of
 the FMU at every step; its process time includes the engine's worker threads.
 
@@ -163,6 +166,8 @@ def main(argv=None):
     ap.add_argument("--step", type=float, default=0.01)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--chains", default="8,32", help="links of the chain scenes ('' for none)")
+    ap.add_argument("--no-rk4-frame", dest="rk4_frame", action="store_false",
+                    help="leave out braced_frame_3d with RK4 (1 ms steps, a ground record sample at every point)")
     args = ap.parse_args(argv)
     import fmpy
     if not compiled.AVAILABLE:
@@ -178,13 +183,17 @@ def main(argv=None):
     # (label, solver path, native steps in the FMU)
     both = (("numpy", "numpy", False), ("compiled, steps in Python", "compiled", False),
             ("compiled, native steps", "compiled", True))
-    cases = [(ROOT / "scenarios" / f"{name}.toml", both) for name in ("lumped_mass_2d", "two_bar_2d")]
-    cases += [(write_chain(scratch / f"chain_{links}.toml", links), both[1:])
+    # (scene, paths, solver: None for the scene's own)
+    cases = [(ROOT / "scenarios" / f"{name}.toml", both, None) for name in ("lumped_mass_2d", "two_bar_2d")]
+    cases += [(write_chain(scratch / f"chain_{links}.toml", links), both[1:], None)
               for links in (int(x) for x in args.chains.split(",") if x.strip())]
-    for scene, paths in cases:
-        name = scene.stem
+    # RK4 across a ground record's samples (a discontinuity at every communication point)
+    cases += [(ROOT / "scenarios" / "braced_frame_3d.toml", both[1:], "RK4")] if args.rk4_frame else []
+    for scene, paths, solver in cases:
+        name = scene.stem if solver is None else f"{scene.stem}, {solver}"
         fmu = str(build(scene, scratch / "fmu"))
-        model = inerter.load(scene)
+        model = inerter.load(scene, **({} if solver is None else {"experiment.method": solver}))
+        solver_start = {} if solver is None else {"solver": solver}
         n = int(round(args.stop_time / args.step))
         lengths = [o["name"] for o in model.output_info() if o["unit"] == "m"]
         floor = floor_fmu(len(model.output_info()), scratch)
@@ -205,7 +214,7 @@ def main(argv=None):
             os.environ["INERTER_FMU_NATIVE"] = "1" if native else "0"
             try:
                 res = fmpy.simulate_fmu(fmu, stop_time=args.stop_time, output_interval=args.step,
-                                        start_values={"compiled": path == "compiled"})
+                                        start_values={"compiled": path == "compiled", **solver_start})
             finally:
                 del os.environ["INERTER_FMU_NATIVE"]
             assert abs(res["time"][-1] - args.stop_time) < 1e-9
@@ -228,7 +237,7 @@ def main(argv=None):
             return fmpy.simulate_fmu(which, stop_time=args.stop_time, output_interval=args.step)
 
         fmu_run("compiled", True)                             # load the kernels inside the FMU once
-        if has_cosim:
+        if has_cosim and solver is None:
             whole_cpu = cpu(lambda: whole("compiled"))[0]
             native, python, cosim_floor = (cosim_cpu(fmu, args, True), cosim_cpu(fmu, args, False),
                                            cosim_cpu(c_floor, args, True))

@@ -774,8 +774,6 @@ class CompiledStepper(Stepper):
         if self._order is None or self._input_moved:
             return None
         if self.settings.method == "RK4":
-            if getattr(self.mech, "discontinuities", ()):
-                return None                               # segments at the discontinuities: stepped here
             native = self._native
             if native is None:
                 ny = self.kernel.nq + self.kernel.n

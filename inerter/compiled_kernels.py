@@ -1869,8 +1869,8 @@ def native_step3(tab, t, h):
 def native_step_on(tab, t, h, P):
     """One co-simulation step (t, t + h] of the running integration whose arrays `tab` lists: what
     ``CompiledStepper.step`` does while the inputs hold (:func:`cosim_step` with the step bound,
-    then every output into `values`; RK4: :func:`integrate_rk4` from the communication point, then
-    the outputs). Returns NATIVE_TOOK_STEP, or 0 where it declines and leaves
+    then every output into `values`; RK4: :func:`integrate_rk4` from the communication point,
+    segment by segment between the discontinuities, then the outputs). Returns NATIVE_TOOK_STEP, or 0 where it declines and leaves
     the step to the Python path: a communication point that is not the current one, a step size
     that is not finite and > 0, a failed step or outputs the kernels cannot evaluate. A declined
     step leaves CLOCK_BUSY set and the integration's state as it was in the backup arrays (b_*),
@@ -1899,22 +1899,39 @@ def native_step_on(tab, t, h, P):
             _f1(tab, 42), _f1(tab, 43))
     raw, order, values = _f1(tab, 44), _i1(tab, 45), _f1(tab, 46)
     if tab[1] == NATIVE_RK4:
-        ts[0] = now
-        ts[1] = t_end
-        st, k, steps, evals, t_reached = integrate_rk4(y, now, t_end, ts, out, clock[CLOCK_STEP], tab[2], inputs,
-                                                       alpha, P, 0.0)
-        if st != OK:
-            return 0
-        y_end = out[1]
-        for i in range(y_end.shape[0]):
-            if not math.isfinite(y_end[i]):
+        # Segment by segment, as CompiledStepper._step_rk4: a discontinuity in (now, t_end) ends a
+        # segment there (within eps: one at t_end ends the last segment, one at now starts none).
+        jumps = _f1(tab, 53)
+        eps = 1e-12 * max(1.0, abs(t_end))
+        t0 = now
+        i = np.searchsorted(jumps, t0 + eps, side="right")
+        while True:
+            if i < jumps.shape[0] and jumps[i] <= t_end - eps:
+                end = jumps[i]
+                i += 1
+            else:
+                end = t_end
+            j = np.searchsorted(jumps, end - eps, side="right")
+            jump = end if j < jumps.shape[0] and jumps[j] <= end + eps else 0.0
+            ts[0] = t0
+            ts[1] = end
+            st, k, steps, evals, t_reached = integrate_rk4(y, t0, end, ts, out, clock[CLOCK_STEP], tab[2], inputs,
+                                                           alpha, P, jump)
+            if st != OK:
                 return 0
-        if _signals_at(t_end, y_end, inputs, alpha, tab[3] != 0, P, work, raw) != OK:
+            y_end = out[1]
+            for n in range(y_end.shape[0]):
+                if not math.isfinite(y_end[n]):
+                    return 0
+            y[:] = y_end
+            hdr[RK_TOTAL] += steps
+            if end == t_end:
+                break
+            t0 = end
+        if _signals_at(t_end, y, inputs, alpha, tab[3] != 0, P, work, raw) != OK:
             return 0
-        for i in range(order.shape[0]):
-            values[i] = raw[order[i]]
-        y[:] = y_end
-        hdr[RK_TOTAL] += steps
+        for n in range(order.shape[0]):
+            values[n] = raw[order[n]]
     else:
         if t_end > bound:                       # the importer went past its stop time
             bound = np.inf

@@ -153,6 +153,44 @@ def test_native_steps_of_each_compiled_method_give_what_the_slave_gives(fmus, pa
     assert native_steps(native) >= 30 and native_steps(slave) == 0
 
 
+STEP_FORCE = INPUT_SCENE.parent / "hard" / "step_force_1dof_2d.toml"
+BRACED_FRAME = INPUT_SCENE.parent / "braced_frame_3d.toml"
+
+
+@pytest.fixture(scope="module")
+def step_forces_scene(tmp_path_factory):
+    """scenarios/hard/step_force_1dof_2d.toml with three step forces, whose switches fall inside the
+    communication steps of :func:`replay` (0.105 s; 0.155 s, in the steps that are rolled back) and on
+    one of its points (0.2 s)."""
+    text = STEP_FORCE.read_text(encoding="utf-8")
+    text = text.replace('name = "step_force_1dof_2d"', 'name = "step_forces_rk4_2d"')
+    text = text.replace('ts = { value = 0.5,', 'ts = { value = 0.105,')
+    assert "step_forces_rk4_2d" in text and "0.105" in text
+    for name, time in (("later", 0.155), ("on_point", 0.2)):
+        text += (f'\n[forces.{name}]\npoint = "P"\ndirection = [1, 0]\nfunction = "step"\n'
+                 f'value = "F"\ntime = {time}\ninitial = 0\n')
+    path = tmp_path_factory.mktemp("scene") / "step_forces_rk4_2d.toml"
+    path.write_text(text, encoding="utf-8")
+    assert inerter.load(path).mechanism.discontinuities == [0.105, 0.155, 0.2]
+    return path
+
+
+@pytest.mark.parametrize("which", ["step_forces", "braced_frame_3d"])
+def test_native_rk4_steps_through_discontinuities_give_what_the_slave_gives(fmus, pair, step_forces_scene,
+                                                                            which):
+    """RK4 restarts at each discontinuity of the right-hand side inside a communication step (step
+    forces' switches; the braced frame's ground record, sampled every 10 ms, on every point), in the
+    native step as in the slave's: the same results bit for bit, the steps taken natively."""
+    scene = step_forces_scene if which == "step_forces" else BRACED_FRAME
+    native_scene(scene)
+    native, slave = pair(fmus[scene])
+    a = replay(native, False, stop_time=0.3, solver="RK4")
+    b = replay(slave, False, stop_time=0.3, solver="RK4")
+    assert a.entries == b.entries
+    assert a.messages() == b.messages()
+    assert native_steps(native) >= 30 and native_steps(slave) == 0
+
+
 TERMINALS_MEET = INPUT_SCENE.parent / "hard" / "terminals_meet_2d.toml"
 
 

@@ -143,9 +143,10 @@ ELEMENT_KIND = {"spring": 0, "damper": 1, "inerter": 2}
 FORCE_CODE = {"constant": 0, "sine": 1, "step": 2}
 
 
-def element_row(e, me, pidx, centripetal) -> tuple[tuple, tuple]:
+def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
     """The ``el_int`` and ``el_real`` rows of translational element `e` of the scene (`me`: the
-    mechanism's element of that name, whose free length a spring takes, else the scene's)."""
+    mechanism's element of that name, whose free length a spring takes, else the scene's;
+    `meet_limit`: the distance below which its terminals meet, ``Mechanism.meet_limit``)."""
     free = 0.0
     if e.type == "spring":
         free = getattr(me, "free_length", None)
@@ -154,7 +155,7 @@ def element_row(e, me, pidx, centripetal) -> tuple[tuple, tuple]:
         if free is None:
             raise ValueError(f"spring {e.name}: no free length on the compiled mechanism")
     return ((ELEMENT_KIND[e.type], pidx[e.point_a], pidx[e.point_b], int(bool(centripetal))),
-            (float(e.coefficient), float(free)))
+            (float(e.coefficient), float(free), float(meet_limit)))
 
 
 def force_rows(scene, pidx, dim) -> tuple[list, list, list, list, list]:
@@ -228,7 +229,7 @@ def flatten(mech) -> dict:
             rot_real.append((float(e.coefficient), float(free)))
             rot_names.append(e.name)
             continue
-        row_int, row_real = element_row(e, me, pidx, scene.centripetal)
+        row_int, row_real = element_row(e, me, pidx, scene.centripetal, mech.meet_limit[e.name])
         el_int.append(row_int)
         el_real.append(row_real)
         el_names.append(e.name)
@@ -246,7 +247,7 @@ def flatten(mech) -> dict:
         return np.array(rows, dtype=dtype).reshape(-1, width)
 
     return dict(n=n, nq=n, dim=2, m=2 * len(jt_int), mass=mass, pbody=pbody, ploc=ploc,
-                el_int=arr(el_int, 4, np.int64), el_real=arr(el_real, 2, float),
+                el_int=arr(el_int, 4, np.int64), el_real=arr(el_real, 3, float),
                 rot_int=arr(rot_int, 3, np.int64), rot_real=arr(rot_real, 2, float),
                 jt_int=arr(jt_int, 3, np.int64), jt_real=arr(jt_real, 3, float),
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 9, float),

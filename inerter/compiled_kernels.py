@@ -651,6 +651,61 @@ def _qdot_by_dimension(q, v, P, out):
     return lambda q, v, P, out: _copy(q, v, P, out)
 
 
+def _gap_of(q, z, e, P):
+    raise NotImplementedError("compiled code only")
+
+
+@njit(cache=True)
+def _gap2(q, z, e, P):
+    ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, z, P[3], e, P[1], P[2])
+    return rx, ry, 0.0
+
+
+@njit(cache=True)
+def _gap3(q, z, e, P):
+    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, z, P[3][e, 1], P[3][e, 2], P[1], P[2])
+    return rx, ry, rz
+
+
+@overload(_gap_of, inline="always")
+def _gap_by_dimension(q, z, e, P):
+    """r_b − r_a of translational element e at q (z: zero velocities)."""
+    if is_spatial(P):
+        return lambda q, z, e, P: _gap3(q, z, e, P)
+    return lambda q, z, e, P: _gap2(q, z, e, P)
+
+
+@njit(cache=True)
+def terminals_meet(y_old, y_new, P):
+    """Whether an accepted step brings a translational element's terminals together, as
+    ``Mechanism.check_terminals`` checks each step of the numpy path: the closest approach of the
+    chord from r_b − r_a at y_old to r_b − r_a at y_new is not above the element's limit
+    (``el_real[e, 2]``, MEET_RELATIVE of its initial length). A fixed step (RK4) would otherwise
+    pass through the meeting, where the direction is undefined, and go on with garbage."""
+    el_int = P[3]
+    el_real = P[4]
+    if el_int.shape[0] == 0:
+        return False
+    nq = P[16][6]
+    z = np.zeros(P[16][0])
+    q0 = y_old[:nq]
+    q1 = y_new[:nq]
+    for e in range(el_int.shape[0]):
+        ax, ay, az = _gap_of(q0, z, e, P)
+        bx, by, bz = _gap_of(q1, z, e, P)
+        dx = bx - ax
+        dy = by - ay
+        dz = bz - az
+        dd = dx * dx + dy * dy + dz * dz
+        s = 1.0 if dd == 0.0 else min(1.0, max(0.0, -(ax * dx + ay * dy + az * dz) / dd))
+        cx = ax + s * dx
+        cy = ay + s * dy
+        cz = az + s * dz
+        if not math.sqrt(cx * cx + cy * cy + cz * cz) > el_real[e, 2]:
+            return True
+    return False
+
+
 @njit(cache=True)
 def work_arrays(P, ny, stages):
     """Scratch arrays of the integrators and of the outputs, allocated once per integration:
@@ -1516,6 +1571,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         if status != OK:
             break
         steps += 1
+        if terminals_meet(y, y_new, P):
+            status = TERMINALS_MEET
+            h_abs = abs(h)
+            break
         if monitor[0] > 0.0 and (hits > 0 or steps % int(monitor[1]) == 0):
             num = 0.0
             den = 0.0
@@ -1741,6 +1800,8 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, j
         if st != OK:
             return st, k, steps, evals, t
         steps += 1
+        if terminals_meet(y, y_new, P):
+            return TERMINALS_MEET, k, steps, evals, t
         while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
             s = (grid[k] - t) / h
             h00 = 2 * s ** 3 - 3 * s ** 2 + 1

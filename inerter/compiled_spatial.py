@@ -36,8 +36,9 @@ def flatten3(mech) -> dict:
     * ``pbody`` (points): the point's body; ``ploc`` (points, 3): ū in the body frame (the global
       position for a ground point).
     * ``el_int`` (elements, 4): kind (0 spring, 1 damper, 2 inerter), point a, point b,
-      centripetal term (1: Eq. 9, 0: Eq. 8); ``el_real`` (elements, 2): coefficient (k, c or b),
-      spring free length (0 otherwise).
+      centripetal term (1: Eq. 9, 0: Eq. 8); ``el_real`` (elements, 3): coefficient (k, c or b),
+      spring free length (0 otherwise), the distance below which the terminals meet
+      (``Mechanism.meet_limit``).
     * ``rot_int`` (rotational elements, 3): kind (0 spring, 1 damper), body a, body b;
       ``rot_real`` (rotational elements, 14): coefficient (k or d), free angle, axis n̄ in body a's
       frame (3), rel0 = A_aᵀA_b at the initial pose (9, row-major).
@@ -106,7 +107,7 @@ def flatten3(mech) -> dict:
                              *np.asarray(me.rel0, dtype=float).ravel()])
             rot_names.append(e.name)
             continue
-        row_int, row_real = element_row(e, me, pidx, scene.centripetal)
+        row_int, row_real = element_row(e, me, pidx, scene.centripetal, mech.meet_limit[e.name])
         el_int.append(row_int)
         el_real.append(row_real)
         el_names.append(e.name)
@@ -120,7 +121,7 @@ def flatten3(mech) -> dict:
         return np.ascontiguousarray(np.array(rows, dtype=dtype).reshape(-1, width))
 
     return dict(n=n, m=m, nq=nq, dim=3, mass=mass, pbody=pbody, ploc=np.ascontiguousarray(ploc),
-                el_int=arr(el_int, 4, np.int64), el_real=arr(el_real, 2, float),
+                el_int=arr(el_int, 4, np.int64), el_real=arr(el_real, 3, float),
                 rot_int=arr(rot_int, 3, np.int64), rot_real=arr(rot_real, 14, float),
                 jt_int=arr(jt_int, 6, np.int64), jt_real=arr(jt_real, JOINT_WIDTH, float),
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 10, float),

@@ -162,15 +162,18 @@ class Mechanism:
         if self.ground_motion is not None and self.ground_motion.input:
             self.input_names += [f"ground.a[{i + 1}]" for i in range(dim)]
         self.q0, self.v0 = self.assemble_initial(q0, v0)
-        # Translational elements by terminal pair, with the distance below which the terminals meet.
+        # Translational elements by terminal pair, with the distance below which the terminals meet
+        # (also by element name, for the compiled kernels: meet_limit).
         self._meet = []
+        self.meet_limit = {}
         for spec, group in zip(groups, self.groups):
             if group[0].kind.startswith("rotational"):
                 continue
             pair = self.pair(*spec)
             r0 = pair.evaluate(self.q0, np.zeros(self.n))[0]
-            self._meet.append((pair, [e.name for e in group], spec,
-                               max(el.MIN_LENGTH, MEET_RELATIVE * math.sqrt(float(r0 @ r0)))))
+            limit = max(el.MIN_LENGTH, MEET_RELATIVE * math.sqrt(float(r0 @ r0)))
+            self._meet.append((pair, [e.name for e in group], spec, limit))
+            self.meet_limit.update((e.name, limit) for e in group)
         self.check_mass_matrix(self.q0, self.v0)
 
     # -- compilation helpers ---------------------------------------------------------------

@@ -166,9 +166,36 @@ def test_terminals_passing_close_but_apart_do_not_stop_the_run(tmp_path):
         assert r.status == "failed" and "'inerter'" in r.message and "meet" in r.message
 
 
-def test_terminals_meeting_in_the_fmu_discard_the_step_and_keep_the_state(hard_fmu, instance):
+@pytest.mark.parametrize("method", ["DOP853", "RK45", "RK4"])
+def test_terminals_meeting_stop_the_compiled_loop_where_they_stop_the_numpy_path(method, tmp_path):
+    """Reference: the numpy path, whose check of each accepted step (Mechanism.check_terminals: the
+    chord between two steps' terminal positions comes within 1e-6 of the element's initial length)
+    the compiled loop makes too (compiled_kernels.terminals_meet). Without it the fixed-step RK4
+    passed through the meeting, where the direction is undefined, and went on to the stop time."""
+    runs = {path: inerter.load(MEET, **{"experiment.method": method}).simulate(stop_time=3.0, metrics=False,
+                                                                                path=path)
+            for path in ("numpy", "compiled")}
+    assert runs["compiled"].run.extra["path"] == "compiled"
+    for path, r in runs.items():
+        assert r.status == "failed", (path, r.message)
+        assert "terminals O and P meet" in r.message and "'inerter'" in r.message, (path, r.message)
+    # the same last good sample (the steps are the same on both paths)
+    assert runs["compiled"].time[-1] == runs["numpy"].time[-1]
+    assert T_MEET - 0.01 < runs["compiled"].time[-1] <= T_MEET
+    # a ball passing its inerter's ground terminal at 1e-3 of the element's length goes on (NEAR_MISS)
+    path = tmp_path / "near_miss.toml"
+    path.write_text(NEAR_MISS)
+    r = inerter.load(path, **{"experiment.method": method}).simulate(metrics=False, path="compiled")
+    assert r.status == "ok", r.message
+    path.write_text(NEAR_MISS.replace("[1.0, 1e-3]", "[1.0, 0.0]"))
+    r = inerter.load(path, **{"experiment.method": method}).simulate(metrics=False, path="compiled")
+    assert r.status == "failed" and "'inerter'" in r.message and "meet" in r.message, r.message
+
+
+@pytest.mark.parametrize("solver", ["DOP853", "RK4"])
+def test_terminals_meeting_in_the_fmu_discard_the_step_and_keep_the_state(hard_fmu, instance, solver):
     inst = instance(hard_fmu(MEET))
-    inst.initialise()
+    inst.initialise(strings={"solver": solver})
     h, t = 0.01, 0.0
     while True:
         good = inst.get(inst.outputs)

@@ -146,7 +146,7 @@ FORCE_CODE = {"constant": 0, "sine": 1, "step": 2}
 def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
     """The ``el_int`` and ``el_real`` rows of translational element `e` of the scene (`me`: the
     mechanism's element of that name, whose free length a spring takes, else the scene's;
-    `meet_limit`: the distance below which its terminals meet, ``Mechanism.meet_limit``)."""
+    `meet_limit`: its column of :func:`meet_limits`)."""
     free = 0.0
     if e.type == "spring":
         free = getattr(me, "free_length", None)
@@ -156,6 +156,20 @@ def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
             raise ValueError(f"spring {e.name}: no free length on the compiled mechanism")
     return ((ELEMENT_KIND[e.type], pidx[e.point_a], pidx[e.point_b], int(bool(centripetal))),
             (float(e.coefficient), float(free), float(meet_limit)))
+
+
+def meet_limits(mech, elements) -> dict[str, float]:
+    """Column 2 of ``el_real`` by translational element name: the distance below which its terminals
+    meet (``Mechanism.meet_limit``), 0.0 for an element whose pair of terminals an earlier element
+    shares (compiled_kernels.terminals_meet checks each pair once, as Mechanism.check_terminals)."""
+    seen, limits = set(), {}
+    for e in elements:
+        if e.type in ("rotational_spring", "rotational_damper"):
+            continue
+        pair = frozenset((e.point_a, e.point_b))
+        limits[e.name] = 0.0 if pair in seen else float(mech.meet_limit[e.name])
+        seen.add(pair)
+    return limits
 
 
 def force_rows(scene, pidx, dim) -> tuple[list, list, list, list, list]:
@@ -217,6 +231,7 @@ def flatten(mech) -> dict:
 
     mech_elements = _by_name(getattr(mech, "elements", []))
     el_int, el_real, rot_int, rot_real, el_names, rot_names = [], [], [], [], [], []
+    limits = meet_limits(mech, scene.elements.values())
     for e in scene.elements.values():
         me = mech_elements.get(e.name)
         if e.type in ("rotational_spring", "rotational_damper"):
@@ -229,7 +244,7 @@ def flatten(mech) -> dict:
             rot_real.append((float(e.coefficient), float(free)))
             rot_names.append(e.name)
             continue
-        row_int, row_real = element_row(e, me, pidx, scene.centripetal, mech.meet_limit[e.name])
+        row_int, row_real = element_row(e, me, pidx, scene.centripetal, limits[e.name])
         el_int.append(row_int)
         el_real.append(row_real)
         el_names.append(e.name)

@@ -676,22 +676,38 @@ def _gap_by_dimension(q, z, e, P):
 
 
 @njit(cache=True)
-def terminals_meet(y_old, y_new, P):
+def terminal_gaps(y, P):
+    """(gaps, z): r_b − r_a at y of each translational element whose terminals are checked
+    (``el_real[e, 2]`` > 0: one element per pair of terminals), for :func:`terminals_meet`, and the
+    zero velocities it evaluates them with."""
+    el_int = P[3]
+    z = np.zeros(P[16][0])
+    gaps = np.zeros((el_int.shape[0], 3))
+    q = y[:P[16][6]]
+    for e in range(el_int.shape[0]):
+        if P[4][e, 2] > 0.0:
+            gaps[e, 0], gaps[e, 1], gaps[e, 2] = _gap_of(q, z, e, P)
+    return gaps, z
+
+
+@njit(cache=True)
+def terminals_meet(gaps, z, y_new, P):
     """Whether an accepted step brings a translational element's terminals together, as
     ``Mechanism.check_terminals`` checks each step of the numpy path: the closest approach of the
-    chord from r_b − r_a at y_old to r_b − r_a at y_new is not above the element's limit
-    (``el_real[e, 2]``, MEET_RELATIVE of its initial length). A fixed step (RK4) would otherwise
-    pass through the meeting, where the direction is undefined, and go on with garbage."""
-    el_int = P[3]
+    chord from r_b − r_a at the step's start (`gaps`, :func:`terminal_gaps`) to r_b − r_a at y_new
+    is not above the element's limit (``el_real[e, 2]``, MEET_RELATIVE of its initial length; 0: the
+    pair of terminals is another element's). A fixed step (RK4) would otherwise pass through the
+    meeting, where the direction is undefined, and go on with garbage. Otherwise `gaps` moves on
+    to y_new."""
     el_real = P[4]
-    if el_int.shape[0] == 0:
-        return False
-    nq = P[16][6]
-    z = np.zeros(P[16][0])
-    q0 = y_old[:nq]
-    q1 = y_new[:nq]
-    for e in range(el_int.shape[0]):
-        ax, ay, az = _gap_of(q0, z, e, P)
+    q1 = y_new[:P[16][6]]
+    for e in range(gaps.shape[0]):
+        limit = el_real[e, 2]
+        if limit == 0.0:
+            continue
+        ax = gaps[e, 0]
+        ay = gaps[e, 1]
+        az = gaps[e, 2]
         bx, by, bz = _gap_of(q1, z, e, P)
         dx = bx - ax
         dy = by - ay
@@ -701,8 +717,11 @@ def terminals_meet(y_old, y_new, P):
         cx = ax + s * dx
         cy = ay + s * dy
         cz = az + s * dz
-        if not math.sqrt(cx * cx + cy * cy + cz * cz) > el_real[e, 2]:
+        if not math.sqrt(cx * cx + cy * cy + cz * cz) > limit:
             return True
+        gaps[e, 0] = bx
+        gaps[e, 1] = by
+        gaps[e, 2] = bz
     return False
 
 
@@ -1476,6 +1495,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     while k < nts and ts[k] <= t + 1e-12 * max(1.0, t):     # covered by the last step already
         _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
         k += 1
+    gaps, z = terminal_gaps(y, P)
     while k < nts and status == OK:
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         if h_abs < min_step:
@@ -1571,7 +1591,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         if status != OK:
             break
         steps += 1
-        if terminals_meet(y, y_new, P):
+        if terminals_meet(gaps, z, y_new, P):
             status = TERMINALS_MEET
             h_abs = abs(h)
             break
@@ -1781,6 +1801,7 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, j
     k = 1
     ngrid = grid.shape[0]
     steps = 0
+    gaps, z = terminal_gaps(y, P)
     while t < t_end:
         h = min(step, abs(t_end - t))
         for i in range(ny):
@@ -1800,7 +1821,7 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, j
         if st != OK:
             return st, k, steps, evals, t
         steps += 1
-        if terminals_meet(y, y_new, P):
+        if terminals_meet(gaps, z, y_new, P):
             return TERMINALS_MEET, k, steps, evals, t
         while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
             s = (grid[k] - t) / h

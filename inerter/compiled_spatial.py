@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compiled import ELEMENT_KIND, _by_name, element_row, force_rows
+from .compiled import ELEMENT_KIND, _by_name, element_row, force_rows, meet_limits
 from .joints import Coincident, SpatialJoint
 
 # Joint kinds (column 0 of ``jt_int``), as in :mod:`inerter.compiled_kernels` (its 3D section).
@@ -38,7 +38,7 @@ def flatten3(mech) -> dict:
     * ``el_int`` (elements, 4): kind (0 spring, 1 damper, 2 inerter), point a, point b,
       centripetal term (1: Eq. 9, 0: Eq. 8); ``el_real`` (elements, 3): coefficient (k, c or b),
       spring free length (0 otherwise), the distance below which the terminals meet
-      (``Mechanism.meet_limit``).
+      (``compiled.meet_limits``: 0 where an earlier element has the same terminals).
     * ``rot_int`` (rotational elements, 3): kind (0 spring, 1 damper), body a, body b;
       ``rot_real`` (rotational elements, 14): coefficient (k or d), free angle, axis n̄ in body a's
       frame (3), rel0 = A_aᵀA_b at the initial pose (9, row-major).
@@ -99,6 +99,7 @@ def flatten3(mech) -> dict:
 
     mech_elements = _by_name(mech.elements)
     el_int, el_real, rot_int, rot_real, el_names, rot_names = [], [], [], [], [], []
+    limits = meet_limits(mech, scene.elements.values())
     for e in scene.elements.values():
         me = mech_elements[e.name]
         if e.type in ("rotational_spring", "rotational_damper"):
@@ -107,7 +108,7 @@ def flatten3(mech) -> dict:
                              *np.asarray(me.rel0, dtype=float).ravel()])
             rot_names.append(e.name)
             continue
-        row_int, row_real = element_row(e, me, pidx, scene.centripetal, mech.meet_limit[e.name])
+        row_int, row_real = element_row(e, me, pidx, scene.centripetal, limits[e.name])
         el_int.append(row_int)
         el_real.append(row_real)
         el_names.append(e.name)

@@ -79,7 +79,8 @@ def main(argv=None):
     lines = ["# What each effect costs", "",
              f"`python benchmarks/effect_cost.py`, {time.strftime('%Y-%m-%d')}, one run. Cost of one evaluation of "
              f"Eq. (33): compiled (RK4 1 ms over the whole span, CPU time / evaluations) and numpy "
-             f"(`Mechanism.accelerations`, a loop of calls), best of {ROUNDS} rounds taken in turn over the variants.", "",
+             f"(`Mechanism.accelerations`, a loop of calls), best of {ROUNDS} rounds taken in turn over the "
+             "variants.", "",
              "| scene | variant | compiled (µs/eval) | numpy (µs/eval) | compiled ≤ reference? |",
              "|---|---|---|---|---|"]
     verdicts = []

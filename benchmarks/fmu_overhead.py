@@ -29,9 +29,10 @@ record puts a discontinuity at every communication point, where RK4 restarts, in
 RK4 in co-simulation restarts at each communication point, the whole run at each record sample: the
 two are the same times up to rounding, so their lengths differ by round-off (about 1e-14 m).
 
-A second table runs the compiled-path FMUs (at their scenes' own solver) and the C floor through libcosimpy (the Open Simulation
-Platform's C++ engine, when installed) with a last-value observer, which reads every variable of
-the FMU at every step; its process time includes the engine's worker threads.
+A second table runs the compiled-path FMUs (at their scenes' own solver) and the C floor through
+libcosimpy (the Open Simulation Platform's C++ engine, when installed) with a last-value observer,
+which reads every variable of the FMU at every step; its process time includes the engine's worker
+threads.
 
 The compiled kernels are loaded once before timing (their one-off compilation, cached on disk, is
 in the README). Writes docs/fmu_overhead.md.

@@ -1952,12 +1952,12 @@ def native_step_on(tab, t, h, P):
     """One co-simulation step (t, t + h] of the running integration whose arrays `tab` lists: what
     ``CompiledStepper.step`` does while the inputs hold (:func:`cosim_step` with the step bound,
     then every output into `values`; RK4: :func:`integrate_rk4` from the communication point,
-    segment by segment between the discontinuities, then the outputs). Returns NATIVE_TOOK_STEP, or 0 where it declines and leaves
-    the step to the Python path: a communication point that is not the current one, a step size
-    that is not finite and > 0, a failed step or outputs the kernels cannot evaluate. A declined
-    step leaves CLOCK_BUSY set and the integration's state as it was in the backup arrays (b_*),
-    which the Python path restores before it takes the step itself, so that it gives the
-    messages and the results the Python path always gives."""
+    segment by segment between the discontinuities, then the outputs). Returns NATIVE_TOOK_STEP,
+    or 0 where it declines and leaves the step to the Python path: a communication point that is
+    not the current one, a step size that is not finite and > 0, a failed step or outputs the
+    kernels cannot evaluate. A declined step leaves CLOCK_BUSY set and the integration's state as
+    it was in the backup arrays (b_*), which the Python path restores before it takes the step
+    itself, so that it gives the messages and the results the Python path always gives."""
     clock = _f1(tab, 47)
     now = clock[CLOCK_TIME]
     if not (math.isfinite(t) and math.isfinite(h) and h > 0.0):

@@ -742,22 +742,17 @@ class CompiledStepper(Stepper):
 
     def _step_rk4(self, t_end):
         """RK4 from the communication point, its last step shortened to land on t_end; a
-        discontinuity inside (or at t_end) ends a segment there, as the numpy stepper's."""
+        discontinuity inside (or at t_end) ends a segment there, as the numpy stepper's
+        (:func:`compiled_kernels.rk4_cosim_step`, which the FMU's native step calls too)."""
         s, kernel = self.settings, self.kernel
-        eps = 1e-12 * max(1.0, abs(t_end))
-        t0, y = self.time, np.ascontiguousarray(self.y, dtype=float)
-        inputs = kernel._inputs(self.inputs.copy())
-        for end in list(jumps(self.mech, t0 + eps, t_end - eps)) + [t_end]:
-            jump = end if jumps(self.mech, end - eps, end + eps) else 0.0
-            out = np.empty((2, kernel.nq + kernel.n))
-            status, k, steps, evals, t_reached = _k.integrate_rk4(
-                y, t0, end, np.array([t0, end]), out, float(s.step), int(s.max_steps), inputs, float(s.alpha),
-                kernel.params, float(jump))
-            if status:
-                why = failure_text(kernel, status, s.method, s.step, y, t0)
-                raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
-            self.steps += int(steps)
-            t0, y = end, out[1].copy()
+        y = np.array(self.y, dtype=float)                 # advanced in place, segment by segment
+        status, steps, t_reached, t_fail = _k.rk4_cosim_step(
+            y, float(self.time), t_end, self._jumps, np.zeros(2), np.empty((2, len(y))), float(s.step),
+            int(s.max_steps), kernel._inputs(self.inputs.copy()), float(s.alpha), kernel.params)
+        if status:
+            why = failure_text(kernel, status, s.method, s.step, y, t_fail)
+            raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
+        self.steps += int(steps)
         if not np.isfinite(y).all():
             raise SimulationError("the state became non-finite", t_end)
         self.y = y

@@ -1842,6 +1842,38 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, j
 
 
 @njit(cache=True)
+def rk4_cosim_step(y, t0, t_end, jumps, ts, out, step, max_steps, inputs, alpha, P):
+    """RK4 from (t0, y) to t_end, y left at t_end (a co-simulation step: CompiledStepper.step and
+    the FMU's native step), segment by segment: a discontinuity of the increasing `jumps` in
+    (t0, t_end) ends a segment there, where :func:`integrate_rk4` restarts; within
+    eps = 1e-12·max(1 s, |t_end|) one at t_end ends the last segment and one at t0 starts none.
+    `ts`, `out`: scratch of two samples. Returns (status, steps, the time reached, the start of the
+    segment that failed)."""
+    eps = 1e-12 * max(1.0, abs(t_end))
+    steps = 0
+    i = np.searchsorted(jumps, t0 + eps, side="right")
+    while True:
+        if i < jumps.shape[0] and jumps[i] <= t_end - eps:
+            end = jumps[i]
+            i += 1
+        else:
+            end = t_end
+        j = np.searchsorted(jumps, end - eps, side="right")
+        jump = end if j < jumps.shape[0] and jumps[j] <= end + eps else 0.0
+        ts[0] = t0
+        ts[1] = end
+        st, k, s_steps, evals, t_reached = integrate_rk4(y, t0, end, ts, out, step, max_steps, inputs, alpha, P,
+                                                         jump)
+        steps += s_steps
+        if st != OK:
+            return st, steps, t_reached, t0
+        y[:] = out[1]
+        if end == t_end:
+            return OK, steps, t_end, t0
+        t0 = end
+
+
+@njit(cache=True)
 def max_residual(states, P):
     """The largest constraint residual over a history (rows [q, v])."""
     nq = P[16][6]
@@ -1951,8 +1983,8 @@ def native_step3(tab, t, h):
 def native_step_on(tab, t, h, P):
     """One co-simulation step (t, t + h] of the running integration whose arrays `tab` lists: what
     ``CompiledStepper.step`` does while the inputs hold (:func:`cosim_step` with the step bound,
-    then every output into `values`; RK4: :func:`integrate_rk4` from the communication point,
-    segment by segment between the discontinuities, then the outputs). Returns NATIVE_TOOK_STEP,
+    then every output into `values`; RK4: :func:`rk4_cosim_step` from the communication point,
+    then the outputs). Returns NATIVE_TOOK_STEP,
     or 0 where it declines and leaves the step to the Python path: a communication point that is
     not the current one, a step size that is not finite and > 0, a failed step or outputs the
     kernels cannot evaluate. A declined step leaves CLOCK_BUSY set and the integration's state as
@@ -1981,35 +2013,14 @@ def native_step_on(tab, t, h, P):
             _f1(tab, 42), _f1(tab, 43))
     raw, order, values = _f1(tab, 44), _i1(tab, 45), _f1(tab, 46)
     if tab[1] == NATIVE_RK4:
-        # Segment by segment, as CompiledStepper._step_rk4: a discontinuity in (now, t_end) ends a
-        # segment there (within eps: one at t_end ends the last segment, one at now starts none).
-        jumps = _f1(tab, 53)
-        eps = 1e-12 * max(1.0, abs(t_end))
-        t0 = now
-        i = np.searchsorted(jumps, t0 + eps, side="right")
-        while True:
-            if i < jumps.shape[0] and jumps[i] <= t_end - eps:
-                end = jumps[i]
-                i += 1
-            else:
-                end = t_end
-            j = np.searchsorted(jumps, end - eps, side="right")
-            jump = end if j < jumps.shape[0] and jumps[j] <= end + eps else 0.0
-            ts[0] = t0
-            ts[1] = end
-            st, k, steps, evals, t_reached = integrate_rk4(y, t0, end, ts, out, clock[CLOCK_STEP], tab[2], inputs,
-                                                           alpha, P, jump)
-            if st != OK:
+        st, steps, t_reached, t_fail = rk4_cosim_step(y, now, t_end, _f1(tab, 53), ts, out, clock[CLOCK_STEP],
+                                                      tab[2], inputs, alpha, P)
+        if st != OK:
+            return 0
+        for n in range(y.shape[0]):
+            if not math.isfinite(y[n]):
                 return 0
-            y_end = out[1]
-            for n in range(y_end.shape[0]):
-                if not math.isfinite(y_end[n]):
-                    return 0
-            y[:] = y_end
-            hdr[RK_TOTAL] += steps
-            if end == t_end:
-                break
-            t0 = end
+        hdr[RK_TOTAL] += steps
         if _signals_at(t_end, y, inputs, alpha, tab[3] != 0, P, work, raw) != OK:
             return 0
         for n in range(order.shape[0]):

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 from numba import carray, cfunc, njit, types
+from numba.core import cgutils
 from numba.extending import intrinsic, overload
 
 # Translational element kinds (column 0 of ``el_int``).
@@ -458,6 +459,7 @@ def band_solve(AB, b, kl):
 @njit(cache=True)
 def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
     """Eq. (33): out[:n] = q̈, out[n:] = λ (original ordering). Returns a status code."""
+    P = _unowned(P)                 # entered from Python (_unowned)
     perm = P[15]
     dims = P[16]
     status = _assemble_of(t, q, v, inputs, alpha, P, AB, rhs, gen)
@@ -471,6 +473,7 @@ def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
 @njit(cache=True)
 def constraint_residual(q, P):
     """Largest |C_i| over the joints."""
+    P = _unowned(P)                 # entered from Python (_unowned)
     return _residual_of(q, P)
 
 
@@ -510,6 +513,7 @@ def constraint_residual2(q, P):
 def signal_values(q, v, qdd, P, out):
     """Every output at one state (:func:`signal_values2`, :func:`signal_values3`). Returns a status
     code."""
+    P = _unowned(P)                 # entered from Python (_unowned)
     return _signals_of(q, v, qdd, P, out)
 
 
@@ -753,6 +757,7 @@ def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
 def signal_history(times, states, inputs, alpha, need_acc, P, out):
     """`signal_values` at every sample of a history (rows [q, v]). Returns (status, index of the
     sample where it was raised)."""
+    P = _unowned(P)                 # entered from Python (_unowned)
     work = work_arrays(P, states.shape[1], 1)
     for i in range(states.shape[0]):
         st = _signals_at(times[i], states[i], inputs, alpha, need_acc, P, work, out[i])
@@ -1323,6 +1328,7 @@ def signal_values3(q, v, qdd, P, out):
 @njit(cache=True)
 def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
     """dy = [q̇, v̇] at y = [q, v]: q̇ = B(q) v (the identity in 2D), v̇ from Eq. (33)."""
+    P = _unowned(P)                 # entered from Python (_unowned)
     n = P[16][0]
     nq = P[16][6]
     q = y[:nq]
@@ -1694,6 +1700,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     k ≥ 1 (grid[-1] = t_end). Returns (status, samples written, steps, evaluations, t reached, next
     step size): the last is the step size the error control proposes after the last accepted step
     (scipy's ``h_abs``)."""
+    P = _unowned(P)                 # entered from Python (_unowned)
     ny = y0.shape[0]
     hdr = np.zeros(RK_HEADER)
     hdr[RK_T] = t0
@@ -1746,6 +1753,7 @@ def cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol, 
     chosen as scipy does, from the state there, as :func:`integrate_rk` over the segments of a whole
     run. Steps are clipped to the segment's end and to `t_bound`. `ts` (one slot) and `out` (one
     row) take the sample. Returns (integrator status, signal status)."""
+    P = _unowned(P)                 # entered from Python (_unowned)
     while True:
         jump = hdr[RK_JUMP]
         if jump > 0.0 and hdr[RK_T] >= jump and t_end > jump:
@@ -1774,6 +1782,7 @@ def cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol, 
 def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump):
     """Classical RK4 with a fixed step (the last one shortened), cubic Hermite between nodes; `jump`:
     a discontinuity the integration ends at (0: none), see :func:`_before`."""
+    P = _unowned(P)                 # entered from Python (_unowned)
     before = _before(jump)
     n = P[16][0]
     m = P[16][1]
@@ -1849,6 +1858,7 @@ def rk4_cosim_step(y, t0, t_end, jumps, ts, out, step, max_steps, inputs, alpha,
     eps = 1e-12·max(1 s, |t_end|) one at t_end ends the last segment and one at t0 starts none.
     `ts`, `out`: scratch of two samples. Returns (status, steps, the time reached, the start of the
     segment that failed)."""
+    P = _unowned(P)                 # entered from Python (_unowned)
     eps = 1e-12 * max(1.0, abs(t_end))
     steps = 0
     i = np.searchsorted(jumps, t0 + eps, side="right")
@@ -1876,6 +1886,7 @@ def rk4_cosim_step(y, t0, t_end, jumps, ts, out, step, max_steps, inputs, alpha,
 @njit(cache=True)
 def max_residual(states, P):
     """The largest constraint residual over a history (rows [q, v])."""
+    P = _unowned(P)                 # entered from Python (_unowned)
     nq = P[16][6]
     worst = 0.0
     for k in range(states.shape[0]):
@@ -1933,6 +1944,32 @@ def _pointer(typingctx, address, dtype):
     def codegen(context, builder, signature, args):
         return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
     return sig, codegen
+
+
+@intrinsic
+def _unowned(typingctx, arrays):
+    """The tuple of arrays `arrays` as views that numba does not reference-count (no owner: a null
+    meminfo, as a view of a raw pointer has, :func:`_f1`).
+
+    Numba increments and decrements, atomically, the reference count of every array of a tuple
+    each time the tuple enters or leaves a kernel that is not inlined: for a scene's P (19 arrays,
+    passed down through a few nested kernels per evaluation of Eq. 33) a quarter of an evaluation's
+    time on the paper scenes. A kernel entered from Python takes P through this at its start: its
+    caller holds P for the whole call, and no kernel returns or keeps P's arrays, so the views
+    never outlive them. Only for arguments: a tuple a kernel allocates itself may be released after
+    its last use, before the views are."""
+    if not isinstance(arrays, types.BaseTuple) or not all(isinstance(a, types.Array) for a in arrays):
+        return None
+
+    def codegen(context, builder, signature, args):
+        tup = args[0]
+        for i, ty in enumerate(signature.args[0]):
+            view = context.make_array(ty)(context, builder, builder.extract_value(tup, i))
+            view.meminfo = cgutils.get_null_value(view.meminfo.type)
+            view.parent = cgutils.get_null_value(view.parent.type)
+            tup = builder.insert_value(tup, view._getvalue(), i)
+        return tup
+    return arrays(arrays), codegen
 
 
 @njit(cache=True, inline="always")

@@ -745,7 +745,7 @@ def work_arrays(P, ny, stages):
 def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
     """`signal_values` at one state y = [q, v]; accelerations from Eq. (33) only when `need_acc`."""
     nq = P[16][6]
-    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = work
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
     if need_acc:
         st = accelerations(t, y[:nq], y[nq:], inputs, alpha, P, AB, rhs, gen, sig_acc)
         if st != OK:
@@ -1464,7 +1464,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     `work`: scratch from :func:`work_arrays` with rk_stages(A) rows of stages.
     Returns (status, the first k not written); on failure y, f and the last step's data are those of
     the last good node."""
-    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = work
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
     ny = y.shape[0]
     if method == 0:
         n_stages = 12
@@ -1783,25 +1783,18 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, j
     """Classical RK4 with a fixed step (the last one shortened), cubic Hermite between nodes; `jump`:
     a discontinuity the integration ends at (0: none), see :func:`_before`."""
     P = _unowned(P)                 # entered from Python (_unowned)
+    work = work_arrays(P, y0.shape[0], 4)
+    return _rk4_run(y0.copy(), t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, work)
+
+
+@njit(cache=True)
+def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, work):
+    """:func:`integrate_rk4` from y (overwritten) with the scratch `work` (:func:`work_arrays`, 4 rows
+    of stages), an argument so that it can be taken without reference counting (_unowned)."""
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
+    f, k2, k3, k4 = K[0], K[1], K[2], K[3]
     before = _before(jump)
-    n = P[16][0]
-    m = P[16][1]
-    N = n + m
-    kl = P[16][2]
-    ku = P[16][3]
-    AB = band_storage(kl, ku, N)
-    rhs = np.empty(N)
-    gen = np.empty(n)
-    acc = np.empty(N)
-    ny = y0.shape[0]
-    y = y0.copy()
-    f = np.empty(ny)
-    k2 = np.empty(ny)
-    k3 = np.empty(ny)
-    k4 = np.empty(ny)
-    ys = np.empty(ny)
-    y_new = np.empty(ny)
-    f_new = np.empty(ny)
+    ny = y.shape[0]
     t = t0
     evals = 1
     st = _rhs(min(t, before), y, inputs, alpha, P, AB, rhs, gen, acc, f)
@@ -1952,12 +1945,15 @@ def _unowned(typingctx, arrays):
     meminfo, as a view of a raw pointer has, :func:`_f1`).
 
     Numba increments and decrements, atomically, the reference count of every array of a tuple
-    each time the tuple enters or leaves a kernel that is not inlined: for a scene's P (19 arrays,
-    passed down through a few nested kernels per evaluation of Eq. 33) a quarter of an evaluation's
-    time on the paper scenes. A kernel entered from Python takes P through this at its start: its
-    caller holds P for the whole call, and no kernel returns or keeps P's arrays, so the views
-    never outlive them. Only for arguments: a tuple a kernel allocates itself may be released after
-    its last use, before the views are."""
+    each time the tuple enters or leaves a kernel that is not inlined. A scene's P (19 arrays) and
+    the integrators' scratch (:func:`work_arrays`) are passed down through a few nested kernels
+    per evaluation of Eq. (33): counted, they took 30 % of a whole run's time on the paper scenes.
+    So a kernel entered from Python takes P through this at its start, and the loops that call
+    kernels take their scratch through it (:func:`rk_advance`, :func:`_rk4_run`,
+    :func:`_signals_at`). Only for a kernel's own arguments: its caller holds them for the whole
+    call, and no kernel returns or keeps them, so the views never outlive the arrays. An array a
+    kernel allocates itself may be released after its last use, before the views are: such
+    scratch is passed to an inner kernel as an argument instead (:func:`integrate_rk4`)."""
     if not isinstance(arrays, types.BaseTuple) or not all(isinstance(a, types.Array) for a in arrays):
         return None
 

@@ -106,6 +106,57 @@ def test_band_solve_is_partial_pivoting_bit_for_bit(kl, ku, N):
 
 
 @needs_numba
+def test_unowned_views_share_the_arrays_memory():
+    """compiled_kernels._unowned gives views of the very arrays passed in (a write through a view is
+    a write to the array), of the same shapes and dtypes."""
+    from numba import njit
+    ck = compiled._k
+
+    @njit
+    def write_through(arrays, value):
+        views = ck._unowned(arrays)
+        views[0][1] = value
+        views[1][1, 0] = 7
+        return views[0].shape[0], views[1].shape[1]
+
+    a, b = np.zeros(3), np.zeros((2, 2), dtype=np.int64)
+    assert write_through((a, b), 2.5) == (3, 2)
+    assert a[1] == 2.5 and b[1, 0] == 7
+
+
+@needs_numba
+@pytest.mark.parametrize("method", ["DOP853", "RK4"])
+def test_kernels_leave_the_reference_counts_of_the_scenes_arrays_as_they_were(method):
+    """The kernels take the scene's arrays P and their scratch as views numba does not
+    reference-count (compiled_kernels._unowned). A view that took a reference and never gave it
+    back would keep P's arrays alive for ever; one that gave back a reference it never took would
+    free them under the caller. Numba's hold on an array passed from Python is a reference to the
+    Python object, so either would show in sys.getrefcount: whole runs, stepper steps (which take
+    the scratch the stepper keeps) and outputs must leave every count as it was, and repeat their
+    results bit for bit."""
+    import sys
+
+    model = inerter.load(PAPER[1], **{"experiment.method": method})
+    kernel = compiled._kernel_for(model.mechanism)
+
+    def run():
+        result = model.simulate(stop_time=0.5, output_interval=0.01, metrics=False, path="compiled")
+        stepper = model.stepper(path="compiled")
+        assert stepper.path == "compiled"
+        for k in range(1, 11):
+            stepper.step(0.05 * k)
+        return result["C.r[2]"], np.array(list(stepper.outputs().values()))
+
+    first = run()
+    counts = [sys.getrefcount(a) for a in kernel.params]
+    for _ in range(3):
+        again = run()
+        np.testing.assert_array_equal(again[0], first[0])
+        np.testing.assert_array_equal(again[1], first[1])
+    assert [sys.getrefcount(a) for a in kernel.params] == counts
+
+
+@needs_numba
 @pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
 @pytest.mark.parametrize("centripetal", [True, False])
 def test_kernel_matches_numpy_path(path, centripetal):

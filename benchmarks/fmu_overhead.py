@@ -19,6 +19,7 @@ in turn, so drifting load weighs on all alike):
   doStep does nothing (what fmpy and pythonfmu cost per step), and the same FMU with its binary
   replaced by benchmarks/c_floor_fmu.c, a C binary that does nothing, alone in the FMU (what fmpy
   alone costs, extraction included; no FMU driven by fmpy can cost less);
+- the fixed cost of a run: the FMU and the C floor over a single communication step;
 - on the compiled path, the FMU binary's own work without an importer: the stepper's first step,
   then the native step's C function (inerter.compiled_kernels.native_step_cfunc) called through
   ctypes for every further step, on the table the slave gives the FMU's binary (its lengths at the
@@ -176,7 +177,7 @@ def main(argv=None):
     if not compiled.AVAILABLE:
         raise SystemExit(f"the compiled path is not available: {compiled.WHY_NOT}")
     compiled.warm_up()
-    rows, cosim_rows = [], []
+    rows, cosim_rows, fixed_rows = [], [], []
     try:
         import libcosimpy  # noqa: F401
         has_cosim = True
@@ -240,6 +241,15 @@ def main(argv=None):
             return fmpy.simulate_fmu(which, stop_time=args.stop_time, output_interval=args.step)
 
         fmu_run("compiled", True)                             # load the kernels inside the FMU once
+        # The fixed cost of a run: one communication step (extraction, instantiation, loading the scene,
+        # initialisation, one step, termination, clean-up), the FMU against the C floor's.
+        one = [np.inf, np.inf]
+        for _ in range(args.repeats):
+            one[0] = min(one[0], cpu(lambda: fmpy.simulate_fmu(fmu, stop_time=args.step, output_interval=args.step,
+                                                               start_values=solver_start))[0])
+            one[1] = min(one[1], cpu(lambda: fmpy.simulate_fmu(c_floor, stop_time=args.step,
+                                                               output_interval=args.step))[0])
+        fixed_rows.append((name, *one))
         if has_cosim and solver is None:
             whole_cpu = cpu(lambda: whole("compiled"))[0]
             native, python, cosim_floor = (cosim_cpu(fmu, args, True), cosim_cpu(fmu, args, False),
@@ -286,6 +296,11 @@ def main(argv=None):
                    f"| **{e / c:.2f}** | {e / d:.2f} | {(e - cf) / c:.2f} | {_or_dash(x, '.3f')} "
                    f"| {_or_dash(x / c, '.2f')} "
                    f"| {f:.2e} |\n" for a, p, b, c, d, e, g, cf, f, x in rows)
+    body += ("\nThe fixed cost of a run: `fmpy.simulate_fmu` over one communication step (extraction, "
+             "instantiation, loading the scene, initialisation, one step, termination, clean-up), the FMU with "
+             f"native steps against the C floor, best of {args.repeats}:\n\n"
+             "| scene | FMU, one step (s) | C floor, one step (s) | FMU − C floor (s) |\n|---|---|---|---|\n")
+    body += "".join(f"| {a} | {o:.4f} | {f:.4f} | {o - f:.4f} |\n" for a, o, f in fixed_rows)
     if cosim_rows:
         body += ("\nThrough libcosimpy (last-value observer: every variable read at every step), compiled path, "
                  "process CPU seconds, best of {r}:\n\n"

@@ -1947,7 +1947,8 @@ def _unowned(typingctx, arrays):
     Numba increments and decrements, atomically, the reference count of every array of a tuple
     each time the tuple enters or leaves a kernel that is not inlined. A scene's P (19 arrays) and
     the integrators' scratch (:func:`work_arrays`) are passed down through a few nested kernels
-    per evaluation of Eq. (33): counted, they took 30 % of a whole run's time on the paper scenes.
+    per evaluation of Eq. (33): counted, they took half of a whole run's time on the paper scenes
+    (two-bar, 20 s: 78 ms counted, 39 ms not; the same steps, bit for bit the same results).
     So a kernel entered from Python takes P through this at its start, and the loops that call
     kernels take their scratch through it (:func:`rk_advance`, :func:`_rk4_run`,
     :func:`_signals_at`). Only for a kernel's own arguments: its caller holds them for the whole

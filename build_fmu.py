@@ -8,7 +8,7 @@ An FMU is rebuilt only when its scene or the shipped code changed. Same as `iner
 """
 import sys
 
-from inerter.fmu_build import main
+from inerter.fmu.build import main
 
 if __name__ == "__main__":
     sys.exit(main())

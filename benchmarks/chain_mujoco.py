@@ -189,7 +189,7 @@ def compiled_tip(links: int, stop_time: float, output_interval: float = 0.01, **
     import tempfile
 
     import inerter
-    from inerter import compiled
+    from inerter.engine import compiled
     from chain_scene import write_chain
 
     tmp = Path(tempfile.mkdtemp())

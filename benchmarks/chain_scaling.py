@@ -45,9 +45,10 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(ROOT))
 
+from inerter import api
 import inerter  # noqa: E402
 from inerter import compiled  # noqa: E402
-from inerter.simulation import integrate  # noqa: E402
+from inerter.engine.simulation import integrate  # noqa: E402
 from chain_scene import write_chain  # noqa: E402
 
 STEPS = [2e-2, 1.75e-2, 1.5e-2, 1.25e-2, 1e-2, 5e-3, 2.5e-3, 1e-3, 5e-4, 2.5e-4]
@@ -337,7 +338,7 @@ def main(argv=None):
     log = lambda s: print(s, flush=True)  # noqa: E731
     load = os.getloadavg()[0]
     log(f"MuJoCo {mj_version}; load average at start {load:.2f}")
-    compiled.warm_up()
+    api.warm_up()
     links = [int(x) for x in a.links.split(",")]
     acc_links = [int(x) for x in (a.accuracy_links or a.links).split(",")]
     tmp = Path(tempfile.mkdtemp())

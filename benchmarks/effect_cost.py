@@ -26,6 +26,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(ROOT))
 
+from inerter import api
 import inerter  # noqa: E402
 from inerter import compiled  # noqa: E402
 from chain_scene import chain_toml  # noqa: E402
@@ -72,7 +73,7 @@ def main(argv=None):
     a = p.parse_args(argv)
     if not compiled.AVAILABLE:
         raise SystemExit(f"the compiled path is not available: {compiled.WHY_NOT}")
-    compiled.warm_up()
+    api.warm_up()
     tmp = Path(tempfile.mkdtemp())
     bases = [("two_bar_2d", (ROOT / "scenarios" / "two_bar_2d.toml").read_text(), 20.0, 300),
              ("chain_32", chain_toml(32), 1.0, 20)]

@@ -13,7 +13,7 @@ in turn, so drifting load weighs on all alike):
   one integration running across the communication points, outputs evaluated after each step);
 - the FMU through `fmpy.simulate_fmu` (extraction, instantiation, every step, every output
   recorded), with its parameter `compiled` set accordingly. On the compiled path twice: as shipped
-  (the FMU's binary takes the steps natively, inerter/fmu_native.py) and with native steps off
+  (the FMU's binary takes the steps natively, inerter/fmu/native.py) and with native steps off
   (INERTER_FMU_NATIVE=0: every step through pythonfmu into the slave);
 - two floors, through the same `fmpy.simulate_fmu` call with as many outputs: a pythonfmu FMU whose
   doStep does nothing (what fmpy and pythonfmu cost per step), and the same FMU with its binary
@@ -21,7 +21,7 @@ in turn, so drifting load weighs on all alike):
   alone costs, extraction included; no FMU driven by fmpy can cost less);
 - the fixed cost of a run: the FMU and the C floor over a single communication step;
 - on the compiled path, the FMU binary's own work without an importer: the stepper's first step,
-  then the native step's C function (inerter.compiled_kernels.native_step_cfunc) called through
+  then the native step's C function (inerter.engine.kernels.native_step_cfunc) called through
   ctypes for every further step, on the table the slave gives the FMU's binary (its lengths at the
   stop time must equal the stepper's, bit for bit).
 
@@ -52,10 +52,11 @@ from pathlib import Path
 
 import numpy as np
 
+from inerter import api
 import inerter
-from inerter import compiled
-from inerter.bench import settle
-from inerter.fmu_build import build
+from inerter.engine import compiled
+from inerter.studies.bench import settle
+from inerter.fmu.build import build
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -64,7 +65,7 @@ from chain_scene import write_chain  # noqa: E402
 
 
 def cpu(fn):
-    """(process time of fn(), its value), settled first (inerter.bench.settle): the garbage
+    """(process time of fn(), its value), settled first (inerter.studies.bench.settle): the garbage
     collections during fn() traverse fn's own objects only, not the results of every row before it."""
     settle()
     t0 = time.process_time()
@@ -176,7 +177,7 @@ def main(argv=None):
     import fmpy
     if not compiled.AVAILABLE:
         raise SystemExit(f"the compiled path is not available: {compiled.WHY_NOT}")
-    compiled.warm_up()
+    api.warm_up()
     rows, cosim_rows, fixed_rows = [], [], []
     try:
         import libcosimpy  # noqa: F401
@@ -324,7 +325,7 @@ def main(argv=None):
           "(the braced frame's whole run at each record sample, the same times up to rounding): there the "
           "difference is round-off. "
           "As shipped, the FMU's binary takes those steps itself in compiled code and serves the outputs "
-          "(inerter/fmu_native.py); with native steps off, every doStep and getReal goes through pythonfmu "
+          "(inerter/fmu/native.py); with native steps off, every doStep and getReal goes through pythonfmu "
           "into the slave. The two floors are FMUs that do nothing, driven by the same fmpy call: with "
           "pythonfmu's binary (fmpy's and pythonfmu's cost per step) and with a C binary "
           "(benchmarks/c_floor_fmu.c: fmpy's own cost, recording every output at every step). "

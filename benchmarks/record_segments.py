@@ -40,8 +40,8 @@ def main(argv=None):
     base = inerter.load(a.scene)
     if base.mechanism.ground_motion is None or base.mechanism.ground_motion.record is None:
         raise SystemExit(f"{a.scene}: the scene has no ground acceleration record")
-    ref = run(base.oracle(), True, stop_time=a.stop_time, rtol=inerter.model.ORACLE_RTOL,
-              atol=inerter.model.ORACLE_ATOL)
+    ref = run(base.oracle(), True, stop_time=a.stop_time, rtol=inerter.api.ORACLE_RTOL,
+              atol=inerter.api.ORACLE_ATOL)
     names = [n for n in ref.names if ".r[" in n]
     print(f"oracle: {ref.run.steps} steps, {ref.run.cpu_time:.2f} s")
     rows = []

@@ -26,7 +26,7 @@ def main():
                 kw = {}
                 if kind == "oracle":
                     model = model.oracle()
-                    kw = dict(rtol=inerter.model.ORACLE_RTOL, atol=inerter.model.ORACLE_ATOL)
+                    kw = dict(rtol=inerter.api.ORACLE_RTOL, atol=inerter.api.ORACLE_ATOL)
                 t0 = time.process_time()
                 result = model.simulate(**kw)
                 total = time.process_time() - t0

@@ -16,8 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
+from inerter import api
 import inerter
-from inerter import compiled
+from inerter.engine import compiled
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -37,7 +38,7 @@ def timed(model, path):
 def main():
     if not compiled.AVAILABLE:
         raise SystemExit(f"numba is not available: {compiled.WHY_NOT}")
-    warm = compiled.warm_up(spatial=True)
+    warm = api.warm_up(spatial=True)
     rows = []
     for path in sorted((ROOT / "scenarios").glob("*_3d.toml")):
         model = inerter.load(path)

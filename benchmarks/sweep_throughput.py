@@ -26,7 +26,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 import inerter
-from inerter.sweep import DaskClient, Sweep, parse_vary, read_results, run_sweep
+from inerter.studies.sweep import DaskClient, Sweep, parse_vary, read_results, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenarios" / "lumped_mass_2d.toml"
@@ -64,7 +64,7 @@ def serial(sweep: Sweep) -> tuple[float, dict, list[float]]:
     for run in sweep.runs():
         t = time.perf_counter()
         if sweep.model == "fmu":
-            from inerter.fmu_run import simulate_fmu
+            from inerter.fmu.run import simulate_fmu
             result = simulate_fmu(sweep.scene, run.overrides, stop_time=sweep.stop_time, step=sweep.step)
         else:
             result = inerter.load(sweep.scene, **run.overrides).simulate(stop_time=sweep.stop_time)

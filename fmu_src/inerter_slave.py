@@ -1,6 +1,6 @@
 """The generic FMI 2.0 co-simulation slave: one inerter scene behind the FMI interface.
 
-Every FMU built by :mod:`inerter.fmu_build` ships this file in its ``resources/`` next to a
+Every FMU built by :mod:`inerter.fmu.build` ships this file in its ``resources/`` next to a
 small generated module that subclasses :class:`InerterSlave` under the scene's name and names
 the scene file shipped beside it. The slave loads that scene with the solver package shipped in
 the same ``resources/`` and exposes it as
@@ -55,8 +55,8 @@ from pythonfmu import Boolean, DefaultExperiment, Fmi2Slave, Integer, Real, Stri
 from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability, Fmi2Initial
 
 import inerter
-from inerter import fmu_native
-from inerter.errors import InerterError, SimulationError
+from inerter.fmu import native as fmu_native
+from inerter.common.errors import InerterError, SimulationError
 
 STATE_FORMAT = "inerter-fmu-state/1"
 
@@ -163,7 +163,7 @@ class InerterSlave(Fmi2Slave):
         self._outputs = [float(v) for v in model.stepper().output_values()]
 
         self._register(model)
-        # The native doStep (inerter/fmu_native.py): the FMU's binary steps in compiled code
+        # The native doStep (inerter/fmu/native.py): the FMU's binary steps in compiled code
         # whenever this slave arms it.
         kinds = ((Real, fmu_native.REAL), (Integer, fmu_native.INTEGER),
                  (Boolean, fmu_native.BOOLEAN), (String, fmu_native.STRING))
@@ -548,7 +548,7 @@ class InerterSlave(Fmi2Slave):
         return True
 
     def _arm_native(self, stepper):
-        """Let the FMU's binary take the next step natively where it can (inerter/fmu_native.py)."""
+        """Let the FMU's binary take the next step natively where it can (inerter/fmu/native.py)."""
         try:
             self._native.arm(stepper, TIME_TOLERANCE)
         except Exception as exc:  # the steps go on here, as without the link

@@ -14,7 +14,7 @@
  * every call is forwarded with the original's component, and the slave's messages reach the
  * importer through the original's logger calls as before.
  *
- * The native doStep (inerter/fmu_native.py says the protocol). After fmi2Instantiate the shim reads
+ * The native doStep (inerter/fmu/native.py says the protocol). After fmi2Instantiate the shim reads
  * the slave's context address through the private Integer value references NATIVE_LINK_VR and
  * NATIVE_LINK_VR + 1. After a doStep the slave took and returned fmi2OK, it arms itself where the
  * context says so, and then takes the next doStep by calling the context's C function on the
@@ -25,7 +25,7 @@
  * NATIVE_SYNC_VR, and the slave takes them over. Every call but fmi2DoStep and the getters disarms
  * it until the next step the slave takes.
  *
- * Build (inerter/fmu_build.py does it, with the value reference from modelDescription.xml):
+ * Build (inerter/fmu/build.py does it, with the value reference from modelDescription.xml):
  *   gcc -shared -fPIC -O2 -fvisibility=hidden -pthread -DSTATUS_VR=<n> \
  *       -DNATIVE_LINK_VR=<n> -DNATIVE_SYNC_VR=<n> -DNATIVE_MAGIC=<n> \
  *       -DORIGINAL_LIBRARY='"<modelIdentifier>.pythonfmu.so"' -o <modelIdentifier>.so \
@@ -76,7 +76,7 @@
 #error "compile with -DORIGINAL_LIBRARY='\"<file name of pythonfmu's binary>\"'"
 #endif
 #if !defined(NATIVE_LINK_VR) || !defined(NATIVE_SYNC_VR) || !defined(NATIVE_MAGIC)
-#error "compile with -DNATIVE_LINK_VR, -DNATIVE_SYNC_VR and -DNATIVE_MAGIC (inerter/fmu_native.py)"
+#error "compile with -DNATIVE_LINK_VR, -DNATIVE_SYNC_VR and -DNATIVE_MAGIC (inerter/fmu/native.py)"
 #endif
 #ifndef PATH_MAX
 #define PATH_MAX 4096
@@ -222,14 +222,14 @@ __attribute__((destructor)) static void unload_original(void)
     handle = NULL;
 }
 
-/* The context's slots and the kinds of variables in its map (inerter/fmu_native.py). */
+/* The context's slots and the kinds of variables in its map (inerter/fmu/native.py). */
 enum {
     CTX_MAGIC, CTX_ARMED, CTX_FUNCTION, CTX_TABLE, CTX_MAP_SIZE, CTX_MAP, CTX_VALUES, CTX_REALS,
     CTX_INTEGERS, CTX_BOOLEANS, CTX_STRINGS
 };
 enum { KIND_OUTPUT, KIND_REAL, KIND_INTEGER, KIND_BOOLEAN, KIND_STRING };
 
-/* inerter.compiled_kernels.native_step: 1 when it took the step (t, t + h], else 0. */
+/* inerter.engine.kernels.native_step: 1 when it took the step (t, t + h], else 0. */
 typedef int32_t native_step_fn(const int64_t *table, double t, double h);
 
 /* An instance: the original's component and the native link's state. */
@@ -278,7 +278,7 @@ static fmi2Status enter(fmi2Component c)
     return sync(w);
 }
 
-/* Where the value of each of vr[0..nvr) is, as (kind << 32) + index (inerter/fmu_native.py), when
+/* Where the value of each of vr[0..nvr) is, as (kind << 32) + index (inerter/fmu/native.py), when
  * native steps were taken since the slave last ran and every one of them is of kind `kind` (or
  * KIND_OUTPUT, where `kind` is KIND_REAL); else 0, and the getter goes to the slave. */
 static int served(const struct instance *w, const fmi2ValueReference vr[], size_t nvr, int kind,

@@ -10,27 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InerterError, SceneError
+from inerter.common.errors import InerterError, SceneError
+from inerter.scene.overrides import parse_set  # noqa: F401  (the CLI's --set)
 
 PAPER_SCENES = ("lumped_mass_2d", "two_bar_2d")
-
-
-def parse_set(items) -> dict:
-    """``NAME=VALUE`` pairs; VALUE is read as a TOML value (20, 1e-3, false, [0, -9.81]) or, failing
-    that, as a bare string (a method name)."""
-    out = {}
-    for item in items or []:
-        if "=" not in item:
-            raise SceneError("--set", item, item, "NAME=VALUE, e.g. b=20 or effects.centripetal=false",
-                             "missing '='")
-        name, text = item.split("=", 1)
-        name = name.strip()
-        try:
-            value = tomllib.loads(f"v = {text.strip()}")["v"]
-        except tomllib.TOMLDecodeError:
-            value = text.strip()
-        out[name] = value
-    return out
 
 
 def _write(result, out: Path, stem: str, label: str | None = None):
@@ -45,10 +28,10 @@ def _write(result, out: Path, stem: str, label: str | None = None):
 
 def simulate(scene, overrides, model_kind, args):
     """Run one scene through the solver, the oracle or its FMU; returns a Result."""
-    from .model import ORACLE_ATOL, ORACLE_RTOL, load
+    from inerter.api import ORACLE_ATOL, ORACLE_RTOL, load
     kw = dict(stop_time=args.stop_time, method=args.method, rtol=args.rtol)
     if model_kind == "fmu":
-        from .fmu_run import simulate_fmu
+        from inerter.fmu.run import simulate_fmu
         return simulate_fmu(scene, overrides, stop_time=args.stop_time, step=args.step)
     model = load(scene, **overrides)
     if model_kind == "oracle":
@@ -68,7 +51,7 @@ def cmd_run(args):
     stem = result.model.name
     summary = _write(result, out, stem)
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
-    from .plotting import plot_runs
+    from inerter.studies.plotting import plot_runs
     plot_runs([(args.model, result, {})], out / f"{stem}.png", f"{stem} ({args.model})")
     print(f"{stem}: {result.status} ({result.message}); {len(result.time)} samples to t = "
           f"{result.time[-1]:.6g} s in {wall:.2f} s wall; path: {summary['statistics']['path']}")
@@ -100,7 +83,7 @@ def cmd_compare(args):
     diff = max_difference(corrected, oracle)
     summaries["max_difference_to_oracle_m"] = diff
     (out / "summary.json").write_text(json.dumps({"scene": name, "runs": summaries}, indent=2, default=float))
-    from .plotting import plot_runs
+    from inerter.studies.plotting import plot_runs
     png = plot_runs(runs, out / f"{name}_compare.png", f"{name}: with and without the centripetal term")
     print(f"{name}:")
     keys = sorted(set(summaries["corrected"]["metrics"]) | set(summaries["uncorrected"]["metrics"]))
@@ -125,7 +108,7 @@ def max_difference(a, b) -> float:
 
 
 def cmd_describe(args):
-    from .model import load
+    from inerter.api import load
     model = load(args.scene, **parse_set(args.set))
     print(f"{model.name}: {model.scene.description}")
     print("compiled terms:")
@@ -140,7 +123,7 @@ def cmd_describe(args):
 
 
 def cmd_build_fmu(args):
-    from .fmu_build import main as build_main
+    from inerter.fmu.build import main as build_main
     return build_main(args.scenes + (["--force"] if args.force else []))
 
 
@@ -157,10 +140,10 @@ def cmd_paper(args):
 
 #: Subcommands whose arguments their own module parses.
 DELEGATED = {
-    "bench": ("bench", "main_bench", "work-precision diagrams: error against the oracle vs CPU time"),
-    "sweep": ("sweep", "main_sweep", "parameter sweeps on dask, resumable"),
-    "study": ("sweep", "main_study", "built-in studies: fig9, two_bar_b, two_bar_f"),
-    "sweep-plot": ("sweep", "main_sweep_plot", "plot a metric of a sweep's results against a parameter"),
+    "bench": ("studies.bench", "main_bench", "work-precision diagrams: error against the oracle vs CPU time"),
+    "sweep": ("studies.sweep", "main_sweep", "parameter sweeps on dask, resumable"),
+    "study": ("studies.builtin", "main_study", "built-in studies: fig9, two_bar_b, two_bar_f"),
+    "sweep-plot": ("studies.sweep", "main_sweep_plot", "plot a metric of a sweep's results against a parameter"),
 }
 
 

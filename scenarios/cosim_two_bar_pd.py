@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 import inerter
-from inerter.cosim import build_controller, run_coupled
-from inerter.fmu_build import build
+from inerter.fmu.cosim import build_controller, run_coupled
+from inerter.fmu.build import build
 
 HERE = Path(__file__).resolve().parent
 

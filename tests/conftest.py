@@ -39,7 +39,7 @@ def runs():
 @pytest.fixture(scope="session")
 def fmu_runs():
     """fmu_runs(scene_path, **overrides, stop_time=..., step=...) → FMU result (fmpy), shared."""
-    from inerter.fmu_run import simulate_fmu
+    from inerter.fmu.run import simulate_fmu
     cache = {}
 
     def get(scene, stop_time=None, step=None, metrics=True, **overrides):

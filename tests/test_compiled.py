@@ -1,4 +1,4 @@
-"""The compiled fast path (inerter.compiled): the kernel against Mechanism.accelerations, the
+"""The compiled fast path (inerter.engine.compiled): the kernel against Mechanism.accelerations, the
 compiled integrators against the oracle. No timing assertions (timings: benchmarks/)."""
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import inerter
-from inerter import compiled
-from inerter.simulation import integrate
+from inerter.engine import compiled
+from inerter.engine.simulation import integrate
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = sorted((ROOT / "scenarios").glob("*.toml"))
@@ -70,7 +70,7 @@ def test_band_solve_is_partial_pivoting_bit_for_bit(kl, ku, N):
     profiles changes no operation on a nonzero. Random banded matrices with a third of the band
     zero and zero diagonals in places (as the augmented matrix's λ rows), so rows are swapped; the
     residual is checked against the matrix too (1e-12 relative). A singular matrix returns False."""
-    from inerter import compiled_kernels as ck
+    from inerter.engine import kernels as ck
 
     rng = np.random.default_rng(kl * 100 + ku * 10 + N)
     solved = 0
@@ -314,7 +314,7 @@ def test_failure_is_reported_not_raised():
 
 @needs_numba
 def test_bench_writes_table_csv_and_png(tmp_path):
-    from inerter.bench import main_bench
+    from inerter.studies.bench import main_bench
     code = main_bench([str(PAPER[0]), "--out", str(tmp_path), "--stop-time", "0.5", "--paths", "compiled",
                        "--methods", "DOP853,RK4", "--quick"])
     assert code == 0
@@ -330,7 +330,7 @@ def test_bench_measures_the_fmu_path_against_the_oracle(tmp_path):
     pytest.importorskip("fmpy")
     import csv
 
-    from inerter.bench import main_bench
+    from inerter.studies.bench import main_bench
     code = main_bench([str(PAPER[0]), "--out", str(tmp_path), "--stop-time", "0.5", "--paths", "fmu",
                        "--methods", "DOP853", "--quick"])
     assert code == 0
@@ -350,7 +350,7 @@ def test_bench_measures_the_fmu_path_against_the_oracle(tmp_path):
 @pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
 def test_compiled_outputs_match_the_numpy_signals(path):
     """Every output (positions, velocities, element s_rel/v_rel/f with the inerter's Eq. 9 force,
-    energy, constraint residual) from the kernels equals inerter.outputs.Signals to round-off
+    energy, constraint residual) from the kernels equals inerter.engine.outputs.Signals to round-off
     (1e-12 relative) at random states."""
     model = inerter.load(path)
     mech, signals = model.mechanism, model.signals
@@ -504,7 +504,7 @@ def test_the_compiled_stepper_falls_back_where_the_loop_cannot_go():
 
 KERNEL_CACHE_PROBE = """
 import json, sys
-from inerter import compiled
+from inerter.engine import compiled
 import inerter
 model = inerter.load(sys.argv[1])
 kernel = compiled.compile_mechanism(model.mechanism)

@@ -1,4 +1,4 @@
-"""The 3D compiled kernels (inerter.compiled_kernels' 3D section, inerter.compiled_spatial) against the numpy
+"""The 3D compiled kernels (inerter.engine.kernels' 3D section, inerter.engine.compiled_spatial) against the numpy
 Mechanism: Eq. (33)'s accelerations and multipliers, q̇ = B(q) v, the constraint residual and the
 output signals, at the initial state and at random states (unnormalised quaternions, joints
 violated, Baumgarte stabilisation on and off)."""
@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 
 import inerter
-from inerter import compiled
-from inerter.elements import TerminalsMeet
-from inerter.outputs import Signals
-from inerter.spatial import axis_angle_matrix, euler_matrix
+from inerter.engine import compiled
+from inerter.common.errors import TerminalsMeet
+from inerter.engine.outputs import Signals
+from inerter.common.rotations import axis_angle_matrix, euler_matrix
 
 pytestmark = pytest.mark.skipif(not compiled.AVAILABLE, reason=compiled.WHY_NOT or "numba missing")
 if compiled.AVAILABLE:
-    from inerter.compiled_spatial import flatten3, signal_layout3, sparsity3
+    from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
     ck = compiled._k                  # the kernels as the package loads them (their on-disk cache)
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,10 +1,10 @@
-"""Tests of inerter.expressions: values, parameter ordering and error messages."""
+"""Tests of inerter.scene.expressions: values, parameter ordering and error messages."""
 import math
 
 import pytest
 
-from inerter.errors import SceneError
-from inerter.expressions import evaluate, evaluate_parameters, free_names, parameter_meta
+from inerter.common.errors import SceneError
+from inerter.scene.expressions import evaluate, evaluate_parameters, free_names, parameter_meta
 
 SOURCE = "scenes/test.toml"
 FIELD = "bodies.arm.length"

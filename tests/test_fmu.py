@@ -1,4 +1,4 @@
-"""The FMI 2.0 co-simulation FMUs (inerter.fmu_build, fmu_src/), checked through fmpy.
+"""The FMI 2.0 co-simulation FMUs (inerter.fmu.build, fmu_src/), checked through fmpy.
 
 One FMU per scene in scenarios/, built once per session. What is checked: the model description
 (fmpy's validator, names, units, descriptions), the binaries (the status shim in front of

@@ -1,4 +1,4 @@
-"""The FMU's native doStep (inerter/fmu_native.py, fmu_src/status_shim.c).
+"""The FMU's native doStep (inerter/fmu/native.py, fmu_src/status_shim.c).
 
 On the compiled path the FMU's binary takes co-simulation steps in compiled code without entering
 Python, and hands everything else to the slave after it took those steps over. It must change
@@ -18,7 +18,8 @@ from test_fmu import (FMI_DISCARD, FMI_ERROR, INPUT, INPUT_SCENE, SCENE_PARAMS, 
                       fmus, instance, needs_shim, unzipped)
 
 import inerter  # noqa: E402
-from inerter import compiled, fmu_native  # noqa: E402
+from inerter import fmu_native  # noqa: E402
+from inerter.engine import compiled
 
 pytestmark = pytest.mark.skipif(not compiled.AVAILABLE, reason="numba is missing: no native steps")
 

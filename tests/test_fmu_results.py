@@ -57,8 +57,8 @@ def test_coupled_cosimulation_converges_to_the_one_scene_solution():
     one scene: the only difference is the zero-order hold of the force, so the error halves
     when the communication step halves (first order), and is small at 5 ms."""
     import inerter
-    from inerter.cosim import build_controller, run_coupled
-    from inerter.fmu_build import build
+    from inerter.fmu.cosim import build_controller, run_coupled
+    from inerter.fmu.build import build
 
     one = inerter.load(SCENARIOS / "two_bar_2d_pd.toml")
     p = {k["name"]: k["value"] for k in one.parameter_info()}

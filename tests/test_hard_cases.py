@@ -18,10 +18,10 @@ from scipy.integrate import solve_ivp
 
 import inerter
 from conftest import LUMPED, SCENARIOS, TWO_BAR
-from inerter import compiled
+from inerter.engine import compiled
 from inerter.cli import main as cli_main
-from inerter.errors import SceneError
-from inerter.simulation import STIFFNESS_EVERY, STIFFNESS_HITS
+from inerter.common.errors import SceneError
+from inerter.engine.simulation import STIFFNESS_EVERY, STIFFNESS_HITS
 
 fmpy = pytest.importorskip("fmpy")
 from fmpy import extract  # noqa: E402
@@ -406,8 +406,9 @@ def test_a_trial_step_into_an_unevaluable_state_is_retried_shorter(tmp_path, mon
     rejected and tried 5 times shorter, as a step with too large an error would be; the run used to
     stop at t = 0 there. The whole run completes on both paths, which agree to 1e-9 m (the same
     algorithm, the same steps), with the constraints held (drift ≤ 1e-8 m)."""
-    from inerter import mechanism, simulation
-    from inerter.errors import SimulationError
+    from inerter.model import mechanism
+    from inerter.engine import simulation
+    from inerter.common.errors import SimulationError
     model = _chain(tmp_path, 8)
     mech, s = model.mechanism, model.settings()
     raised = []
@@ -496,7 +497,7 @@ def test_a_step_force_in_the_solver_matches_the_closed_form():
 
 
 def test_a_step_force_at_a_communication_point_gives_the_solvers_result(hard_fmu):
-    from inerter.fmu_run import simulate_fmu
+    from inerter.fmu.run import simulate_fmu
     fmu = simulate_fmu(STEP, {}, stop_time=1.0, step=0.01, fmu_path=hard_fmu(STEP), metrics=False)
     solver = inerter.load(STEP).simulate(stop_time=1.0, metrics=False)
     assert fmu.status == "ok" and np.allclose(fmu.time, solver.time, rtol=0, atol=1e-9)
@@ -507,7 +508,7 @@ def test_a_step_force_at_a_communication_point_gives_the_solvers_result(hard_fmu
 @pytest.mark.parametrize("step, stop, ts", [(1e-6, 2e-3, 1e-3), (0.5, 3.0, 0.5), (0.5, 3.0, 0.75)],
                          ids=["1e-6 s", "0.5 s, jump at a point", "0.5 s, jump inside a step"])
 def test_communication_steps_from_1e_6_to_half_a_second(hard_fmu, step, stop, ts):
-    from inerter.fmu_run import simulate_fmu
+    from inerter.fmu.run import simulate_fmu
     r = simulate_fmu(STEP, {"ts": ts}, stop_time=stop, step=step, fmu_path=hard_fmu(STEP), metrics=False)
     assert r.status == "ok", r.message
     assert len(r.time) == round(stop / step) + 1
@@ -523,7 +524,7 @@ def test_communication_steps_from_1e_6_to_half_a_second(hard_fmu, step, stop, ts
 # ----------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("scene", [SNAP, MASSLESS, FREE, ALIGNED], ids=lambda p: p.stem)
 def test_hard_scenes_through_the_fmu_match_the_solver(hard_fmu, scene):
-    from inerter.fmu_run import simulate_fmu
+    from inerter.fmu.run import simulate_fmu
     r = simulate_fmu(scene, {}, stop_time=0.5, step=0.01, fmu_path=hard_fmu(scene), metrics=False)
     ref = inerter.load(scene).simulate(stop_time=0.5, output_interval=0.01, metrics=False)
     assert r.status == "ok", r.message
@@ -597,7 +598,7 @@ def test_an_out_of_range_parameter_on_a_hard_scene_fails_fmu_initialisation(hard
 
 @pytest.fixture(scope="module")
 def hard_fmu(tmp_path_factory):
-    from inerter import fmu_build
+    from inerter.fmu import build as fmu_build
     out = tmp_path_factory.mktemp("hard_fmu")
     built = {}
 

@@ -1,10 +1,10 @@
-"""Tests of inerter.metrics against closed-form signals."""
+"""Tests of inerter.engine.metrics against closed-form signals."""
 import math
 
 import numpy as np
 import pytest
 
-from inerter.metrics import crossing_times, free_oscillation, harmonics, steady_state
+from inerter.engine.metrics import crossing_times, free_oscillation, harmonics, steady_state
 
 F0 = 1.7  # Hz
 W0 = 2.0 * math.pi * F0

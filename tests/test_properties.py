@@ -10,7 +10,7 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E402
 
 import inerter  # noqa: E402
-from inerter.errors import SceneError  # noqa: E402
+from inerter.common.errors import SceneError  # noqa: E402
 
 SETTINGS = dict(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 

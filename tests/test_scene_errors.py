@@ -9,7 +9,7 @@ import pytest
 
 import inerter
 from inerter.cli import main as cli_main
-from inerter.errors import SceneError
+from inerter.common.errors import SceneError
 from conftest import LUMPED, TWO_BAR
 
 BASE = TWO_BAR.read_text()

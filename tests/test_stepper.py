@@ -1,4 +1,4 @@
-"""The numpy co-simulation stepper (inerter.simulation.Stepper), which the FMU uses for every scene
+"""The numpy co-simulation stepper (inerter.engine.simulation.Stepper), which the FMU uses for every scene
 the compiled path does not take (3D scenes, implicit methods, step forces, projection): its running
 integration against the whole run, rollback through its state, failures, and stepping past the
 stop time. References: the numpy whole run (`integrate`) and the closed-form impact time of
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import inerter
-from inerter.errors import SimulationError
+from inerter.common.errors import SimulationError
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANAR = ROOT / "scenarios" / "two_bar_2d.toml"

@@ -1,4 +1,4 @@
-"""Parameter sweeps on dask (inerter.sweep, inerter.studies): results, resuming, failures, studies.
+"""Parameter sweeps on dask (inerter.studies.sweep, inerter.studies.builtin): results, resuming, failures, studies.
 
 Short runs (lumped mass, 3 s at rtol 1e-8) on one local cluster of 2 worker processes shared by
 the module; the sweeps reach it through ``--scheduler``, as they would reach a remote one. One
@@ -19,9 +19,10 @@ import pytest
 
 import inerter
 from conftest import LUMPED, ROOT
-from inerter import sweep as sw
-from inerter.studies import STUDIES, make_sweep, study_table
-from inerter.sweep import (ResultsFile, Sweep, main_study, main_sweep, main_sweep_plot, parse_vary, run_key,
+from inerter.studies import sweep as sw
+from inerter.studies.builtin import STUDIES, make_sweep, study_table
+from inerter.studies.builtin import main_study
+from inerter.studies.sweep import (ResultsFile, Sweep, main_sweep, main_sweep_plot, parse_vary, run_key,
                            run_one, run_sweep)
 
 distributed = pytest.importorskip("distributed")
@@ -208,7 +209,7 @@ def test_a_sweep_stopped_part_way_resumes_without_recomputing(tmp_path, client):
 def test_a_killed_sweep_is_finished_by_running_it_again(tmp_path, address):
     out = tmp_path / "killed"
     args = [str(LUMPED), "--vary", "y0=1.1:1.8:8", *FAST, "--workers", "2", "--out", str(out), "--no-progress"]
-    proc = subprocess.Popen([sys.executable, "-c", f"from inerter.sweep import main_sweep; main_sweep({args!r})"],
+    proc = subprocess.Popen([sys.executable, "-c", f"from inerter.studies.sweep import main_sweep; main_sweep({args!r})"],
                             cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     results = out / "results.csv"
     try:
@@ -240,7 +241,7 @@ def test_a_killed_sweep_is_finished_by_running_it_again(tmp_path, address):
 def lumped_fmu(tmp_path_factory):
     pytest.importorskip("fmpy")
     pytest.importorskip("pythonfmu")
-    from inerter.fmu_build import build
+    from inerter.fmu.build import build
     try:
         return build(LUMPED, tmp_path_factory.mktemp("fmu"))
     except inerter.InerterError as exc:                          # pragma: no cover
@@ -248,7 +249,7 @@ def lumped_fmu(tmp_path_factory):
 
 
 def test_fmu_runs_reuse_one_instance_and_match_simulate_fmu(tmp_path, lumped_fmu, client):
-    from inerter.fmu_run import simulate_fmu
+    from inerter.fmu.run import simulate_fmu
     sweep = Sweep(LUMPED, [("y0", [1.3, 1.5])], {"effects.centripetal": False}, model="fmu", stop_time=2.0)
     made = sw.FmuSlot.instances
     rows = []
@@ -335,7 +336,7 @@ def test_a_failed_handshake_with_a_running_scheduler_is_tried_again(address, mon
     connects anew, up to CONNECT_ATTEMPTS times, then stops with its own error."""
     import distributed
 
-    from inerter.sweep import CONNECT_ATTEMPTS, DaskClient, SweepError
+    from inerter.studies.sweep import CONNECT_ATTEMPTS, DaskClient, SweepError
     real, calls = distributed.Client, []
 
     def flaky(*args, **kwargs):

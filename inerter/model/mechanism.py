@@ -19,12 +19,12 @@ import math
 
 import numpy as np
 
-from . import elements as el
-from .errors import SceneError, SimulationError
-from .joints import make_joint
-from .planar import PointKinematics, PointPair
-from .scene import GROUND, Scene
-from .spatial import EULER_SINGULARITY, Orientation, RotationCache, SpatialPoint, cross
+from inerter.model import evaluators as el
+from inerter.common.errors import SceneError, SimulationError
+from inerter.model.joints import make_joint
+from inerter.model.planar import PointKinematics, PointPair
+from inerter.scene.reader import GROUND, Scene
+from inerter.model.spatial import EULER_SINGULARITY, Orientation, RotationCache, SpatialPoint, cross
 
 #: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
 ASSEMBLY_TOLERANCE = 1e-6
@@ -78,12 +78,15 @@ class BodyFrame:
 
 
 class Mechanism:
-    """A scene compiled for simulation. `oracle=True` evaluates the translational elements by
-    differentiating their terminal distance L(q) (module `oracle`) instead of Eqs. (15–20)."""
+    """A scene compiled for simulation. `element_factory`, where given, builds the translational
+    elements instead of :mod:`inerter.model.evaluators`: the oracle (:mod:`inerter.oracle`) passes
+    its own, which differentiates each element's terminal distance L(q) instead of Eqs. (15–20),
+    with the signature ``factory(spec, pair, centripetal, free_length, labels, mechanism)``."""
 
-    def __init__(self, scene: Scene, oracle: bool = False):
+    def __init__(self, scene: Scene, element_factory=None):
         self.scene = scene
-        self.oracle = oracle
+        self.element_factory = element_factory
+        self.oracle = element_factory is not None
         self.dim = dim = scene.dimension
         self.body_names = list(scene.bodies)
         self.body_index = {n: i for i, n in enumerate(self.body_names)}
@@ -210,9 +213,8 @@ class Mechanism:
         labels = (e.point_a, e.point_b)
         L_initial = self._initial_length(e, pair, q0)
         free = (e.free_length if e.free_length is not None else L_initial) if e.type == "spring" else None
-        if self.oracle:
-            from . import oracle
-            return oracle.OracleElement(e, pair, self.scene.centripetal, free, labels, self)
+        if self.element_factory is not None:
+            return self.element_factory(e, pair, self.scene.centripetal, free, labels, self)
         if e.type == "spring":
             return el.Spring(e.name, pair, e.coefficient, free, labels)
         if e.type == "damper":

@@ -18,9 +18,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import OdeSolution
 
-from .elements import TerminalsMeet
-from .errors import SimulationError
-from .integrators import make_solver
+from inerter.common.errors import TerminalsMeet
+from inerter.common.errors import SimulationError
+from inerter.engine.integrators import make_solver
 
 
 @dataclass

@@ -39,3 +39,11 @@ class SimulationError(InerterError, RuntimeError):
         self.recoverable = recoverable
         text = message if time is None else f"t = {time:.9g} s: {message}"
         super().__init__(text)
+
+
+#: Terminal distance below which a translational element's direction is undefined (m).
+MIN_LENGTH = 1e-9
+
+
+class TerminalsMeet(SimulationError):
+    """The two terminals of a translational element coincide: r̂ is undefined."""

@@ -23,7 +23,7 @@ following constructs are accepted:
 
 Every problem (bad syntax, forbidden construct, unknown name, division by zero,
 overflow, an argument outside a function's domain, ...) is reported as a
-:class:`~inerter.errors.SceneError` naming the source, the field path, the offending
+:class:`~inerter.common.errors.SceneError` naming the source, the field path, the offending
 text and what was expected.  Results are always finite Python floats.
 """
 from __future__ import annotations
@@ -36,7 +36,7 @@ import math
 import numbers
 from collections.abc import Callable, Mapping
 
-from .errors import SceneError
+from inerter.common.errors import SceneError
 
 __all__ = [
     "CONSTANTS",

@@ -8,8 +8,8 @@ entering Python, whenever the slave has *armed* it:
 
 - the slave owns a context, an int64 array at a fixed address for the instance's life
   (CTX_* slots): a magic number, whether the link is armed, the address of the C function
-  :func:`inerter.compiled_kernels.native_step_cfunc` for the scene's dimension, the address of
-  the running integration's table (:meth:`inerter.compiled.CompiledStepper.native_table`), and a map from every value
+  :func:`inerter.engine.kernels.native_step_cfunc` for the scene's dimension, the address of
+  the running integration's table (:meth:`inerter.engine.compiled.CompiledStepper.native_table`), and a map from every value
   reference to where its value is: the outputs in the array the C function writes, every other
   variable (parameters, inputs, the solver settings, ``fmi_status``) in arrays the slave fills
   when it arms the link (none of them can change between native steps: fixed parameters are
@@ -29,7 +29,7 @@ entering Python, whenever the slave has *armed* it:
   slave always gives;
 - before any other call enters Python after native steps, the shim sets the Integer SYNC_VR:
   the slave takes over the time, state, counters and outputs the native steps left
-  (:meth:`~inerter.compiled.CompiledStepper.native_sync`). Every call but a doStep and the
+  (:meth:`~inerter.engine.compiled.CompiledStepper.native_sync`). Every call but a doStep and the
   getters disarms the shim until the next doStep the slave takes.
 
 So the native steps are the steps the slave would take, on the same arrays with the same compiled
@@ -106,7 +106,7 @@ class NativeLink:
     def _why_off() -> str:
         if os.environ.get(SWITCH, "1").strip() == "0":
             return f"{SWITCH}=0"
-        from . import compiled
+        from inerter.engine import compiled
         return "" if compiled.AVAILABLE else compiled.WHY_NOT
 
     def address_words(self) -> list[int]:

@@ -53,7 +53,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InerterError, SceneError
+from inerter.common.errors import InerterError, SceneError
 
 try:  # POSIX: one sweep at a time writes a results file
     import fcntl
@@ -71,7 +71,7 @@ STATUS_COLUMNS = ("status", "error")
 TAIL_COLUMNS = ("run_time_s", "worker", "finished_at")
 META_COLUMNS = HEAD_COLUMNS + STATUS_COLUMNS + TAIL_COLUMNS
 
-#: The metric keys each kind of [[metrics]] gives (see inerter.model.compute_metrics). Used to lay
+#: The metric keys each kind of [[metrics]] gives (see inerter.api.compute_metrics). Used to lay
 #: out the CSV header before any run has finished; a key not listed here still gets its column.
 METRIC_KEYS = {
     "natural_frequency": ("natural_frequency",),
@@ -90,7 +90,7 @@ class SweepError(InerterError):
 # ----------------------------------------------------------------------------------------------
 def _value(name: str, text: str):
     """One value as ``--set`` reads it (a TOML value, else a bare string)."""
-    from .cli import parse_set
+    from inerter.scene.overrides import parse_set
     return parse_set([f"{name}={text}"])[name]
 
 
@@ -161,8 +161,8 @@ class Sweep:
     path: str = "numpy"                  # the solver's path (--model solver): numpy or compiled
 
     def __post_init__(self):
-        from .model import load
-        from .scene import EXPERIMENT_FIELDS, KNOWN_EFFECTS
+        from inerter.api import load
+        from inerter.scene.reader import EXPERIMENT_FIELDS, KNOWN_EFFECTS
 
         self.scene = Path(self.scene).resolve()
         if not self.scene.is_file():
@@ -281,7 +281,7 @@ def run_one(task: dict) -> dict:
                 _drop_slot(slot)
                 raise
         else:
-            from .model import load
+            from inerter.api import load
             result = load(scene, **task["overrides"]).simulate(stop_time=task["stop_time"],
                                                                path=task.get("path", "numpy"))
         status, error = result.status, ("" if result.status == "ok" else result.message)
@@ -325,7 +325,7 @@ def fmu_slot(fmu_path, scene) -> "FmuSlot":
         slots = _local.fmus = {}
     path = Path(fmu_path) if fmu_path else None
     if path is None or not path.is_file():          # a worker on another machine: build it here
-        from .fmu_build import build
+        from inerter.fmu.build import build
         path = build(scene, _worker_folder() / "fmu")
     stat = path.stat()
     key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)
@@ -350,7 +350,7 @@ class FmuSlot:
 
     Each run sets the start values, runs setupExperiment, enter/exitInitializationMode, then
     doStep over the communication step to the stop time, reading every output after each step,
-    as ``fmpy.simulate_fmu`` does (``inerter.fmu_run.simulate_fmu`` gives the same numbers).
+    as ``fmpy.simulate_fmu`` does (``inerter.fmu.run.simulate_fmu`` gives the same numbers).
     """
 
     instances = 0          # made in this process (the tests check the reuse)
@@ -414,8 +414,8 @@ class FmuSlot:
     def simulate(self, scene, overrides: dict, stop_time=None, step=None):
         from fmpy.fmi1 import FMICallException
 
-        from .fmu_run import FmuResult, FmuRunInfo, start_values
-        from .model import Model, compute_metrics
+        from inerter.fmu.run import FmuResult, FmuRunInfo, start_values
+        from inerter.api import Model, compute_metrics
 
         model = Model(scene, overrides)                # the solver's messages for bad overrides
         settings = model.settings(stop_time=stop_time)
@@ -681,7 +681,7 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
         if todo:
             fmu_path = None
             if sweep.model == "fmu":
-                from .fmu_build import DEFAULT_OUT_DIR, build
+                from inerter.fmu.build import DEFAULT_OUT_DIR, build
                 fmu_path = str(Path(build(sweep.scene, fmu_dir or DEFAULT_OUT_DIR)).resolve())
             tasks = [dict(key=r.key, name=sweep.name, model=sweep.model, overrides=r.overrides,
                           stop_time=sweep.stop_time, step=sweep.step, fmu_path=fmu_path, path=sweep.path,
@@ -882,7 +882,7 @@ def status_code(report: SweepReport) -> int:
 
 
 def _sweep(argv) -> int:
-    from .cli import parse_set
+    from inerter.scene.overrides import parse_set
     p = argparse.ArgumentParser(prog="inerter sweep", description="Run every combination of the varied "
                                 "parameters in parallel on dask; rows go to DIR/results.csv as runs finish.")
     p.add_argument("scene")
@@ -918,12 +918,6 @@ def _sweep_plot(argv) -> int:
 def main_sweep(argv=None) -> int:
     """``inerter sweep``: exit 0 (all ok), 3 (some runs failed, recorded), 2 (bad arguments)."""
     return _guarded(_sweep, argv)
-
-
-def main_study(argv=None) -> int:
-    """``inerter study NAME``: a built-in study (module `studies`)."""
-    from .studies import main as study_main
-    return _guarded(study_main, argv)
 
 
 def main_sweep_plot(argv=None) -> int:

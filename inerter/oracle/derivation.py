@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from .elements import MIN_LENGTH, TerminalsMeet
+from inerter.common.errors import MIN_LENGTH, TerminalsMeet
 
 
 class Jet:
@@ -152,7 +152,7 @@ class DistanceProbe:
         self.name = name
         self.dim = mech.dim
         if mech.dim == 3 and mech.orientation.kind != "quaternion":
-            from .errors import SceneError
+            from inerter.common.errors import SceneError
             raise SceneError(mech.scene.source, "scene.orientation", mech.orientation.kind,
                              "orientation = \"quaternion\" for the oracle", "the oracle differentiates "
                              "quaternion kinematics only")

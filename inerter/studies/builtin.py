@@ -22,10 +22,10 @@ import argparse
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .sweep import (SweepError, Sweep, _number, add_run_arguments, parse_vary, print_report, read_results,
+from inerter.studies.sweep import (SweepError, Sweep, _number, add_run_arguments, parse_vary, print_report, read_results,
                     run_sweep, status_code)
 
-REPO_SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+REPO_SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 CORRECTION = "effects.centripetal"
 
 
@@ -160,7 +160,7 @@ def print_table(study: Study, table: dict):
 
 
 def main(argv=None) -> int:
-    from .cli import parse_set
+    from inerter.scene.overrides import parse_set
     p = argparse.ArgumentParser(prog="inerter study", description="Built-in studies: a sweep with and "
                                 "without the centripetal correction, then one figure. " + ", ".join(
                                     f"{s.name}: {s.x} of {s.scene}" for s in STUDIES.values()))
@@ -194,3 +194,9 @@ def main(argv=None) -> int:
         png = plot_study(study, table, out / f"{study.name}.png")
         print(f"wrote {png}")
     return status_code(report)
+
+
+def main_study(argv=None) -> int:
+    """``inerter study NAME``: a built-in study (module `studies`)."""
+    from inerter.studies.sweep import _guarded
+    return _guarded(main, argv)

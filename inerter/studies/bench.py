@@ -4,7 +4,7 @@
                         [--methods DOP853,RK45,Radau,BDF,RK4] [--budget SECONDS] [--quick]
 
 For every method over a range of tolerances (RK4: step sizes), on the numpy path
-(``inerter.simulation.integrate``) and the compiled path (``inerter.compiled.integrate_compiled``),
+(``inerter.engine.simulation.integrate``) and the compiled path (``inerter.engine.compiled.integrate_compiled``),
 and through the scene's FMU (``--paths fmu``: fmpy, communication step × method × tolerance),
 the error against the oracle at tight tolerance (``model.oracle().simulate(rtol=1e-12,
 atol=1e-14)``) is plotted against the CPU time of the integration. The error is the largest
@@ -113,7 +113,8 @@ def signal_extractor(mech, signal: str | None) -> Callable[[np.ndarray], np.ndar
 
 def reference_states(path, overrides, stop_time, output_interval):
     """The oracle's samples at rtol 1e-12, atol 1e-14 (DOP853)."""
-    from .model import load
+    from inerter import api
+    from inerter.api import load
 
     oracle = load(path, **overrides).oracle()
     result = oracle.simulate(stop_time=stop_time, output_interval=output_interval, rtol=1e-12, atol=1e-14,
@@ -159,12 +160,12 @@ def _timed(fn):
 
 def sweep(study: Study, model, reference, extract, paths, methods, sweeps, budget, log=print):
     """Add the numpy / compiled path points of every method to the study."""
-    from . import compiled
-    from .simulation import integrate
+    from inerter.engine import compiled
+    from inerter.engine.simulation import integrate
 
     ref = extract(reference)
     if "compiled" in paths:
-        compiled.warm_up(spatial=model.mechanism.dim == 3)
+        api.warm_up(spatial=model.mechanism.dim == 3)
     for path in paths:
         for method in methods:
             label = f"{path} {method}"
@@ -213,7 +214,7 @@ def fmu_sweep(study: Study, scene, overrides, reference, names, interval, method
     oracle at the oracle's sample times, and the process CPU time of the run (REPEATS_TEXT)."""
     import fmpy
 
-    from .fmu_build import build
+    from inerter.fmu.build import build
 
     fmu = str(build(scene))
     fmpy.simulate_fmu(fmu, stop_time=min(study.stop_time, 0.1), start_values=dict(overrides))   # warm up
@@ -321,7 +322,7 @@ def write_outputs(study: Study, out: Path, ratio_to: str | None = None, title: s
 def run_study(scene, stop_time=None, signal=None, paths=("numpy", "compiled"), methods=tuple(SWEEPS),
               sweeps=None, budget=30.0, overrides=None, log=print):
     """Reference + sweeps for one scene. Returns (study, model, reference states, extractor)."""
-    from .model import load
+    from inerter.api import load
 
     overrides = dict(overrides or {})
     model = load(scene, **overrides)

@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import SimulationError
-from .model import Model, compute_metrics, sample_spline
+from inerter.common.errors import SimulationError
+from inerter.api import Model, compute_metrics, sample_spline
 
 
 @dataclass
@@ -71,7 +71,7 @@ class FmuResult:
         return sample_spline(self.time, self[name])
 
     def summary(self):
-        from .model import Result
+        from inerter.api import Result
         out = Result.summary(self)
         out["settings"]["model"] = "fmu"
         out["settings"]["communication_step"] = self.communication_step
@@ -86,7 +86,7 @@ class FmuResult:
 def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None, metrics=True):
     import fmpy
 
-    from .fmu_build import build
+    from inerter.fmu.build import build
 
     overrides = dict(overrides or {})
     model = Model(scene, overrides)                  # validates the overrides with the solver's messages

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.linalg import eigh, null_space, orth
 from scipy.optimize import root
 
-from .errors import SimulationError
+from inerter.common.errors import SimulationError
 
 
 def static_forces(mech, q):

@@ -1,5 +1,5 @@
 """Flattening a 3D mechanism (quaternion orientation) for the 3D section of
-:mod:`inerter.compiled_kernels`: the arrays (the slots of the planar ones, with 3D column
+:mod:`inerter.engine.kernels`: the arrays (the slots of the planar ones, with 3D column
 meanings), the output layout and the structural pattern of Eq. (33); ``compiled.Kernel`` builds
 the parameter tuple from them.
 
@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compiled import ELEMENT_KIND, _by_name, element_row, force_rows, meet_limits
-from .joints import Coincident, SpatialJoint
+from inerter.engine.tables import ELEMENT_KIND, _by_name, element_row, force_rows, meet_limits
+from inerter.model.joints import Coincident, SpatialJoint
 
-# Joint kinds (column 0 of ``jt_int``), as in :mod:`inerter.compiled_kernels` (its 3D section).
+# Joint kinds (column 0 of ``jt_int``), as in :mod:`inerter.engine.kernels` (its 3D section).
 _JOINT_KIND = {"spherical": 0, "revolute": 1, "fixed": 2, "prismatic": 3}
 #: Width of a ``jt_real`` row: three dot-1 pairs (s̄_a, s̄_b) and two dot-2 vectors s̄_a.
 JOINT_WIDTH = 24

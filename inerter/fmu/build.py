@@ -15,7 +15,7 @@ On Linux, ``binaries/linux64/<model>.so`` is the status shim compiled from
 forwards every call to it and returns the slave's status (its variable ``fmi_status``, whose value
 reference is compiled in) from exitInitializationMode, setXxx, doStep and setFMUstate. It also
 takes the doSteps of a running compiled integration itself, in compiled code, when the slave arms
-it (``inerter/fmu_native.py``; the private value references are compiled in too). Without
+it (``inerter/fmu/native.py``; the private value references are compiled in too). Without
 gcc (or on a host other than Linux x86-64) the FMU is built with pythonfmu's binary alone and the
 build warns (FmuBuildWarning): errors then come as fmi2Discard from the next doStep. The win64
 binary is always pythonfmu's own.
@@ -48,10 +48,10 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from . import fmu_native
-from .errors import InerterError
+from inerter.fmu import native as fmu_native
+from inerter.common.errors import InerterError
 
-PACKAGE_DIR = Path(__file__).parent
+PACKAGE_DIR = Path(__file__).resolve().parents[1]
 REPO_DIR = PACKAGE_DIR.parent
 FMU_SRC = REPO_DIR / "fmu_src"
 SLAVE_FILE = "inerter_slave.py"

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .spatial import cross, skew
+from inerter.model.spatial import cross, skew
 
 
 class Coincident:

@@ -5,18 +5,20 @@ the same scene compiled with ``oracle=True`` and solved at tight tolerance.
 """
 from __future__ import annotations
 
+import time as _time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from . import metrics as metric_fns
-from .equilibrium import natural_frequencies, static_equilibrium
-from .mechanism import Mechanism
-from .outputs import Signals
-from .scene import KNOWN_EFFECTS, METHODS, load_scene
-from .errors import SimulationError
-from .simulation import Settings, Stepper, integrate
+from inerter.engine import metrics as metric_fns
+from inerter.engine.equilibrium import natural_frequencies, static_equilibrium
+from inerter.model.mechanism import Mechanism
+from inerter.oracle import OracleElement
+from inerter.engine.outputs import Signals
+from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
+from inerter.common.errors import SimulationError
+from inerter.engine.simulation import Settings, Stepper, integrate
 
 #: Tolerances at which the oracle is solved (DOP853).
 ORACLE_RTOL = 1e-12
@@ -36,7 +38,7 @@ class Model:
         self.path = Path(path)
         self.overrides = dict(overrides or {})
         self.scene = load_scene(self.path, self.overrides)
-        self.mechanism = Mechanism(self.scene, oracle=oracle)
+        self.mechanism = Mechanism(self.scene, element_factory=OracleElement if oracle else None)
         self.signals = Signals(self.mechanism)
         self.is_oracle = oracle
         self._static = None
@@ -121,7 +123,7 @@ class Model:
         s = self.settings(stop_time=stop_time, output_interval=output_interval, method=method, rtol=rtol,
                           atol=atol, constraint=constraint, step=step)
         if path == "compiled" and not self.is_oracle:
-            from . import compiled
+            from inerter.engine import compiled
             run = compiled.integrate_compiled(self.mechanism, s)
         elif path in ("numpy", "compiled"):
             run = integrate(self.mechanism, s)
@@ -134,12 +136,12 @@ class Model:
 
     def stepper(self, method=None, rtol=None, atol=None, path="numpy", stop_time=None) -> Stepper:
         """A co-simulation stepper at t = 0. `path` = "compiled": each step one call of the compiled
-        integrator loop where :func:`inerter.compiled.compiled_stepper` can take the scene (the numpy
+        integrator loop where :func:`inerter.engine.compiled.compiled_stepper` can take the scene (the numpy
         stepper otherwise; ``stepper.path`` says which). On both paths the adaptive integrators run
         on across communication points, their steps clipped to `stop_time` where it is given."""
         s = self.settings(method=method, rtol=rtol, atol=atol)
         if path == "compiled" and not self.is_oracle:
-            from . import compiled
+            from inerter.engine import compiled
             stepper = compiled.compiled_stepper(self.mechanism, s, self.signals, stop_time)
             if stepper is not None:
                 return stepper
@@ -294,3 +296,29 @@ def _compute_metric(model, result, m, out, windows):
         r = metric_fns.steady_state(t, x, m.period, m.periods, reference, dense=dense)
         out[_key(m.prefix, "peak_to_peak")] = float(r["peak_to_peak"])
         out[_key(m.prefix, "mean_offset")] = float(r["mean_offset"])
+
+
+def warm_up(spatial: bool = False):
+    """Compile (or load from numba's cache) every kernel once for 2D scenes (`spatial`: for 3D
+    scenes too), so timings exclude compilation. Returns the seconds it took."""
+    from inerter.engine import compiled
+
+    if not compiled.AVAILABLE:
+        return 0.0
+
+    t0 = _time.perf_counter()
+    folder = Path(__file__).resolve().parents[1] / "scenarios"
+    for name in ("two_bar_2d.toml", "two_bar_2d_as_3d.toml")[:2 if spatial else 1]:
+        if not (folder / name).exists():
+            continue
+        model = load(folder / name)
+        for method in compiled.COMPILED_METHODS:
+            compiled.integrate_compiled(model.mechanism, model.settings(method=method, stop_time=0.05, step=1e-2))
+        kernel = compiled._kernel_for(model.mechanism)
+        kernel.accelerations(0.0, kernel.q0, kernel.v0)
+        for method in compiled._RK_CODE:                       # the co-simulation step (the FMU's)
+            stepper = model.stepper(method=method, path="compiled", stop_time=0.05)
+            stepper.step(0.01)
+            stepper.output_values()
+        compiled._k.native_step_cfunc(kernel.spatial)         # the FMU's native step (inerter.fmu.native)
+    return _time.perf_counter() - t0

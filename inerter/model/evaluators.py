@@ -13,16 +13,8 @@ import math
 
 import numpy as np
 
-from .errors import SimulationError
-from .planar import PointPair
-
-#: Terminal distance below which a translational element's direction is undefined (m).
-MIN_LENGTH = 1e-9
-
-
-class TerminalsMeet(SimulationError):
-    """The two terminals of a translational element coincide: r̂ is undefined."""
-
+from inerter.common.errors import MIN_LENGTH, TerminalsMeet  # noqa: F401  (re-exported)
+from inerter.model.planar import PointPair
 
 class TranslationalElement:
     """Common geometry of a two-terminal uniaxial element between points a and b."""

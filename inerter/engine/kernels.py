@@ -1,10 +1,10 @@
 """Compiled kernels of the fast path (numba ``@njit(cache=True)``): Eq. (33) and explicit integrators.
 
-Everything here works on flat arrays built once per scene by :mod:`inerter.compiled`; there are no
+Everything here works on flat arrays built once per scene by :mod:`inerter.engine.compiled`; there are no
 Python objects in the inner loop. A scene's arrays hold only the terms it declares: a loop over
 an element kind the scene does not have runs zero times, and gravity is added only when declared.
 
-Importing this module requires numba; :mod:`inerter.compiled` falls back to the numpy path when
+Importing this module requires numba; :mod:`inerter.engine.compiled` falls back to the numpy path when
 it is missing.
 """
 from __future__ import annotations
@@ -29,7 +29,7 @@ GROUND_NONE, GROUND_RECORD, GROUND_SINE, GROUND_INPUT = 0, 1, 2, 3
 # Status codes of the integrators.
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED = 0, 1, 2, 3, 4, 5, 6, 7
 
-MIN_LENGTH = 1e-9
+from inerter.common.errors import MIN_LENGTH  # noqa: E402  (terminals meeting: the one threshold)
 
 
 @njit(cache=True, inline="always")
@@ -507,7 +507,7 @@ def constraint_residual2(q, P):
 
 
 # ------------------------------------------------------------------------------------------------
-# Output signals (the same values as inerter.outputs.Signals, in the layout of `signal_layout`)
+# Output signals (the same values as inerter.engine.outputs.Signals, in the layout of `signal_layout`)
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def signal_values(q, v, qdd, P, out):
@@ -772,7 +772,7 @@ def signal_history(times, states, inputs, alpha, need_acc, P, out):
 # Each body has the coordinates q = [R(3), p(4)] (p a quaternion, normalised on the fly as
 # ``spatial.quat_matrix``) and the velocity coordinates v = [Ṙ(3), ω(3)], ω in the body frame
 # (``Mechanism.q_index``, ``v_index``); the arrays, with the 3D meaning of each column, come from
-# :func:`inerter.compiled_spatial.flatten3`. Point kinematics (Sec. 3.2, Eqs. 15, 22, 25):
+# :func:`inerter.engine.compiled_spatial.flatten3`. Point kinematics (Sec. 3.2, Eqs. 15, 22, 25):
 # r = R + A ū, ṙ = Ṙ + A(ω × ū), r̈ = R̈ − A ũ ω̇ + A(ω × (ω × ū)). A global vector s projected on a
 # point's H = [I, −A ũ] gives sᵀH = [sᵀ, (ū × Aᵀs)ᵀ]; :func:`_wcol` computes the second part, which
 # is also the ω-columns of ∂(s·(A s̄))/∂ω of the dot-1 and dot-2 joint rows.
@@ -1237,7 +1237,7 @@ def constraint_residual3(q, P):
 
 
 # ------------------------------------------------------------------------------------------------
-# Output signals (the same values as inerter.outputs.Signals, in the layout of `signal_layout3`)
+# Output signals (the same values as inerter.engine.outputs.Signals, in the layout of `signal_layout3`)
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def signal_values3(q, v, qdd, P, out):
@@ -1452,7 +1452,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     coefficients `dense` (7 × len(y)). A fresh state has RK_STARTED = 0: the derivative is evaluated
     first and, where RK_H is 0, the first step chosen as scipy's select_initial_step does.
 
-    Watched as inerter.simulation.StepMonitor watches scipy's integrators, with its constants in
+    Watched as inerter.engine.simulation.StepMonitor watches scipy's integrators, with its constants in
     `monitor` = (stiffness bound, every, hits, collapse relative, collapse steps, trial shrink):
     Hairer's stiffness test (h·|λ| from the last two stages, both at t + h, against the bound, checked every `every`
     accepted steps and then at every step while it fires; `hits` firings in a row: STIFF), a step
@@ -1543,7 +1543,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
             if st == SINGULAR or st == NOT_FINITE:
                 # A stage the accelerations cannot be evaluated at (a wild stage of too long a step,
                 # say): the trial is rejected and tried again `trial shrink` times as long, as
-                # inerter.simulation does with scipy's integrators; fatal below 10 ulp of t.
+                # inerter.engine.simulation does with scipy's integrators; fatal below 10 ulp of t.
                 trial_failure = st
                 h_abs *= monitor[5]
                 rejected = True
@@ -1888,7 +1888,7 @@ def max_residual(states, P):
 
 
 # ------------------------------------------------------------------------------------------------
-# The co-simulation step as a C function (the FMU's native doStep, see inerter/fmu_native.py)
+# The co-simulation step as a C function (the FMU's native doStep, see inerter/fmu/native.py)
 # ------------------------------------------------------------------------------------------------
 # The arrays of one running integration are passed as a table of int64: TABLE_HEAD slots (the
 # table's length, method code, max_steps, need_acc), then three per array (address, shape[0],

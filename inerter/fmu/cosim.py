@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .fmu_build import DEFAULT_OUT_DIR, FMU_SRC, _complete_model_description, _run_pythonfmu
+from inerter.fmu.build import DEFAULT_OUT_DIR, FMU_SRC, _complete_model_description, _run_pythonfmu
 
 CONTROLLER = "pd_controller.py"
 CONTROLLER_UNITS = {"kp": "N/m", "kd": "N.s/m", "reference": "m", "y": "m", "v": "m/s", "F": "N"}

@@ -5,7 +5,7 @@ evaluated against the scene's parameters (after command-line / FMU overrides), a
 a plain, immutable :class:`Scene`. Nothing later re-reads the file.
 
 Errors name the file, the field path (``elements.inerter.b``), the value and what was expected
-(:class:`~inerter.errors.SceneError`). Unknown fields are errors, never silently ignored.
+(:class:`~inerter.common.errors.SceneError`). Unknown fields are errors, never silently ignored.
 """
 from __future__ import annotations
 
@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .errors import SceneError
-from .expressions import evaluate, evaluate_parameters, parameter_meta
+from inerter.common.errors import SceneError
+from inerter.scene.expressions import evaluate, evaluate_parameters, parameter_meta
 
 GROUND = "ground"
 
@@ -399,7 +399,7 @@ def _read_effects(r: _Reader, raw, overrides, dimension, folder):
 
 
 def _read_ground_motion(r: _Reader, spec, fld, dimension, folder):
-    from .ground_motion import GroundMotion
+    from inerter.scene.ground_motion import GroundMotion
     r.table(spec, fld, {"file": False, "amplitude": False, "frequency": False, "scale": False, "input": False})
     scale = r.number(spec, "scale", fld, default=1.0)
     kinds = [k for k in ("file", "amplitude", "input") if k in spec]
@@ -534,7 +534,7 @@ def _read_inertia(r: _Reader, raw, fld):
 
 def _read_rotation(r: _Reader, raw, fld):
     """Initial rotation: axis (default Z) and angle, or Z-X-Z Euler angles [φ, θ, ψ]."""
-    from .spatial import axis_angle_matrix, euler_matrix
+    from inerter.common.rotations import axis_angle_matrix, euler_matrix
     if "euler" in raw:
         if "axis" in raw or "angle" in raw:
             raise r.error(f"{fld}.euler", raw["euler"], "either euler = [φ, θ, ψ] or axis and angle", "both given")

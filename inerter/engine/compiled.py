@@ -1,17 +1,17 @@
 """The compiled fast path: Eq. (33) and the explicit integrators in numba-compiled kernels.
 
-    from inerter.compiled import compile_mechanism, integrate_compiled
+    from inerter.engine.compiled import compile_mechanism, integrate_compiled
     kernel = compile_mechanism(model.mechanism)
     qdd, lam = kernel.accelerations(t, q, v, inputs, alpha)      # = Mechanism.accelerations
-    run = integrate_compiled(model.mechanism, model.settings())   # an inerter.simulation.Run
+    run = integrate_compiled(model.mechanism, model.settings())   # an inerter.engine.simulation.Run
 
-A :class:`~inerter.mechanism.Mechanism` is flattened once into arrays (bodies' masses and, in 3D,
+A :class:`~inerter.model.mechanism.Mechanism` is flattened once into arrays (bodies' masses and, in 3D,
 inertia tensors; points as body index and body-frame coordinates; joints; translational elements
 with coefficient, free length and centripetal flag; rotational elements; point forces with their
 time functions; gravity and the ground motion when declared): :func:`flatten` for 2D scenes,
-:func:`inerter.compiled_spatial.flatten3` for 3D scenes with quaternion orientations (Z-X-Z Euler
+:func:`inerter.engine.compiled_spatial.flatten3` for 3D scenes with quaternion orientations (Z-X-Z Euler
 angles stay on the numpy path, which watches their singularity). The kernels in
-:mod:`inerter.compiled_kernels` evaluate the mass matrix with M_I, the constraint Jacobian, γ, the
+:mod:`inerter.engine.kernels` evaluate the mass matrix with M_I, the constraint Jacobian, γ, the
 forces and Q_Iv from these arrays (the same formulas as ``elements.py``, ``joints.py``,
 ``planar.py``, ``spatial.py``) and solve the augmented system with a band LU with partial
 pivoting after a reverse Cuthill-McKee ordering, so a chain's cost grows linearly with its length.
@@ -21,12 +21,12 @@ Integrators: DOP853 and RK45 with scipy's error control, step-size rule and dens
 same steps as the numpy path at the same tolerances), and RK4 with a fixed step, each in one
 compiled loop that writes the samples at the output grid, restarted at each discontinuity of the
 right-hand side (a step force's switch, a ground record's sample). Radau, BDF and LSODA, and the
-``projection`` constraint treatment, run scipy's integrators (``inerter.simulation.integrate``)
+``projection`` constraint treatment, run scipy's integrators (``inerter.engine.simulation.integrate``)
 on the compiled right-hand side.
 
 numba is optional (``pip install numba``). Without it, :data:`AVAILABLE` is False,
 :func:`compile_mechanism` returns a kernel that calls the numpy path and
-:func:`integrate_compiled` runs :func:`inerter.simulation.integrate`.
+:func:`integrate_compiled` runs :func:`inerter.engine.simulation.integrate`.
 """
 from __future__ import annotations
 
@@ -41,8 +41,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SimulationError
-from .simulation import Stepper, jumps
+from inerter.common.errors import SimulationError
+from inerter.engine.simulation import Stepper, jumps
+from inerter.engine.tables import ELEMENT_KIND, FORCE_CODE, _by_name, element_row, force_rows, meet_limits
+from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
 
 
 
@@ -56,7 +58,7 @@ def _kernel_cache_dir() -> Path:
 
 
 def _import_kernels():
-    """Import :mod:`inerter.compiled_kernels` from a per-user copy named by the hash of its source.
+    """Import :mod:`inerter.engine.kernels` from a per-user copy named by the hash of its source.
 
     numba keys its on-disk cache by the source file's path and time stamp. An FMU importer extracts
     the FMU, and with it this package, into a new temporary folder each time, so a cache next to
@@ -65,7 +67,7 @@ def _import_kernels():
     so every process (solver runs, sweep workers, each instance of every FMU built from this
     source) loads the kernels compiled by the first. When the cache folder cannot be written,
     the package's own module is imported (numba then caches next to it, where it can)."""
-    source = Path(__file__).with_name("compiled_kernels.py")
+    source = Path(__file__).with_name("kernels.py")
     text = source.read_bytes()
     digest = hashlib.sha256(text).hexdigest()[:16]
     name = f"inerter_kernels_{digest}"
@@ -81,7 +83,7 @@ def _import_kernels():
                 fh.write(text)
             os.replace(tmp, target)          # atomic: concurrent processes see a whole file or none
     except OSError:
-        from . import compiled_kernels
+        from inerter.engine import kernels as compiled_kernels
         return compiled_kernels
     spec = importlib.util.spec_from_file_location(name, target)
     module = importlib.util.module_from_spec(spec)
@@ -110,8 +112,8 @@ _RK_CODE = {"DOP853": 0, "RK45": 1}
 _NO_ORDER = np.zeros(0, dtype=np.int64)
 
 def _monitor(method) -> np.ndarray:
-    """The constants of :class:`inerter.simulation.StepMonitor` for the compiled loop."""
-    from . import simulation as sim
+    """The constants of :class:`inerter.engine.simulation.StepMonitor` for the compiled loop."""
+    from inerter.engine import simulation as sim
     return np.array([sim.STIFFNESS_BOUND.get(method, 0.0), sim.STIFFNESS_EVERY, sim.STIFFNESS_HITS,
                      sim.COLLAPSE_RELATIVE, sim.COLLAPSE_STEPS, sim.TRIAL_SHRINK], dtype=float)
 
@@ -134,64 +136,6 @@ _STATUS_TEXT = {
 # ------------------------------------------------------------------------------------------------
 # Flattening a compiled mechanism into arrays
 # ------------------------------------------------------------------------------------------------
-def _by_name(objects):
-    return {getattr(o, "name", None): o for o in objects}
-
-
-#: Column 0 of ``el_int`` and column 1 of ``fa_int``, as in :mod:`inerter.compiled_kernels`.
-ELEMENT_KIND = {"spring": 0, "damper": 1, "inerter": 2}
-FORCE_CODE = {"constant": 0, "sine": 1, "step": 2}
-
-
-def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
-    """The ``el_int`` and ``el_real`` rows of translational element `e` of the scene (`me`: the
-    mechanism's element of that name, whose free length a spring takes, else the scene's;
-    `meet_limit`: its column of :func:`meet_limits`)."""
-    free = 0.0
-    if e.type == "spring":
-        free = getattr(me, "free_length", None)
-        if free is None:
-            free = e.free_length
-        if free is None:
-            raise ValueError(f"spring {e.name}: no free length on the compiled mechanism")
-    return ((ELEMENT_KIND[e.type], pidx[e.point_a], pidx[e.point_b], int(bool(centripetal))),
-            (float(e.coefficient), float(free), float(meet_limit)))
-
-
-def meet_limits(mech, elements) -> dict[str, float]:
-    """Column 2 of ``el_real`` by translational element name: the distance below which its terminals
-    meet (``Mechanism.meet_limit``), 0.0 for an element whose pair of terminals an earlier element
-    shares (compiled_kernels.terminals_meet checks each pair once, as Mechanism.check_terminals)."""
-    seen, limits = set(), {}
-    for e in elements:
-        if e.type in ("rotational_spring", "rotational_damper"):
-            continue
-        pair = frozenset((e.point_a, e.point_b))
-        limits[e.name] = 0.0 if pair in seen else float(mech.meet_limit[e.name])
-        seen.add(pair)
-    return limits
-
-
-def force_rows(scene, pidx, dim) -> tuple[list, list, list, list, list]:
-    """(fa_int, fa_real, pd_int, pd_real, in_int): the scene's applied point forces with time
-    functions (point, code; direction's `dim` components, value, amplitude, frequency, phase,
-    offset, time, initial), grounded PD actuators (point; direction, kp, kd, reference) and input
-    forces (point)."""
-    fa_int, fa_real, pd_int, pd_real, in_int = [], [], [], [], []
-    for f in scene.forces.values():
-        p = pidx[f.point]
-        d = [float(x) for x in f.direction[:dim]] if f.direction is not None else None
-        if f.function in FORCE_CODE:
-            fa_int.append((p, FORCE_CODE[f.function]))
-            fa_real.append((*d, f.value, f.amplitude, f.frequency, f.phase, f.offset, f.time, f.initial))
-        elif f.function == "pd":
-            pd_int.append((p,))
-            pd_real.append((*d, f.kp, f.kd, f.reference))
-        elif f.function == "input":
-            in_int.append((p,))
-    return fa_int, fa_real, pd_int, pd_real, in_int
-
-
 def flatten(mech) -> dict:
     """The arrays the kernels run on, from a 2D mechanism and its scene (index maps in
     ``mech.scene`` order: bodies, points, joints, elements, forces)."""
@@ -274,7 +218,6 @@ def flatten(mech) -> dict:
 def signal_layout(flat) -> list[str]:
     """The names of the values :func:`compiled_kernels.signal_values` writes, in its order."""
     if flat["dim"] == 3:
-        from .compiled_spatial import signal_layout3
         return signal_layout3(flat)
     names = [f"{p}.{x}" for p in flat["point_names"] for x in ("r[1]", "r[2]", "v[1]", "v[2]")]
     names += [f"{e}.{x}" for e in flat["el_names"] for x in ("s_rel", "v_rel", "f")]
@@ -363,8 +306,6 @@ class Kernel:
     def __init__(self, mech):
         self.mech = mech
         spatial = mech.scene.dimension == 3
-        if spatial:
-            from .compiled_spatial import flatten3, sparsity3
         flat = flatten3(mech) if spatial else flatten(mech)
         self.flat = flat
         self.n, self.m, self.nq = flat["n"], flat["m"], flat["nq"]
@@ -511,7 +452,7 @@ def compile_mechanism(mech):
 
 
 class _KernelMechanism:
-    """What :func:`inerter.simulation.integrate` needs of a mechanism, backed by a kernel
+    """What :func:`inerter.engine.simulation.integrate` needs of a mechanism, backed by a kernel
     (scipy's implicit integrators and the projection treatment on the compiled right-hand side)."""
 
     def __init__(self, mech, kernel):
@@ -564,10 +505,10 @@ def _kernel_for(mech):
 
 
 def integrate_compiled(mech, settings, inputs=None):
-    """Integrate like :func:`inerter.simulation.integrate`, in one compiled loop for DOP853, RK45
+    """Integrate like :func:`inerter.engine.simulation.integrate`, in one compiled loop for DOP853, RK45
     and RK4 with Baumgarte stabilisation (``Run.dense`` is None: samples at the output grid only);
     other methods and ``projection`` use scipy's integrators on the compiled right-hand side."""
-    from .simulation import Run, integrate
+    from inerter.engine.simulation import Run, integrate
 
     why = unsupported(mech)
     if why:
@@ -643,7 +584,7 @@ class CompiledStepper(Stepper):
     """Co-simulation stepping on the compiled path, one compiled call per communication step.
 
     DOP853 and RK45 keep one integration running across communication points
-    (:func:`~inerter.compiled_kernels.rk_advance`): a step advances the integrator until its last
+    (:func:`~inerter.engine.kernels.rk_advance`): a step advances the integrator until its last
     step covers the communication point and takes the state there from the step's dense output,
     as the whole run samples its output grid. The integrator's steps are clipped only to the
     experiment's stop time (`stop_time`, where the importer gave one), so while the inputs stay as
@@ -774,7 +715,7 @@ class CompiledStepper(Stepper):
         self._values = values.tolist()
         return self._values
 
-    # The native doStep (inerter.fmu_native): compiled_kernels.native_step takes steps on the running
+    # The native doStep (inerter.fmu.native): compiled_kernels.native_step takes steps on the running
     # integration's arrays without entering Python; native_sync takes over what it did.
     def native_table(self, tolerance: float):
         """The int64 table of :func:`compiled_kernels.native_step` for the next step, its clock at the
@@ -898,7 +839,7 @@ def failure_text(kernel, status, method, h, y_last, t_last) -> str:
     """What a compiled loop's failure `status` means, in the words of the numpy path: the step size
     `h` it ended with; for terminals meeting, the element whose terminals were closest in the last
     good state `y_last` (at `t_last`), the loop having stopped within a step of it."""
-    from . import simulation as sim
+    from inerter.engine import simulation as sim
     text = _STATUS_TEXT[status]
     if status == 6:
         return text.format(method=method, h=h, hits=sim.STIFFNESS_HITS)
@@ -939,28 +880,3 @@ def unsupported(mech) -> str:
     if orientation is not None and orientation.kind != "quaternion":
         return f"the compiled path takes quaternion orientations (the scene has {orientation.kind})"
     return ""
-
-
-def warm_up(spatial: bool = False):
-    """Compile (or load from numba's cache) every kernel once for 2D scenes (`spatial`: for 3D
-    scenes too), so timings exclude compilation. Returns the seconds it took."""
-    if not AVAILABLE:
-        return 0.0
-    from .model import load
-
-    t0 = _time.perf_counter()
-    folder = Path(__file__).resolve().parents[1] / "scenarios"
-    for name in ("two_bar_2d.toml", "two_bar_2d_as_3d.toml")[:2 if spatial else 1]:
-        if not (folder / name).exists():
-            continue
-        model = load(folder / name)
-        for method in COMPILED_METHODS:
-            integrate_compiled(model.mechanism, model.settings(method=method, stop_time=0.05, step=1e-2))
-        kernel = _kernel_for(model.mechanism)
-        kernel.accelerations(0.0, kernel.q0, kernel.v0)
-        for method in _RK_CODE:                               # the co-simulation step (the FMU's)
-            stepper = model.stepper(method=method, path="compiled", stop_time=0.05)
-            stepper.step(0.01)
-            stepper.output_values()
-        _k.native_step_cfunc(kernel.spatial)                  # the FMU's native step (fmu_native)
-    return _time.perf_counter() - t0

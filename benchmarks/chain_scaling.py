@@ -47,7 +47,7 @@ sys.path.insert(0, str(ROOT))
 
 from inerter import api
 import inerter  # noqa: E402
-from inerter import compiled  # noqa: E402
+from inerter.engine import compiled  # noqa: E402
 from inerter.engine.simulation import integrate  # noqa: E402
 from chain_scene import write_chain  # noqa: E402
 

@@ -28,7 +28,7 @@ sys.path.insert(0, str(ROOT))
 
 from inerter import api
 import inerter  # noqa: E402
-from inerter import compiled  # noqa: E402
+from inerter.engine import compiled  # noqa: E402
 from chain_scene import chain_toml  # noqa: E402
 
 

@@ -26,7 +26,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(ROOT))
 
 import inerter  # noqa: E402
-from inerter import bench  # noqa: E402
+from inerter.studies import bench  # noqa: E402
 from peers import TwoAngleODE, mujoco_two_bar  # noqa: E402
 
 ODE_RTOLS = [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]

@@ -5,12 +5,11 @@ import argparse
 import json
 import sys
 import time
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
-from inerter.common.errors import InerterError, SceneError
+from inerter.common.errors import InerterError
 from inerter.scene.overrides import parse_set  # noqa: F401  (the CLI's --set)
 
 PAPER_SCENES = ("lumped_mass_2d", "two_bar_2d")

@@ -42,7 +42,7 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE,  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
 import inerter  # noqa: E402
-from inerter import fmu_build  # noqa: E402
+from inerter.fmu import build as fmu_build  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = sorted((ROOT / "scenarios").glob("*.toml"))

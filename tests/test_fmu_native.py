@@ -18,7 +18,7 @@ from test_fmu import (FMI_DISCARD, FMI_ERROR, INPUT, INPUT_SCENE, SCENE_PARAMS, 
                       fmus, instance, needs_shim, unzipped)
 
 import inerter  # noqa: E402
-from inerter import fmu_native  # noqa: E402
+from inerter.fmu import native as fmu_native  # noqa: E402
 from inerter.engine import compiled
 
 pytestmark = pytest.mark.skipif(not compiled.AVAILABLE, reason="numba is missing: no native steps")

@@ -1,1 +1,73 @@
-"""Element kinds."""
+"""Element kinds, one module each, every kind's physics written once for 2D and 3D.
+
+A kind's module holds its :class:`~inerter.elements.base.ElementKind` (the scene's ``type``, its
+parameters with units and physical ranges, its outputs) and its law as scalar functions compiled by
+:func:`~inerter.elements.base.law`, in the vector form of the paper's Eqs. 5-9: for a
+translational element, of the terminal distance L, its rate L̇ = ṙ·r̂, a_n·r̂ and |ṙ⊥|²
+(whatever the dimension), for a rotational one of the angle φ and its rate. The engine's kernels
+(2D and 3D assembly, outputs) call these functions through :mod:`.dispatch`; the readable
+evaluators run the same functions uncompiled. The scene reader takes each kind's parameters from
+here, so a kind is declared, validated, simulated and reported from its one module.
+
+Adding a kind, e.g. a linear spring with a preload F0 (``elements.NAME.type = "preloaded_spring"``):
+
+1. ``inerter/elements/preloaded_spring.py``::
+
+       from inerter.elements.base import TRANSLATIONAL, ElementKind, Parameter, law
+       from inerter.elements.layout import COEFFICIENT, FREE_LENGTH
+
+       KIND = ElementKind(name="preloaded_spring", family=TRANSLATIONAL, equation="Eq. 5",
+                          description="linear spring with its free length as preload",
+                          coefficient=Parameter("k", "N/m", "stiffness", minimum=0.0),
+                          free=Parameter("length", "m", "free length", minimum=0.0, required=False))
+
+       @law
+       def inertance(row):
+           return 0.0
+
+       @law
+       def force(row, L, Ldot, an, perp2):
+           return row[COEFFICIENT] * (L - row[FREE_LENGTH])
+
+       @law
+       def energy(row, L, Ldot):
+           return 0.5 * row[COEFFICIENT] * (L - row[FREE_LENGTH]) ** 2
+
+2. ``python -m inerter.elements.generate`` writes the kernels' dispatch (:mod:`.dispatch`; a test
+   fails while it is stale).
+3. Its tests: the law against a closed form, and a scene using it through the engine against the
+   oracle (``tests/test_elements.py`` shows both for the shipped kinds).
+
+A translational law returns the axial force less its inertance times gᵀq̈: ``inertance(row)`` is
+the factor that goes into the mass matrix (M += b g gᵀ, Eq. 33; zero for all but the inerter) and
+``force(row, L, Ldot, an, perp2)`` the rest (Q −= F g, Eqs. 29 and 31).
+"""
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from inerter.elements.base import ROTATIONAL, TRANSLATIONAL, ElementKind, Parameter  # noqa: F401
+
+_NOT_KINDS = {"base", "layout", "dispatch", "generate"}
+
+
+def _kind_modules():
+    """Every module of this package that defines a KIND, in name order (their codes)."""
+    names = sorted(m.name for m in pkgutil.iter_modules(__path__) if m.name not in _NOT_KINDS)
+    mods = [importlib.import_module(f"{__name__}.{n}") for n in names]
+    return tuple(m for m in mods if hasattr(m, "KIND"))
+
+
+#: The kinds' modules; a kind's code in the engine's tables is its place here.
+MODULES = _kind_modules()
+#: The kinds by the scene's ``type``.
+KINDS: dict[str, ElementKind] = {m.KIND.name: m.KIND for m in MODULES}
+#: A kind's code in the engine's tables, by the scene's ``type``.
+CODE: dict[str, int] = {m.KIND.name: i for i, m in enumerate(MODULES)}
+#: A kind's module, by the scene's ``type``.
+MODULE = {m.KIND.name: m for m in MODULES}
+
+
+def translational(name: str) -> bool:
+    return KINDS[name].family == TRANSLATIONAL

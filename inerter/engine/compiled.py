@@ -43,7 +43,10 @@ import numpy as np
 
 from inerter.common.errors import SimulationError
 from inerter.engine.simulation import Stepper, jumps
-from inerter.engine.tables import ELEMENT_KIND, FORCE_CODE, _by_name, element_row, force_rows, meet_limits
+from inerter import elements
+from inerter.elements import layout
+from inerter.engine.tables import (_by_name, adds_mass, element_row, force_rows, meet_limits,
+                                    rotational_row)
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
 
 
@@ -57,6 +60,14 @@ def _kernel_cache_dir() -> Path:
     return Path(base) / "inerter"
 
 
+def kernel_sources() -> list[Path]:
+    """The files whose code the kernels compile: :mod:`inerter.engine.kernels`, the element kinds'
+    laws and their dispatch (:mod:`inerter.elements`), and the shared constants."""
+    package = Path(__file__).resolve().parents[1]
+    return ([Path(__file__).with_name("kernels.py"), package / "common" / "errors.py"]
+            + sorted((package / "elements").glob("*.py")))
+
+
 def _import_kernels():
     """Import :mod:`inerter.engine.kernels` from a per-user copy named by the hash of its source.
 
@@ -66,10 +77,15 @@ def _import_kernels():
     6 s). The copy lives at a path that depends only on the source's content, and is written once,
     so every process (solver runs, sweep workers, each instance of every FMU built from this
     source) loads the kernels compiled by the first. When the cache folder cannot be written,
-    the package's own module is imported (numba then caches next to it, where it can)."""
-    source = Path(__file__).with_name("kernels.py")
-    text = source.read_bytes()
-    digest = hashlib.sha256(text).hexdigest()[:16]
+    the package's own module is imported (numba then caches next to it, where it can).
+
+    The hash covers every source the kernels compile in (:func:`kernel_sources`): the element
+    laws they inline too, since numba's cache does not notice a change in a called function."""
+    text = Path(__file__).with_name("kernels.py").read_bytes()
+    h = hashlib.sha256()
+    for path in kernel_sources():
+        h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    digest = h.hexdigest()[:16]
     name = f"inerter_kernels_{digest}"
     if name in sys.modules:
         return sys.modules[name]
@@ -178,14 +194,15 @@ def flatten(mech) -> dict:
     limits = meet_limits(mech, scene.elements.values())
     for e in scene.elements.values():
         me = mech_elements.get(e.name)
-        if e.type in ("rotational_spring", "rotational_damper"):
+        if not elements.translational(e.type):
             ia, ib = angle_index(e.body_a), angle_index(e.body_b)
             free = getattr(me, "free_angle", None)
             if free is None:
                 free = e.free_length if e.free_length is not None else \
                     (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
-            rot_int.append((0 if e.type == "rotational_spring" else 1, ia, ib))
-            rot_real.append((float(e.coefficient), float(free)))
+            row_int, row_real = rotational_row(e, ia, ib, free)
+            rot_int.append(row_int)
+            rot_real.append(row_real)
             rot_names.append(e.name)
             continue
         row_int, row_real = element_row(e, me, pidx, scene.centripetal, limits[e.name])
@@ -206,8 +223,10 @@ def flatten(mech) -> dict:
         return np.array(rows, dtype=dtype).reshape(-1, width)
 
     return dict(n=n, nq=n, dim=2, m=2 * len(jt_int), mass=mass, pbody=pbody, ploc=ploc,
-                el_int=arr(el_int, 4, np.int64), el_real=arr(el_real, 3, float),
-                rot_int=arr(rot_int, 3, np.int64), rot_real=arr(rot_real, 2, float),
+                el_int=arr(el_int, layout.ELEMENT_INT_COLUMNS, np.int64),
+                el_real=arr(el_real, layout.ELEMENT_REAL_COLUMNS, float),
+                rot_int=arr(rot_int, layout.ROT_INT_COLUMNS, np.int64),
+                rot_real=arr(rot_real, layout.ROT_REAL_COLUMNS_2D, float),
                 jt_int=arr(jt_int, 3, np.int64), jt_real=arr(jt_real, 3, float),
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 9, float),
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 5, float),
@@ -238,9 +257,10 @@ def sparsity(flat) -> np.ndarray:
     for i in range(0, n, 3):
         S[i:i + 3, i:i + 3] = True
     pbody = flat["pbody"]
-    for kind, a, b, _ in flat["el_int"]:
-        if kind != 2:
+    for row_int, row_real in zip(flat["el_int"], flat["el_real"]):
+        if not adds_mass(row_int, row_real):
             continue
+        a, b = row_int[layout.POINT_A], row_int[layout.POINT_B]
         dofs = [d for p in (a, b) if pbody[p] >= 0 for d in range(3 * pbody[p], 3 * pbody[p] + 3)]
         S[np.ix_(dofs, dofs)] = True
     for j, (_, a, b) in enumerate(flat["jt_int"]):

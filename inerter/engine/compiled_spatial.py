@@ -13,7 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from inerter.engine.tables import ELEMENT_KIND, _by_name, element_row, force_rows, meet_limits
+from inerter import elements
+from inerter.elements import layout
+from inerter.engine.tables import (_by_name, adds_mass, element_row, force_rows, meet_limits,
+                                    rotational_row)
 from inerter.model.joints import Coincident, SpatialJoint
 
 # Joint kinds (column 0 of ``jt_int``), as in :mod:`inerter.engine.kernels` (its 3D section).
@@ -102,10 +105,11 @@ def flatten3(mech) -> dict:
     limits = meet_limits(mech, scene.elements.values())
     for e in scene.elements.values():
         me = mech_elements[e.name]
-        if e.type in ("rotational_spring", "rotational_damper"):
-            rot_int.append((0 if e.type == "rotational_spring" else 1, me.fa.body, me.fb.body))
-            rot_real.append([float(me.coefficient), float(me.free_angle), *np.asarray(me.axis, dtype=float),
-                             *np.asarray(me.rel0, dtype=float).ravel()])
+        if not elements.translational(e.type):
+            extra = [*np.asarray(me.axis, dtype=float), *np.asarray(me.rel0, dtype=float).ravel()]
+            row_int, row_real = rotational_row(e, me.fa.body, me.fb.body, me.free_angle, extra)
+            rot_int.append(row_int)
+            rot_real.append(row_real)
             rot_names.append(e.name)
             continue
         row_int, row_real = element_row(e, me, pidx, scene.centripetal, limits[e.name])
@@ -122,8 +126,10 @@ def flatten3(mech) -> dict:
         return np.ascontiguousarray(np.array(rows, dtype=dtype).reshape(-1, width))
 
     return dict(n=n, m=m, nq=nq, dim=3, mass=mass, pbody=pbody, ploc=np.ascontiguousarray(ploc),
-                el_int=arr(el_int, 4, np.int64), el_real=arr(el_real, 3, float),
-                rot_int=arr(rot_int, 3, np.int64), rot_real=arr(rot_real, 14, float),
+                el_int=arr(el_int, layout.ELEMENT_INT_COLUMNS, np.int64),
+                el_real=arr(el_real, layout.ELEMENT_REAL_COLUMNS, float),
+                rot_int=arr(rot_int, layout.ROT_INT_COLUMNS, np.int64),
+                rot_real=arr(rot_real, layout.ROT_REAL_COLUMNS_3D, float),
                 jt_int=arr(jt_int, 6, np.int64), jt_real=arr(jt_real, JOINT_WIDTH, float),
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 10, float),
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 6, float),
@@ -160,9 +166,9 @@ def sparsity3(flat) -> np.ndarray:
     def dofs(*points):
         return [d for p in points if pbody[p] >= 0 for d in range(6 * pbody[p], 6 * pbody[p] + 6)]
 
-    for kind, a, b, _ in flat["el_int"]:
-        if kind == ELEMENT_KIND["inerter"]:
-            d = dofs(a, b)
+    for row_int, row_real in zip(flat["el_int"], flat["el_real"]):
+        if adds_mass(row_int, row_real):
+            d = dofs(row_int[layout.POINT_A], row_int[layout.POINT_B])
             S[np.ix_(d, d)] = True
     row = n
     for (_, a, b, *_), k in zip(flat["jt_int"], _joint_rows(flat)):

@@ -16,10 +16,12 @@ from numba import carray, cfunc, njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic, overload
 
-# Translational element kinds (column 0 of ``el_int``).
-SPRING, DAMPER, INERTER = 0, 1, 2
-# Rotational element kinds.
-ROT_SPRING, ROT_DAMPER = 0, 1
+from inerter.common.errors import MIN_LENGTH
+
+from inerter.elements import dispatch as law
+from inerter.elements.layout import (AXIS, BODY_A, BODY_B, KIND, MEET_LIMIT, POINT_A, POINT_B, REL0,
+                                     ROT_KIND)
+
 # Joint kinds.
 REVOLUTE, PRISMATIC = 0, 1
 # Time functions of applied forces.
@@ -29,7 +31,6 @@ GROUND_NONE, GROUND_RECORD, GROUND_SINE, GROUND_INPUT = 0, 1, 2, 3
 # Status codes of the integrators.
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED = 0, 1, 2, 3, 4, 5, 6, 7
 
-from inerter.common.errors import MIN_LENGTH  # noqa: E402  (terminals meeting: the one threshold)
 
 
 @njit(cache=True, inline="always")
@@ -80,10 +81,10 @@ def _pair(q, v, ba, lax, lay, bb, lbx, lby):
 
 @njit(cache=True, inline="always")
 def _row_pair(q, v, table, row, pbody, ploc):
-    """The points named in columns 1 and 2 of a table row (element or joint): their bodies and
-    :func:`_pair` of them, (ba, bb, r, ṙ, a_n, the θ-columns of H)."""
-    pa = table[row, 1]
-    pb = table[row, 2]
+    """The points named in columns POINT_A and POINT_B of a table row (element or joint): their
+    bodies and :func:`_pair` of them, (ba, bb, r, ṙ, a_n, the θ-columns of H)."""
+    pa = table[row, POINT_A]
+    pb = table[row, POINT_B]
     ba = pbody[pa]
     bb = pbody[pb]
     rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _pair(
@@ -100,7 +101,7 @@ def _element(q, v, e, el_int, pbody, ploc):
     meets = not L > MIN_LENGTH
     if meets:
         L = MIN_LENGTH
-    return el_int[e, 0], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, rx / L, ry / L, meets
+    return el_int[e, KIND], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, rx / L, ry / L, meets
 
 
 # ------------------------------------------------------------------------------------------------
@@ -120,6 +121,24 @@ def _addK(AB, perm, off, i, j, x):
     pi = perm[i]
     pj = perm[j]
     AB[pi, off + pj - pi] += x
+
+
+@njit(cache=True, inline="always")
+def _axial(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez):
+    """The scalars every translational law takes (2D: z components 0): L̇ = ṙ·r̂, a_n·r̂ and
+    |ṙ⊥|² = |ṙ|² − L̇² (the centripetal term's numerator, Eq. 9)."""
+    Ldot = rdx * ex + rdy * ey + rdz * ez
+    an = anx * ex + any_ * ey + anz * ez
+    perp2 = rdx * rdx + rdy * rdy + rdz * rdz - Ldot * Ldot
+    return Ldot, an, perp2
+
+
+@njit(cache=True, inline="always")
+def _element_law(kind, row, L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez):
+    """A translational element's law (:mod:`inerter.elements`): (F without the inertance part,
+    the inertance b, L̇)."""
+    Ldot, an, perp2 = _axial(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+    return law.force(kind, row, L, Ldot, an, perp2), law.inertance(kind, row), Ldot
 
 
 @njit(cache=True, inline="always")
@@ -165,6 +184,17 @@ def _start_assembly(AB, gen, gravity, n, has_gravity):
         gen[i] = gravity[i] if has_gravity else 0.0
 
 
+@njit(cache=True, inline="always")
+def _rotational2(q, v, e, rot_int):
+    """A 2D rotational element: the velocity indices of its bodies' angles (−1: the ground), the
+    relative angle φ = θ_b − θ_a and its rate."""
+    ia = rot_int[e, BODY_A]
+    ib = rot_int[e, BODY_B]
+    phi = (q[ib] if ib >= 0 else 0.0) - (q[ia] if ia >= 0 else 0.0)
+    w = (v[ib] if ib >= 0 else 0.0) - (v[ia] if ia >= 0 else 0.0)
+    return ia, ib, phi, w
+
+
 @njit(cache=True)
 def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix) and rhs (permuted) at (t, q, v).
@@ -195,29 +225,13 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
         gb[0] = ex
         gb[1] = ey
         gb[2] = tbx * ex + tby * ey
-        coef = el_real[e, 0]
-        if kind == SPRING:
-            F = coef * (L - el_real[e, 1])
-        elif kind == DAMPER:
-            F = coef * (rdx * ex + rdy * ey)
-        else:
-            term = anx * ex + any_ * ey
-            if el_int[e, 3]:
-                along = rdx * ex + rdy * ey
-                term += (rdx * rdx + rdy * rdy - along * along) / L
-            F = coef * term
-        _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, coef if kind == INERTER else 0.0, 3)
+        F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
+        _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 3)
 
     # -- rotational springs and dampers
     for e in range(rot_int.shape[0]):
-        ia = rot_int[e, 1]
-        ib = rot_int[e, 2]
-        if rot_int[e, 0] == ROT_SPRING:
-            phi = (q[ib] if ib >= 0 else 0.0) - (q[ia] if ia >= 0 else 0.0)
-            tau = rot_real[e, 0] * (phi - rot_real[e, 1])
-        else:
-            w = (v[ib] if ib >= 0 else 0.0) - (v[ia] if ia >= 0 else 0.0)
-            tau = rot_real[e, 0] * w
+        ia, ib, phi, w = _rotational2(q, v, e, rot_int)
+        tau = law.torque(rot_int[e, ROT_KIND], rot_real[e], phi, w)
         if ib >= 0:
             gen[ib] -= tau
         if ia >= 0:
@@ -546,48 +560,29 @@ def signal_values2(q, v, qdd, P, out):
             q, v, e, el_int, pbody, ploc)
         if meets:
             status = TERMINALS_MEET
-        along = rdx * ex + rdy * ey
-        coef = el_real[e, 0]
-        if kind == SPRING:
-            F = coef * (L - el_real[e, 1])
-            energy += 0.5 * coef * (L - el_real[e, 1]) ** 2
-        elif kind == DAMPER:
-            F = coef * along
-        else:
-            # r̈ = H q̈ + a_n (Eqs. 17-19); F = b (r̈·r̂ [+ |ṙ⊥|²/L]), Eq. (9) / (8)
-            ax = anx
-            ay = any_
+        F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
+        if b != 0.0:
+            # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 17-19): the inertance part of F = b d²L/dt², Eq. (9) / (8)
+            gq = 0.0
             if ba >= 0:
                 ka = 3 * ba
-                ax -= qdd[ka] + qdd[ka + 2] * tax
-                ay -= qdd[ka + 1] + qdd[ka + 2] * tay
+                gq -= (qdd[ka] + qdd[ka + 2] * tax) * ex + (qdd[ka + 1] + qdd[ka + 2] * tay) * ey
             if bb >= 0:
                 kb = 3 * bb
-                ax += qdd[kb] + qdd[kb + 2] * tbx
-                ay += qdd[kb + 1] + qdd[kb + 2] * tby
-            term = ax * ex + ay * ey
-            if el_int[e, 3]:
-                term += (rdx * rdx + rdy * rdy - along * along) / L
-            F = coef * term
-            energy += 0.5 * coef * along * along
+                gq += (qdd[kb] + qdd[kb + 2] * tbx) * ex + (qdd[kb + 1] + qdd[kb + 2] * tby) * ey
+            F += b * gq
+        energy += law.energy(kind, el_real[e], L, along)
         out[k] = L
         out[k + 1] = along
         out[k + 2] = F
         k += 3
     for e in range(rot_int.shape[0]):
-        ia = rot_int[e, 1]
-        ib = rot_int[e, 2]
-        phi = (q[ib] if ib >= 0 else 0.0) - (q[ia] if ia >= 0 else 0.0)
-        w = (v[ib] if ib >= 0 else 0.0) - (v[ia] if ia >= 0 else 0.0)
-        coef = rot_real[e, 0]
-        if rot_int[e, 0] == ROT_SPRING:
-            tau = coef * (phi - rot_real[e, 1])
-            energy += 0.5 * coef * (phi - rot_real[e, 1]) ** 2
-        else:
-            tau = coef * w
+        ia, ib, phi, w = _rotational2(q, v, e, rot_int)
+        kind = rot_int[e, ROT_KIND]
+        energy += law.rotational_energy(kind, rot_real[e], phi, w)
         out[k] = phi
         out[k + 1] = w
-        out[k + 2] = tau
+        out[k + 2] = law.torque(kind, rot_real[e], phi, w)
         k += 3
     out[k] = energy
     out[k + 1] = constraint_residual2(q, P) if jt_int.shape[0] else 0.0
@@ -682,7 +677,7 @@ def _gap_by_dimension(q, z, e, P):
 @njit(cache=True)
 def terminal_gaps(y, P):
     """(gaps, z): r_b − r_a at y of each translational element whose terminals are checked
-    (``el_real[e, 2]`` > 0: one element per pair of terminals), for :func:`terminals_meet`, and the
+    (``el_real[e, MEET_LIMIT]`` > 0: one element per pair of terminals), for :func:`terminals_meet`, and the
     zero velocities it evaluates them with."""
     el_int = P[3]
     z = np.zeros(P[16][0])
@@ -699,14 +694,14 @@ def terminals_meet(gaps, z, y_new, P):
     """Whether an accepted step brings a translational element's terminals together, as
     ``Mechanism.check_terminals`` checks each step of the numpy path: the closest approach of the
     chord from r_b − r_a at the step's start (`gaps`, :func:`terminal_gaps`) to r_b − r_a at y_new
-    is not above the element's limit (``el_real[e, 2]``, MEET_RELATIVE of its initial length; 0: the
+    is not above the element's limit (``el_real[e, MEET_LIMIT]``, MEET_RELATIVE of its initial length; 0: the
     pair of terminals is another element's). A fixed step (RK4) would otherwise pass through the
     meeting, where the direction is undefined, and go on with garbage. Otherwise `gaps` moves on
     to y_new."""
     el_real = P[4]
     q1 = y_new[:P[16][6]]
     for e in range(gaps.shape[0]):
-        limit = el_real[e, 2]
+        limit = el_real[e, MEET_LIMIT]
         if limit == 0.0:
             continue
         ax = gaps[e, 0]
@@ -882,8 +877,8 @@ def _element3(q, v, e, el_int, pbody, ploc, ga, gb):
     """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, L, r̂, whether the terminals
     meet), with g = Hᵀ r̂ written to ga (a's six coordinates) and gb (b's); L is held at MIN_LENGTH
     where the terminals meet."""
-    pa = el_int[e, 1]
-    pb = el_int[e, 2]
+    pa = el_int[e, POINT_A]
+    pb = el_int[e, POINT_B]
     ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
     L = math.sqrt(rx * rx + ry * ry + rz * rz)
     meets = not L > MIN_LENGTH
@@ -907,15 +902,15 @@ def _element3(q, v, e, el_int, pbody, ploc, ga, gb):
     gb[3] = wx
     gb[4] = wy
     gb[5] = wz
-    return el_int[e, 0], ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets
+    return el_int[e, KIND], ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets
 
 
 @njit(cache=True, inline="always")
 def _rel(Aa, Ab, rot_real, e, i, j):
-    """D[i, j] of D = (A_aᵀ A_b) rel0ᵀ, rel0 row-major in rot_real[e, 5:14]."""
+    """D[i, j] of D = (A_aᵀ A_b) rel0ᵀ, rel0 row-major in rot_real's REL0 columns."""
     x = 0.0
     for k in range(3):
-        x += (Aa[i] * Ab[k] + Aa[3 + i] * Ab[3 + k] + Aa[6 + i] * Ab[6 + k]) * rot_real[e, 5 + 3 * j + k]
+        x += (Aa[i] * Ab[k] + Aa[3 + i] * Ab[3 + k] + Aa[6 + i] * Ab[6 + k]) * rot_real[e, REL0 + 3 * j + k]
     return x
 
 
@@ -924,13 +919,13 @@ def _rotational3(q, v, e, rot_int, rot_real):
     """A 3D rotational element (``elements.SpatialRotationalElement``): φ about the axis n̄ (fixed in
     body a) since the initial relative orientation rel0, its rate n·(A_b ω_b − A_a ω_a), the torque
     (restoring positive) and the axis in the global frame n = A_a n̄, with A_a, A_b."""
-    ia = rot_int[e, 1]
-    ib = rot_int[e, 2]
+    ia = rot_int[e, BODY_A]
+    ib = rot_int[e, BODY_B]
     Aa = _rot(q, ia)
     Ab = _rot(q, ib)
-    nx = rot_real[e, 2]
-    ny = rot_real[e, 3]
-    nz = rot_real[e, 4]
+    nx = rot_real[e, AXIS]
+    ny = rot_real[e, AXIS + 1]
+    nz = rot_real[e, AXIS + 2]
     # D = (A_aᵀ A_b) rel0ᵀ: the rotation since t = 0, in a's frame
     d00 = _rel(Aa, Ab, rot_real, e, 0, 0)
     d01 = _rel(Aa, Ab, rot_real, e, 0, 1)
@@ -952,10 +947,7 @@ def _rotational3(q, v, e, rot_int, rot_real):
     ox, oy, oz = _mul(Ab, wbx, wby, wbz)
     px, py, pz = _mul(Aa, wax, way, waz)
     w = gx * (ox - px) + gy * (oy - py) + gz * (oz - pz)
-    if rot_int[e, 0] == ROT_SPRING:
-        tau = rot_real[e, 0] * (phi - rot_real[e, 1])
-    else:
-        tau = rot_real[e, 0] * w
+    tau = law.torque(rot_int[e, ROT_KIND], rot_real[e], phi, w)
     return ia, ib, Aa, Ab, phi, w, tau, gx, gy, gz
 
 
@@ -1053,18 +1045,8 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
             q, v, e, el_int, pbody, ploc, ga, gb)
         if meets:
             status = TERMINALS_MEET
-        coef = el_real[e, 0]
-        if kind == SPRING:
-            F = coef * (L - el_real[e, 1])
-        elif kind == DAMPER:
-            F = coef * (rdx * ex + rdy * ey + rdz * ez)
-        else:
-            term = anx * ex + any_ * ey + anz * ez
-            if el_int[e, 3]:
-                along = rdx * ex + rdy * ey + rdz * ez
-                term += (rdx * rdx + rdy * rdy + rdz * rdz - along * along) / L
-            F = coef * term
-        _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, coef if kind == INERTER else 0.0, 6)
+        F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+        _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 6)
 
     # -- rotational springs and dampers about an axis fixed in body a
     for e in range(rot_int.shape[0]):
@@ -1282,36 +1264,27 @@ def signal_values3(q, v, qdd, P, out):
             q, v, e, el_int, pbody, ploc, ga, gb)
         if meets:
             status = TERMINALS_MEET
-        along = rdx * ex + rdy * ey + rdz * ez
-        coef = el_real[e, 0]
-        if kind == SPRING:
-            F = coef * (L - el_real[e, 1])
-            energy += 0.5 * coef * (L - el_real[e, 1]) ** 2
-        elif kind == DAMPER:
-            F = coef * along
-        else:
-            # r̈·r̂ = (H q̈ + a_n)·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 19, 25); F = b (r̈·r̂ [+ |ṙ⊥|²/L]), Eq. (9) / (8)
-            term = anx * ex + any_ * ey + anz * ez
+        F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+        if b != 0.0:
+            # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 19, 25): the inertance part of F = b d²L/dt², Eq. (9) / (8)
+            gq = 0.0
             if ba >= 0:
                 ka = 6 * ba
                 for i in range(6):
-                    term += ga[i] * qdd[ka + i]
+                    gq += ga[i] * qdd[ka + i]
             if bb >= 0:
                 kb = 6 * bb
                 for i in range(6):
-                    term += gb[i] * qdd[kb + i]
-            if el_int[e, 3]:
-                term += (rdx * rdx + rdy * rdy + rdz * rdz - along * along) / L
-            F = coef * term
-            energy += 0.5 * coef * along * along
+                    gq += gb[i] * qdd[kb + i]
+            F += b * gq
+        energy += law.energy(kind, el_real[e], L, along)
         out[k] = L
         out[k + 1] = along
         out[k + 2] = F
         k += 3
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
-        if rot_int[e, 0] == ROT_SPRING:
-            energy += 0.5 * rot_real[e, 0] * (phi - rot_real[e, 1]) ** 2
+        energy += law.rotational_energy(rot_int[e, ROT_KIND], rot_real[e], phi, w)
         out[k] = phi
         out[k + 1] = w
         out[k + 2] = tau

@@ -1,14 +1,19 @@
 """Rows of the tables the kernels run on, shared by the 2D and 3D flattening
-(:func:`inerter.engine.compiled.flatten`, :func:`inerter.engine.compiled_spatial.flatten3`)."""
+(:func:`inerter.engine.compiled.flatten`, :func:`inerter.engine.compiled_spatial.flatten3`); the
+columns are named in :mod:`inerter.elements.layout`."""
 from __future__ import annotations
+
+from inerter import elements
+from inerter.elements import layout
 
 
 def _by_name(objects):
     return {getattr(o, "name", None): o for o in objects}
 
 
-#: Column 0 of ``el_int`` and column 1 of ``fa_int``, as in :mod:`inerter.engine.kernels`.
-ELEMENT_KIND = {"spring": 0, "damper": 1, "inerter": 2}
+#: An element kind's code in the tables (``el_int[:, KIND]``, ``rot_int[:, ROT_KIND]``).
+ELEMENT_KIND = elements.CODE
+#: Column 1 of ``fa_int``, as in :mod:`inerter.engine.kernels`.
 FORCE_CODE = {"constant": 0, "sine": 1, "step": 2}
 
 
@@ -23,17 +28,45 @@ def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
             free = e.free_length
         if free is None:
             raise ValueError(f"spring {e.name}: no free length on the compiled mechanism")
-    return ((ELEMENT_KIND[e.type], pidx[e.point_a], pidx[e.point_b], int(bool(centripetal))),
-            (float(e.coefficient), float(free), float(meet_limit)))
+    row_int = [0] * layout.ELEMENT_INT_COLUMNS
+    row_int[layout.KIND] = ELEMENT_KIND[e.type]
+    row_int[layout.POINT_A] = pidx[e.point_a]
+    row_int[layout.POINT_B] = pidx[e.point_b]
+    row_real = [0.0] * layout.ELEMENT_REAL_COLUMNS
+    row_real[layout.COEFFICIENT] = float(e.coefficient)
+    row_real[layout.FREE_LENGTH] = float(free)
+    row_real[layout.CENTRIPETAL] = 1.0 if centripetal else 0.0
+    row_real[layout.MEET_LIMIT] = float(meet_limit)
+    return tuple(row_int), tuple(row_real)
 
 
-def meet_limits(mech, elements) -> dict[str, float]:
-    """Column 2 of ``el_real`` by translational element name: the distance below which its terminals
-    meet (``Mechanism.meet_limit``), 0.0 for an element whose pair of terminals an earlier element
-    shares (compiled_kernels.terminals_meet checks each pair once, as Mechanism.check_terminals)."""
+def rotational_row(e, body_a, body_b, free_angle, extra=()) -> tuple[tuple, tuple]:
+    """The ``rot_int`` and ``rot_real`` rows of rotational element `e` (bodies as the kernels
+    index them; `extra`: the 3D columns from AXIS on)."""
+    row_int = [0] * layout.ROT_INT_COLUMNS
+    row_int[layout.ROT_KIND] = ELEMENT_KIND[e.type]
+    row_int[layout.BODY_A] = body_a
+    row_int[layout.BODY_B] = body_b
+    row_real = [float(e.coefficient), float(free_angle), *extra]
+    assert layout.COEFFICIENT == 0 and layout.FREE_ANGLE == 1 and len(row_real) in (
+        layout.ROT_REAL_COLUMNS_2D, layout.ROT_REAL_COLUMNS_3D)
+    return tuple(row_int), tuple(row_real)
+
+
+def adds_mass(row_int, row_real) -> bool:
+    """Whether a translational element adds to the mass matrix (its law's inertance is not 0):
+    its bodies' coordinates are coupled in the sparsity pattern."""
+    return elements.MODULES[row_int[layout.KIND]].inertance.py_func(row_real) != 0.0
+
+
+def meet_limits(mech, specs) -> dict[str, float]:
+    """Column MEET_LIMIT of ``el_real`` by translational element name: the distance below which
+    its terminals meet (``Mechanism.meet_limit``), 0.0 for an element whose pair of terminals an
+    earlier element shares (kernels.terminals_meet checks each pair once, as
+    Mechanism.check_terminals)."""
     seen, limits = set(), {}
-    for e in elements:
-        if e.type in ("rotational_spring", "rotational_damper"):
+    for e in specs:
+        if not elements.translational(e.type):
             continue
         pair = frozenset((e.point_a, e.point_b))
         limits[e.name] = 0.0 if pair in seen else float(mech.meet_limit[e.name])

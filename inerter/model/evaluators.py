@@ -1,8 +1,10 @@
-"""Force elements of the fast path, each behind one small interface.
+"""The readable evaluators of the elements: each element's geometry in numpy, its law from
+:mod:`inerter.elements` run uncompiled (the same definition the kernels inline, ``.py_func``).
 
-An element adds to the system mass matrix M (only the inerter does: M_I of Eq. 33) and to the
-generalised force vector Q, and reports its outputs (Modelica names: ``s_rel``, ``v_rel``, ``f`` for
-translational elements, tension positive; ``phi_rel``, ``w_rel``, ``tau`` for rotational ones).
+An element adds to the system mass matrix M (the factor of gᵀq̈ in its law, b for an inerter: M_I
+of Eq. 33) and to the generalised force vector Q, and reports its outputs (Modelica names:
+``s_rel``, ``v_rel``, ``f`` for translational elements, tension positive; ``phi_rel``, ``w_rel``,
+``tau`` for rotational ones).
 
 Translational elements act along the line between their terminals (uniaxial, Sec. 2.2) and enter
 the equations through the generalised force of Eq. (29), Q = −F Hᵀ r̂.
@@ -13,20 +15,33 @@ import math
 
 import numpy as np
 
+from inerter import elements
 from inerter.common.errors import MIN_LENGTH, TerminalsMeet  # noqa: F401  (re-exported)
+from inerter.elements import layout
 from inerter.model.planar import PointPair
 
+
 class TranslationalElement:
-    """Common geometry of a two-terminal uniaxial element between points a and b."""
+    """A two-terminal uniaxial element between points a and b, of any translational kind."""
 
-    kind = "element"
-    coefficient_name = "k"
-
-    def __init__(self, name: str, pair: PointPair, coefficient: float, labels: tuple[str, str]):
+    def __init__(self, name: str, kind: str, pair: PointPair, coefficient: float, labels: tuple[str, str],
+                 free_length: float | None = None, centripetal: bool = True):
         self.name = name
+        self.kind = kind
         self.pair = pair
-        self.coefficient = float(coefficient)
         self.labels = labels
+        self.coefficient = float(coefficient)
+        self.coefficient_name = elements.KINDS[kind].coefficient.key
+        self.free_length = None if free_length is None else float(free_length)
+        self.centripetal = bool(centripetal)
+        law = elements.MODULE[kind]
+        self._force, self._inertance, self._energy = law.force.py_func, law.inertance.py_func, law.energy.py_func
+        row = np.zeros(layout.ELEMENT_REAL_COLUMNS)
+        row[layout.COEFFICIENT] = self.coefficient
+        row[layout.FREE_LENGTH] = self.free_length or 0.0
+        row[layout.CENTRIPETAL] = 1.0 if self.centripetal else 0.0
+        self.row = row
+        self.inertance = self._inertance(row)
 
     def geometry(self, q, v):
         r, rdot, a_n, H = self.pair.evaluate(q, v)
@@ -41,122 +56,75 @@ class TranslationalElement:
     def length(self, q):
         return self.geometry(q, np.zeros_like(q))[4]
 
+    def _law_force(self, geo):
+        """The law's force without the inertance part (:mod:`inerter.elements`), and L̇."""
+        r, rdot, a_n, H, L, rhat = geo
+        Ldot = float(rdot @ rhat)
+        an = float(a_n @ rhat)
+        perp2 = float(rdot @ rdot) - Ldot * Ldot
+        return self._force(self.row, L, Ldot, an, perp2), Ldot
+
+    def force(self, q, v, a=None, geo=None):
+        """The axial force at accelerations `a` (needed only where the kind has an inertance)."""
+        geo = geo or self.geometry(q, v)
+        F, _ = self._law_force(geo)
+        if self.inertance != 0.0:
+            F += self.inertance * float((geo[3] @ a[self.pair.dofs]) @ geo[5])   # b gᵀq̈, Eq. (9)
+        return F
+
     def outputs(self, q, v, a):
         """(s_rel, v_rel, f) at accelerations `a`."""
-        r, rdot, a_n, H, L, rhat = self.geometry(q, v)
-        return L, float(rdot @ rhat), self.force(q, v, a, (r, rdot, a_n, H, L, rhat))
+        geo = self.geometry(q, v)
+        return geo[4], float(geo[1] @ geo[5]), self.force(q, v, a, geo)
 
     def add_mass(self, q, v, M, geo=None):
-        pass
-
-    def potential(self, q):
-        return 0.0
-
-    def kinetic(self, q, v):
-        return 0.0
-
-
-class Spring(TranslationalElement):
-    """Linear spring, F = k(L − L0) (Eq. 5)."""
-
-    kind = "spring"
-
-    def __init__(self, name, pair, k, free_length, labels):
-        super().__init__(name, pair, k, labels)
-        self.free_length = float(free_length)
-
-    def force(self, q, v, a=None, geo=None):
-        L = (geo or self.geometry(q, v))[4]
-        return self.coefficient * (L - self.free_length)
-
-    def add_force(self, q, v, Q, geo=None):
-        geo = geo or self.geometry(q, v)
-        H, L, rhat = geo[3], geo[4], geo[5]
-        F = self.coefficient * (L - self.free_length)
-        Q[self.pair.dofs] -= F * (H.T @ rhat)                      # Eq. (29)
-
-    def potential(self, q):
-        return 0.5 * self.coefficient * (self.length(q) - self.free_length) ** 2
-
-
-class Damper(TranslationalElement):
-    """Linear viscous damper, F = c ṙ·r̂ (Eq. 7)."""
-
-    kind = "damper"
-    coefficient_name = "c"
-
-    def force(self, q, v, a=None, geo=None):
-        geo = geo or self.geometry(q, v)
-        return self.coefficient * float(geo[1] @ geo[5])
-
-    def add_force(self, q, v, Q, geo=None):
-        geo = geo or self.geometry(q, v)
-        H, rhat = geo[3], geo[5]
-        F = self.coefficient * float(geo[1] @ rhat)
-        Q[self.pair.dofs] -= F * (H.T @ rhat)                      # Eq. (29)
-
-
-class Inerter(TranslationalElement):
-    """Ideal inerter in the augmented form of Eq. (33).
-
-    With the centripetal term (Eq. 9/20): F = b[(H q̈ + a_n)·r̂ + (ṙ·ṙ − (ṙ·r̂)²)/L].
-    Without it (Eq. 8): F = b (H q̈ + a_n)·r̂.
-    The q̈ part moves to the mass matrix, M_I = b Hᵀ r̂ r̂ᵀ H, the rest to the right side as Q_Iv
-    (Eq. 31).
-    """
-
-    kind = "inerter"
-    coefficient_name = "b"
-
-    def __init__(self, name, pair, b, centripetal: bool, labels):
-        super().__init__(name, pair, b, labels)
-        self.centripetal = bool(centripetal)
-
-    def _velocity_term(self, geo):
-        """The part of F/b not multiplying q̈: r̂·a_n (+ the centripetal term of Eq. 9)."""
-        r, rdot, a_n, H, L, rhat = geo
-        term = float(a_n @ rhat)
-        if self.centripetal:
-            along = float(rdot @ rhat)
-            term += (float(rdot @ rdot) - along * along) / L     # |ṙ⊥|²/L, Eq. (9)/(20)
-        return term
-
-    def add_mass(self, q, v, M, geo=None):
+        if self.inertance == 0.0:
+            return
         geo = geo or self.geometry(q, v)
         g = geo[3].T @ geo[5]                                     # Hᵀ r̂
         idx = self.pair.dofs
-        M[np.ix_(idx, idx)] += self.coefficient * np.outer(g, g)   # M_I, Eq. (33)
+        M[np.ix_(idx, idx)] += self.inertance * np.outer(g, g)   # M_I, Eq. (33)
 
     def add_force(self, q, v, Q, geo=None):
         geo = geo or self.geometry(q, v)
-        g = geo[3].T @ geo[5]
-        Q[self.pair.dofs] -= self.coefficient * self._velocity_term(geo) * g   # Q_Iv, Eq. (31)
+        F, _ = self._law_force(geo)
+        Q[self.pair.dofs] -= F * (geo[3].T @ geo[5])              # Eq. (29); Q_Iv, Eq. (31)
 
-    def force(self, q, v, a, geo=None):
-        geo = geo or self.geometry(q, v)
-        r, rdot, a_n, H, L, rhat = geo
-        return self.coefficient * (float((H @ a[self.pair.dofs]) @ rhat) + self._velocity_term(geo))
+    def energy(self, q, v) -> float:
+        geo = self.geometry(q, v)
+        return self._energy(self.row, geo[4], float(geo[1] @ geo[5]))
+
+    def potential(self, q):
+        """The part of :meth:`energy` that does not depend on the velocities."""
+        return self._energy(self.row, self.length(q), 0.0)
 
     def kinetic(self, q, v):
-        geo = self.geometry(q, v)
-        return 0.5 * self.coefficient * float(geo[1] @ geo[5]) ** 2   # ½ b L̇²
+        return self.energy(q, v) - self.potential(q)
 
 
 class RotationalElement:
-    """Rotational spring or damper between two bodies' angles (or a body and the ground)."""
+    """A rotational element between two planar bodies' angles (or a body and the ground), of any
+    rotational kind: φ = θ_b − θ_a."""
 
-    kind = "rotational"
-
-    def __init__(self, name: str, index_a: int, index_b: int, coefficient: float, free_angle: float = 0.0):
+    def __init__(self, name: str, kind: str, index_a: int, index_b: int, coefficient: float,
+                 free_angle: float = 0.0):
         self.name = name
+        self.kind = kind
         self.ia, self.ib = index_a, index_b     # coordinate indices of the angles, −1 for the ground
         self.coefficient = float(coefficient)
+        self.coefficient_name = elements.KINDS[kind].coefficient.key
         self.free_angle = float(free_angle)
+        law = elements.MODULE[kind]
+        self._torque, self._energy = law.torque.py_func, law.energy.py_func
+        self.row = np.array([self.coefficient, self.free_angle])
 
     def relative(self, q, v):
         phi = (q[self.ib] if self.ib >= 0 else 0.0) - (q[self.ia] if self.ia >= 0 else 0.0)
         w = (v[self.ib] if self.ib >= 0 else 0.0) - (v[self.ia] if self.ia >= 0 else 0.0)
         return phi, w
+
+    def torque(self, q, v):
+        return self._torque(self.row, *self.relative(q, v))
 
     def add_force(self, q, v, Q, geo=None):
         tau = self.torque(q, v)
@@ -173,48 +141,30 @@ class RotationalElement:
 
     def outputs(self, q, v, a):
         phi, w = self.relative(q, v)
-        return phi, w, self.torque(q, v)
+        return phi, w, self._torque(self.row, phi, w)
 
     def kinetic(self, q, v):
         return 0.0
 
-
-class RotationalSpring(RotationalElement):
-    """τ = k (φ_rel − φ0), restoring."""
-
-    kind = "rotational_spring"
-
-    def torque(self, q, v):
-        return self.coefficient * (self.relative(q, v)[0] - self.free_angle)
-
     def potential(self, q):
-        return 0.5 * self.coefficient * (self.relative(q, q * 0)[0] - self.free_angle) ** 2
-
-
-class RotationalDamper(RotationalElement):
-    """τ = d ω_rel."""
-
-    kind = "rotational_damper"
-
-    def torque(self, q, v):
-        return self.coefficient * self.relative(q, v)[1]
-
-    def potential(self, q):
-        return 0.0
+        return self._energy(self.row, self.relative(q, q * 0)[0], 0.0)
 
 
 class SpatialRotationalElement:
-    """Rotational spring (τ = k(φ − φ0)) or damper (τ = d φ̇) about an axis between two 3D bodies
-    (or a body and the ground). φ is the rotation about the axis (fixed in body a; global for the
-    ground) measured from the initial relative orientation, so φ(0) = 0; exact while the relative
-    rotation is about that axis (as a revolute joint keeps it)."""
+    """A rotational element about an axis between two 3D bodies (or a body and the ground), of any
+    rotational kind. φ is the rotation about the axis (fixed in body a; global for the ground)
+    measured from the initial relative orientation, so φ(0) = 0; exact while the relative rotation
+    is about that axis (as a revolute joint keeps it)."""
 
     def __init__(self, spec, frame_a, frame_b, q0):
         self.name = spec.name
         self.kind = spec.type
-        self.coefficient_name = "k" if spec.type == "rotational_spring" else "d"
+        self.coefficient_name = elements.KINDS[spec.type].coefficient.key
         self.coefficient = float(spec.coefficient)
         self.free_angle = float(spec.free_length or 0.0)
+        law = elements.MODULE[spec.type]
+        self._torque, self._energy = law.torque.py_func, law.energy.py_func
+        self.row = np.array([self.coefficient, self.free_angle])
         self.fa, self.fb = frame_a, frame_b
         self.axis = np.asarray(spec.axis, dtype=float)
         z = np.zeros(max(frame_a.vi, frame_b.vi) + 6)
@@ -234,9 +184,7 @@ class SpatialRotationalElement:
 
     def torque(self, q, v, geo=None):
         phi, w, *_ = geo or self.geometry(q, v)
-        if self.kind == "rotational_spring":
-            return self.coefficient * (phi - self.free_angle)
-        return self.coefficient * w
+        return self._torque(self.row, phi, w)
 
     def add_force(self, q, v, Q, geo=None):
         geo = geo or self.geometry(q, v)
@@ -258,6 +206,4 @@ class SpatialRotationalElement:
         return 0.0
 
     def potential(self, q):
-        if self.kind != "rotational_spring":
-            return 0.0
-        return 0.5 * self.coefficient * (self.geometry(q, np.zeros(len(q)))[0] - self.free_angle) ** 2
+        return self._energy(self.row, self.geometry(q, np.zeros(len(q)))[0], 0.0)

@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from inerter.model import evaluators as el
+from inerter import elements
 from inerter.common.errors import SceneError, SimulationError
 from inerter.model.joints import make_joint
 from inerter.model.planar import PointKinematics, PointPair
@@ -199,27 +200,24 @@ class Mechanism:
         return PointPair(self.points[a], self.points[b])
 
     def _element(self, e, q0):
-        if e.type in ("rotational_spring", "rotational_damper"):
+        """The evaluator of scene element `e`. A kind with a free length (or angle) that the scene
+        leaves out takes the distance (or relative angle) at t = 0."""
+        has_free = elements.KINDS[e.type].free is not None
+        if not elements.translational(e.type):
             if self.dim == 3:
                 return el.SpatialRotationalElement(e, self.frames[e.body_a], self.frames[e.body_b], q0)
             ia, ib = self.angle_index(e.body_a), self.angle_index(e.body_b)
-            if e.type == "rotational_damper":
-                return el.RotationalDamper(e.name, ia, ib, e.coefficient)
-            phi0 = e.free_length
+            phi0 = e.free_length if has_free else 0.0
             if phi0 is None:
                 phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
-            return el.RotationalSpring(e.name, ia, ib, e.coefficient, phi0)
+            return el.RotationalElement(e.name, e.type, ia, ib, e.coefficient, phi0)
         pair = self.pair(e.point_a, e.point_b)
         labels = (e.point_a, e.point_b)
         L_initial = self._initial_length(e, pair, q0)
-        free = (e.free_length if e.free_length is not None else L_initial) if e.type == "spring" else None
+        free = (e.free_length if e.free_length is not None else L_initial) if has_free else None
         if self.element_factory is not None:
             return self.element_factory(e, pair, self.scene.centripetal, free, labels, self)
-        if e.type == "spring":
-            return el.Spring(e.name, pair, e.coefficient, free, labels)
-        if e.type == "damper":
-            return el.Damper(e.name, pair, e.coefficient, labels)
-        return el.Inerter(e.name, pair, e.coefficient, self.scene.centripetal, labels)
+        return el.TranslationalElement(e.name, e.type, pair, e.coefficient, labels, free, self.scene.centripetal)
 
     def _initial_length(self, e, pair, q0):
         r, _, _, _ = pair.evaluate(q0, np.zeros(self.n))

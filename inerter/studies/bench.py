@@ -113,7 +113,6 @@ def signal_extractor(mech, signal: str | None) -> Callable[[np.ndarray], np.ndar
 
 def reference_states(path, overrides, stop_time, output_interval):
     """The oracle's samples at rtol 1e-12, atol 1e-14 (DOP853)."""
-    from inerter import api
     from inerter.api import load
 
     oracle = load(path, **overrides).oracle()
@@ -160,6 +159,7 @@ def _timed(fn):
 
 def sweep(study: Study, model, reference, extract, paths, methods, sweeps, budget, log=print):
     """Add the numpy / compiled path points of every method to the study."""
+    from inerter import api
     from inerter.engine import compiled
     from inerter.engine.simulation import integrate
 

@@ -1,0 +1,56 @@
+"""What an element kind is: its parameters (key in the scene, symbol, unit, physical range) and its
+law, written once as scalar arithmetic.
+
+A law is a plain function of floats and of the element's row of numbers (``row[COEFFICIENT]``...,
+the named columns of :mod:`inerter.elements.layout`). :func:`law` compiles it with numba for the
+engine's kernels, which inline it into their assembly and output loops, 2D and 3D alike; its
+``.py_func`` is the same definition run by the Python interpreter (the readable evaluators of
+:mod:`inerter.model.evaluators`). Nothing about an element is written a second time.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from numba import njit
+
+#: The families of element kinds: two-terminal elements acting along the line between their
+#: terminals (uniaxial, Sec. 2.2), and rotational ones between two bodies' orientations.
+TRANSLATIONAL, ROTATIONAL = "translational", "rotational"
+
+
+def law(fn):
+    """Compile a law for the kernels (inlined where they call it; cached on disk)."""
+    return njit(cache=True, inline="always")(fn)
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One parameter of an element kind as a scene declares it (``elements.NAME.<key>``)."""
+    key: str
+    unit: str
+    description: str
+    minimum: float = -math.inf
+    required: bool = True
+
+
+@dataclass(frozen=True)
+class ElementKind:
+    """An element kind: the scene's ``type``, its code in the engine's tables (its place in
+    :data:`inerter.elements.KINDS`), its family, its coefficient and optional second parameter,
+    and its outputs' names with units."""
+    name: str
+    family: str
+    coefficient: Parameter
+    description: str
+    free: Parameter | None = None          # a spring's free length, a rotational spring's angle
+    equation: str = ""
+
+    @property
+    def outputs(self) -> tuple[tuple[str, str, str], ...]:
+        """(suffix, unit, description) of the outputs every element of the family reports."""
+        if self.family == TRANSLATIONAL:
+            return (("s_rel", "m", "terminal distance L"), ("v_rel", "m/s", "its rate dL/dt"),
+                    ("f", "N", "axial force, tension positive"))
+        return (("phi_rel", "rad", "relative angle"), ("w_rel", "rad/s", "its rate"),
+                ("tau", "N.m", "torque, restoring positive"))

@@ -1,0 +1,42 @@
+"""Write :mod:`inerter.elements.dispatch`, the kernels' call of each kind's law by its code, from
+the kinds found in this package: ``python -m inerter.elements.generate`` after adding a kind
+(``tests/test_elements.py`` fails while the file is stale)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from inerter.elements import MODULES, ROTATIONAL, TRANSLATIONAL
+
+TARGET = Path(__file__).with_name("dispatch.py")
+
+_FUNCTIONS = {
+    TRANSLATIONAL: (("inertance", "row"), ("force", "row, L, Ldot, an, perp2"), ("energy", "row, L, Ldot")),
+    ROTATIONAL: (("torque", "row, phi, w"), ("rotational_energy", "row, phi, w")),
+}
+_LAW = {"rotational_energy": "energy"}
+
+
+def source() -> str:
+    alias = {m: "kind_" + m.__name__.rsplit(".", 1)[1] for m in MODULES}
+    lines = ['"""The kernels\' call of each element kind\'s law by its code (its place in',
+             "inerter.elements.MODULES). Written by ``python -m inerter.elements.generate``: do not edit.\"\"\"",
+             "from inerter.elements.base import law"]
+    lines += [f"from inerter.elements import {m.__name__.rsplit('.', 1)[1]} as {alias[m]}" for m in MODULES]
+    for family, functions in _FUNCTIONS.items():
+        members = [(code, m) for code, m in enumerate(MODULES) if m.KIND.family == family]
+        for name, args in functions:
+            lines += ["", "", "@law", f"def {name}(kind, {args}):"]
+            if not members:
+                lines.append("    return 0.0")
+                continue
+            for code, m in members[:-1]:
+                lines.append(f"    if kind == {code}:")
+                lines.append(f"        return {alias[m]}.{_LAW.get(name, name)}({args})")
+            lines.append(f"    return {alias[members[-1][1]]}.{_LAW.get(name, name)}({args})"
+                         f"  # kind == {members[-1][0]}")
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    TARGET.write_text(source(), encoding="utf-8")
+    print(f"wrote {TARGET}")

@@ -1,0 +1,32 @@
+"""The named columns of the engine's element tables, so that no slot is addressed by number.
+
+A translational element is one row of ``el_int`` (kind, terminals) and one of ``el_real`` (its
+numbers); a rotational element one row of ``rot_int`` and one of ``rot_real``. The laws of
+:mod:`inerter.elements` read their parameters from the real row through these names.
+"""
+
+# -- el_int: a translational element's integers
+KIND = 0                 # its code: its place in inerter.elements.KINDS
+POINT_A = 1              # terminal a (point index)
+POINT_B = 2              # terminal b (point index)
+ELEMENT_INT_COLUMNS = 3
+
+# -- el_real: a translational element's numbers
+COEFFICIENT = 0          # k (N/m), c (N.s/m) or b (kg)
+FREE_LENGTH = 1          # a spring's free length L0 (m); 0 for the other kinds
+CENTRIPETAL = 2          # an inerter: 1.0 with the centripetal term (Eq. 9), 0.0 without (Eq. 8)
+MEET_LIMIT = 3           # the distance below which the terminals meet (m); 0: a pair checked earlier
+ELEMENT_REAL_COLUMNS = 4
+
+# -- rot_int: a rotational element's integers
+ROT_KIND = 0             # its code: its place in inerter.elements.KINDS
+BODY_A = 1               # body a (2D: velocity index of its angle; 3D: body index; -1: ground)
+BODY_B = 2
+ROT_INT_COLUMNS = 3
+
+# -- rot_real: a rotational element's numbers
+FREE_ANGLE = 1           # a rotational spring's free angle φ0 (rad); COEFFICIENT is column 0 too
+AXIS = 2                 # 3D: the axis n̄ in body a's frame, 3 columns
+REL0 = 5                 # 3D: the initial relative orientation A_aᵀ A_b, 9 columns, row-major
+ROT_REAL_COLUMNS_2D = 2
+ROT_REAL_COLUMNS_3D = 14

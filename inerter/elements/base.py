@@ -50,7 +50,18 @@ class ElementKind:
     def outputs(self) -> tuple[tuple[str, str, str], ...]:
         """(suffix, unit, description) of the outputs every element of the family reports."""
         if self.family == TRANSLATIONAL:
-            return (("s_rel", "m", "terminal distance L"), ("v_rel", "m/s", "its rate dL/dt"),
+            return (("s_rel", "m", "distance between the terminals"),
+                    ("v_rel", "m/s", "rate of change of the terminal distance"),
                     ("f", "N", "axial force, tension positive"))
-        return (("phi_rel", "rad", "relative angle"), ("w_rel", "rad/s", "its rate"),
-                ("tau", "N.m", "torque, restoring positive"))
+        return (("phi_rel", "rad", "relative angle"), ("w_rel", "rad/s", "relative angular velocity"),
+                ("tau", "N.m", "torque (restoring positive)"))
+
+
+@law
+def axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez):
+    """The scalars every translational law takes, from ṙ, a_n and r̂ (in 2D the z components are
+    0): L̇ = ṙ·r̂, a_n·r̂ and |ṙ⊥|² = |ṙ|² − L̇² (the centripetal term's numerator, Eq. 9)."""
+    Ldot = rdx * ex + rdy * ey + rdz * ez
+    an = anx * ex + any_ * ey + anz * ez
+    perp2 = rdx * rdx + rdy * rdy + rdz * rdz - Ldot * Ldot
+    return Ldot, an, perp2

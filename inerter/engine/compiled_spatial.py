@@ -26,6 +26,33 @@ JOINT_WIDTH = 24
 DOT2 = 18
 
 
+def _joint_rows3(mech, pidx):
+    """The ``jt_int`` and ``jt_real`` rows of a 3D scene's joints (see :func:`flatten3`)."""
+    scene = mech.scene
+    mech_joints = _by_name(mech.joints)
+    jt_int, jt_real = [], []
+    for j in scene.joints.values():
+        mj = mech_joints[j.name]
+        real = np.zeros(JOINT_WIDTH)
+        if isinstance(mj, Coincident):
+            coincident, dot1, dot2 = True, [], []
+        elif isinstance(mj, SpatialJoint):
+            coincident, dot1, dot2 = mj.coincident, mj.dot1, mj.dot2
+        else:
+            raise ValueError(f"joint {j.name!r}: {type(mj).__name__} is not a 3D joint")
+        if len(dot1) > 3 or len(dot2) > 2:
+            raise ValueError(f"joint {j.name!r}: more dot-1/dot-2 rows than the kernels take")
+        for k, (va, vb) in enumerate(dot1):
+            real[6 * k:6 * k + 3] = va.local
+            real[6 * k + 3:6 * k + 6] = vb.local
+        for k, va in enumerate(dot2):
+            real[DOT2 + 3 * k:DOT2 + 3 * k + 3] = va.local
+        jt_int.append((_JOINT_KIND[j.type], pidx[j.point_a], pidx[j.point_b], int(bool(coincident)),
+                       len(dot1), len(dot2)))
+        jt_real.append(real)
+    return jt_int, jt_real
+
+
 def flatten3(mech) -> dict:
     """The arrays the 3D kernels run on, from a 3D mechanism with quaternion orientation (index
     maps in ``mech.scene`` order: bodies, points, joints, elements, forces).
@@ -77,27 +104,7 @@ def flatten3(mech) -> dict:
         k = 6 * i + 3
         mass[n + 9 * i:n + 9 * i + 9] = M0[k:k + 3, k:k + 3].ravel()
 
-    mech_joints = _by_name(mech.joints)
-    jt_int, jt_real = [], []
-    for j in scene.joints.values():
-        mj = mech_joints[j.name]
-        real = np.zeros(JOINT_WIDTH)
-        if isinstance(mj, Coincident):
-            coincident, dot1, dot2 = True, [], []
-        elif isinstance(mj, SpatialJoint):
-            coincident, dot1, dot2 = mj.coincident, mj.dot1, mj.dot2
-        else:
-            raise ValueError(f"joint {j.name!r}: {type(mj).__name__} is not a 3D joint")
-        if len(dot1) > 3 or len(dot2) > 2:
-            raise ValueError(f"joint {j.name!r}: more dot-1/dot-2 rows than the kernels take")
-        for k, (va, vb) in enumerate(dot1):
-            real[6 * k:6 * k + 3] = va.local
-            real[6 * k + 3:6 * k + 6] = vb.local
-        for k, va in enumerate(dot2):
-            real[DOT2 + 3 * k:DOT2 + 3 * k + 3] = va.local
-        jt_int.append((_JOINT_KIND[j.type], pidx[j.point_a], pidx[j.point_b], int(bool(coincident)),
-                       len(dot1), len(dot2)))
-        jt_real.append(real)
+    jt_int, jt_real = _joint_rows3(mech, pidx)
     m = sum(3 * c + d1 + d2 for _, _, _, c, d1, d2 in jt_int)
 
     mech_elements = _by_name(mech.elements)

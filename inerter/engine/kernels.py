@@ -19,6 +19,7 @@ from numba.extending import intrinsic, overload
 from inerter.common.errors import MIN_LENGTH
 
 from inerter.elements import dispatch as law
+from inerter.elements.base import axial_scalars
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, KIND, MEET_LIMIT, POINT_A, POINT_B, REL0,
                                      ROT_KIND)
 
@@ -124,20 +125,10 @@ def _addK(AB, perm, off, i, j, x):
 
 
 @njit(cache=True, inline="always")
-def _axial(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez):
-    """The scalars every translational law takes (2D: z components 0): L̇ = ṙ·r̂, a_n·r̂ and
-    |ṙ⊥|² = |ṙ|² − L̇² (the centripetal term's numerator, Eq. 9)."""
-    Ldot = rdx * ex + rdy * ey + rdz * ez
-    an = anx * ex + any_ * ey + anz * ez
-    perp2 = rdx * rdx + rdy * rdy + rdz * rdz - Ldot * Ldot
-    return Ldot, an, perp2
-
-
-@njit(cache=True, inline="always")
 def _element_law(kind, row, L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez):
     """A translational element's law (:mod:`inerter.elements`): (F without the inertance part,
     the inertance b, L̇)."""
-    Ldot, an, perp2 = _axial(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+    Ldot, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
     return law.force(kind, row, L, Ldot, an, perp2), law.inertance(kind, row), Ldot
 
 
@@ -195,22 +186,12 @@ def _rotational2(q, v, e, rot_int):
     return ia, ib, phi, w
 
 
-@njit(cache=True)
-def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
-    """Fill AB (band storage of the permuted augmented matrix) and rhs (permuted) at (t, q, v).
-
-    gen: work vector of length n for the generalised forces. Returns a status code."""
-    (mass, pbody, ploc, el_int, el_real, rot_int, rot_real, jt_int, jt_real,
-     fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims, ground_t, ground_a) = P
-    n = dims[0]
-    has_gravity = dims[4]
-    off = dims[2]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
-    _start_assembly(AB, gen, gravity, n, has_gravity)
-    for i in range(n):
-        _addK(AB, perm, off, i, i, mass[i])
-
+@njit(cache=True, inline="always")
+def _add_elements2(q, v, P, AB, perm, off, gen):
+    """Translational elements of a 2D scene, each through its law (:mod:`inerter.elements`):
+    Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂. Returns a status code."""
+    pbody, ploc, el_int, el_real = P[1], P[2], P[3], P[4]
     status = OK
-    # -- translational elements (spring, damper, inerter), Eqs. (5), (7), (9)/(8), (29), (31), (33)
     ga = np.empty(3)
     gb = np.empty(3)
     for e in range(el_int.shape[0]):
@@ -227,8 +208,13 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
         gb[2] = tbx * ex + tby * ey
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 3)
+    return status
 
-    # -- rotational springs and dampers
+
+@njit(cache=True, inline="always")
+def _add_rotational2(q, v, P, gen):
+    """Rotational elements of a 2D scene: ∓τ on the bodies' angles, τ from the kind's law."""
+    rot_int, rot_real = P[5], P[6]
     for e in range(rot_int.shape[0]):
         ia, ib, phi, w = _rotational2(q, v, e, rot_int)
         tau = law.torque(rot_int[e, ROT_KIND], rot_real[e], phi, w)
@@ -237,13 +223,17 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
         if ia >= 0:
             gen[ia] += tau
 
-    # -- applied point forces with time functions
+
+@njit(cache=True, inline="always")
+def _add_point_forces2(t, q, v, inputs, P, gen):
+    """Applied point forces with time functions, grounded PD actuators, held inputs and the ground
+    motion (−m a_g on every body: coordinates relative to the moving ground) of a 2D scene."""
+    mass, pbody, ploc, dims = P[0], P[1], P[2], P[16]
+    fa_int, fa_real, pd_int, pd_real, in_int = P[9], P[10], P[11], P[12], P[13]
     for f in range(fa_int.shape[0]):
         p = fa_int[f, 0]
         mag = _force_magnitude(fa_real, f, fa_int[f, 1], 2, t)     # columns: dx, dy, value, ...
         _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], mag * fa_real[f, 0], mag * fa_real[f, 1], gen)
-
-    # -- grounded PD actuators
     for f in range(pd_int.shape[0]):
         p = pd_int[f, 0]
         rx, ry, vx, vy, ux, uy, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
@@ -253,87 +243,107 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
         rate = dx * vx + dy * vy
         mag = -(pd_real[f, 2] * along + pd_real[f, 3] * rate)
         _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], mag * dx, mag * dy, gen)
-
-    # -- held inputs
     if inputs.shape[0] > 0:
         for f in range(in_int.shape[0]):
             p = in_int[f, 0]
             _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], inputs[2 * f], inputs[2 * f + 1], gen)
-
-    # -- ground motion: coordinates relative to the moving ground, −m a_g on every body
     if dims[7] != GROUND_NONE:
         agx, agy, agz = ground_acceleration(t, inputs, P)
-        for k in range(0, n, 3):
+        for k in range(0, dims[0], 3):
             gen[k] -= mass[k] * agx
             gen[k + 1] -= mass[k] * agy
 
+
+@njit(cache=True, inline="always")
+def _revolute2(AB, perm, off, rhs, row, alpha, ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby):
+    """A 2D revolute joint's two rows: C = r, C_q = H, γ = −a_n (with Baumgarte's −2αĊ − α²C)."""
+    if ba >= 0:
+        ka = 3 * ba
+        _sym(AB, perm, off, row, ka, -1.0)
+        _sym(AB, perm, off, row, ka + 2, -tax)
+        _sym(AB, perm, off, row + 1, ka + 1, -1.0)
+        _sym(AB, perm, off, row + 1, ka + 2, -tay)
+    if bb >= 0:
+        kb = 3 * bb
+        _sym(AB, perm, off, row, kb, 1.0)
+        _sym(AB, perm, off, row, kb + 2, tbx)
+        _sym(AB, perm, off, row + 1, kb + 1, 1.0)
+        _sym(AB, perm, off, row + 1, kb + 2, tby)
+    rhs[perm[row]] = -anx - 2.0 * alpha * rdx - alpha * alpha * rx
+    rhs[perm[row + 1]] = -any_ - 2.0 * alpha * rdy - alpha * alpha * ry
+
+
+@njit(cache=True, inline="always")
+def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
+                ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby):
+    """A 2D prismatic joint's two rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0 with n = A_a n̄."""
+    nbx = jt_real[jn, 0]
+    nby = jt_real[jn, 1]
+    phi0 = jt_real[jn, 2]
+    tha = q[3 * ba + 2] if ba >= 0 else 0.0
+    thb = q[3 * bb + 2] if bb >= 0 else 0.0
+    wa = v[3 * ba + 2] if ba >= 0 else 0.0
+    wb = v[3 * bb + 2] if bb >= 0 else 0.0
+    c1 = thb - tha - phi0
+    cd1 = wb - wa
+    if ba >= 0:
+        c = math.cos(tha)
+        s = math.sin(tha)
+        nx = c * nbx - s * nby
+        ny = s * nbx + c * nby
+    else:
+        nx = nbx
+        ny = nby
+    npx = -ny
+    npy = nx
+    c2 = nx * rx + ny * ry
+    cd2 = 0.0
+    if ba >= 0:
+        ka = 3 * ba
+        _sym(AB, perm, off, row, ka + 2, -1.0)
+        _sym(AB, perm, off, row + 1, ka, -nx)
+        _sym(AB, perm, off, row + 1, ka + 1, -ny)
+        h2 = -(nx * tax + ny * tay) + (npx * rx + npy * ry)
+        _sym(AB, perm, off, row + 1, ka + 2, h2)
+        cd2 += -nx * v[ka] - ny * v[ka + 1] + h2 * v[ka + 2]
+    if bb >= 0:
+        kb = 3 * bb
+        _sym(AB, perm, off, row, kb + 2, 1.0)
+        _sym(AB, perm, off, row + 1, kb, nx)
+        _sym(AB, perm, off, row + 1, kb + 1, ny)
+        h2 = nx * tbx + ny * tby
+        _sym(AB, perm, off, row + 1, kb + 2, h2)
+        cd2 += nx * v[kb] + ny * v[kb + 1] + h2 * v[kb + 2]
+    gamma2 = -((nx * anx + ny * any_) - wa * wa * c2 + 2.0 * wa * (npx * rdx + npy * rdy))
+    rhs[perm[row]] = 0.0 - 2.0 * alpha * cd1 - alpha * alpha * c1
+    rhs[perm[row + 1]] = gamma2 - 2.0 * alpha * cd2 - alpha * alpha * c2
+
+
+@njit(cache=True)
+def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
+    """Fill AB (band storage of the permuted augmented matrix of Eq. 33) and rhs (permuted) at
+    (t, q, v) for a 2D scene; gen: work vector of length n for the generalised forces. Returns a
+    status code."""
+    mass, pbody, ploc, jt_int, jt_real, gravity, perm, dims = P[0], P[1], P[2], P[7], P[8], P[14], P[15], P[16]
+    n = dims[0]
+    off = dims[2]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
+    _start_assembly(AB, gen, gravity, n, dims[4])
+    for i in range(n):
+        _addK(AB, perm, off, i, i, mass[i])
+    status = _add_elements2(q, v, P, AB, perm, off, gen)
+    _add_rotational2(q, v, P, gen)
+    _add_point_forces2(t, q, v, inputs, P, gen)
     for i in range(n):
         rhs[perm[i]] = gen[i]
-
     # -- joints: C_q (and its transpose) and γ − 2αĊ − α²C
     row = n
     for jn in range(jt_int.shape[0]):
         ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, v, jt_int, jn, pbody, ploc)
         if jt_int[jn, 0] == REVOLUTE:
-            # C = r, C_q = H, γ = −a_n
-            cdx = rdx
-            cdy = rdy
-            if ba >= 0:
-                ka = 3 * ba
-                _sym(AB, perm, off, row, ka, -1.0)
-                _sym(AB, perm, off, row, ka + 2, -tax)
-                _sym(AB, perm, off, row + 1, ka + 1, -1.0)
-                _sym(AB, perm, off, row + 1, ka + 2, -tay)
-            if bb >= 0:
-                kb = 3 * bb
-                _sym(AB, perm, off, row, kb, 1.0)
-                _sym(AB, perm, off, row, kb + 2, tbx)
-                _sym(AB, perm, off, row + 1, kb + 1, 1.0)
-                _sym(AB, perm, off, row + 1, kb + 2, tby)
-            rhs[perm[row]] = -anx - 2.0 * alpha * cdx - alpha * alpha * rx
-            rhs[perm[row + 1]] = -any_ - 2.0 * alpha * cdy - alpha * alpha * ry
+            _revolute2(AB, perm, off, rhs, row, alpha, ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby)
         else:
-            # θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0 with n = A_a n̄
-            nbx = jt_real[jn, 0]
-            nby = jt_real[jn, 1]
-            phi0 = jt_real[jn, 2]
-            tha = q[3 * ba + 2] if ba >= 0 else 0.0
-            thb = q[3 * bb + 2] if bb >= 0 else 0.0
-            wa = v[3 * ba + 2] if ba >= 0 else 0.0
-            wb = v[3 * bb + 2] if bb >= 0 else 0.0
-            c1 = thb - tha - phi0
-            cd1 = wb - wa
-            if ba >= 0:
-                c = math.cos(tha)
-                s = math.sin(tha)
-                nx = c * nbx - s * nby
-                ny = s * nbx + c * nby
-            else:
-                nx = nbx
-                ny = nby
-            npx = -ny
-            npy = nx
-            c2 = nx * rx + ny * ry
-            cd2 = 0.0
-            if ba >= 0:
-                ka = 3 * ba
-                _sym(AB, perm, off, row, ka + 2, -1.0)
-                _sym(AB, perm, off, row + 1, ka, -nx)
-                _sym(AB, perm, off, row + 1, ka + 1, -ny)
-                h2 = -(nx * tax + ny * tay) + (npx * rx + npy * ry)
-                _sym(AB, perm, off, row + 1, ka + 2, h2)
-                cd2 += -nx * v[ka] - ny * v[ka + 1] + h2 * v[ka + 2]
-            if bb >= 0:
-                kb = 3 * bb
-                _sym(AB, perm, off, row, kb + 2, 1.0)
-                _sym(AB, perm, off, row + 1, kb, nx)
-                _sym(AB, perm, off, row + 1, kb + 1, ny)
-                h2 = nx * tbx + ny * tby
-                _sym(AB, perm, off, row + 1, kb + 2, h2)
-                cd2 += nx * v[kb] + ny * v[kb + 1] + h2 * v[kb + 2]
-            gamma2 = -((nx * anx + ny * any_) - wa * wa * c2 + 2.0 * wa * (npx * rdx + npy * rdy))
-            rhs[perm[row]] = 0.0 - 2.0 * alpha * cd1 - alpha * alpha * c1
-            rhs[perm[row + 1]] = gamma2 - 2.0 * alpha * cd2 - alpha * alpha * c2
+            _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
+                        ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby)
         row += 2
     return status
 
@@ -662,7 +672,7 @@ def _gap2(q, z, e, P):
 
 @njit(cache=True)
 def _gap3(q, z, e, P):
-    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, z, P[3][e, 1], P[3][e, 2], P[1], P[2])
+    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, z, P[3][e, POINT_A], P[3][e, POINT_B], P[1], P[2])
     return rx, ry, rz
 
 
@@ -684,7 +694,7 @@ def terminal_gaps(y, P):
     gaps = np.zeros((el_int.shape[0], 3))
     q = y[:P[16][6]]
     for e in range(el_int.shape[0]):
-        if P[4][e, 2] > 0.0:
+        if P[4][e, MEET_LIMIT] > 0.0:
             gaps[e, 0], gaps[e, 1], gaps[e, 2] = _gap_of(q, z, e, P)
     return gaps, z
 
@@ -1000,24 +1010,12 @@ def _wrow(AB, perm, off, row, v, body, A, sx, sy, sz, tx, ty, tz):
 # ------------------------------------------------------------------------------------------------
 # Assembly of the augmented system of Eq. (33) in band storage
 # ------------------------------------------------------------------------------------------------
-@njit(cache=True)
-def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
-    """Fill AB (band storage of the permuted augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]]) and rhs
-    (permuted [Q_e + Q_Iv, γ − 2αĊ − α²C]) at (t, q, v) for a 3D mechanism, as ``Mechanism.assemble``
-    and ``Mechanism.constraints``. gen: work vector of length n. Returns a status code."""
-    # P by slot
-    mass, pbody, ploc, el_int, el_real = P[0], P[1], P[2], P[3], P[4]
-    rot_int, rot_real, jt_int, jt_real = P[5], P[6], P[7], P[8]
-    fa_int, fa_real, pd_int, pd_real, in_int = P[9], P[10], P[11], P[12], P[13]
-    gravity, perm, dims = P[14], P[15], P[16]
+@njit(cache=True, inline="always")
+def _add_bodies3(v, P, AB, perm, off, gen):
+    """The mass matrix diag(m I, J) per body and the gyroscopic term −ω × Jω (body frame)."""
+    mass, perm, dims = P[0], P[15], P[16]
     n = dims[0]
-    has_gravity = dims[4]
-    off = dims[2]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
-    nb = n // 6
-    _start_assembly(AB, gen, gravity, n, has_gravity)
-
-    # -- mass matrix diag(m I, J) per body and the gyroscopic term −ω × Jω (body frame)
-    for b in range(nb):
+    for b in range(n // 6):
         k = 6 * b
         for i in range(3):
             _addK(AB, perm, off, k + i, k + i, mass[k + i])
@@ -1036,8 +1034,13 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
         gen[k + 4] -= cy
         gen[k + 5] -= cz
 
+
+@njit(cache=True, inline="always")
+def _add_elements3(q, v, P, AB, perm, off, gen):
+    """Translational elements of a 3D scene, each through its law (:mod:`inerter.elements`):
+    Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂. Returns a status code."""
+    pbody, ploc, el_int, el_real = P[1], P[2], P[3], P[4]
     status = OK
-    # -- translational elements (spring, damper, inerter), Eqs. (5), (7), (9)/(8), (29), (31), (33)
     ga = np.empty(6)
     gb = np.empty(6)
     for e in range(el_int.shape[0]):
@@ -1047,8 +1050,13 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
             status = TERMINALS_MEET
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 6)
+    return status
 
-    # -- rotational springs and dampers about an axis fixed in body a
+
+@njit(cache=True, inline="always")
+def _add_rotational3(q, v, P, gen):
+    """Rotational elements about an axis fixed in body a: ∓τ n on the bodies' ω (body frames)."""
+    rot_int, rot_real = P[5], P[6]
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
         if ib >= 0:
@@ -1064,14 +1072,19 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
             gen[k + 1] += tau * ty
             gen[k + 2] += tau * tz
 
-    # -- applied point forces with time functions
+
+@njit(cache=True, inline="always")
+def _add_point_forces3(t, q, v, inputs, P, gen):
+    """Applied point forces with time functions, grounded PD actuators (F = −[kp (d·r − ref) +
+    kd d·ṙ] d), held inputs (three components each) and the ground motion (−m a_g on every body's
+    Ṙ: coordinates relative to the moving ground) of a 3D scene."""
+    mass, pbody, ploc, dims = P[0], P[1], P[2], P[16]
+    fa_int, fa_real, pd_int, pd_real, in_int = P[9], P[10], P[11], P[12], P[13]
     for f in range(fa_int.shape[0]):
         p = fa_int[f, 0]
         mag = _force_magnitude(fa_real, f, fa_int[f, 1], 3, t)     # columns: dx, dy, dz, value, ...
         _point_force3(q, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
                       mag * fa_real[f, 0], mag * fa_real[f, 1], mag * fa_real[f, 2], gen)
-
-    # -- grounded PD actuators: F = −[kp (d·r − ref) + kd d·ṙ] d
     for f in range(pd_int.shape[0]):
         p = pd_int[f, 0]
         b = pbody[p]
@@ -1084,84 +1097,101 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
         rate = dx * vx + dy * vy + dz * vz
         mag = -(pd_real[f, 3] * along + pd_real[f, 4] * rate)
         _point_force3(q, b, ploc[p, 0], ploc[p, 1], ploc[p, 2], mag * dx, mag * dy, mag * dz, gen)
-
-    # -- held inputs (three force components per input force, in in_int order)
     if inputs.shape[0] > 0:
         for f in range(in_int.shape[0]):
             p = in_int[f, 0]
             _point_force3(q, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
                           inputs[3 * f], inputs[3 * f + 1], inputs[3 * f + 2], gen)
-
-    # -- ground motion: coordinates relative to the moving ground, −m a_g on every body's Ṙ
     if dims[7] != GROUND_NONE:
         agx, agy, agz = ground_acceleration(t, inputs, P)
-        for k in range(0, n, 6):
+        for k in range(0, dims[0], 6):
             gen[k] -= mass[k] * agx
             gen[k + 1] -= mass[k] * agy
             gen[k + 2] -= mass[k] * agz
 
+
+@njit(cache=True, inline="always")
+def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
+    """Joint jn's rows from `row` on (joints.py): C_v (and its transpose) and γ − 2αĊ − α²C,
+    Ċ = C_v v, for its coincident, dot-1 and dot-2 rows. Returns the next row."""
+    pbody, ploc, jt_int, jt_real = P[1], P[2], P[7], P[8]
+    pa = jt_int[jn, 1]
+    pb = jt_int[jn, 2]
+    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
+    lax = ploc[pa, 0]
+    lay = ploc[pa, 1]
+    laz = ploc[pa, 2]
+    lbx = ploc[pb, 0]
+    lby = ploc[pb, 1]
+    lbz = ploc[pb, 2]
+    if jt_int[jn, 3]:
+        # coincident points: C = r, C_v = H, γ = −a_n (Eqs. 18-19, 25)
+        for i in range(3):
+            sx = 1.0 if i == 0 else 0.0
+            sy = 1.0 if i == 1 else 0.0
+            sz = 1.0 if i == 2 else 0.0
+            cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, -sx, -sy, -sz)
+            cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, sx, sy, sz)
+            c = sx * rx + sy * ry + sz * rz
+            gamma = -(sx * anx + sy * any_ + sz * anz)
+            rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
+            row += 1
+    wax, way, waz = _omega(v, ba)
+    wbx, wby, wbz = _omega(v, bb)
+    for d in range(jt_int[jn, 4]):
+        # dot-1: s_a·s_b = 0 for body-fixed s_a = A_a s̄_a, s_b = A_b s̄_b
+        j = 6 * d
+        sax = jt_real[jn, j]
+        say = jt_real[jn, j + 1]
+        saz = jt_real[jn, j + 2]
+        sbx = jt_real[jn, j + 3]
+        sby = jt_real[jn, j + 4]
+        sbz = jt_real[jn, j + 5]
+        a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, sax, say, saz)
+        b0, b1, b2, bd0, bd1, bd2, bb0, bb1, bb2 = _vector(Ab, wbx, wby, wbz, sbx, sby, sbz)
+        cd = _wrow(AB, perm, off, row, v, ba, Aa, sax, say, saz, b0, b1, b2)
+        cd += _wrow(AB, perm, off, row, v, bb, Ab, sbx, sby, sbz, a0, a1, a2)
+        c = a0 * b0 + a1 * b1 + a2 * b2
+        gamma = -((aa0 * b0 + aa1 * b1 + aa2 * b2) + 2.0 * (ad0 * bd0 + ad1 * bd1 + ad2 * bd2)
+                  + (a0 * bb0 + a1 * bb1 + a2 * bb2))
+        rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
+        row += 1
+    for d in range(jt_int[jn, 5]):
+        # dot-2: s_a·(r_b − r_a) = 0
+        j = DOT2 + 3 * d
+        sax = jt_real[jn, j]
+        say = jt_real[jn, j + 1]
+        saz = jt_real[jn, j + 2]
+        a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, sax, say, saz)
+        cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, -a0, -a1, -a2)
+        cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, a0, a1, a2)
+        cd += _wrow(AB, perm, off, row, v, ba, Aa, sax, say, saz, rx, ry, rz)
+        c = a0 * rx + a1 * ry + a2 * rz
+        gamma = -((aa0 * rx + aa1 * ry + aa2 * rz) + 2.0 * (ad0 * rdx + ad1 * rdy + ad2 * rdz)
+                  + (a0 * anx + a1 * any_ + a2 * anz))
+        rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
+        row += 1
+    return row
+
+
+@njit(cache=True)
+def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
+    """Fill AB (band storage of the permuted augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]]) and rhs
+    (permuted [Q_e + Q_Iv, γ − 2αĊ − α²C]) at (t, q, v) for a 3D mechanism, as ``Mechanism.assemble``
+    and ``Mechanism.constraints``. gen: work vector of length n. Returns a status code."""
+    jt_int, gravity, perm, dims = P[7], P[14], P[15], P[16]
+    n = dims[0]
+    off = dims[2]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
+    _start_assembly(AB, gen, gravity, n, dims[4])
+    _add_bodies3(v, P, AB, perm, off, gen)
+    status = _add_elements3(q, v, P, AB, perm, off, gen)
+    _add_rotational3(q, v, P, gen)
+    _add_point_forces3(t, q, v, inputs, P, gen)
     for i in range(n):
         rhs[perm[i]] = gen[i]
-
-    # -- joints (joints.py): C_v (and its transpose) and γ − 2αĊ − α²C, Ċ = C_v v
     row = n
     for jn in range(jt_int.shape[0]):
-        pa = jt_int[jn, 1]
-        pb = jt_int[jn, 2]
-        ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
-        lax = ploc[pa, 0]
-        lay = ploc[pa, 1]
-        laz = ploc[pa, 2]
-        lbx = ploc[pb, 0]
-        lby = ploc[pb, 1]
-        lbz = ploc[pb, 2]
-        if jt_int[jn, 3]:
-            # coincident points: C = r, C_v = H, γ = −a_n (Eqs. 18-19, 25)
-            for i in range(3):
-                sx = 1.0 if i == 0 else 0.0
-                sy = 1.0 if i == 1 else 0.0
-                sz = 1.0 if i == 2 else 0.0
-                cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, -sx, -sy, -sz)
-                cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, sx, sy, sz)
-                c = sx * rx + sy * ry + sz * rz
-                gamma = -(sx * anx + sy * any_ + sz * anz)
-                rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
-                row += 1
-        wax, way, waz = _omega(v, ba)
-        wbx, wby, wbz = _omega(v, bb)
-        for d in range(jt_int[jn, 4]):
-            # dot-1: s_a·s_b = 0 for body-fixed s_a = A_a s̄_a, s_b = A_b s̄_b
-            j = 6 * d
-            sax = jt_real[jn, j]
-            say = jt_real[jn, j + 1]
-            saz = jt_real[jn, j + 2]
-            sbx = jt_real[jn, j + 3]
-            sby = jt_real[jn, j + 4]
-            sbz = jt_real[jn, j + 5]
-            a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, sax, say, saz)
-            b0, b1, b2, bd0, bd1, bd2, bb0, bb1, bb2 = _vector(Ab, wbx, wby, wbz, sbx, sby, sbz)
-            cd = _wrow(AB, perm, off, row, v, ba, Aa, sax, say, saz, b0, b1, b2)
-            cd += _wrow(AB, perm, off, row, v, bb, Ab, sbx, sby, sbz, a0, a1, a2)
-            c = a0 * b0 + a1 * b1 + a2 * b2
-            gamma = -((aa0 * b0 + aa1 * b1 + aa2 * b2) + 2.0 * (ad0 * bd0 + ad1 * bd1 + ad2 * bd2)
-                      + (a0 * bb0 + a1 * bb1 + a2 * bb2))
-            rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
-            row += 1
-        for d in range(jt_int[jn, 5]):
-            # dot-2: s_a·(r_b − r_a) = 0
-            j = DOT2 + 3 * d
-            sax = jt_real[jn, j]
-            say = jt_real[jn, j + 1]
-            saz = jt_real[jn, j + 2]
-            a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, sax, say, saz)
-            cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, -a0, -a1, -a2)
-            cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, a0, a1, a2)
-            cd += _wrow(AB, perm, off, row, v, ba, Aa, sax, say, saz, rx, ry, rz)
-            c = a0 * rx + a1 * ry + a2 * rz
-            gamma = -((aa0 * rx + aa1 * ry + aa2 * rz) + 2.0 * (ad0 * rdx + ad1 * rdy + ad2 * rdz)
-                      + (a0 * anx + a1 * any_ + a2 * anz))
-            rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
-            row += 1
+        row = _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row)
     return status
 
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from inerter import elements
+
 
 class Signals:
     def __init__(self, mech):
@@ -28,15 +30,11 @@ class Signals:
                            for i in range(d)],
                         False, lambda t, q, v, a, p=point: np.concatenate(p.evaluate(q, v)[:2]))
         for e in mech.elements:
-            if e.kind.startswith("rotational"):
-                spec = (("phi_rel", "rad", "relative angle"), ("w_rel", "rad/s", "relative angular velocity"),
-                        ("tau", "N.m", "torque (restoring positive)"))
-            else:
-                spec = (("s_rel", "m", "distance between the terminals"),
-                        ("v_rel", "m/s", "rate of change of the terminal distance"),
-                        ("f", "N", "axial force, tension positive"))
+            spec = elements.KINDS[e.kind].outputs
+            # an element whose law has an inertance reports a force that depends on q̈
+            needs_a = e.kind == "inerter" or getattr(e, "inertance", 0.0) != 0.0
             self._group([(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}") for suffix, unit, text in spec],
-                        e.kind == "inerter", lambda t, q, v, a, e=e: e.outputs(q, v, a)[:3])
+                        needs_a, lambda t, q, v, a, e=e: e.outputs(q, v, a)[:3])
         self._group([("energy", "J", "kinetic + potential energy, with ½·b·(dL/dt)² per inerter")], False,
                     lambda t, q, v, a: (mech.energy(q, v),))
         self._group([("constraint_residual", "m", "largest |C_i(q)| of the joint constraints (m or rad)")], False,

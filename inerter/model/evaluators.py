@@ -18,7 +18,11 @@ import numpy as np
 from inerter import elements
 from inerter.common.errors import MIN_LENGTH, TerminalsMeet  # noqa: F401  (re-exported)
 from inerter.elements import layout
+from inerter.elements.base import axial_scalars as _compiled_axial_scalars
 from inerter.model.planar import PointPair
+
+
+axial_scalars = _compiled_axial_scalars.py_func     # the kernels' definition, run uncompiled
 
 
 class TranslationalElement:
@@ -59,10 +63,10 @@ class TranslationalElement:
     def _law_force(self, geo):
         """The law's force without the inertance part (:mod:`inerter.elements`), and L̇."""
         r, rdot, a_n, H, L, rhat = geo
-        Ldot = float(rdot @ rhat)
-        an = float(a_n @ rhat)
-        perp2 = float(rdot @ rdot) - Ldot * Ldot
-        return self._force(self.row, L, Ldot, an, perp2), Ldot
+        rd, an, e = np.zeros(3), np.zeros(3), np.zeros(3)       # 2D vectors padded with z = 0
+        rd[:len(rdot)], an[:len(a_n)], e[:len(rhat)] = rdot, a_n, rhat
+        Ldot, an_r, perp2 = axial_scalars(*rd, *an, *e)
+        return self._force(self.row, L, Ldot, an_r, perp2), Ldot
 
     def force(self, q, v, a=None, geo=None):
         """The axial force at accelerations `a` (needed only where the kind has an inertance)."""

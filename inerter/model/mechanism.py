@@ -82,25 +82,49 @@ class Mechanism:
     """A scene compiled for simulation. `element_factory`, where given, builds the translational
     elements instead of :mod:`inerter.model.evaluators`: the oracle (:mod:`inerter.oracle`) passes
     its own, which differentiates each element's terminal distance L(q) instead of Eqs. (15–20),
-    with the signature ``factory(spec, pair, centripetal, free_length, labels, mechanism)``."""
+    with the signature ``factory(spec, pair, centripetal, free_length, labels, mechanism)``. Where
+    the factory has an attribute ``rotational``, the planar rotational elements are built by it,
+    ``factory.rotational(spec, angle_index_a, angle_index_b, free_angle)``."""
 
     def __init__(self, scene: Scene, element_factory=None):
         self.scene = scene
         self.element_factory = element_factory
         self.oracle = element_factory is not None
-        self.dim = dim = scene.dimension
+        self.dim = scene.dimension
         self.body_names = list(scene.bodies)
         self.body_index = {n: i for i, n in enumerate(self.body_names)}
-        self.orientation = Orientation(scene.orientation) if dim == 3 else None
+        self.orientation = Orientation(scene.orientation) if self.dim == 3 else None
+        q0, v0 = self._bodies(scene)
+        self.point_names = list(scene.points)
+        self._rotation_caches = [RotationCache() for _ in self.body_names]
+        self.points = {p.name: self._point(p) for p in scene.points.values()}
+        self.joints = [make_joint(j, self, q0) for j in scene.joints.values()]
+        self.m = sum(j.rows for j in self.joints)
+        self.elements = [self._element(e, q0) for e in scene.elements.values()]
+        self.inerters = [e for e in self.elements if e.kind == "inerter"]
+        # Elements on the same pair of terminals share one evaluation of the pair's geometry.
+        groups = {}
+        for spec, e in zip(scene.elements.values(), self.elements):
+            key = (spec.point_a, spec.point_b) if spec.point_a else ("rotational", spec.name)
+            groups.setdefault(key, []).append(e)
+        self.groups = list(groups.values())
+        self._forces(scene)
+        self._effects(scene)
+        self.q0, self.v0 = self.assemble_initial(q0, v0)
+        self._meet_limits(groups)
+        self.check_mass_matrix(self.q0, self.v0)
 
-        # Coordinate layout: per body, q = [R, θ] (2D) or [R, orientation] (3D); v = [Ṙ, θ̇] or [Ṙ, ω].
+    def _bodies(self, scene):
+        """The coordinate layout (per body q = [R, θ] in 2D or [R, orientation] in 3D; v = [Ṙ, θ̇]
+        or [Ṙ, ω]), the constant mass matrix M0, the body frames and the initial (q0, v0) as the
+        scene gives them (before assembly)."""
+        dim = self.dim
         nqb = 3 if dim == 2 else 3 + self.orientation.size
         nvb = 3 if dim == 2 else 6
         self.q_index = [nqb * i for i in range(len(self.body_names))]
         self.v_index = [nvb * i for i in range(len(self.body_names))]
         self.nq = nqb * len(self.body_names)
         self.n = nvb * len(self.body_names)
-
         self.M0 = np.zeros((self.n, self.n))
         q0, v0 = [], []
         self.inertia_body = []
@@ -118,35 +142,25 @@ class Mechanism:
                 A = np.array(b.rotation)
                 q0 += [*b.position, *self.orientation.from_matrix(A)]
                 v0 += [*b.velocity, *(A.T @ np.array(b.angular_velocity))]   # ω to the body frame
-        q0, v0 = np.array(q0, dtype=float), np.array(v0, dtype=float)
         self.frames = {GROUND: BodyFrame(-1, 0, 0, None, dim)}
         for name in self.body_names:
             i = self.body_index[name]
             self.frames[name] = BodyFrame(i, self.q_index[i], self.v_index[i], self.orientation, dim)
+        return np.array(q0, dtype=float), np.array(v0, dtype=float)
 
-        self.point_names = list(scene.points)
-        self._rotation_caches = [RotationCache() for _ in self.body_names]
-        self.points = {p.name: self._point(p) for p in scene.points.values()}
-
-        self.joints = [make_joint(j, self, q0) for j in scene.joints.values()]
-        self.m = sum(j.rows for j in self.joints)
-
-        self.elements = [self._element(e, q0) for e in scene.elements.values()]
-        self.inerters = [e for e in self.elements if e.kind == "inerter"]
-        # Elements on the same pair of terminals share one evaluation of the pair's geometry.
-        groups = {}
-        for spec, e in zip(scene.elements.values(), self.elements):
-            key = (spec.point_a, spec.point_b) if spec.point_a else ("rotational", spec.name)
-            groups.setdefault(key, []).append(e)
-        self.groups = list(groups.values())
-
+    def _forces(self, scene):
+        """Point forces: applied with a time function, PD actuators, and held inputs."""
         self.applied = [(f, self.points[f.point], TimeFunction(f)) for f in scene.forces.values()
                         if f.function not in ("input", "pd")]
         self.feedback = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "pd"]
         self.input_forces = [(f, self.points[f.point]) for f in scene.forces.values() if f.function == "input"]
-        self.input_names = [f"{f.point}.f[{i + 1}]" for f, _ in self.input_forces for i in range(dim)]
-        switches = {f.time for f in scene.forces.values() if f.function == "step" and f.time > 0}
+        self.input_names = [f"{f.point}.f[{i + 1}]" for f, _ in self.input_forces for i in range(self.dim)]
 
+    def _effects(self, scene):
+        """Gravity and the ground motion where declared, and the times where the right-hand side is
+        not smooth."""
+        dim = self.dim
+        switches = {f.time for f in scene.forces.values() if f.function == "step" and f.time > 0}
         g = scene.effects.get("gravity")
         self.gravity = None
         if g is not None and any(g):
@@ -165,20 +179,20 @@ class Mechanism:
         self.discontinuities = sorted(switches)
         if self.ground_motion is not None and self.ground_motion.input:
             self.input_names += [f"ground.a[{i + 1}]" for i in range(dim)]
-        self.q0, self.v0 = self.assemble_initial(q0, v0)
-        # Translational elements by terminal pair, with the distance below which the terminals meet
-        # (also by element name, for the compiled kernels: meet_limit).
+
+    def _meet_limits(self, groups):
+        """Translational elements by terminal pair, with the distance below which the terminals
+        meet (also by element name, for the compiled kernels: meet_limit)."""
         self._meet = []
         self.meet_limit = {}
         for spec, group in zip(groups, self.groups):
-            if group[0].kind.startswith("rotational"):
+            if not elements.translational(group[0].kind):
                 continue
             pair = self.pair(*spec)
             r0 = pair.evaluate(self.q0, np.zeros(self.n))[0]
             limit = max(el.MIN_LENGTH, MEET_RELATIVE * math.sqrt(float(r0 @ r0)))
             self._meet.append((pair, [e.name for e in group], spec, limit))
             self.meet_limit.update((e.name, limit) for e in group)
-        self.check_mass_matrix(self.q0, self.v0)
 
     # -- compilation helpers ---------------------------------------------------------------
     def _body(self, name):
@@ -210,6 +224,9 @@ class Mechanism:
             phi0 = e.free_length if has_free else 0.0
             if phi0 is None:
                 phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
+            rotational = getattr(self.element_factory, "rotational", None)
+            if rotational is not None:
+                return rotational(e, ia, ib, phi0)
             return el.RotationalElement(e.name, e.type, ia, ib, e.coefficient, phi0)
         pair = self.pair(e.point_a, e.point_b)
         labels = (e.point_a, e.point_b)

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
+from inerter import elements
 from inerter.common.errors import SceneError
 from inerter.scene.expressions import evaluate, evaluate_parameters, parameter_meta
 
@@ -29,7 +30,8 @@ KNOWN_EFFECTS = {
                            "inputs ground.a[i]); coordinates are relative to the ground",
 }
 
-ELEMENT_TYPES = ("spring", "damper", "inerter", "rotational_spring", "rotational_damper")
+#: The element kinds (inerter.elements: one module each, with its parameters).
+ELEMENT_TYPES = tuple(elements.KINDS)
 JOINT_TYPES = ("revolute", "prismatic")
 JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed")
 ORIENTATIONS = ("quaternion", "euler_zxz")
@@ -368,13 +370,13 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     effects = _read_effects(r, data.get("effects", {}), e_over, dimension, Path(source).parent)
     bodies, points = _read_bodies(r, data, dimension)
     joints = _read_joints(r, data.get("joints", {}), points, dimension)
-    elements = _read_elements(r, data.get("elements", {}), points, bodies, dimension)
+    element_specs = _read_elements(r, data.get("elements", {}), points, bodies, dimension)
     forces = _read_forces(r, data.get("forces", {}), points, dimension)
     experiment = _read_experiment(r, data.get("experiment", {}), x_over)
-    outputs = _signal_names(points, elements, dimension)
+    outputs = _signal_names(points, element_specs, dimension)
     metrics = _read_metrics(r, data.get("metrics", []), outputs)
     return Scene(source, name, description, dimension, orientation, parameters, effects, bodies, points, joints,
-                 elements, forces, experiment, metrics, raw=data)
+                 element_specs, forces, experiment, metrics, raw=data)
 
 
 def _read_effects(r: _Reader, raw, overrides, dimension, folder):
@@ -572,9 +574,7 @@ def _read_joints(r: _Reader, raw, points, dimension):
 def _read_elements(r: _Reader, raw, points, bodies, dimension):
     if not isinstance(raw, dict):
         raise r.error("elements", raw, "a table of elements", "not a table")
-    elements = {}
-    coefficient_key = {"spring": "k", "damper": "c", "inerter": "b",
-                       "rotational_spring": "k", "rotational_damper": "d"}
+    out = {}
     body_names = dict(bodies, **{GROUND: None})
     for ename, spec in raw.items():
         fld = f"elements.{ename}"
@@ -585,33 +585,35 @@ def _read_elements(r: _Reader, raw, points, bodies, dimension):
         if not isinstance(spec, dict):
             raise r.error(fld, spec, "a table", "not a table")
         etype = r.string(spec, "type", fld, ELEMENT_TYPES)
-        key = coefficient_key[etype]
-        if etype.startswith("rotational"):
-            allowed = {"type": True, "bodies": True, key: True}
-            if etype == "rotational_spring":
-                allowed["angle"] = False
-            if dimension == 3:
-                allowed["axis"] = True
-            r.table(spec, fld, allowed)
+        kind = elements.KINDS[etype]
+        rotational = kind.family == elements.ROTATIONAL
+        allowed = {"type": True, "bodies" if rotational else "between": True, kind.coefficient.key: True}
+        if kind.free is not None:
+            allowed[kind.free.key] = kind.free.required
+        if rotational and dimension == 3:
+            allowed["axis"] = True
+        r.table(spec, fld, allowed)
+        if rotational:
             a, b = r.name_pair(spec, "bodies", fld, body_names, "body")
-            coef = r.number(spec, key, fld, minimum=0.0)
-            free = r.number(spec, "angle", fld, required=False) if etype == "rotational_spring" else None
-            axis = r.vector(spec, "axis", fld, 3, unit_length=True) if dimension == 3 else None
-            elements[ename] = Element(ename, etype, body_a=a, body_b=b, coefficient=coef, free_length=free,
-                                      axis=axis)
         else:
-            allowed = {"type": True, "between": True, key: True}
-            if etype == "spring":
-                allowed["length"] = False
-            r.table(spec, fld, allowed)
             a, b = r.name_pair(spec, "between", fld, points, "point")
             if points[a].body == points[b].body:
                 raise r.error(f"{fld}.between", [a, b], "points on two different bodies",
                               f"both points are on {points[a].body}: the element could never act")
-            coef = r.number(spec, key, fld, minimum=0.0)
-            free = r.number(spec, "length", fld, minimum=0.0, required=False) if etype == "spring" else None
-            elements[ename] = Element(ename, etype, point_a=a, point_b=b, coefficient=coef, free_length=free)
-    return elements
+        coef = _read_parameter(r, spec, fld, kind.coefficient)
+        free = _read_parameter(r, spec, fld, kind.free) if kind.free is not None else None
+        if rotational:
+            axis = r.vector(spec, "axis", fld, 3, unit_length=True) if dimension == 3 else None
+            out[ename] = Element(ename, etype, body_a=a, body_b=b, coefficient=coef, free_length=free, axis=axis)
+        else:
+            out[ename] = Element(ename, etype, point_a=a, point_b=b, coefficient=coef, free_length=free)
+    return out
+
+
+def _read_parameter(r: _Reader, spec, fld, p: "elements.Parameter"):
+    """One parameter of an element kind, within the range its kind declares (inerter.elements)."""
+    minimum = p.minimum if p.minimum != -math.inf else None
+    return r.number(spec, p.key, fld, minimum=minimum, required=p.required)
 
 
 def _read_forces(r: _Reader, raw, points, dimension):
@@ -685,16 +687,13 @@ def _read_experiment(r: _Reader, raw, overrides):
     )
 
 
-def _signal_names(points, elements, dimension):
+def _signal_names(points, element_specs, dimension):
     names = set()
     for p in points:
         for i in range(1, dimension + 1):
             names.update({f"{p}.r[{i}]", f"{p}.v[{i}]"})
-    for e, el in elements.items():
-        if el.type.startswith("rotational"):
-            names.update({f"{e}.phi_rel", f"{e}.w_rel", f"{e}.tau"})
-        else:
-            names.update({f"{e}.s_rel", f"{e}.v_rel", f"{e}.f"})
+    for e, el in element_specs.items():
+        names.update(f"{e}.{suffix}" for suffix, _, _ in elements.KINDS[el.type].outputs)
     names.update({"energy", "constraint_residual"})
     return names
 

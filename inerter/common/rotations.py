@@ -1,22 +1,6 @@
-"""Rotation math shared by every layer (paper Sec. 3.2, Appendix B): quaternions, Z-X-Z Euler
-angles, axis-angle, cross products.
-
-From the description of spatial kinematics in :mod:`inerter.model.spatial`:
-
-A 3D body has the position R of its centre of mass and an orientation; its velocity coordinates
-are (Ṙ, ω) with ω the angular velocity in the body frame, so that its mass matrix is the constant
-diag(m I, J) and only the gyroscopic term −ω × Jω appears in the forces.
-
-A point with body coordinates ū is at r = R + A ū (Eq. 15); ṙ = Ṙ − A ũ ω (the 3D H of Eq. 22,
-written with body-frame ω instead of Euler-angle rates); r̈ = R̈ − A ũ ω̇ + A(ω × (ω × ū)), whose
-last term is the 3D a_n of Eq. (25).
-
-Orientations:
-* ``quaternion`` (default): a unit quaternion p = (w, x, y, z); ṗ = ½ p ⊗ (0, ω). No singularity.
-* ``euler_zxz``: the paper's Euler angles (φ, θ, ψ), A = R_z(φ) R_x(θ) R_z(ψ) (Eq. B.1). Their
-  rates follow from ω through the inverse of G (Eq. 23), which does not exist where sin θ = 0
-  (gimbal lock): there the solver stops with an error naming the body and the time.
-"""
+"""Rotation math shared by every layer (paper Sec. 3.2, Appendix B): quaternions p = (w, x, y, z),
+the paper's Z-X-Z Euler angles (Eq. B.1, singular where sin θ = 0), axis-angle matrices and cross
+products. How bodies use them: :mod:`inerter.model.spatial`."""
 from __future__ import annotations
 
 import math

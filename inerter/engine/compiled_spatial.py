@@ -13,10 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from inerter import elements
 from inerter.elements import layout
-from inerter.engine.tables import (_by_name, adds_mass, element_row, force_rows, meet_limits,
-                                    rotational_row)
+from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.model.joints import Coincident, SpatialJoint
 
 # Joint kinds (column 0 of ``jt_int``), as in :mod:`inerter.engine.kernels` (its 3D section).
@@ -107,22 +105,13 @@ def flatten3(mech) -> dict:
     jt_int, jt_real = _joint_rows3(mech, pidx)
     m = sum(3 * c + d1 + d2 for _, _, _, c, d1, d2 in jt_int)
 
-    mech_elements = _by_name(mech.elements)
-    el_int, el_real, rot_int, rot_real, el_names, rot_names = [], [], [], [], [], []
-    limits = meet_limits(mech, scene.elements.values())
-    for e in scene.elements.values():
-        me = mech_elements[e.name]
-        if not elements.translational(e.type):
-            extra = [*np.asarray(me.axis, dtype=float), *np.asarray(me.rel0, dtype=float).ravel()]
-            row_int, row_real = rotational_row(e, me.fa.body, me.fb.body, me.free_angle, extra)
-            rot_int.append(row_int)
-            rot_real.append(row_real)
-            rot_names.append(e.name)
-            continue
-        row_int, row_real = element_row(e, me, pidx, scene.centripetal, limits[e.name])
-        el_int.append(row_int)
-        el_real.append(row_real)
-        el_names.append(e.name)
+    def rotational(e, me):          # body indices; the axis and the initial relative orientation
+        extra = [*np.asarray(me.axis, dtype=float), *np.asarray(me.rel0, dtype=float).ravel()]
+        return me.fa.body, me.fb.body, me.free_angle, extra
+
+    tables = element_tables(mech, pidx, rotational)
+    el_int, el_real, el_names = tables["el_int"], tables["el_real"], tables["el_names"]
+    rot_int, rot_real, rot_names = tables["rot_int"], tables["rot_real"], tables["rot_names"]
 
     fa_int, fa_real, pd_int, pd_real, in_int = force_rows(scene, pidx, 3)
 

@@ -92,3 +92,26 @@ def force_rows(scene, pidx, dim) -> tuple[list, list, list, list, list]:
         elif f.function == "input":
             in_int.append((p,))
     return fa_int, fa_real, pd_int, pd_real, in_int
+
+
+def element_tables(mech, pidx, rotational) -> dict:
+    """The element tables of a mechanism: ``el_int``/``el_real`` rows of its translational elements
+    and ``rot_int``/``rot_real`` rows of its rotational ones, with their names, in scene order.
+    ``rotational(spec, element)`` gives a rotational element's (body a, body b, free angle, extra
+    columns) as the kernels of its dimension index them."""
+    scene = mech.scene
+    mech_elements = _by_name(getattr(mech, "elements", []))
+    out = {key: [] for key in ("el_int", "el_real", "el_names", "rot_int", "rot_real", "rot_names")}
+    limits = meet_limits(mech, scene.elements.values())
+    for e in scene.elements.values():
+        me = mech_elements.get(e.name)
+        if elements.translational(e.type):
+            row_int, row_real = element_row(e, me, pidx, scene.centripetal, limits[e.name])
+            prefix = "el"
+        else:
+            row_int, row_real = rotational_row(e, *rotational(e, me))
+            prefix = "rot"
+        out[prefix + "_int"].append(row_int)
+        out[prefix + "_real"].append(row_real)
+        out[prefix + "_names"].append(e.name)
+    return out

@@ -11,6 +11,12 @@ L(q) from the bodies' poses and differentiates it with forward-mode automatic di
 Inerter with the centripetal term: F = b L̈ (Eq. 9). Without it (Eq. 8): F = b r̈·r̂, which the
 oracle obtains as b(L̈ − |ṙ⊥|²/L) with ṙ from the Jacobian of r(q), again by differentiation.
 An error in either the fast path or this module shows up as a disagreement between the two.
+
+Planar rotational elements (:class:`OracleRotational`) are derived in the same way from the relative
+angle φ(q) = θ_b − θ_a: a rotational spring from its potential V = ½k(φ − φ0)² (generalised force
+−∇V, torque dV/dφ), a rotational damper from its dissipation function R = ½d φ̇² (generalised force
+−(∂R/∂φ̇)∇φ, torque ∂R/∂φ̇), each derivative taken on Jets. 3D rotational elements stay with the
+numpy evaluators (see :class:`OracleRotational`).
 """
 from __future__ import annotations
 
@@ -181,8 +187,85 @@ class DistanceProbe:
         return L, rdot
 
 
+class OracleRotational:
+    """A planar rotational spring or damper between two bodies' angles (or a body and the ground),
+    from its potential or its dissipation function, differentiated on Jets.
+
+    φ(q) = θ_b − θ_a is a Jet with its gradient ∇φ over the angles and φ̇ = ∇φ·q̇ along the motion.
+    Spring: V(φ) = ½k(φ − φ0)²; the generalised force is −∇V (chain rule on the Jets: V.g), the
+    torque dV/dφ (V on a Jet seeded dφ = 1). Damper: R(φ̇) = ½d φ̇² (Rayleigh); the generalised
+    force is −(∂R/∂φ̇)∇φ, since ∂φ̇/∂q̇ = ∇φ, the torque ∂R/∂φ̇ (R on a Jet seeded dφ̇ = 1). Neither
+    law is read from :mod:`inerter.elements`: these two functions are the definitions.
+
+    The mechanism builds these through ``OracleElement.rotational`` for planar scenes only. In 3D
+    the evaluators' φ (rotation about an axis fixed in body a) equals an exact derivation only
+    while the relative rotation stays about that axis, so an oracle there would disagree off the
+    revolute joint's manifold by construction, not by a mistake."""
+
+    def __init__(self, spec, index_a, index_b, free_angle):
+        self.name = spec.name
+        self.kind = spec.type
+        self.coefficient = float(spec.coefficient)
+        self.coefficient_name = {"rotational_spring": "k", "rotational_damper": "d"}[spec.type]
+        self.free_angle = float(free_angle)
+        self.ia, self.ib = index_a, index_b
+        self.dofs = [i for i in (index_a, index_b) if i >= 0]
+
+    def _definition(self, x):
+        """V(φ) of a spring, R(φ̇) of a damper, on a Jet (or a float)."""
+        if self.kind == "rotational_spring":
+            d = x - self.free_angle
+            return 0.5 * self.coefficient * (d * d)
+        return 0.5 * self.coefficient * (x * x)
+
+    def angle(self, q, v):
+        """φ as a Jet over the velocity coordinates in `dofs` (gradient ∇φ, first derivative φ̇)."""
+        n = len(self.dofs)
+        phi = Jet.constant(0.0, n)
+        for sign, i in ((1.0, self.ib), (-1.0, self.ia)):
+            if i >= 0:
+                g = np.zeros(n)
+                g[self.dofs.index(i)] = 1.0
+                phi = phi + sign * Jet(float(q[i]), float(v[i]), 0.0, g)
+        return phi
+
+    def _torque(self, phi):
+        """dV/dφ (spring) or ∂R/∂φ̇ (damper), by differentiation of the definition."""
+        x = phi.v if self.kind == "rotational_spring" else phi.d1
+        return self._definition(Jet(x, 1.0, 0.0, np.zeros(0))).d1
+
+    def geometry(self, q, v):
+        return self.angle(q, v)
+
+    def add_force(self, q, v, Q, geo=None):
+        phi = geo or self.angle(q, v)
+        if self.kind == "rotational_spring":
+            Q[self.dofs] -= self._definition(phi).g               # −∇V
+        else:
+            Q[self.dofs] -= self._torque(phi) * phi.g             # −(∂R/∂φ̇) ∇φ
+
+    def add_mass(self, q, v, M, geo=None):
+        pass
+
+    def outputs(self, q, v, a):
+        phi = self.angle(q, v)
+        return phi.v, phi.d1, self._torque(phi)
+
+    def kinetic(self, q, v):
+        return 0.0
+
+    def potential(self, q):
+        if self.kind != "rotational_spring":
+            return 0.0
+        return self._definition(self.angle(q, np.zeros_like(q)).v)
+
+
 class OracleElement:
-    """Spring, damper or inerter through L(q) and its derivatives."""
+    """Spring, damper or inerter through L(q) and its derivatives. As the mechanism's element
+    factory it builds the planar rotational elements too (:attr:`rotational`)."""
+
+    #: The factory of planar rotational elements, ``rotational(spec, index_a, index_b, free_angle)``.
+    rotational = OracleRotational
 
     def __init__(self, spec, pair, centripetal, free_length, labels, mech):
         self.name = spec.name

@@ -12,6 +12,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e ".[test]"
+	$(VENV)/bin/inerter compile    # the engine's kernels, once for this machine (about 2 min on 2 cores)
 	touch $(STAMP)
 
 venv: $(STAMP)

@@ -1,6 +1,7 @@
 """Work-precision diagrams of both paper scenes, with the peers measured in the same run.
 
     python benchmarks/work_precision.py [--quick] [--budget 30] [--out docs/benchmarks]
+    python benchmarks/work_precision.py --scenes two_bar_2d --paths default     # the default call only
 
 two_bar_2d, 0-20 s, error = max |C_y − oracle| over 10 ms samples: every method on the numpy
 and the compiled path, DOP853 and RK45 through the FMU (fmpy, 10 ms and 2 ms communication steps,
@@ -10,6 +11,14 @@ force at every stage; skipped when mujoco does not import). lumped_mass_2d, 0-20
 P_y. Writes docs/benchmarks/<scene>/work_precision.{png,csv,md} and docs/benchmarks/work_precision.md
 (the targets: fast path to 1e-6 m and 1e-9 m in ≤ 1/3 of the hand-written ODE's time; through the
 FMU at a 10 ms step ≤ 2× the solver path).
+
+`--paths default` (part of the default set): the default call, ``model.simulate(stop_time=20,
+rtol=rtol, atol=rtol/100)`` with the scene's metrics (natural frequency, C_y steady state from the
+dense output), timed whole (settings, grid, integration, outputs, metrics; the Model is built
+before) side by side with scipy DOP853 on the hand-written ODE at the same tolerances, the two
+timed in turn at each tolerance so that both see the same machine; the ratio of the cheapest runs
+reaching 1e-6 m and 1e-9 m (target ≤ 1/4), and the call's cost beyond its own integration
+(``run.cpu_time``) relative to it (target ≤ 1/5). Written to docs/benchmarks/default_call.md.
 """
 from __future__ import annotations
 
@@ -58,6 +67,94 @@ def peers(study, reference_cy, grid, log=print):
         log(f"  MuJoCo RK4 {dt:8.1e}  error {err:9.2e}  cpu {cpu:8.4f} s")
 
 
+#: Tolerances of the default call's comparison (rtol; atol = rtol/100): ODE_RTOLS and the points
+#: between them, for both the default call and the hand-written ODE.
+DEFAULT_RTOLS = sorted({*ODE_RTOLS, 5e-5, 2e-5, 5e-6, 2e-6, 5e-7, 5e-8, 5e-9, 5e-10}, reverse=True)
+
+
+def default_call(model, reference_cy, grid, rtols=DEFAULT_RTOLS, log=print):
+    """The default call (``model.simulate`` with its metrics, on the default path) and scipy DOP853
+    on the hand-written ODE, side by side at each of `rtols`: rows of (rtol, call CPU s, the
+    integration's own CPU s in it, error m, steps, ODE CPU s, ODE error m, ODE evaluations, the
+    first call on a Model just built CPU s).
+
+    The call is repeated on one Model (as the ODE's solve is), the best kept; the first call on a
+    new Model also works out what the Model keeps for later calls (the kernels' arrays, the static
+    equilibrium and the natural frequencies of the metrics): measured apart, on Models built
+    untimed before each call."""
+    from inerter import api
+
+    api.warm_up()
+    ode = TwoAngleODE()
+    rows = []
+    log(f"default call ({model.name}, 0-20 s, with its metrics) vs scipy 2-angle ODE DOP853, CPU s:")
+    log(f"  {'rtol':>8s}  {'call':>8s} {'integr.':>8s} {'extra':>6s} {'error':>9s}  {'ODE':>8s} {'error':>9s}  ratio")
+    for rtol in rtols:
+        integrations = []
+
+        def call():
+            t0 = time.process_time()
+            result = model.simulate(stop_time=20.0, rtol=rtol, atol=rtol * 1e-2)
+            cpu = time.process_time() - t0
+            integrations.append(result.run.cpu_time)
+            return result, cpu
+        (result, _), cpu = bench.best_time(call)
+        integration = min(integrations)          # the integration's own time, best over the same repeats
+        (y, _, nfev), ode_cpu = bench.best_time(lambda: ode.solve(20.0, grid, rtol, rtol * 1e-2))
+        ok = result.status == "ok" and "C_y_peak_to_peak" in result.metrics
+        err = float(np.max(np.abs(result["C.r[2]"] - reference_cy))) if ok else float("nan")
+        ode_err = float(np.max(np.abs(y - reference_cy)))
+        fresh = []
+        for _ in range(3):
+            new = inerter.load(model.path, **model.overrides)
+            bench.settle()
+            t0 = time.process_time()
+            new.simulate(stop_time=20.0, rtol=rtol, atol=rtol * 1e-2)
+            fresh.append(time.process_time() - t0)
+        rows.append((rtol, cpu, integration, err, result.run.steps, ode_cpu, ode_err, nfev, min(fresh)))
+        log(f"  {rtol:8.1e}  {cpu:8.4f} {integration:8.4f} {(cpu - integration) / integration:6.1%} {err:9.2e}  "
+            f"{ode_cpu:8.4f} {ode_err:9.2e}  {cpu / ode_cpu:5.3f}   first call {min(fresh):.4f}")
+    return rows
+
+
+def default_call_report(rows, model) -> list[str]:
+    """Markdown: the side-by-side table and, for 1e-6 m and 1e-9 m, the cheapest of each reaching
+    it, their ratio (target ≤ 1/4) and the call's extra cost over its integration (target ≤ 1/5)."""
+    lines = ["# The default call against scipy on the hand-written ODE", "",
+             f"`python benchmarks/work_precision.py --scenes two_bar_2d --paths default`, {time.strftime('%Y-%m-%d')}. "
+             f"two_bar_2d, 0-20 s: `model.simulate(stop_time=20, rtol=rtol, atol=rtol/100)` on the default path "
+             f"with the scene's metrics ({', '.join(m.kind for m in model.scene.metrics)}), the Model built "
+             f"before; scipy DOP853 on the hand-written 2-angle ODE (benchmarks/peers.py) at the same tolerances, "
+             f"the two timed in turn at each tolerance. CPU time (process time, {bench.REPEATS_TEXT}); "
+             "`integration`: the call's own integration loop (`run.cpu_time`); error: max |C_y − oracle| over the "
+             "10 ms samples. `first call`: the same call on a Model just built (best of 3), which also works out "
+             "what the Model keeps for later calls (the kernels' arrays, the static equilibrium, the natural "
+             "frequencies).", "",
+             "| rtol | call (s) | integration (s) | call beyond its integration | error (m) | steps | ODE (s) "
+             "| ODE error (m) | ODE evaluations | call / ODE | first call (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for rtol, cpu, integ, err, steps, ode, ode_err, nfev, first in rows:
+        lines.append(f"| {rtol:g} | {cpu:.4f} | {integ:.4f} | {(cpu - integ) / integ:.1%} | {err:.3g} | {steps} "
+                     f"| {ode:.4f} | {ode_err:.3g} | {nfev} | {cpu / ode:.3f} | {first:.4f} |")
+    lines += ["", "## Cheapest run reaching each error", ""]
+    for target in (1e-6, 1e-9):
+        for grid_name, allowed in (("every tolerance above", set(DEFAULT_RTOLS)), ("decades only", set(ODE_RTOLS))):
+            mine = [r for r in rows if r[3] <= target and r[0] in allowed]
+            peer = [r for r in rows if r[6] <= target and r[0] in allowed]
+            if not mine or not peer:
+                lines.append(f"* to {target:g} m ({grid_name}): not reached by "
+                             f"{'the default call' if not mine else 'the ODE'}")
+                continue
+            a, b = min(mine, key=lambda r: r[1]), min(peer, key=lambda r: r[5])
+            ratio, extra = a[1] / b[5], (a[1] - a[2]) / a[2]
+            lines.append(f"* to {target:g} m ({grid_name}): default call {a[1]:.4f} s (rtol {a[0]:g}, its integration "
+                         f"{a[2]:.4f} s, the rest {extra:.1%} of it: target ≤ 20%, "
+                         f"{'met' if extra <= 0.2 else 'NOT met'}), scipy ODE {b[5]:.4f} s (rtol {b[0]:g}), ratio "
+                         f"{ratio:.3f} (target ≤ 0.25: {'met' if ratio <= 0.25 else 'NOT met'}); the first call on "
+                         f"a new Model {a[8]:.4f} s, ratio {a[8] / b[5]:.3f}")
+    return lines
+
+
 def same_run(model, method, point) -> float:
     """CPU seconds of the run an FMU point of `method` stands for, on the compiled solver path: the
     same method, rtol and atol, every output at the same 10 ms points (no metrics), best as
@@ -94,9 +191,26 @@ def main(argv=None):
     p.add_argument("--budget", type=float, default=30.0)
     p.add_argument("--out", default=str(ROOT / "docs" / "benchmarks"))
     p.add_argument("--scenes", default="two_bar_2d,lumped_mass_2d")
-    p.add_argument("--paths", default="numpy,compiled,fmu")
+    p.add_argument("--paths", default="numpy,compiled,fmu,default",
+                   help="some of numpy, compiled, fmu (the sweeps) and default (the default call against the "
+                        "hand-written ODE, two_bar_2d)")
     a = p.parse_args(argv)
     out = Path(a.out)
+    paths = [x for x in a.paths.split(",") if x and x != "default"]
+    if "default" in a.paths.split(",") and "two_bar_2d" in a.scenes.split(","):
+        scene = ROOT / "scenarios" / "two_bar_2d.toml"
+        model = inerter.load(scene)
+        interval = model.scene.experiment.output_interval
+        extract = bench.signal_extractor(model.mechanism, "C.r[2]")
+        reference = extract(bench.reference_states(scene, {}, 20.0, interval))[:, 0]
+        rows = default_call(model, reference, np.arange(len(reference)) * interval,
+                            ODE_RTOLS if a.quick else DEFAULT_RTOLS)
+        report = default_call_report(rows, model)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "default_call.md").write_text("\n".join(report) + "\n")
+        print("\n".join(report[report.index("## Cheapest run reaching each error"):]))
+        if not paths:
+            return
     sweeps = bench.QUICK if a.quick else bench.SWEEPS
     summary = ["# Work-precision of the paper scenes", "",
                f"`python benchmarks/work_precision.py{' --quick' if a.quick else ''}`, "
@@ -107,7 +221,7 @@ def main(argv=None):
         if name not in a.scenes.split(","):
             continue
         scene = ROOT / "scenarios" / f"{name}.toml"
-        study, model, reference, extract = bench.run_study(scene, 20.0, signal, a.paths.split(","),
+        study, model, reference, extract = bench.run_study(scene, 20.0, signal, paths,
                                                            list(bench.SWEEPS), sweeps, a.budget)
         if name == "two_bar_2d":
             grid = np.arange(len(reference)) * model.scene.experiment.output_interval

@@ -23,6 +23,8 @@ from inerter.engine.simulation import Settings, Stepper, integrate
 #: Tolerances at which the oracle is solved (DOP853).
 ORACLE_RTOL = 1e-12
 ORACLE_ATOL = 1e-14
+#: Kinds of [[metrics]] that read their signal between the samples (through ``Result.dense``).
+DENSE_METRICS = ("free_oscillation", "harmonics", "steady_state")
 
 
 def load(path, **overrides) -> "Model":
@@ -42,6 +44,8 @@ class Model:
         self.signals = Signals(self.mechanism)
         self.is_oracle = oracle
         self._static = None
+        self._frequencies = None          # natural_frequencies(), once asked for
+        self._static_values = {}          # static_value(signal), once asked for
 
     # -- description -------------------------------------------------------------------------
     @property
@@ -105,26 +109,33 @@ class Model:
         return self._static
 
     def natural_frequencies(self):
-        return natural_frequencies(self.mechanism, self.static_equilibrium())
+        if self._frequencies is None:
+            self._frequencies = natural_frequencies(self.mechanism, self.static_equilibrium())
+        return self._frequencies
 
     def static_value(self, signal: str) -> float:
-        q = self.static_equilibrium()
-        return self.signals.function(signal)(0.0, q, np.zeros(self.mechanism.n))
+        if signal not in self._static_values:
+            q = self.static_equilibrium()
+            self._static_values[signal] = self.signals.function(signal)(0.0, q, np.zeros(self.mechanism.n))
+        return self._static_values[signal]
 
     # -- simulation --------------------------------------------------------------------------
     def settings(self, **overrides) -> Settings:
         return Settings.from_experiment(self.scene.experiment, **overrides)
 
     def simulate(self, stop_time=None, output_interval=None, method=None, rtol=None, atol=None,
-                 constraint=None, step=None, metrics=True, path="numpy") -> "Result":
-        """Integrate from the initial state. `path`: "numpy" (the readable reference) or "compiled"
-        (numba kernels and integrator loops, module `compiled`; 2D scenes, falls back to numpy
-        where numba is missing or the scene is 3D)."""
+                 constraint=None, step=None, metrics=True, path="compiled") -> "Result":
+        """Integrate from the initial state. `path`: "compiled" (the default: numba kernels and
+        integrator loops, :mod:`inerter.engine.compiled`, 2D and 3D; it falls back to the numpy path
+        where it cannot take the scene, Z-X-Z Euler angles, and ``result.run.extra["path"]`` says
+        why) or "numpy" (the readable reference). The oracle always runs its own numpy evaluation.
+        With `metrics`, the scene's [[metrics]] are computed from the integrator's dense output (the
+        compiled loop keeps it only then)."""
         s = self.settings(stop_time=stop_time, output_interval=output_interval, method=method, rtol=rtol,
                           atol=atol, constraint=constraint, step=step)
         if path == "compiled" and not self.is_oracle:
             from inerter.engine import compiled
-            run = compiled.integrate_compiled(self.mechanism, s)
+            run = compiled.integrate_compiled(self.mechanism, s, dense=bool(metrics) and self._metrics_need_dense())
         elif path in ("numpy", "compiled"):
             run = integrate(self.mechanism, s)
         else:
@@ -134,11 +145,16 @@ class Model:
             result.metrics = compute_metrics(self, result)
         return result
 
-    def stepper(self, method=None, rtol=None, atol=None, path="numpy", stop_time=None) -> Stepper:
-        """A co-simulation stepper at t = 0. `path` = "compiled": each step one call of the compiled
-        integrator loop where :func:`inerter.engine.compiled.compiled_stepper` can take the scene (the numpy
-        stepper otherwise; ``stepper.path`` says which). On both paths the adaptive integrators run
-        on across communication points, their steps clipped to `stop_time` where it is given."""
+    def _metrics_need_dense(self) -> bool:
+        """Whether a metric of the scene reads its signal between the samples."""
+        return any(m.kind in DENSE_METRICS for m in self.scene.metrics)
+
+    def stepper(self, method=None, rtol=None, atol=None, path="compiled", stop_time=None) -> Stepper:
+        """A co-simulation stepper at t = 0. `path` = "compiled" (the default): each step one call
+        of the compiled integrator loop where :func:`inerter.engine.compiled.compiled_stepper` can
+        take the scene (the numpy stepper otherwise; ``stepper.path`` says which); "numpy": the
+        readable reference. On both paths the adaptive integrators run on across communication
+        points, their steps clipped to `stop_time` where it is given."""
         s = self.settings(method=method, rtol=rtol, atol=atol)
         if path == "compiled" and not self.is_oracle:
             from inerter.engine import compiled
@@ -151,7 +167,13 @@ class Model:
 
 
 class Result:
-    """A time history: ``result.time``, ``result["C.r[2]"]``, ``result.metrics``."""
+    """A time history: ``result.time``, ``result["C.r[2]"]``, ``result.metrics``.
+
+    The outputs are evaluated when first asked for: on a compiled run each signal on its own in
+    the kernels (a point's coordinate from that point alone, accelerations only for a force that
+    needs them), on the numpy path all of them at once. An output that cannot be evaluated at a
+    sample (terminals met there, Eq. (33) singular there) ends the result before that sample,
+    failed, when it is first asked for (``simulate`` asks for its metrics' signals)."""
 
     def __init__(self, model: Model, settings: Settings, run):
         self.model = model
@@ -162,11 +184,21 @@ class Result:
         self.message = run.message
         self.metrics: dict[str, float] = {}
         self.metric_errors: dict[str, str] = {}
-        n = model.mechanism.nq
-        sig = model.signals
-        values, start = [], 0
+        self.names = list(model.signals.names)
         kernel = run.extra.get("kernel")             # a compiled run's outputs come from its kernels
-        order = kernel.signal_order(sig) if kernel is not None and hasattr(kernel, "signal_order") else None
+        self._kernel = kernel if getattr(kernel, "compiled", False) else None
+        self._values = None                          # every output at every sample, once asked for
+        self._columns: dict[str, np.ndarray] = {}    # one output at every sample, once asked for
+
+    def _all_values(self) -> np.ndarray:
+        """Every output at every sample (time × signal), in the order of ``names``."""
+        if self._values is not None:
+            return self._values
+        run, settings, sig = self.run, self.settings, self.model.signals
+        n = self.model.mechanism.nq
+        values, start = [], 0
+        kernel = self._kernel
+        order = kernel.signal_order(sig) if kernel is not None else None
         if order is not None:
             compiled_values, start = kernel.signal_history(sig, order, run.time, run.states, None, settings.alpha)
             values = list(compiled_values)
@@ -178,7 +210,30 @@ class Result:
                 self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
                 break
         self._values = np.array(values) if values else np.zeros((0, len(sig.names)))
-        self.names = list(sig.names)
+        return self._values
+
+    def _column(self, name) -> np.ndarray:
+        """One output at every sample: in the kernels on a compiled run, up to a sample where it
+        cannot be evaluated, from which the numpy path's signals give the values or the message."""
+        kernel = self._kernel
+        index = kernel.signal_index(name) if kernel is not None else None
+        if index is None:
+            return self._all_values()[:, self.model.signals.index[name]]
+        run, alpha = self.run, self.settings.alpha
+        values, k = kernel.signal_column(index, run.time, run.states, None, alpha)
+        if k < len(run.time):
+            sig, n, j = self.model.signals, self.model.mechanism.nq, self.model.signals.index[name]
+            values = list(values)
+            for i in range(k, len(run.time)):
+                t, y = run.time[i], run.states[i]
+                try:
+                    values.append(sig.evaluate(t, y[:n], y[n:], None, alpha)[j])
+                except SimulationError as exc:
+                    self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
+                    break
+            values = np.array(values, dtype=float)
+        self._columns[name] = values
+        return values
 
     def _truncate(self, i, exc):
         """The outputs cannot be evaluated from sample i on: the result ends before it, failed."""
@@ -187,33 +242,58 @@ class Result:
         run.message = str(exc) if run.message == "completed" else f"{exc}; the integrator had reported: {run.message}"
         run.status = "failed"
         self.time, self.status, self.message = run.time, run.status, run.message
+        self._columns = {key: column[:i] for key, column in self._columns.items()}
+        if self._values is not None:
+            self._values = self._values[:i]
+
+    def _check_name(self, name):
+        if name not in self.model.signals.index:
+            raise KeyError(f"{name!r} is not an output of {self.model.name}; outputs: " + ", ".join(self.names))
 
     def __getitem__(self, name) -> np.ndarray:
-        try:
+        self._check_name(name)
+        if self._values is not None:
             return self._values[:, self.model.signals.index[name]]
-        except KeyError:
-            raise KeyError(f"{name!r} is not an output of {self.model.name}; outputs: "
-                           + ", ".join(self.names)) from None
+        column = self._columns.get(name)
+        return column if column is not None else self._column(name)
 
     def dense(self, name):
-        """A callable t ↦ signal(t) through the integrator's dense output (vectorised over t), or
-        a cubic spline through the samples where the run kept no dense output."""
-        if self.run.dense is None:
+        """A callable t ↦ signal(t), vectorised over t (a 1-D array of the values), through the
+        integrator's dense output: on a compiled run, the states from the kept steps' polynomials
+        and the signal from the kernels, in one compiled call; on the numpy path, scipy's dense
+        output and the numpy signals. Where the run kept none (RK4, whose fixed steps give no
+        polynomial, or a run without metrics): a cubic spline through the samples."""
+        self._check_name(name)
+        sol = self.run.dense
+        if sol is None:
             return sample_spline(self.time, self[name])
         fn = self.model.signals.function(name)
         n = self.model.mechanism.nq
-        sol = self.run.dense
         alpha = self.settings.alpha
 
-        def f(t):
-            t = np.atleast_1d(np.asarray(t, dtype=float))
+        def numpy_values(t):
             Y = sol(t)
             return np.array([fn(ti, Y[:n, i], Y[n:, i], None, alpha) for i, ti in enumerate(t)])
-        return f
+
+        kernel = self._kernel
+        index = kernel.signal_index(name) if kernel is not None else None
+        if index is None:
+            return lambda t: numpy_values(np.atleast_1d(np.asarray(t, dtype=float)))
+
+        def compiled_values(t):
+            t = np.atleast_1d(np.asarray(t, dtype=float))
+            values, k = kernel.dense_signal(sol, index, t, None, alpha)
+            if k < len(t):            # not defined at t[k]: the numpy path's values, or its message
+                values = np.concatenate((values, numpy_values(t[k:])))
+            return values
+        return compiled_values
 
     def summary(self) -> dict:
+        """What a run was and how it went, as plain JSON values (``json.dumps`` needs no default):
+        numbers, strings, lists and dicts; an effect held as an object (a ground motion) appears as
+        its ``describe()`` text."""
         s = self.settings
-        return {
+        return _plain({
             "scene": self.model.name,
             "source": self.model.source,
             "status": self.status,
@@ -224,24 +304,44 @@ class Result:
                          "rtol": s.rtol, "atol": s.atol, "constraint": s.constraint, "baumgarte": s.baumgarte,
                          "oracle": self.model.is_oracle,
                          "parameters": {p.name: p.value for p in self.model.scene.parameters.values()},
-                         "effects": {k: (list(v) if isinstance(v, tuple) else v)
-                                     for k, v in self.model.scene.effects.items()}},
+                         "effects": dict(self.model.scene.effects)},
             "statistics": {"path": self.run.extra.get("path", "numpy"),
                            "steps": self.run.steps, "evaluations": self.run.evaluations,
                            "cpu_time_s": self.run.cpu_time, "max_constraint_drift": self.run.max_drift,
                            "energy_start": float(self["energy"][0]) if len(self.time) else None,
                            "energy_end": float(self["energy"][-1]) if len(self.time) else None},
-        }
+        })
 
     def write_csv(self, path):
+        values = self._all_values()
         header = ",".join(["time"] + self.names)
-        np.savetxt(path, np.column_stack((self.time, self._values)), delimiter=",", header=header,
+        np.savetxt(path, np.column_stack((self.time, values)), delimiter=",", header=header,
                    comments="", fmt="%.12g")
+
+
+def _plain(value):
+    """`value` as plain JSON values: numpy scalars and arrays to numbers and lists, tuples to lists,
+    a number that is not finite to None (JSON has no NaN), an object with a ``describe()`` (a
+    ground motion) to that text, anything else to its str()."""
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if np.isfinite(value) else None
+    if isinstance(value, np.bool_):
+        return bool(value)
+    describe = getattr(value, "describe", None)
+    return describe() if callable(describe) else str(value)
 
 
 def sample_spline(time, values):
     """A cubic spline through samples (error O(h⁴); linear interpolation would flatten peaks by
-    (ωh)²/12): metrics of runs without a dense output (compiled path, FMUs)."""
+    (ωh)²/12): metrics of runs without a dense output (RK4's fixed steps, FMUs)."""
     from scipy.interpolate import CubicSpline
     return CubicSpline(time, values)
 
@@ -272,12 +372,14 @@ def _compute_metric(model, result, m, out, windows):
         out[_key(m.prefix, "natural_frequency")] = float(freqs[0]) if len(freqs) else float("nan")
         out[_key(m.prefix, "natural_frequencies")] = [float(f) for f in freqs]
         return
-    t, x, dense = result.time, result[m.signal], result.dense(m.signal)
+    x = result[m.signal]            # first: a sample where it is undefined ends the result before it
+    t = result.time
     if m.kind == "peak":
         # largest excursion from the reference (default: the signal's initial value)
         ref = m.reference if m.reference is not None else float(x[0])
         out[_key(m.prefix, "peak")] = float(np.max(np.abs(x - ref)))
         return
+    dense = result.dense(m.signal)
     reference = m.reference if m.reference is not None else model.static_value(m.signal)
     if m.kind == "free_oscillation":
         r = metric_fns.free_oscillation(t, x, reference, dense=dense)
@@ -314,6 +416,15 @@ def warm_up(spatial: bool = False):
         model = load(folder / name)
         for method in compiled.COMPILED_METHODS:
             compiled.integrate_compiled(model.mechanism, model.settings(method=method, stop_time=0.05, step=1e-2))
+            s = model.settings(method=method, stop_time=0.05, step=1e-2)     # with the dense output (metrics)
+            result = Result(model, s, compiled.integrate_compiled(model.mechanism, s, dense=True))
+            for signal in ("C.r[2]", "inerter.f"):
+                result[signal]
+                result.dense(signal)(np.array([0.01, 0.02]))
+            if result.run.dense is not None:
+                result.run.dense(np.array([0.01, 0.02]))
+            result._all_values()
+            result.run.max_drift
         kernel = compiled._kernel_for(model.mechanism)
         kernel.accelerations(0.0, kernel.q0, kernel.v0)
         for method in compiled._RK_CODE:                       # the co-simulation step (the FMU's)

@@ -1,8 +1,9 @@
-"""Command line: ``inerter run | compare | describe | build-fmu | paper``."""
+"""Command line: ``inerter run | compare | describe | build-fmu | paper | compile``."""
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -15,13 +16,48 @@ from inerter.scene.overrides import parse_set  # noqa: F401  (the CLI's --set)
 PAPER_SCENES = ("lumped_mass_2d", "two_bar_2d")
 
 
+class OptionError(InerterError):
+    """A command-line option has a value the command cannot use; the message reads
+    ``<option>: <problem> (got <value>; expected <expected>)``, like a scene error's."""
+
+    def __init__(self, option: str, value, expected: str, problem: str = "out of range"):
+        super().__init__(f"{option}: {problem} (got {value!r}; expected {expected})")
+
+
+def _check_options(args):
+    """The solver options, checked before anything runs (the scene's own fields are checked by
+    its reader, with the same ranges)."""
+    from inerter.scene.reader import METHODS
+    for option, name, unit in (("--stop-time", "stop_time", "s"), ("--step", "step", "s")):
+        value = getattr(args, name, None)
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise OptionError(option, value, f"a finite number > 0 ({unit})")
+    rtol = getattr(args, "rtol", None)
+    if rtol is not None and not (math.isfinite(rtol) and 1e-14 <= rtol <= 0.1):
+        raise OptionError("--rtol", rtol, "a relative tolerance in [1e-14, 0.1]")
+    method = getattr(args, "method", None)
+    if method is not None and method not in METHODS:
+        raise OptionError("--method", method, "one of: " + ", ".join(METHODS), "unknown value")
+
+
+def _out_dir(path) -> Path:
+    """The output folder, made before anything is computed."""
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OptionError("--out", str(path), "a folder that can be created and written",
+                          f"cannot create the output folder: {exc.strerror or exc}") from None
+    return out
+
+
 def _write(result, out: Path, stem: str, label: str | None = None):
     out.mkdir(parents=True, exist_ok=True)
     result.write_csv(out / f"{stem}.csv")
     summary = result.summary()
     if label:
         summary["label"] = label
-    (out / f"{stem}.summary.json").write_text(json.dumps(summary, indent=2, default=float))
+    (out / f"{stem}.summary.json").write_text(json.dumps(summary, indent=2))
     return summary
 
 
@@ -31,7 +67,8 @@ def simulate(scene, overrides, model_kind, args):
     kw = dict(stop_time=args.stop_time, method=args.method, rtol=args.rtol)
     if model_kind == "fmu":
         from inerter.fmu.run import simulate_fmu
-        return simulate_fmu(scene, overrides, stop_time=args.stop_time, step=args.step)
+        solver = {f"experiment.{k}": getattr(args, k) for k in ("method", "rtol") if getattr(args, k, None)}
+        return simulate_fmu(scene, dict(overrides, **solver), stop_time=args.stop_time, step=args.step)
     model = load(scene, **overrides)
     if model_kind == "oracle":
         model = model.oracle()
@@ -43,13 +80,13 @@ def simulate(scene, overrides, model_kind, args):
 
 def cmd_run(args):
     overrides = parse_set(args.set)
+    out = _out_dir(args.out)
     t0 = time.perf_counter()
     result = simulate(args.scene, overrides, args.model, args)
     wall = time.perf_counter() - t0
-    out = Path(args.out)
     stem = result.model.name
     summary = _write(result, out, stem)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
     from inerter.studies.plotting import plot_runs
     plot_runs([(args.model, result, {})], out / f"{stem}.png", f"{stem} ({args.model})")
     print(f"{stem}: {result.status} ({result.message}); {len(result.time)} samples to t = "
@@ -66,7 +103,7 @@ def cmd_run(args):
 def cmd_compare(args):
     """With and without the centripetal correction (and the oracle, and the FMU with --model fmu)."""
     overrides = parse_set(args.set)
-    out = Path(args.out)
+    out = _out_dir(args.out)
     runs, summaries = [], {}
     variants = [("corrected", True), ("uncorrected", False)]
     for label, cen in variants:
@@ -80,8 +117,8 @@ def cmd_compare(args):
     name = runs[0][1].model.name
     corrected = runs[0][1]
     diff = max_difference(corrected, oracle)
-    summaries["max_difference_to_oracle_m"] = diff
-    (out / "summary.json").write_text(json.dumps({"scene": name, "runs": summaries}, indent=2, default=float))
+    summaries["max_difference_to_oracle_m"] = diff if math.isfinite(diff) else None   # JSON has no NaN
+    (out / "summary.json").write_text(json.dumps({"scene": name, "runs": summaries}, indent=2))
     from inerter.studies.plotting import plot_runs
     png = plot_runs(runs, out / f"{name}_compare.png", f"{name}: with and without the centripetal term")
     print(f"{name}:")
@@ -92,7 +129,8 @@ def cmd_compare(args):
         if any(isinstance(v, list) for v in vals):
             continue
         print(f"  {k:32s} " + " ".join(f"{v:16.6g}" if v is not None else f"{'-':>16s}" for v in vals))
-    print(f"  largest |{args.model} − oracle| over point positions: {diff:.3g} m")
+    print(f"  largest |{args.model} − oracle| over point positions: "
+          + (f"{diff:.3g} m" if math.isfinite(diff) else "not computed (the runs' time grids differ)"))
     print(f"wrote {png} and {out / 'summary.json'}")
     return 0 if all(r.status == "ok" for _, r, _ in runs) else 3
 
@@ -137,6 +175,32 @@ def cmd_paper(args):
     return status
 
 
+def cmd_compile(args):
+    """Compile the engine's kernels ahead of time into the kernel cache, so that no later run, sweep
+    worker or FMU instance on this machine compiles them (the set-up runs it: Makefile)."""
+    from inerter.api import warm_up
+    from inerter.engine import compiled
+    if not compiled.AVAILABLE:
+        print(f"inerter compile: nothing to compile: {compiled.WHY_NOT}")
+        return 0
+    dims = (2,) if args.planar else (2, 3)
+    label = " and ".join(f"{d}D" for d in dims)
+    print(f"inerter: compiling the engine's {label} kernels for this machine where the cache lacks them "
+          f"(once per version of the kernels; about {sum(compiled.AOT_SECONDS[d] for d in dims)} s on 2 "
+          f"cores)...", file=sys.stderr, flush=True)
+    compiled.NOTICE.enabled = False                 # said once here, not per kernel
+    before = compiled.NOTICE.seconds
+    try:
+        seconds = warm_up(spatial=not args.planar)
+    finally:
+        compiled.NOTICE.enabled = True
+    fresh = compiled.NOTICE.seconds > before        # some kernel was not in the cache
+    print(f"inerter: ... done in {seconds:.0f} s" + ("" if fresh else " (all were in the cache)"), file=sys.stderr)
+    print(f"{label} kernels {'compiled' if fresh else 'loaded'} in {seconds:.1f} s; cache: "
+          f"{Path(compiled._k.__file__).parent}")
+    return 0
+
+
 #: Subcommands whose arguments their own module parses.
 DELEGATED = {
     "bench": ("studies.bench", "main_bench", "work-precision diagrams: error against the oracle vs CPU time"),
@@ -159,9 +223,10 @@ def build_parser():
         sp.add_argument("--method", default=None)
         sp.add_argument("--rtol", type=float, default=None)
         sp.add_argument("--step", type=float, default=None, help="FMU communication step (s)")
-        sp.add_argument("--path", choices=("numpy", "compiled"), default="numpy",
-                        help="the solver's path: numpy (the readable reference) or compiled (numba kernels "
-                             "and integrator loops; planar scenes, falls back to numpy elsewhere)")
+        sp.add_argument("--path", choices=("numpy", "compiled"), default="compiled",
+                        help="the solver's path: compiled (the default: numba kernels and integrator loops, 2D "
+                             "and 3D; falls back to numpy where it cannot take the scene, Z-X-Z Euler angles) or "
+                             "numpy (the readable reference)")
 
     r = sub.add_parser("run", help="simulate a scene: CSV, summary.json and a PNG")
     r.add_argument("scene")
@@ -186,6 +251,9 @@ def build_parser():
     pp.add_argument("--scenarios", default="scenarios")
     pp.add_argument("--model", choices=("solver", "fmu"), default="solver")
     pp.set_defaults(func=cmd_paper)
+    k = sub.add_parser("compile", help="compile the engine's kernels ahead of time (the set-up does it once)")
+    k.add_argument("--planar", action="store_true", help="only the 2D kernels")
+    k.set_defaults(func=cmd_compile)
     return p
 
 
@@ -197,9 +265,14 @@ def main(argv=None):
         return getattr(importlib.import_module(f"inerter.{module}"), func)(argv[1:])
     args = build_parser().parse_args(argv)
     try:
+        _check_options(args)
         return args.func(args)
     except InerterError as exc:
         print(f"inerter: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:            # an output file that cannot be written
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"inerter: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
 
 

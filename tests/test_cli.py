@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from inerter.cli import main, parse_set
-from conftest import LUMPED, TWO_BAR
+from conftest import LUMPED, SCENARIOS, TWO_BAR
 
 
 def test_run_writes_csv_summary_and_plot(tmp_path, capsys):
@@ -70,3 +70,42 @@ def test_unknown_override_is_a_clear_error(tmp_path, capsys):
     assert main(["run", str(TWO_BAR), "--set", "bb=3", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "bb" in err and "unknown name" in err and "two_bar_2d.toml" in err
+
+
+def test_a_ground_motion_scene_writes_plain_json(tmp_path, capsys):
+    """The braced frame's ground motion is an object in the scene; its summary holds its description."""
+    scene = SCENARIOS / "braced_frame_3d.toml"
+
+    def refuse(constant):
+        raise AssertionError(f"{constant} is not JSON")
+    assert main(["run", str(scene), "--stop-time", "0.05", "--out", str(tmp_path / "run")]) == 0
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text(), parse_constant=refuse)
+    motion = summary["settings"]["effects"]["ground_acceleration"]
+    assert isinstance(motion, str) and "records/synthetic_bidirectional.csv" in motion
+    assert main(["compare", str(scene), "--stop-time", "0.05", "--out", str(tmp_path / "compare")]) == 0
+    runs = json.loads((tmp_path / "compare" / "summary.json").read_text(), parse_constant=refuse)["runs"]
+    assert runs["oracle"]["settings"]["effects"]["ground_acceleration"] == motion
+
+
+@pytest.mark.parametrize("option, value, expected", [
+    ("--stop-time", "-1", "a finite number > 0"),
+    ("--stop-time", "nan", "a finite number > 0"),
+    ("--rtol", "0", "a relative tolerance in [1e-14, 0.1]"),
+    ("--method", "Euler", "one of: DOP853"),
+    ("--step", "0", "a finite number > 0"),
+])
+def test_a_bad_option_is_a_one_line_error_before_anything_runs(tmp_path, capsys, option, value, expected):
+    out = tmp_path / "out"
+    assert main(["run", str(TWO_BAR), option, value, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith(f"inerter: error: {option}: "), err
+    assert value in err and expected in err, err
+    assert not out.exists()
+
+
+def test_an_output_folder_that_cannot_be_made_is_a_one_line_error(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert main(["run", str(TWO_BAR), "--stop-time", "0.1", "--out", str(blocker / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--out" in err and str(blocker / "out") in err, err

@@ -118,7 +118,7 @@ def test_terminals_meeting_stop_the_run_naming_the_elements_and_the_time(method)
     if method == "compiled":
         r = model.simulate(path="compiled", metrics=False)
     else:
-        r = model.simulate(method=method, metrics=False)
+        r = model.simulate(method=method, metrics=False, path="numpy")
     assert time.process_time() - start < 30.0
     assert r.status == "failed"
     assert "terminals" in r.message and "meet" in r.message

@@ -30,9 +30,9 @@ def test_with_inputs_held_the_numpy_stepper_is_the_whole_run(path, method):
     comes from the dense output of the step covering it, as the whole run samples its grid: the
     same steps, and at every point the whole run's state bit for bit."""
     model = inerter.load(path)
-    whole = model.simulate(stop_time=STOP, output_interval=STEP, method=method, metrics=False)
+    whole = model.simulate(stop_time=STOP, output_interval=STEP, method=method, metrics=False, path="numpy")
     assert whole.status == "ok", whole.message
-    st = model.stepper(method=method, stop_time=STOP)
+    st = model.stepper(method=method, stop_time=STOP, path="numpy")
     assert st.path == "numpy"
     for k in range(1, len(whole.time)):
         st.step(whole.time[k])
@@ -47,7 +47,7 @@ def test_the_numpy_stepper_rolls_back_bit_for_bit(path, method):
     set_state, on the same stepper or on a new one, give the same states bit for bit. The step
     force of STEP_FORCE switches inside the repeated steps."""
     model = inerter.load(path)
-    st = model.stepper(method=method, stop_time=1.0)
+    st = model.stepper(method=method, stop_time=1.0, path="numpy")
     for k in range(1, 31):
         st.step(k * STEP)
     blob = st.get_state()
@@ -62,7 +62,7 @@ def test_the_numpy_stepper_rolls_back_bit_for_bit(path, method):
     first = run_on(st)
     st.set_state(blob)
     again = run_on(st)
-    other = model.stepper(method=method, stop_time=1.0)
+    other = model.stepper(method=method, stop_time=1.0, path="numpy")
     other.set_state(blob)
     restored = run_on(other)
     assert np.array_equal(first[0], again[0]) and first[1] == again[1]
@@ -75,8 +75,8 @@ def test_the_numpy_stepper_runs_on_past_its_stop_time(method):
     goes on (restarted at the old bound with the proposed step size). Against a whole run to the
     later time: 1e-9 (m, rad, m/s, quaternion) at the scene's rtol 1e-10."""
     model = inerter.load(SPATIAL)
-    whole = model.simulate(stop_time=2 * STOP, output_interval=STEP, method=method, metrics=False)
-    st = model.stepper(method=method, stop_time=STOP)
+    whole = model.simulate(stop_time=2 * STOP, output_interval=STEP, method=method, metrics=False, path="numpy")
+    st = model.stepper(method=method, stop_time=STOP, path="numpy")
     for k in range(1, len(whole.time)):
         st.step(whole.time[k])
     assert st.time == whole.time[-1]
@@ -90,13 +90,13 @@ def test_an_input_that_changes_restarts_the_numpy_integration_there():
     restart; and the state differs from the run without the change."""
     model = inerter.load(ROOT / "scenarios" / "two_bar_2d_pd.toml")
     name = model.mechanism.input_names[0]
-    held = model.stepper(stop_time=STOP)
-    moved = model.stepper(stop_time=STOP)
+    held = model.stepper(stop_time=STOP, path="numpy")
+    moved = model.stepper(stop_time=STOP, path="numpy")
     for k in range(1, 21):
         held.step(k * STEP)
         moved.step(k * STEP)
     moved.set_input(name, 2.0)
-    replay = model.stepper(stop_time=STOP)
+    replay = model.stepper(stop_time=STOP, path="numpy")
     replay.set_state(moved.get_state())
     for k in range(21, 51):
         held.step(k * STEP)
@@ -112,7 +112,7 @@ def test_a_failed_numpy_step_leaves_the_state_and_fails_again():
     failure drops the running integration, so the retried step restarts from the communication
     point (as on the compiled path) and fails again in the same step."""
     model = inerter.load(TERMINALS_MEET)
-    st = model.stepper(stop_time=2.0)
+    st = model.stepper(stop_time=2.0, path="numpy")
     impact = math.pi * math.sqrt(2) / 4
     k = 1
     while (k + 1) * STEP < impact:

@@ -153,7 +153,7 @@ def test_a_sweep_on_the_compiled_path_equals_the_compiled_runs_one_by_one(tmp_pa
     rows = rows_of(out / "results.csv")
     assert len(rows) == 2 and {r["status"] for r in rows} == {"ok"}
     numpy_keys = {r.key for r in Sweep(LUMPED, [parse_vary("y0=1.2:1.6:2")], {"experiment.rtol": 1e-8},
-                                       stop_time=3.0).runs()}
+                                       stop_time=3.0, path="numpy").runs()}
     assert not numpy_keys & {r["key"] for r in rows}                # the path enters each run's key
     for row in rows:
         alone = inerter.load(LUMPED, **{"experiment.rtol": 1e-8, "y0": float(row["y0"])}).simulate(
@@ -208,7 +208,8 @@ def test_a_sweep_stopped_part_way_resumes_without_recomputing(tmp_path, client):
 
 def test_a_killed_sweep_is_finished_by_running_it_again(tmp_path, address):
     out = tmp_path / "killed"
-    args = [str(LUMPED), "--vary", "y0=1.1:1.8:8", *FAST, "--workers", "2", "--out", str(out), "--no-progress"]
+    runs = 100          # enough that the compiled path's runs (~10 ms each) cannot all end before the kill
+    args = [str(LUMPED), "--vary", f"y0=1.1:1.8:{runs}", *FAST, "--workers", "2", "--out", str(out), "--no-progress"]
     proc = subprocess.Popen([sys.executable, "-c", f"from inerter.studies.sweep import main_sweep; main_sweep({args!r})"],
                             cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     results = out / "results.csv"
@@ -225,12 +226,12 @@ def test_a_killed_sweep_is_finished_by_running_it_again(tmp_path, address):
             pass
         proc.wait()
     done_before = rows_of(results)
-    assert 0 < len(done_before) < 8, "the sweep was not stopped part-way"
+    assert 0 < len(done_before) < runs, "the sweep was not stopped part-way"
     with open(results, "a") as fh:
         fh.write(done_before[0]["key"][:8])                      # as if killed in the middle of a row
     assert main_sweep(args[:-3] + ["--scheduler", address, "--out", str(out), "--no-progress"]) == 0
     rows = rows_of(results)
-    assert len(rows) == 8 and len({r["key"] for r in rows}) == 8
+    assert len(rows) == runs and len({r["key"] for r in rows}) == runs
     assert rows[:len(done_before)] == done_before                 # nothing finished was recomputed
 
 

@@ -20,13 +20,15 @@ The state is y = [q, v] with q̇ = B(q) v (the identity in 2D, the quaternion ra
 Integrators: DOP853 and RK45 with scipy's error control, step-size rule and dense output (the
 same steps as the numpy path at the same tolerances), and RK4 with a fixed step, each in one
 compiled loop that writes the samples at the output grid, restarted at each discontinuity of the
-right-hand side (a step force's switch, a ground record's sample). Radau, BDF and LSODA, and the
-``projection`` constraint treatment, run scipy's integrators (``inerter.engine.simulation.integrate``)
-on the compiled right-hand side.
+right-hand side (a step force's switch, a ground record's sample); on request the loop keeps
+every step's dense output (:class:`DenseOutput`, the metrics' interpolant). Radau, BDF and LSODA,
+and the ``projection`` constraint treatment, run scipy's integrators
+(``inerter.engine.simulation.integrate``) on the compiled right-hand side.
 
-numba is optional (``pip install numba``). Without it, :data:`AVAILABLE` is False,
-:func:`compile_mechanism` returns a kernel that calls the numpy path and
-:func:`integrate_compiled` runs :func:`inerter.engine.simulation.integrate`.
+This is the default path (``Model.simulate``, ``Model.stepper``); numba is a dependency of the
+package. Where it cannot be imported, :data:`AVAILABLE` is False, :func:`compile_mechanism`
+returns a kernel that calls the numpy path and :func:`integrate_compiled` runs
+:func:`inerter.engine.simulation.integrate`, saying so in ``run.extra["path"]``.
 """
 from __future__ import annotations
 
@@ -36,17 +38,16 @@ import os
 import pickle
 import sys
 import tempfile
+import threading
 import time as _time
 from pathlib import Path
 
 import numpy as np
 
 from inerter.common.errors import SimulationError
-from inerter.engine.simulation import Stepper, jumps
-from inerter import elements
+from inerter.engine.simulation import Run, Stepper, jumps
 from inerter.elements import layout
-from inerter.engine.tables import (_by_name, adds_mass, element_row, force_rows, meet_limits,
-                                    rotational_row)
+from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
 
 
@@ -112,11 +113,130 @@ def _import_kernels():
     return module
 
 
+# ------------------------------------------------------------------------------------------------
+# First use: saying so while the kernels compile
+# ------------------------------------------------------------------------------------------------
+#: Seconds a run's first compilation of the kernels takes on a 2-core machine, by dimension (its
+#: integrator loop and outputs, docs/benchmarks/first_use.md), for the notice.
+COMPILE_SECONDS = {2: 30, 3: 50}
+#: Seconds ``inerter compile`` takes on a 2-core machine with an empty cache, by dimension (every kernel:
+#: the three integrator loops, outputs, co-simulation steps and the FMU's native step).
+AOT_SECONDS = {2: 55, 3: 80}
+#: The kernels entered from Python, in the notice's words (others by their own name).
+_WHAT = {"integrate_rk": "the DOP853/RK45 loop", "integrate_rk4": "the RK4 loop",
+         "signal_history": "the outputs", "signal_column": "the outputs", "dense_signal": "the outputs",
+         "dense_states": "the dense output",
+         "signal_values": "the outputs", "max_residual": "the constraint residual",
+         "cosim_step": "the co-simulation step", "rk4_cosim_step": "the RK4 co-simulation step",
+         "native_step": "the FMU's native step", "native_step3": "the FMU's native step"}
+
+
+class CompileNotice:
+    """Says on stderr while the kernels compile, so that a first run does not look hung.
+
+    numba's ``numba:compile`` event fires only where a kernel is not found in the on-disk cache
+    (:func:`_import_kernels`), so a warm process says nothing and pays nothing. Per outermost
+    compilation of a kernel (the kernels it calls compile inside it): the first one of a dimension
+    in the process is announced at once, with what the dimension's first compilation takes
+    (:data:`COMPILE_SECONDS`); any other is announced once it has taken 2 s. An announced one says
+    "done" with its time. ``enabled = False`` silences it (``inerter compile`` says it once)."""
+
+    LATE = 2.0
+
+    def __init__(self, stream=None):
+        self.enabled = True
+        self.stream = stream                # None: sys.stderr at the time of writing
+        self.seconds = 0.0                  # time spent in outermost compilations of the kernels
+        self._depth = 0
+        self._announced = set()             # dimensions announced in this process
+        self._lock = threading.Lock()
+        self._timer = None
+        self._start = 0.0
+        self._loud = False
+
+    def _say(self, text):
+        stream = self.stream or sys.stderr
+        print(f"inerter: {text}", file=stream, flush=True)
+
+    @staticmethod
+    def _ours(dispatcher) -> bool:
+        module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
+        return module.startswith("inerter")       # the kernels, their copy (inerter_kernels_<hash>)
+
+    @staticmethod
+    def dimension(args) -> int | None:
+        """2 or 3 from the type of a kernel's P among `args` (numba types), None without one."""
+        from numba.core import types
+        for a in args:
+            if (isinstance(a, types.BaseTuple) and len(a) >= len(_k.PARAMS)
+                    and all(isinstance(x, types.Array) for x in a)):
+                return 3 if _k.is_spatial(a) else 2
+        return None
+
+    def on_start(self, event):
+        self._depth += 1
+        if self._depth > 1 or not self._ours(event.data["dispatcher"]):
+            return
+        self._start = _time.perf_counter()
+        self._loud = False
+        if not self.enabled:
+            return
+        dim = self.dimension(event.data["args"])
+        name = event.data["dispatcher"].py_func.__name__
+        if dim is not None and dim not in self._announced:
+            self._announced.add(dim)
+            self._loud = True
+            self._say(f"compiling the engine's {dim}D kernels for this machine (once; about "
+                      f"{COMPILE_SECONDS[dim]} s on 2 cores, later runs load them from the cache)...")
+        else:
+            label = f"{dim}D kernels" if dim else "kernels"
+            self._timer = threading.Timer(self.LATE, self._late, (f"{label}: {_WHAT.get(name, name)}",))
+            self._timer.daemon = True
+            self._timer.start()
+
+    def _late(self, what):
+        with self._lock:
+            if threading.current_thread() is not self._timer:      # that compilation has ended
+                return
+            self._loud = True
+            self._say(f"compiling the engine's {what} (once for this machine)...")
+
+    def on_end(self, event):
+        self._depth -= 1
+        if self._depth or not self._ours(event.data["dispatcher"]):
+            return
+        seconds = _time.perf_counter() - self._start
+        self.seconds += seconds
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+            if self._loud:
+                self._say(f"... done in {seconds:.0f} s")
+            self._loud = False
+
+
+#: The process's notice (None without numba).
+NOTICE = None
+
+
+def _install_notice():
+    global NOTICE
+    from numba.core import event
+
+    class _Listener(CompileNotice, event.Listener):
+        pass
+
+    NOTICE = _Listener()
+    event.register("numba:compile", NOTICE)
+
+
 try:
     import numba  # noqa: F401
     _k = _import_kernels()
     AVAILABLE = True
     WHY_NOT = ""
+    _install_notice()
 except ImportError as exc:          # numba missing (or unusable): the numpy path is used
     _k = None
     AVAILABLE = False
@@ -189,26 +309,17 @@ def flatten(mech) -> dict:
             jt_int.append((_k_code("PRISMATIC"), a, b))
             jt_real.append((-float(axis[1]), float(axis[0]), float(phi0)))
 
-    mech_elements = _by_name(getattr(mech, "elements", []))
-    el_int, el_real, rot_int, rot_real, el_names, rot_names = [], [], [], [], [], []
-    limits = meet_limits(mech, scene.elements.values())
-    for e in scene.elements.values():
-        me = mech_elements.get(e.name)
-        if not elements.translational(e.type):
-            ia, ib = angle_index(e.body_a), angle_index(e.body_b)
-            free = getattr(me, "free_angle", None)
-            if free is None:
-                free = e.free_length if e.free_length is not None else \
-                    (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
-            row_int, row_real = rotational_row(e, ia, ib, free)
-            rot_int.append(row_int)
-            rot_real.append(row_real)
-            rot_names.append(e.name)
-            continue
-        row_int, row_real = element_row(e, me, pidx, scene.centripetal, limits[e.name])
-        el_int.append(row_int)
-        el_real.append(row_real)
-        el_names.append(e.name)
+    def rotational(e, me):          # bodies' angle indices; φ0 from the mechanism's element
+        ia, ib = angle_index(e.body_a), angle_index(e.body_b)
+        free = getattr(me, "free_angle", None)
+        if free is None:
+            free = e.free_length if e.free_length is not None else \
+                (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
+        return ia, ib, free, ()
+
+    tables = element_tables(mech, pidx, rotational)
+    el_int, el_real, el_names = tables["el_int"], tables["el_real"], tables["el_names"]
+    rot_int, rot_real, rot_names = tables["rot_int"], tables["rot_real"], tables["rot_names"]
 
     fa_int, fa_real, pd_int, pd_real, in_int = force_rows(scene, pidx, 2)
 
@@ -346,6 +457,8 @@ class Kernel:
         self.q0 = np.asarray(mech.q0, dtype=float)
         self.v0 = np.asarray(mech.v0, dtype=float)
         self.input_names = list(getattr(mech, "input_names", []))
+        self._layout = self._signal_index = None     # signal_layout and its index, once asked for
+        self._read_cache = {}
 
     @property
     def band(self):
@@ -384,6 +497,74 @@ class Kernel:
 
     def constraint_residual(self, q) -> float:
         return float(_k.constraint_residual(np.ascontiguousarray(q, dtype=float), self.params)) if self.m else 0.0
+
+    def signal_index(self, name) -> int | None:
+        """The position of signal `name` in the kernel's signal layout (None: not one of them)."""
+        if self._signal_index is None:
+            self._layout = signal_layout(self.flat)
+            self._signal_index = {n: i for i, n in enumerate(self._layout)}
+        return self._signal_index.get(name)
+
+    def _reads(self, index):
+        """:meth:`signal_reads`, once per signal."""
+        if index not in self._read_cache:
+            self._read_cache[index] = self.signal_reads(index)
+        return self._read_cache[index]
+
+    def signal_reads(self, index):
+        """(needs the accelerations, the state components it reads) of the signal at `index`: a
+        point's coordinate reads its body's coordinates (and velocities, for a velocity); an
+        element's force needs q̈ where its law has an inertance; any other signal reads the whole
+        state."""
+        flat = self.flat
+        width = 2 * flat["dim"]
+        ny = self.nq + self.n
+        self.signal_index("")
+        if index < width * len(flat["point_names"]):
+            b, c, d = int(flat["pbody"][index // width]), index % width, flat["dim"]
+            if b < 0:
+                return False, np.zeros(0, dtype=np.int64)
+            # r[c] = R[c] + (A ū)[c] reads R[c] and the orientation (θ; the quaternion); ṙ[c] =
+            # Ṙ[c] + (A (ω × ū))[c] reads Ṙ[c], the orientation and the angular velocity
+            nqb, nvb = (3, 3) if d == 2 else (7, 6)
+            orientation = [nqb * b + j for j in range(d if d == 3 else 2, nqb)]
+            if c < d:
+                comps = [nqb * b + c] + orientation
+            else:
+                omega = [self.nq + nvb * b + j for j in range(d if d == 3 else 2, nvb)]
+                comps = orientation + [self.nq + nvb * b + c - d] + omega
+            return False, np.array(comps, dtype=np.int64)
+        name = self._layout[index]
+        need = False
+        for e, (row_int, row_real) in enumerate(zip(flat["el_int"], flat["el_real"])):
+            if name == f"{flat['el_names'][e]}.f":
+                need = adds_mass(row_int, row_real)
+        return need, np.arange(ny, dtype=np.int64)
+
+    def signal_column(self, index, times, states, inputs=None, alpha=0.0):
+        """(values, k): the signal at `index` at each sample of a history (rows [q, v]), up to the
+        first sample k where it cannot be evaluated (k = len(times) when it can at all), with the
+        values signal_history gives."""
+        need, _ = self._reads(index)
+        out = np.empty(len(times))
+        st, k = _k.signal_column(np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(states, dtype=float),
+                                 self._inputs(inputs), float(alpha), int(index), need, self.params,
+                                 np.empty(len(self._layout)), out)
+        return out[:k], int(k)
+
+    def dense_signal(self, sol, index, times, inputs=None, alpha=0.0):
+        """(values, k): the signal at `index` at `times` on a dense output, up to the first time k
+        where it cannot be evaluated: a :class:`DenseOutput` in one compiled call (only the state
+        components the signal reads), another (scipy's OdeSolution) through its states."""
+        times = np.ascontiguousarray(times, dtype=float).reshape(-1)
+        if not isinstance(sol, DenseOutput):
+            return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha)
+        need, comps = self._reads(index)
+        out = np.empty(len(times))
+        st, k = _k.dense_signal(sol.method_code, sol.nodes, sol.coeffs, sol.count, times, comps,
+                                self._inputs(inputs), float(alpha), int(index), need, self.params,
+                                np.empty(len(self._layout)), out)
+        return out[:k], int(k)
 
     def signal_order(self, signals):
         """Indices taking the kernel's signal layout to the order of `signals.names` (None when the
@@ -524,11 +705,16 @@ def _kernel_for(mech):
     return kernel
 
 
-def integrate_compiled(mech, settings, inputs=None):
+def integrate_compiled(mech, settings, inputs=None, dense=False):
     """Integrate like :func:`inerter.engine.simulation.integrate`, in one compiled loop for DOP853, RK45
-    and RK4 with Baumgarte stabilisation (``Run.dense`` is None: samples at the output grid only);
-    other methods and ``projection`` use scipy's integrators on the compiled right-hand side."""
-    from inerter.engine.simulation import Run, integrate
+    and RK4 with Baumgarte stabilisation; other methods and ``projection`` use scipy's integrators
+    on the compiled right-hand side (and their dense output).
+
+    `dense`: keep the dense output of every accepted step of DOP853 and RK45 (scipy's polynomials,
+    the same the samples are taken from), as ``Run.dense``, a :class:`DenseOutput`; without it,
+    or with RK4 (fixed step: metrics use a cubic spline through the samples), ``Run.dense`` is None.
+    The samples are the same either way."""
+    from inerter.engine.simulation import integrate
 
     why = unsupported(mech)
     if why:
@@ -558,6 +744,11 @@ def integrate_compiled(mech, settings, inputs=None):
     steps = evals = 0
     h, t0, k, status, t_reached = 0.0, 0.0, 1, 0, 0.0
     tables = None if settings.method == "RK4" else _tables(settings.method)
+    keep = None
+    if dense and tables is not None:          # (nodes, coeffs, kept) of kernels.rk_advance, grown there
+        rows = 8 if settings.method == "DOP853" else 1 + tables[6].shape[1]
+        room = 256
+        keep = (np.empty(room + 1), np.empty((room, rows, len(y0))), np.zeros(1, dtype=np.int64))
     start = _time.process_time()
     y = y0
     for t1 in ends:
@@ -573,10 +764,10 @@ def integrate_compiled(mech, settings, inputs=None):
                 kernel.params, t1 if t1 in switches else 0.0)
         else:
             A, B, C, E, E3, D, Pm = tables
-            status, done, s_steps, s_evals, t_reached, h = _k.integrate_rk(
+            status, done, s_steps, s_evals, t_reached, h, keep = _k.integrate_rk(
                 _RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol), float(settings.atol), 0.0,
                 int(settings.max_steps) - steps, inp, alpha, kernel.params, A, B, C, E, E3, D, Pm,
-                _monitor(settings.method), t1 if t1 in switches else 0.0)
+                _monitor(settings.method), t1 if t1 in switches else 0.0, keep)
         steps += int(s_steps)
         evals += int(s_evals)
         written = min(done - 1, last - k)                         # grid samples among seg_out[1:done]
@@ -587,17 +778,60 @@ def integrate_compiled(mech, settings, inputs=None):
         y, t0 = seg_out[-1].copy(), t1
     cpu = _time.process_time() - start
     states = out[:k].copy()
-    max_drift = float(_k.max_residual(states, kernel.params)) if kernel.m else 0.0
     if status == 0:
         message = "completed"
     else:
         why = failure_text(kernel, status, settings.method, h if settings.method != "RK4" else settings.step,
-                           states[-1], grid[k - 1])
+                           states[-1], grid[k - 1], int(settings.max_steps))
         message = f"at t = {t_reached:.6g} s: the {settings.method} integrator failed: {why}"
-    run = Run(grid[:k].copy(), states, None, "ok" if status == 0 else "failed", message, int(steps), int(evals),
-              cpu, max_drift)
+    sol = None
+    if keep is not None and keep[2][0] > 0:
+        sol = DenseOutput(_RK_CODE[settings.method], keep[0], keep[1], int(keep[2][0]))
+    run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
+                      int(evals), cpu, None)
     run.extra.update(path="compiled", kernel=kernel)
     return run
+
+
+class CompiledRun(Run):
+    """A :class:`~inerter.engine.simulation.Run` of the compiled loop, whose ``max_drift`` (the
+    largest constraint residual over the samples) is computed when first read: a run whose caller
+    never reads it does not pay for it."""
+
+    @property
+    def max_drift(self) -> float:
+        if self._max_drift is None:
+            kernel = self.extra["kernel"]
+            self._max_drift = float(_k.max_residual(self.states, kernel.params)) if kernel.m else 0.0
+        return self._max_drift
+
+    @max_drift.setter
+    def max_drift(self, value):
+        self._max_drift = value
+
+
+class DenseOutput:
+    """The dense output of a compiled DOP853 or RK45 run (``Run.dense``): every accepted step's
+    polynomial with scipy's formulas, kept by :func:`~inerter.engine.kernels.rk_advance` (steps of
+    every segment between discontinuities, one after the other). ``sol(t)`` gives the states at t
+    as scipy's ``OdeSolution`` does: shape (ny,) for a scalar t, (ny, len(t)) for an array,
+    evaluated in compiled code (:func:`~inerter.engine.kernels.dense_states`). ``sol.ts``: the
+    nodes (the steps' ends)."""
+
+    def __init__(self, method_code, nodes, coeffs, count):
+        self.method_code = int(method_code)          # 0 DOP853, 1 RK45 (kernels' codes)
+        self.nodes, self.coeffs, self.count = nodes, coeffs, int(count)
+        self.ts = nodes[:count + 1]
+        self.t_min, self.t_max = float(self.ts[0]), float(self.ts[-1])
+        self.n = coeffs.shape[2]
+
+    def __call__(self, t):
+        times = np.asarray(t, dtype=float)
+        scalar = times.ndim == 0
+        times = np.ascontiguousarray(times.reshape(-1))
+        out = np.empty((self.n, len(times)))
+        _k.dense_states(self.method_code, self.nodes, self.coeffs, self.count, times, out)
+        return out[:, 0] if scalar else out
 
 
 class CompiledStepper(Stepper):
@@ -691,7 +925,7 @@ class CompiledStepper(Stepper):
             max_steps, self._rk_inputs, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm, self._monitor,
             self._work, self._need_acc, self._raw, order, values, self._jumps)
         if status:
-            why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk[1], hdr[_k.RK_T])
+            why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk[1], hdr[_k.RK_T], int(s.max_steps))
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(hdr[_k.RK_T]))
         self._rk = rk
         self._input_moved = False
@@ -711,7 +945,7 @@ class CompiledStepper(Stepper):
             y, float(self.time), t_end, self._jumps, np.zeros(2), np.empty((2, len(y))), float(s.step),
             int(s.max_steps), kernel._inputs(self.inputs.copy()), float(s.alpha), kernel.params)
         if status:
-            why = failure_text(kernel, status, s.method, s.step, y, t_fail)
+            why = failure_text(kernel, status, s.method, s.step, y, t_fail, int(s.max_steps))
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
         self.steps += int(steps)
         if not np.isfinite(y).all():
@@ -855,12 +1089,16 @@ class CompiledStepper(Stepper):
         self._values = None
 
 
-def failure_text(kernel, status, method, h, y_last, t_last) -> str:
+def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> str:
     """What a compiled loop's failure `status` means, in the words of the numpy path: the step size
-    `h` it ended with; for terminals meeting, the element whose terminals were closest in the last
-    good state `y_last` (at `t_last`), the loop having stopped within a step of it."""
+    `h` it ended with (and the step budget `max_steps` it ran out of); for terminals meeting, the
+    element whose terminals were closest in the last good state `y_last` (at `t_last`), the loop
+    having stopped within a step of it."""
     from inerter.engine import simulation as sim
     text = _STATUS_TEXT[status]
+    if status == 1 and max_steps is not None:
+        return (f"more than max_steps = {max_steps} integrator steps (step size {h:.3g} s): the scene may be "
+                f"stiff for {method}; try method = \"Radau\" or \"BDF\"")
     if status == 6:
         return text.format(method=method, h=h, hits=sim.STIFFNESS_HITS)
     if status == 7:

@@ -1394,6 +1394,9 @@ def rk_stages(A):
 RK_T, RK_H, RK_T_PREV, RK_H_LAST, RK_DENSE, RK_STEPS, RK_EVALS, RK_HITS, RK_CALM, RK_SMALL, RK_STARTED, \
     RK_JUMP, RK_TOTAL = range(13)
 RK_HEADER = 13
+# rk_advance's status when the arrays keeping every step's dense output are full (integrate_rk
+# gives them room and resumes; never returned further).
+DENSE_FULL = -1
 
 
 @njit(cache=True, inline="always")
@@ -1439,9 +1442,97 @@ def _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out):
             out[k, i] = y_prev[i] + h * val
 
 
+@njit(cache=True, inline="always")
+def _keep_step(keep, t, t_new, y_start, dense):
+    """Append the accepted step from t to t_new (solution `y_start` at its start, dense-output
+    coefficients `dense`) to `keep` = (nodes, coeffs, kept), see :func:`rk_advance`."""
+    nodes, coeffs, kept = keep
+    i = kept[0]
+    nodes[i] = t
+    nodes[i + 1] = t_new
+    for j in range(y_start.shape[0]):
+        coeffs[i, 0, j] = y_start[j]
+    for r in range(1, coeffs.shape[1]):
+        for j in range(y_start.shape[0]):
+            coeffs[i, r, j] = dense[r - 1, j]
+    kept[0] = i + 1
+
+
+@njit(cache=True, inline="always")
+def _step_of(nodes, count, t, i):
+    """The step of a kept dense output (`count` steps from `nodes`) whose polynomial gives y(t), as
+    scipy's OdeSolution chooses it: a node belongs to the step ending there; before the first
+    node the first step, after the last the last. `i`: a guess (the previous time's step)."""
+    if (i == 0 or nodes[i] < t) and (i == count - 1 or t <= nodes[i + 1]):
+        return i
+    if i + 1 < count and nodes[i + 1] < t and (i + 1 == count - 1 or t <= nodes[i + 2]):
+        return i + 1
+    lo = 0
+    hi = count + 1                   # the first node >= t, by bisection over nodes[:count + 1]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if nodes[mid] < t:
+            lo = mid + 1
+        else:
+            hi = mid
+    return min(max(lo - 1, 0), count - 1)
+
+
+@njit(cache=True, inline="always")
+def _dop853_at(nodes, coeffs, i, t, comps, Y, row):
+    """Y[row, j] = y_j(t) for j in `comps` from DOP853's polynomial of kept step i, as
+    :func:`_rk_sample` evaluates it (its loop unrolled: the same operations)."""
+    t0 = nodes[i]
+    x = (t - t0) / (nodes[i + 1] - t0)
+    xm = 1.0 - x
+    for c in range(comps.shape[0]):
+        j = comps[c]
+        val = (0.0 + coeffs[i, 7, j]) * x
+        val = (val + coeffs[i, 6, j]) * xm
+        val = (val + coeffs[i, 5, j]) * x
+        val = (val + coeffs[i, 4, j]) * xm
+        val = (val + coeffs[i, 3, j]) * x
+        val = (val + coeffs[i, 2, j]) * xm
+        val = (val + coeffs[i, 1, j]) * x
+        Y[row, j] = val + coeffs[i, 0, j]
+
+
+@njit(cache=True, inline="always")
+def _rk45_at(nodes, coeffs, i, t, comps, Y, row):
+    """Y[row, j] = y_j(t) for j in `comps` from RK45's polynomial of kept step i, as
+    :func:`_rk_sample` evaluates it."""
+    t0 = nodes[i]
+    h = nodes[i + 1] - t0
+    x = (t - t0) / h
+    for c in range(comps.shape[0]):
+        j = comps[c]
+        val = 0.0
+        p = 1.0
+        for r in range(1, coeffs.shape[1]):
+            p *= x
+            val += coeffs[i, r, j] * p
+        Y[row, j] = coeffs[i, 0, j] + h * val
+
+
+@njit(cache=True, inline="always")
+def _dense_block(method, nodes, coeffs, count, times, start, end, comps, Y, i):
+    """Y[k − start, j] = y_j(times[k]) for start ≤ k < end and j in `comps`, from the kept dense
+    output of :func:`rk_advance` (`count` steps), in the steps :func:`_step_of` chooses (`i`: a
+    guess for the first). Returns the step of the last time."""
+    if method == 0:
+        for k in range(start, end):
+            i = _step_of(nodes, count, times[k], i)
+            _dop853_at(nodes, coeffs, i, times[k], comps, Y, k - start)
+    else:
+        for k in range(start, end):
+            i = _step_of(nodes, count, times[k], i)
+            _rk45_at(nodes, coeffs, i, times[k], comps, Y, k - start)
+    return i
+
+
 @njit(cache=True)
 def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-               A, B, C, E, E3, Dm, Pm, monitor, work):
+               A, B, C, E, E3, Dm, Pm, monitor, work, keep=None):
     """Advance an adaptive explicit Runge-Kutta integration until its last step covers the last of
     the increasing times `ts`, writing out[k] = y(ts[k]) for k ≥ k0 as the steps cover them: the step's own
     solution at a node (within 1e-12·max(1 s, t)), its dense output inside a step. Steps are
@@ -1465,6 +1556,12 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
 
     method 0: DOP853 (A, B, C, E5 = E, E3, D = Dm as in scipy), method 1: RK45 (A, B, C, E, P = Pm).
     `work`: scratch from :func:`work_arrays` with rk_stages(A) rows of stages.
+    `keep`: None, or (nodes, coeffs, kept) to keep every accepted step's dense output, as scipy's
+    ``dense_output=True`` does (DOP853's three extra stages are then evaluated at every step): step
+    i = kept[0] spans nodes[i] to nodes[i + 1], coeffs[i, 0] is the solution at its start and
+    coeffs[i, 1:] its coefficients (:func:`_dop853_at`, :func:`_rk45_at`). When coeffs is full the
+    call returns DENSE_FULL before the next step, resumable once the caller gave it room
+    (:func:`integrate_rk`). Keeping them changes neither the steps nor the samples.
     Returns (status, the first k not written); on failure y, f and the last step's data are those of
     the last good node."""
     AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
@@ -1506,6 +1603,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         k += 1
     gaps, z = terminal_gaps(y, P)
     while k < nts and status == OK:
+        if keep is not None:
+            if keep[2][0] >= keep[1].shape[0]:
+                status = DENSE_FULL
+                break
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         if h_abs < min_step:
             h_abs = min_step
@@ -1638,9 +1739,12 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         else:
             small = 0
         # The step is accepted: it becomes the last step, with its dense output where a sample lies
-        # inside it (DOP853's extra stages are evaluated only then).
+        # inside it (DOP853's extra stages are evaluated only then) or where every step's is kept.
         hdr[RK_DENSE] = 0.0
-        if ts[k] <= t_new + 1e-12 * max(1.0, t_new) and ts[k] < t_new:
+        inside = ts[k] <= t_new + 1e-12 * max(1.0, t_new) and ts[k] < t_new
+        if keep is not None:
+            inside = True
+        if inside:
             if method == 0:
                 for s in range(n_stages + 1, A.shape[0]):
                     for i in range(ny):
@@ -1679,6 +1783,8 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
             f[i] = f_new[i]
         hdr[RK_T_PREV] = t
         hdr[RK_H_LAST] = h
+        if keep is not None:
+            _keep_step(keep, t, t_new, y_prev, dense)
         t = t_new
         while k < nts and ts[k] <= t + 1e-12 * max(1.0, t):
             _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
@@ -1698,11 +1804,13 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
 
 @njit(cache=True)
 def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_steps, inputs, alpha, P,
-                 A, B, C, E, E3, Dm, Pm, monitor, jump):
+                 A, B, C, E, E3, Dm, Pm, monitor, jump, keep=None):
     """One integration from t0 to t_end with :func:`rk_advance`, sampling `out[k] = y(grid[k])` for
-    k ≥ 1 (grid[-1] = t_end). Returns (status, samples written, steps, evaluations, t reached, next
-    step size): the last is the step size the error control proposes after the last accepted step
-    (scipy's ``h_abs``)."""
+    k ≥ 1 (grid[-1] = t_end). `keep`: None, or (nodes, coeffs, kept) of :func:`rk_advance`, to
+    which every step's dense output is appended, the arrays replaced by ones twice as long when
+    full. Returns (status, samples written, steps, evaluations, t reached, next step size, keep):
+    the step size is the one the error control proposes after the last accepted step (scipy's
+    ``h_abs``)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = y0.shape[0]
     hdr = np.zeros(RK_HEADER)
@@ -1714,9 +1822,169 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     y_prev = y0.copy()
     dense = np.zeros((7, ny))
     work = work_arrays(P, ny, rk_stages(A))
-    st, k = rk_advance(method, hdr, y, f, y_prev, dense, grid, out, 1, t_end, rtol, atol, max_steps, inputs,
-                       alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work)
-    return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H]
+    if keep is None:
+        # np.int64(1): a literal k0 would compile rk_advance once more, for the literal
+        st, k = rk_advance(method, hdr, y, f, y_prev, dense, grid, out, np.int64(1), t_end, rtol, atol, max_steps,
+                           inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work)
+        return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H], keep
+    else:
+        nodes, coeffs, kept = keep
+        k = np.int64(1)                 # not a literal: as above
+        while True:
+            # the step budget is the whole integration's, over the calls
+            st, k = rk_advance(method, hdr, y, f, y_prev, dense, grid, out, k, t_end, rtol, atol,
+                               max_steps - int(hdr[RK_STEPS]), inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor,
+                               work, (nodes, coeffs, kept))
+            if st != DENSE_FULL:
+                break
+            room = coeffs.shape[0]
+            size = max(2 * room, 16)
+            more = np.empty((size, coeffs.shape[1], coeffs.shape[2]))
+            more[:room] = coeffs
+            coeffs = more
+            longer = np.empty(size + 1)
+            longer[:room + 1] = nodes
+            nodes = longer
+        return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H], (nodes, coeffs, kept)
+
+
+# ------------------------------------------------------------------------------------------------
+# One output signal along a history or a dense output (metrics, Result.dense): a point's coordinate
+# from that point's kinematics alone, any other signal from signal_values (with the accelerations
+# where that signal needs them); the same values as signal_history's.
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _point_value2(q, v, p, c, P):
+    pbody, ploc = P[1], P[2]
+    rx, ry, vx, vy, ux, uy, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
+    if c == 0:
+        return rx
+    if c == 1:
+        return ry
+    if c == 2:
+        return vx
+    return vy
+
+
+@njit(cache=True, inline="always")
+def _point_value3(q, v, p, c, P):
+    pbody, ploc = P[1], P[2]
+    b = pbody[p]
+    A = _rot(q, b)
+    rx, ry, rz, vx, vy, vz, ax, ay, az = _point3(q, v, b, A, ploc[p, 0], ploc[p, 1], ploc[p, 2])
+    if c == 0:
+        return rx
+    if c == 1:
+        return ry
+    if c == 2:
+        return rz
+    if c == 3:
+        return vx
+    if c == 4:
+        return vy
+    return vz
+
+
+def _point_value_of(q, v, p, c, P):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_point_value_of, inline="always")
+def _point_value_by_dimension(q, v, p, c, P):
+    """Component c of point p's [r, ṙ] (the values signal_values writes for it)."""
+    if is_spatial(P):
+        return lambda q, v, p, c, P: _point_value3(q, v, p, c, P)
+    return lambda q, v, p, c, P: _point_value2(q, v, p, c, P)
+
+
+@njit(cache=True, inline="always")
+def _point_signal(index, P):
+    """(point, component) of the signal at `index` of signal_values' layout, (-1, 0) where it is not
+    a point's coordinate."""
+    width = 2 * P[16][5]
+    if index < width * P[1].shape[0]:
+        return index // width, index % width
+    return -1, 0
+
+
+@njit(cache=True)
+def signal_column(times, states, inputs, alpha, index, need_acc, P, raw, out):
+    """out[k] = the signal at `index` of signal_values' layout at each sample of a history (rows
+    [q, v]); accelerations from Eq. (33) only when `need_acc`. `raw`: scratch of that layout's
+    length. Returns (status, the first sample where it could not be evaluated)."""
+    P = _unowned(P)                 # entered from Python (_unowned)
+    ny = states.shape[1]
+    nq = P[16][6]
+    y = np.empty(ny)
+    q = y[:nq]
+    v = y[nq:]
+    work = work_arrays(P, ny, 1)
+    point, c = _point_signal(index, P)
+    for k in range(states.shape[0]):
+        for j in range(ny):
+            y[j] = states[k, j]
+        if point >= 0:
+            out[k] = _point_value_of(q, v, point, c, P)
+        else:
+            st = _signals_at(times[k], y, inputs, alpha, need_acc, P, work, raw)
+            if st != OK:
+                return st, k
+            out[k] = raw[index]
+    return OK, states.shape[0]
+
+
+#: Times a dense-output signal is evaluated at in one block: their states first, then the signal
+#: at each (two loops without a dependence from one time to the next).
+DENSE_BLOCK = 256
+
+
+@njit(cache=True)
+def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, index, need_acc, P, raw, out):
+    """out[k] = the signal at `index` of signal_values' layout at times[k], on the state from a kept
+    dense output (:func:`_dense_block`, only the components `comps` the signal reads). Returns
+    (status, the first time where it could not be evaluated)."""
+    P = _unowned(P)                 # entered from Python (_unowned)
+    ny = coeffs.shape[2]
+    nq = P[16][6]
+    block = np.zeros((DENSE_BLOCK, ny))
+    y = np.zeros(ny)
+    q = y[:nq]
+    v = y[nq:]
+    work = work_arrays(P, ny, 1)
+    point, c = _point_signal(index, P)
+    n = times.shape[0]
+    i = 0
+    for start in range(0, n, DENSE_BLOCK):
+        end = min(n, start + DENSE_BLOCK)
+        i = _dense_block(method, nodes, coeffs, count, times, start, end, comps, block, i)
+        for k in range(start, end):
+            for m in range(comps.shape[0]):
+                y[comps[m]] = block[k - start, comps[m]]
+            if point >= 0:
+                out[k] = _point_value_of(q, v, point, c, P)
+            else:
+                st = _signals_at(times[k], y, inputs, alpha, need_acc, P, work, raw)
+                if st != OK:
+                    return st, k
+                out[k] = raw[index]
+    return OK, n
+
+
+@njit(cache=True)
+def dense_states(method, nodes, coeffs, count, times, out):
+    """out[:, k] = y(times[k]) from a kept dense output (:func:`rk_advance`, `count` steps), as
+    scipy's ``OdeSolution(times)``: one column per time."""
+    ny = coeffs.shape[2]
+    comps = np.arange(ny)
+    block = np.empty((DENSE_BLOCK, ny))
+    n = times.shape[0]
+    i = 0
+    for start in range(0, n, DENSE_BLOCK):
+        end = min(n, start + DENSE_BLOCK)
+        i = _dense_block(method, nodes, coeffs, count, times, start, end, comps, block, i)
+        for k in range(start, end):
+            for j in range(ny):
+                out[j, k] = block[k - start, j]
 
 
 @njit(cache=True)
@@ -1726,8 +1994,8 @@ def cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, t_bound, rtol, atol, max
     (out[0] = y there), then every output signal there: `raw` in the layout of
     :func:`signal_values`, `values[i] = raw[order[i]]`. Returns (integrator status, signal status);
     NOT_FINITE where the state is not finite."""
-    st, k = rk_advance(method, hdr, y, f, y_prev, dense, ts, out, 0, t_bound, rtol, atol, max_steps, inputs,
-                       alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work)
+    st, k = rk_advance(method, hdr, y, f, y_prev, dense, ts, out, np.int64(0), t_bound, rtol, atol, max_steps,
+                       inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work)     # np.int64: as integrate_rk
     if st != OK:
         return st, OK
     y_out = out[0]

@@ -179,7 +179,10 @@ def _step(solver, method):
 
 @dataclass
 class Run:
-    """What :func:`integrate` produced: samples, the solver's dense output, and how it ended."""
+    """What :func:`integrate` produced: samples, the solver's dense output, and how it ended.
+    ``dense(t)``: the states at t, shape (len(y),) for a scalar t and (len(y), len(t)) for an
+    array (scipy's OdeSolution here; the compiled loop's :class:`~inerter.engine.compiled.DenseOutput`
+    on the compiled path, None where it kept none)."""
     time: np.ndarray
     states: np.ndarray              # (len(time), 2n)
     dense: OdeSolution | None

@@ -83,7 +83,7 @@ def scene_path(study: Study, scenarios=None) -> Path:
 
 
 def make_sweep(study: Study, scenarios=None, points=None, span=None, fixed=None, model="solver",
-               stop_time=None, step=None, path="numpy") -> Sweep:
+               stop_time=None, step=None, path="compiled") -> Sweep:
     n = points or study.points
     start, stop = span or (study.start, study.stop)
     _, xs = parse_vary(f"{study.x}={start}:{stop}:{n}")

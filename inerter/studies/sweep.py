@@ -158,7 +158,7 @@ class Sweep:
     model: str = "solver"
     stop_time: float | None = None
     step: float | None = None            # FMU communication step (--model fmu)
-    path: str = "numpy"                  # the solver's path (--model solver): numpy or compiled
+    path: str = "compiled"               # the solver's path (--model solver): compiled or numpy
 
     def __post_init__(self):
         from inerter.api import load
@@ -841,8 +841,9 @@ def add_run_arguments(p: argparse.ArgumentParser):
                    help="fix a parameter, effects.NAME or experiment.NAME for every run (repeatable)")
     p.add_argument("--stop-time", type=float, default=None, help="stop time of every run (s)")
     p.add_argument("--step", type=float, default=None, help="FMU communication step (s), with --model fmu")
-    p.add_argument("--path", choices=PATHS, default="numpy",
-                   help="with --model solver: the numpy path (default) or the compiled one (numba kernels)")
+    p.add_argument("--path", choices=PATHS, default="compiled",
+                   help="with --model solver: the compiled path (default: numba kernels and integrator loops) "
+                        "or the numpy one (the readable reference)")
     p.add_argument("--max-runs", type=int, default=None,
                    help="stop after this many new runs; run the same command again to go on")
     p.add_argument("--retry-failed", action="store_true", help="run the failed runs of results.csv again")

@@ -27,8 +27,16 @@ from inerter.elements.layout import (AXIS, BODY_A, BODY_B, KIND, MEET_LIMIT, POI
 REVOLUTE, PRISMATIC = 0, 1
 # Time functions of applied forces.
 F_CONSTANT, F_SINE, F_STEP = 0, 1, 2
-# Ground motion (dims[7]): none, a record (linearly interpolated, zero outside), a sine, FMU inputs.
+# Ground motion (dims[GROUND_MODE]): none, a record (linearly interpolated, zero outside), a sine, FMU inputs.
 GROUND_NONE, GROUND_RECORD, GROUND_SINE, GROUND_INPUT = 0, 1, 2, 3
+# The slots of P, the scene's tables (PARAMS below, in this order; a 3D scene's P has one more,
+# ``spatial``), by name: numba takes these module constants as literal indices.
+(MASS, PBODY, PLOC, EL_INT, EL_REAL, ROT_INT, ROT_REAL, JT_INT, JT_REAL, FA_INT, FA_REAL, PD_INT, PD_REAL,
+ IN_INT, GRAVITY, PERM, DIMS, GROUND_T, GROUND_A) = range(19)
+# The entries of P[DIMS] (Kernel.__init__ writes them): velocity coordinates n, constraint rows m,
+# the band's lower and upper widths, whether gravity is declared, the dimension, coordinates nq,
+# the ground motion's mode and the offset of its inputs among the held inputs.
+N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND_OFFSET = range(9)
 # Status codes of the integrators.
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED = 0, 1, 2, 3, 4, 5, 6, 7
 
@@ -190,7 +198,7 @@ def _rotational2(q, v, e, rot_int):
 def _add_elements2(q, v, P, AB, perm, off, gen):
     """Translational elements of a 2D scene, each through its law (:mod:`inerter.elements`):
     Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂. Returns a status code."""
-    pbody, ploc, el_int, el_real = P[1], P[2], P[3], P[4]
+    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     status = OK
     ga = np.empty(3)
     gb = np.empty(3)
@@ -214,7 +222,7 @@ def _add_elements2(q, v, P, AB, perm, off, gen):
 @njit(cache=True, inline="always")
 def _add_rotational2(q, v, P, gen):
     """Rotational elements of a 2D scene: ∓τ on the bodies' angles, τ from the kind's law."""
-    rot_int, rot_real = P[5], P[6]
+    rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
     for e in range(rot_int.shape[0]):
         ia, ib, phi, w = _rotational2(q, v, e, rot_int)
         tau = law.torque(rot_int[e, ROT_KIND], rot_real[e], phi, w)
@@ -228,8 +236,8 @@ def _add_rotational2(q, v, P, gen):
 def _add_point_forces2(t, q, v, inputs, P, gen):
     """Applied point forces with time functions, grounded PD actuators, held inputs and the ground
     motion (−m a_g on every body: coordinates relative to the moving ground) of a 2D scene."""
-    mass, pbody, ploc, dims = P[0], P[1], P[2], P[16]
-    fa_int, fa_real, pd_int, pd_real, in_int = P[9], P[10], P[11], P[12], P[13]
+    mass, pbody, ploc, dims = P[MASS], P[PBODY], P[PLOC], P[DIMS]
+    fa_int, fa_real, pd_int, pd_real, in_int = P[FA_INT], P[FA_REAL], P[PD_INT], P[PD_REAL], P[IN_INT]
     for f in range(fa_int.shape[0]):
         p = fa_int[f, 0]
         mag = _force_magnitude(fa_real, f, fa_int[f, 1], 2, t)     # columns: dx, dy, value, ...
@@ -247,9 +255,9 @@ def _add_point_forces2(t, q, v, inputs, P, gen):
         for f in range(in_int.shape[0]):
             p = in_int[f, 0]
             _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], inputs[2 * f], inputs[2 * f + 1], gen)
-    if dims[7] != GROUND_NONE:
+    if dims[GROUND_MODE] != GROUND_NONE:
         agx, agy, agz = ground_acceleration(t, inputs, P)
-        for k in range(0, dims[0], 3):
+        for k in range(0, dims[N_VELOCITY], 3):
             gen[k] -= mass[k] * agx
             gen[k + 1] -= mass[k] * agy
 
@@ -324,10 +332,10 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix of Eq. 33) and rhs (permuted) at
     (t, q, v) for a 2D scene; gen: work vector of length n for the generalised forces. Returns a
     status code."""
-    mass, pbody, ploc, jt_int, jt_real, gravity, perm, dims = P[0], P[1], P[2], P[7], P[8], P[14], P[15], P[16]
-    n = dims[0]
-    off = dims[2]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
-    _start_assembly(AB, gen, gravity, n, dims[4])
+    mass, pbody, ploc, jt_int, jt_real, gravity, perm, dims = P[MASS], P[PBODY], P[PLOC], P[JT_INT], P[JT_REAL], P[GRAVITY], P[PERM], P[DIMS]
+    n = dims[N_VELOCITY]
+    off = dims[KL]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
+    _start_assembly(AB, gen, gravity, n, dims[HAS_GRAVITY])
     for i in range(n):
         _addK(AB, perm, off, i, i, mass[i])
     status = _add_elements2(q, v, P, AB, perm, off, gen)
@@ -353,15 +361,15 @@ def ground_acceleration(t, inputs, P):
     """The ground's acceleration a_g(t) (3 components; the third 0 in 2D), as
     ``GroundMotion.acceleration``: `ground_t` holds a record's sample times (a sine: its frequency),
     `ground_a` the scaled values, one row per axis (a sine: its scaled amplitude per axis in column
-    0; inputs: the scale in [0, 0]), dims[8] the offset of ``ground.a[1]`` among the inputs."""
-    dims = P[16]
-    ground_t = P[17]
-    ground_a = P[18]
-    dim = dims[5]
-    mode = dims[7]
+    0; inputs: the scale in [0, 0]), dims[GROUND_OFFSET] the offset of ``ground.a[1]`` among the inputs."""
+    dims = P[DIMS]
+    ground_t = P[GROUND_T]
+    ground_a = P[GROUND_A]
+    dim = dims[DIMENSION]
+    mode = dims[GROUND_MODE]
     a = np.zeros(3)
     if mode == GROUND_INPUT:
-        off = dims[8]
+        off = dims[GROUND_OFFSET]
         if inputs.shape[0] >= off + dim:
             for i in range(dim):
                 a[i] = ground_a[0, 0] * inputs[off + i]
@@ -484,10 +492,10 @@ def band_solve(AB, b, kl):
 def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
     """Eq. (33): out[:n] = q̈, out[n:] = λ (original ordering). Returns a status code."""
     P = _unowned(P)                 # entered from Python (_unowned)
-    perm = P[15]
-    dims = P[16]
+    perm = P[PERM]
+    dims = P[DIMS]
     status = _assemble_of(t, q, v, inputs, alpha, P, AB, rhs, gen)
-    if not band_solve(AB, rhs, dims[2]):
+    if not band_solve(AB, rhs, dims[KL]):
         return SINGULAR
     for i in range(out.shape[0]):
         out[i] = rhs[perm[i]]
@@ -504,10 +512,10 @@ def constraint_residual(q, P):
 @njit(cache=True)
 def constraint_residual2(q, P):
     """Largest |C_i| over the joints of a 2D scene."""
-    pbody = P[1]
-    ploc = P[2]
-    jt_int = P[7]
-    jt_real = P[8]
+    pbody = P[PBODY]
+    ploc = P[PLOC]
+    jt_int = P[JT_INT]
+    jt_real = P[JT_REAL]
     worst = 0.0
     z = np.zeros(q.shape[0])
     for jn in range(jt_int.shape[0]):
@@ -549,7 +557,7 @@ def signal_values2(q, v, qdd, P, out):
     and the largest constraint residual of a 2D scene. Returns a status code."""
     (mass, pbody, ploc, el_int, el_real, rot_int, rot_real, jt_int, jt_real,
      fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims, ground_t, ground_a) = P
-    n = dims[0]
+    n = dims[N_VELOCITY]
     status = OK
     k = 0
     for p in range(pbody.shape[0]):
@@ -562,7 +570,7 @@ def signal_values2(q, v, qdd, P, out):
     energy = 0.0
     for i in range(n):
         energy += 0.5 * mass[i] * v[i] * v[i]
-    if dims[4]:
+    if dims[HAS_GRAVITY]:
         for i in range(0, n, 3):
             energy -= gravity[i] * q[i] + gravity[i + 1] * q[i + 1]
     for e in range(el_int.shape[0]):
@@ -666,13 +674,13 @@ def _gap_of(q, z, e, P):
 
 @njit(cache=True)
 def _gap2(q, z, e, P):
-    ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, z, P[3], e, P[1], P[2])
+    ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, z, P[EL_INT], e, P[PBODY], P[PLOC])
     return rx, ry, 0.0
 
 
 @njit(cache=True)
 def _gap3(q, z, e, P):
-    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, z, P[3][e, POINT_A], P[3][e, POINT_B], P[1], P[2])
+    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, z, P[EL_INT][e, POINT_A], P[EL_INT][e, POINT_B], P[PBODY], P[PLOC])
     return rx, ry, rz
 
 
@@ -689,12 +697,12 @@ def terminal_gaps(y, P):
     """(gaps, z): r_b − r_a at y of each translational element whose terminals are checked
     (``el_real[e, MEET_LIMIT]`` > 0: one element per pair of terminals), for :func:`terminals_meet`, and the
     zero velocities it evaluates them with."""
-    el_int = P[3]
-    z = np.zeros(P[16][0])
+    el_int = P[EL_INT]
+    z = np.zeros(P[DIMS][N_VELOCITY])
     gaps = np.zeros((el_int.shape[0], 3))
-    q = y[:P[16][6]]
+    q = y[:P[DIMS][N_COORD]]
     for e in range(el_int.shape[0]):
-        if P[4][e, MEET_LIMIT] > 0.0:
+        if P[EL_REAL][e, MEET_LIMIT] > 0.0:
             gaps[e, 0], gaps[e, 1], gaps[e, 2] = _gap_of(q, z, e, P)
     return gaps, z
 
@@ -708,8 +716,8 @@ def terminals_meet(gaps, z, y_new, P):
     pair of terminals is another element's). A fixed step (RK4) would otherwise pass through the
     meeting, where the direction is undefined, and go on with garbage. Otherwise `gaps` moves on
     to y_new."""
-    el_real = P[4]
-    q1 = y_new[:P[16][6]]
+    el_real = P[EL_REAL]
+    q1 = y_new[:P[DIMS][N_COORD]]
     for e in range(gaps.shape[0]):
         limit = el_real[e, MEET_LIMIT]
         if limit == 0.0:
@@ -740,16 +748,16 @@ def work_arrays(P, ny, stages):
     (AB, rhs, gen, acc: Eq. 33 in band storage; K: `stages` rows of Runge-Kutta stages; y_new,
     f_new, ys: a step's solution, derivative and stage argument; sig_acc: the accelerations the
     outputs are evaluated with, zero where they need none)."""
-    n = P[16][0]
-    N = n + P[16][1]
-    return (band_storage(P[16][2], P[16][3], N), np.empty(N), np.empty(n), np.empty(N),
+    n = P[DIMS][N_VELOCITY]
+    N = n + P[DIMS][N_ROWS]
+    return (band_storage(P[DIMS][KL], P[DIMS][KU], N), np.empty(N), np.empty(n), np.empty(N),
             np.zeros((stages, ny)), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros(N))
 
 
 @njit(cache=True)
 def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
     """`signal_values` at one state y = [q, v]; accelerations from Eq. (33) only when `need_acc`."""
-    nq = P[16][6]
+    nq = P[DIMS][N_COORD]
     AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
     if need_acc:
         st = accelerations(t, y[:nq], y[nq:], inputs, alpha, P, AB, rhs, gen, sig_acc)
@@ -1013,8 +1021,8 @@ def _wrow(AB, perm, off, row, v, body, A, sx, sy, sz, tx, ty, tz):
 @njit(cache=True, inline="always")
 def _add_bodies3(v, P, AB, perm, off, gen):
     """The mass matrix diag(m I, J) per body and the gyroscopic term −ω × Jω (body frame)."""
-    mass, perm, dims = P[0], P[15], P[16]
-    n = dims[0]
+    mass, perm, dims = P[MASS], P[PERM], P[DIMS]
+    n = dims[N_VELOCITY]
     for b in range(n // 6):
         k = 6 * b
         for i in range(3):
@@ -1039,7 +1047,7 @@ def _add_bodies3(v, P, AB, perm, off, gen):
 def _add_elements3(q, v, P, AB, perm, off, gen):
     """Translational elements of a 3D scene, each through its law (:mod:`inerter.elements`):
     Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂. Returns a status code."""
-    pbody, ploc, el_int, el_real = P[1], P[2], P[3], P[4]
+    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     status = OK
     ga = np.empty(6)
     gb = np.empty(6)
@@ -1056,7 +1064,7 @@ def _add_elements3(q, v, P, AB, perm, off, gen):
 @njit(cache=True, inline="always")
 def _add_rotational3(q, v, P, gen):
     """Rotational elements about an axis fixed in body a: ∓τ n on the bodies' ω (body frames)."""
-    rot_int, rot_real = P[5], P[6]
+    rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
         if ib >= 0:
@@ -1078,8 +1086,8 @@ def _add_point_forces3(t, q, v, inputs, P, gen):
     """Applied point forces with time functions, grounded PD actuators (F = −[kp (d·r − ref) +
     kd d·ṙ] d), held inputs (three components each) and the ground motion (−m a_g on every body's
     Ṙ: coordinates relative to the moving ground) of a 3D scene."""
-    mass, pbody, ploc, dims = P[0], P[1], P[2], P[16]
-    fa_int, fa_real, pd_int, pd_real, in_int = P[9], P[10], P[11], P[12], P[13]
+    mass, pbody, ploc, dims = P[MASS], P[PBODY], P[PLOC], P[DIMS]
+    fa_int, fa_real, pd_int, pd_real, in_int = P[FA_INT], P[FA_REAL], P[PD_INT], P[PD_REAL], P[IN_INT]
     for f in range(fa_int.shape[0]):
         p = fa_int[f, 0]
         mag = _force_magnitude(fa_real, f, fa_int[f, 1], 3, t)     # columns: dx, dy, dz, value, ...
@@ -1102,9 +1110,9 @@ def _add_point_forces3(t, q, v, inputs, P, gen):
             p = in_int[f, 0]
             _point_force3(q, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
                           inputs[3 * f], inputs[3 * f + 1], inputs[3 * f + 2], gen)
-    if dims[7] != GROUND_NONE:
+    if dims[GROUND_MODE] != GROUND_NONE:
         agx, agy, agz = ground_acceleration(t, inputs, P)
-        for k in range(0, dims[0], 6):
+        for k in range(0, dims[N_VELOCITY], 6):
             gen[k] -= mass[k] * agx
             gen[k + 1] -= mass[k] * agy
             gen[k + 2] -= mass[k] * agz
@@ -1114,7 +1122,7 @@ def _add_point_forces3(t, q, v, inputs, P, gen):
 def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
     """Joint jn's rows from `row` on (joints.py): C_v (and its transpose) and γ − 2αĊ − α²C,
     Ċ = C_v v, for its coincident, dot-1 and dot-2 rows. Returns the next row."""
-    pbody, ploc, jt_int, jt_real = P[1], P[2], P[7], P[8]
+    pbody, ploc, jt_int, jt_real = P[PBODY], P[PLOC], P[JT_INT], P[JT_REAL]
     pa = jt_int[jn, 1]
     pb = jt_int[jn, 2]
     ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
@@ -1179,10 +1187,10 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]]) and rhs
     (permuted [Q_e + Q_Iv, γ − 2αĊ − α²C]) at (t, q, v) for a 3D mechanism, as ``Mechanism.assemble``
     and ``Mechanism.constraints``. gen: work vector of length n. Returns a status code."""
-    jt_int, gravity, perm, dims = P[7], P[14], P[15], P[16]
-    n = dims[0]
-    off = dims[2]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
-    _start_assembly(AB, gen, gravity, n, dims[4])
+    jt_int, gravity, perm, dims = P[JT_INT], P[GRAVITY], P[PERM], P[DIMS]
+    n = dims[N_VELOCITY]
+    off = dims[KL]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
+    _start_assembly(AB, gen, gravity, n, dims[HAS_GRAVITY])
     _add_bodies3(v, P, AB, perm, off, gen)
     status = _add_elements3(q, v, P, AB, perm, off, gen)
     _add_rotational3(q, v, P, gen)
@@ -1202,7 +1210,7 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
 def qdot3(q, v, P, out):
     """out = q̇ = B(q) v: Ṙ, and the quaternion rate ṗ = ½ p ⊗ (0, ω) (``spatial.quat_rate``, p not
     normalised)."""
-    nb = P[16][0] // 6
+    nb = P[DIMS][N_VELOCITY] // 6
     for b in range(nb):
         j = 7 * b
         k = 6 * b
@@ -1225,12 +1233,12 @@ def qdot3(q, v, P, out):
 @njit(cache=True)
 def constraint_residual3(q, P):
     """Largest |C_i| over the joints' rows (coincident, dot-1, dot-2)."""
-    pbody = P[1]
-    ploc = P[2]
-    jt_int = P[7]
-    jt_real = P[8]
+    pbody = P[PBODY]
+    ploc = P[PLOC]
+    jt_int = P[JT_INT]
+    jt_real = P[JT_REAL]
     worst = 0.0
-    z = np.zeros(P[16][0])
+    z = np.zeros(P[DIMS][N_VELOCITY])
     for jn in range(jt_int.shape[0]):
         ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(
             q, z, jt_int[jn, 1], jt_int[jn, 2], pbody, ploc)
@@ -1257,9 +1265,9 @@ def signal_values3(q, v, qdd, P, out):
     v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd), every
     rotational element's φ_rel, ω_rel and torque (3 each), the energy (as ``Mechanism.energy``)
     and the largest constraint residual. Returns a status code."""
-    mass, pbody, ploc, el_int, el_real = P[0], P[1], P[2], P[3], P[4]
-    rot_int, rot_real, jt_int, gravity, dims = P[5], P[6], P[7], P[14], P[16]
-    n = dims[0]
+    mass, pbody, ploc, el_int, el_real = P[MASS], P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    rot_int, rot_real, jt_int, gravity, dims = P[ROT_INT], P[ROT_REAL], P[JT_INT], P[GRAVITY], P[DIMS]
+    n = dims[N_VELOCITY]
     nb = n // 6
     status = OK
     k = 0
@@ -1283,7 +1291,7 @@ def signal_values3(q, v, qdd, P, out):
         for r in range(3):
             for c in range(3):
                 energy += 0.5 * v[i + 3 + r] * mass[J + 3 * r + c] * v[i + 3 + c]
-    if dims[4]:
+    if dims[HAS_GRAVITY]:
         for b in range(nb):
             for i in range(3):
                 energy -= gravity[6 * b + i] * q[7 * b + i]
@@ -1332,8 +1340,8 @@ def signal_values3(q, v, qdd, P, out):
 def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
     """dy = [q̇, v̇] at y = [q, v]: q̇ = B(q) v (the identity in 2D), v̇ from Eq. (33)."""
     P = _unowned(P)                 # entered from Python (_unowned)
-    n = P[16][0]
-    nq = P[16][6]
+    n = P[DIMS][N_VELOCITY]
+    nq = P[DIMS][N_COORD]
     q = y[:nq]
     v = y[nq:]
     st = accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, acc)
@@ -1855,7 +1863,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
 def _point_value2(q, v, p, c, P):
-    pbody, ploc = P[1], P[2]
+    pbody, ploc = P[PBODY], P[PLOC]
     rx, ry, vx, vy, ux, uy, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
     if c == 0:
         return rx
@@ -1868,7 +1876,7 @@ def _point_value2(q, v, p, c, P):
 
 @njit(cache=True, inline="always")
 def _point_value3(q, v, p, c, P):
-    pbody, ploc = P[1], P[2]
+    pbody, ploc = P[PBODY], P[PLOC]
     b = pbody[p]
     A = _rot(q, b)
     rx, ry, rz, vx, vy, vz, ax, ay, az = _point3(q, v, b, A, ploc[p, 0], ploc[p, 1], ploc[p, 2])
@@ -1901,8 +1909,8 @@ def _point_value_by_dimension(q, v, p, c, P):
 def _point_signal(index, P):
     """(point, component) of the signal at `index` of signal_values' layout, (-1, 0) where it is not
     a point's coordinate."""
-    width = 2 * P[16][5]
-    if index < width * P[1].shape[0]:
+    width = 2 * P[DIMS][DIMENSION]
+    if index < width * P[PBODY].shape[0]:
         return index // width, index % width
     return -1, 0
 
@@ -1914,7 +1922,7 @@ def signal_column(times, states, inputs, alpha, index, need_acc, P, raw, out):
     length. Returns (status, the first sample where it could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = states.shape[1]
-    nq = P[16][6]
+    nq = P[DIMS][N_COORD]
     y = np.empty(ny)
     q = y[:nq]
     v = y[nq:]
@@ -1945,7 +1953,7 @@ def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, inde
     (status, the first time where it could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = coeffs.shape[2]
-    nq = P[16][6]
+    nq = P[DIMS][N_COORD]
     block = np.zeros((DENSE_BLOCK, ny))
     y = np.zeros(ny)
     q = y[:nq]
@@ -2151,7 +2159,7 @@ def rk4_cosim_step(y, t0, t_end, jumps, ts, out, step, max_steps, inputs, alpha,
 def max_residual(states, P):
     """The largest constraint residual over a history (rows [q, v])."""
     P = _unowned(P)                 # entered from Python (_unowned)
-    nq = P[16][6]
+    nq = P[DIMS][N_COORD]
     worst = 0.0
     for k in range(states.shape[0]):
         worst = max(worst, constraint_residual(states[k, :nq], P))
@@ -2169,6 +2177,7 @@ def max_residual(states, P):
 # succeeds), the tolerance on communication points, the number of steps taken, and RK4's step.
 # Method codes: 0 DOP853, 1 RK45 (a running integration, cosim_rk), NATIVE_RK4 (integrate_rk4 from
 # the communication point, `y` the state there and `ts`, `out` two rows; the tableau slots unused).
+TABLE_LENGTH, TABLE_METHOD, TABLE_MAX_STEPS, TABLE_NEED_ACC = range(4)
 TABLE_HEAD = 4
 #: The groups of arrays, in the order they are passed: the running integration's state (as
 #: rk_advance takes it), the mechanism's arrays (Kernel.params), the tableau (A, B, C, E, E3, D, P),
@@ -2192,10 +2201,13 @@ NATIVE_RK4 = 2
 #: What the C function returns when it took the step (anything else: it declined, see below).
 NATIVE_TOOK_STEP = 1
 _SLOT = {name: i for i, (name, _) in enumerate(NATIVE_SLOTS)}
-# native_step reads the slots by number: the blocks it reads must start where NATIVE_SLOTS puts them.
-assert (_SLOT["hdr"], _SLOT["b_hdr"], _SLOT["mass"], _SLOT["A"], _SLOT["AB"], _SLOT["raw"], _SLOT["clock"]) == \
-    (0, 48, 8, 27, 35, 44, 47) and _SLOT["jumps"] == 53 and _SLOT["spatial"] == 54 \
-    and len(NATIVE_SLOTS) == 55
+# Where native_step finds each block of NATIVE_SLOTS (the RK state, its backup, the scene's P, the
+# tableau, the scratch) and each single slot: numba takes these module constants as literals.
+S_RK, S_BACKUP, S_PARAMS, S_TABLEAU, S_WORK = (_SLOT["hdr"], _SLOT["b_hdr"], _SLOT["mass"], _SLOT["A"],
+                                               _SLOT["AB"])
+S_TS, S_OUT, S_INPUTS, S_MONITOR, S_RAW, S_ORDER, S_VALUES, S_CLOCK, S_JUMPS, S_SPATIAL = (
+    _SLOT["ts"], _SLOT["out"], _SLOT["inputs"], _SLOT["monitor"], _SLOT["raw"], _SLOT["order"], _SLOT["values"],
+    _SLOT["clock"], _SLOT["jumps"], _SLOT["spatial"])
 
 
 @intrinsic
@@ -2266,10 +2278,13 @@ def _i2(tab, s):
 
 @njit(cache=True, inline="always")
 def _native_params(tab):
-    """P of a 2D scene from the table (slots 8-26: PARAMS)."""
-    return (_f1(tab, 8), _i1(tab, 9), _f2(tab, 10), _i2(tab, 11), _f2(tab, 12), _i2(tab, 13), _f2(tab, 14),
-            _i2(tab, 15), _f2(tab, 16), _i2(tab, 17), _f2(tab, 18), _i2(tab, 19), _f2(tab, 20), _i2(tab, 21),
-            _f1(tab, 22), _i1(tab, 23), _i1(tab, 24), _f1(tab, 25), _f2(tab, 26))
+    """P of a 2D scene from the table (its PARAMS block, from slot S_PARAMS on)."""
+    s = S_PARAMS
+    return (_f1(tab, s + MASS), _i1(tab, s + PBODY), _f2(tab, s + PLOC), _i2(tab, s + EL_INT),
+            _f2(tab, s + EL_REAL), _i2(tab, s + ROT_INT), _f2(tab, s + ROT_REAL), _i2(tab, s + JT_INT),
+            _f2(tab, s + JT_REAL), _i2(tab, s + FA_INT), _f2(tab, s + FA_REAL), _i2(tab, s + PD_INT),
+            _f2(tab, s + PD_REAL), _i2(tab, s + IN_INT), _f1(tab, s + GRAVITY), _i1(tab, s + PERM),
+            _i1(tab, s + DIMS), _f1(tab, s + GROUND_T), _f2(tab, s + GROUND_A))
 
 
 @njit(cache=True)
@@ -2280,8 +2295,8 @@ def native_step(tab, t, h):
 
 @njit(cache=True)
 def native_step3(tab, t, h):
-    """:func:`native_step_on` a 3D scene's table (P with its ``spatial`` slot, table slot 54)."""
-    return native_step_on(tab, t, h, _native_params(tab) + (_i1(tab, 54),))
+    """:func:`native_step_on` a 3D scene's table (P with its ``spatial`` slot, table slot S_SPATIAL)."""
+    return native_step_on(tab, t, h, _native_params(tab) + (_i1(tab, S_SPATIAL),))
 
 
 @njit(cache=True)
@@ -2295,7 +2310,7 @@ def native_step_on(tab, t, h, P):
     kernels cannot evaluate. A declined step leaves CLOCK_BUSY set and the integration's state as
     it was in the backup arrays (b_*), which the Python path restores before it takes the step
     itself, so that it gives the messages and the results the Python path always gives."""
-    clock = _f1(tab, 47)
+    clock = _f1(tab, S_CLOCK)
     now = clock[CLOCK_TIME]
     if not (math.isfinite(t) and math.isfinite(h) and h > 0.0):
         return 0
@@ -2304,8 +2319,10 @@ def native_step_on(tab, t, h, P):
     t_end = t + h
     if not t_end > now:
         return 0
-    hdr, y, f, y_prev, dense = _f1(tab, 0), _f1(tab, 1), _f1(tab, 2), _f1(tab, 3), _f2(tab, 4)
-    b_hdr, b_y, b_f, b_y_prev, b_dense = _f1(tab, 48), _f1(tab, 49), _f1(tab, 50), _f1(tab, 51), _f2(tab, 52)
+    hdr, y, f = _f1(tab, S_RK), _f1(tab, S_RK + 1), _f1(tab, S_RK + 2)
+    y_prev, dense = _f1(tab, S_RK + 3), _f2(tab, S_RK + 4)
+    b_hdr, b_y, b_f = _f1(tab, S_BACKUP), _f1(tab, S_BACKUP + 1), _f1(tab, S_BACKUP + 2)
+    b_y_prev, b_dense = _f1(tab, S_BACKUP + 3), _f2(tab, S_BACKUP + 4)
     b_hdr[:] = hdr
     b_y[:] = y
     b_f[:] = f
@@ -2313,30 +2330,33 @@ def native_step_on(tab, t, h, P):
     b_dense[:, :] = dense
     clock[CLOCK_BUSY] = 1.0
     bound = clock[CLOCK_BOUND]
-    ts, out, inputs, alpha = _f1(tab, 5), _f2(tab, 6), _f1(tab, 7), clock[CLOCK_ALPHA]
-    work = (_f2(tab, 35), _f1(tab, 36), _f1(tab, 37), _f1(tab, 38), _f2(tab, 39), _f1(tab, 40), _f1(tab, 41),
-            _f1(tab, 42), _f1(tab, 43))
-    raw, order, values = _f1(tab, 44), _i1(tab, 45), _f1(tab, 46)
-    if tab[1] == NATIVE_RK4:
-        st, steps, t_reached, t_fail = rk4_cosim_step(y, now, t_end, _f1(tab, 53), ts, out, clock[CLOCK_STEP],
-                                                      tab[2], inputs, alpha, P)
+    ts, out, inputs, alpha = _f1(tab, S_TS), _f2(tab, S_OUT), _f1(tab, S_INPUTS), clock[CLOCK_ALPHA]
+    w = S_WORK                                  # AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc
+    work = (_f2(tab, w), _f1(tab, w + 1), _f1(tab, w + 2), _f1(tab, w + 3), _f2(tab, w + 4), _f1(tab, w + 5),
+            _f1(tab, w + 6), _f1(tab, w + 7), _f1(tab, w + 8))
+    raw, order, values = _f1(tab, S_RAW), _i1(tab, S_ORDER), _f1(tab, S_VALUES)
+    if tab[TABLE_METHOD] == NATIVE_RK4:
+        st, steps, t_reached, t_fail = rk4_cosim_step(y, now, t_end, _f1(tab, S_JUMPS), ts, out, clock[CLOCK_STEP],
+                                                      tab[TABLE_MAX_STEPS], inputs, alpha, P)
         if st != OK:
             return 0
         for n in range(y.shape[0]):
             if not math.isfinite(y[n]):
                 return 0
         hdr[RK_TOTAL] += steps
-        if _signals_at(t_end, y, inputs, alpha, tab[3] != 0, P, work, raw) != OK:
+        if _signals_at(t_end, y, inputs, alpha, tab[TABLE_NEED_ACC] != 0, P, work, raw) != OK:
             return 0
         for n in range(order.shape[0]):
             values[n] = raw[order[n]]
     else:
         if t_end > bound:                       # the importer went past its stop time
             bound = np.inf
-        st, sst = cosim_step(tab[1], hdr, y, f, y_prev, dense, t_end, ts, out, bound,
-                             clock[CLOCK_RTOL], clock[CLOCK_ATOL], tab[2], inputs, alpha, P,
-                             _f2(tab, 27), _f1(tab, 28), _f1(tab, 29), _f1(tab, 30), _f1(tab, 31), _f2(tab, 32),
-                             _f2(tab, 33), _f1(tab, 34), work, tab[3] != 0, raw, order, values, _f1(tab, 53))
+        st, sst = cosim_step(tab[TABLE_METHOD], hdr, y, f, y_prev, dense, t_end, ts, out, bound,
+                             clock[CLOCK_RTOL], clock[CLOCK_ATOL], tab[TABLE_MAX_STEPS], inputs, alpha, P,
+                             _f2(tab, S_TABLEAU), _f1(tab, S_TABLEAU + 1), _f1(tab, S_TABLEAU + 2),
+                             _f1(tab, S_TABLEAU + 3), _f1(tab, S_TABLEAU + 4), _f2(tab, S_TABLEAU + 5),
+                             _f2(tab, S_TABLEAU + 6), _f1(tab, S_MONITOR), work, tab[TABLE_NEED_ACC] != 0, raw, order,
+                             values, _f1(tab, S_JUMPS))
         if st != OK or sst != OK:
             return 0
     clock[CLOCK_TIME] = t_end

@@ -30,3 +30,11 @@ AXIS = 2                 # 3D: the axis n̄ in body a's frame, 3 columns
 REL0 = 5                 # 3D: the initial relative orientation A_aᵀ A_b, 9 columns, row-major
 ROT_REAL_COLUMNS_2D = 2
 ROT_REAL_COLUMNS_3D = 14
+
+# -- point forces (not element kinds, but tables of the same engine): fa_int, fa_real, pd_int,
+#    pd_real, in_int; a force's real row starts with its direction's DIM components (2 or 3), and the
+#    columns below count from there (``fa_real[f, dim + F_AMPLITUDE]``)
+FORCE_POINT = 0          # fa_int, pd_int, in_int: the point the force acts at
+FORCE_FUNCTION = 1       # fa_int: its time function (constant, sine, step)
+F_VALUE, F_AMPLITUDE, F_FREQUENCY, F_PHASE, F_OFFSET, F_TIME, F_INITIAL = range(7)   # fa_real after d
+PD_KP, PD_KD, PD_REFERENCE = range(3)                                                 # pd_real after d

@@ -84,11 +84,15 @@ def force_rows(scene, pidx, dim) -> tuple[list, list, list, list, list]:
         p = pidx[f.point]
         d = [float(x) for x in f.direction[:dim]] if f.direction is not None else None
         if f.function in FORCE_CODE:
-            fa_int.append((p, FORCE_CODE[f.function]))
-            fa_real.append((*d, f.value, f.amplitude, f.frequency, f.phase, f.offset, f.time, f.initial))
+            fa_int.append((p, FORCE_CODE[f.function]))               # FORCE_POINT, FORCE_FUNCTION
+            by_column = {layout.F_VALUE: f.value, layout.F_AMPLITUDE: f.amplitude, layout.F_FREQUENCY: f.frequency,
+                         layout.F_PHASE: f.phase, layout.F_OFFSET: f.offset, layout.F_TIME: f.time,
+                         layout.F_INITIAL: f.initial}
+            fa_real.append((*d, *(by_column[c] for c in range(len(by_column)))))
         elif f.function == "pd":
             pd_int.append((p,))
-            pd_real.append((*d, f.kp, f.kd, f.reference))
+            by_column = {layout.PD_KP: f.kp, layout.PD_KD: f.kd, layout.PD_REFERENCE: f.reference}
+            pd_real.append((*d, *(by_column[c] for c in range(len(by_column)))))
         elif f.function == "input":
             in_int.append((p,))
     return fa_int, fa_real, pd_int, pd_real, in_int

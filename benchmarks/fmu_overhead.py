@@ -26,9 +26,10 @@ in turn, so drifting load weighs on all alike):
   stop time must equal the stepper's, bit for bit).
 
 braced_frame_3d runs a second time with RK4 (1 ms steps; `--no-rk4-frame` leaves it out): its ground
-record puts a discontinuity at every communication point, where RK4 restarts, in the native step too.
-RK4 in co-simulation restarts at each communication point, the whole run at each record sample: the
-two are the same times up to rounding, so their lengths differ by round-off (about 1e-14 m).
+record puts a kink at every communication point, where RK4 ends a step, in the native step too.
+RK4 in co-simulation restarts at each communication point, the whole run ends a step at each record
+sample and runs on: the two are the same times up to rounding, so their lengths differ by round-off
+(about 1e-14 m).
 
 A second table runs the compiled-path FMUs (at their scenes' own solver) and the C floor through
 libcosimpy (the Open Simulation Platform's C++ engine, when installed) with a last-value observer,
@@ -192,7 +193,7 @@ def main(argv=None):
     cases = [(ROOT / "scenarios" / f"{name}.toml", both, None) for name in ("lumped_mass_2d", "two_bar_2d")]
     cases += [(write_chain(scratch / f"chain_{links}.toml", links), both[1:], None)
               for links in (int(x) for x in args.chains.split(",") if x.strip())]
-    # RK4 across a ground record's samples (a discontinuity at every communication point)
+    # RK4 through a ground record's samples (a kink at every communication point)
     cases += [(ROOT / "scenarios" / "braced_frame_3d.toml", both[1:], "RK4")] if args.rk4_frame else []
     for scene, paths, solver in cases:
         name = scene.stem if solver is None else f"{scene.stem}, {solver}"

@@ -169,8 +169,8 @@ def test_braced_frame_responds_to_both_components():
 def test_3d_fmu_against_oracle(fmu_runs, runs, scene):
     """At the scene's default communication step and settings, the FMU's point positions
     (including P.r[3]) are within 1e-6 m of the oracle (rtol 1e-11) over 2 s; 1 s for the braced
-    frame, whose piecewise-linear ground record makes the tight-tolerance oracle restart its
-    steps at every 10 ms sample (the bound is the same, the window shorter to keep the suite fast)."""
+    frame, whose piecewise-linear ground record makes the tight-tolerance oracle end a step at
+    every 10 ms sample (the bound is the same, the window shorter to keep the suite fast)."""
     stop = 1.0 if scene == FRAME else 2.0
     fmu = fmu_runs(scene, stop_time=stop, metrics=False)
     ref = runs(scene, True, oracle=True, stop_time=stop, **TIGHT, metrics=False)

@@ -79,8 +79,8 @@ RTOL, ATOL = 1e-12, 1e-14
 TOL_RUN = 2e-10
 
 #: Simulated time of a run (capped at the scene's own stop time). A scene with a ground motion
-#: record restarts at each of its samples (every 0.01 s), which makes its oracle the costliest
-#: (braced_frame_3d: 2.6 s for 0.5 s), so it runs 0.5 s (50 restarts), as before.
+#: record ends a step at each of its samples (every 0.01 s), which makes its oracle the costliest
+#: (braced_frame_3d: 2 s for 0.5 s), so it runs 0.5 s (50 samples), as before.
 RUN_TIME = 2.0
 RUN_TIME_GROUND_RECORD = 0.5
 

@@ -179,9 +179,10 @@ def step_forces_scene(tmp_path_factory):
 @pytest.mark.parametrize("which", ["step_forces", "braced_frame_3d"])
 def test_native_rk4_steps_through_discontinuities_give_what_the_slave_gives(fmus, pair, step_forces_scene,
                                                                             which):
-    """RK4 restarts at each discontinuity of the right-hand side inside a communication step (step
-    forces' switches; the braced frame's ground record, sampled every 10 ms, on every point), in the
-    native step as in the slave's: the same results bit for bit, the steps taken natively."""
+    """RK4 restarts at each jump of the right-hand side inside a communication step (step forces'
+    switches) and ends a step on each kink (the braced frame's ground record, sampled every 10 ms,
+    on every point), in the native step as in the slave's: the same results bit for bit, the steps
+    taken natively."""
     scene = step_forces_scene if which == "step_forces" else BRACED_FRAME
     native_scene(scene)
     native, slave = pair(fmus[scene])

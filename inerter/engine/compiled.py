@@ -19,8 +19,10 @@ The state is y = [q, v] with q̇ = B(q) v (the identity in 2D, the quaternion ra
 
 Integrators: DOP853 and RK45 with scipy's error control, step-size rule and dense output (the
 same steps as the numpy path at the same tolerances), and RK4 with a fixed step, each in one
-compiled loop that writes the samples at the output grid, restarted at each discontinuity of the
-right-hand side (a step force's switch, a ground record's sample); on request the loop keeps
+compiled loop that writes the samples at the output grid, restarted at each jump of the
+right-hand side (a step force's switch; ``Mechanism.discontinuities``) and running on through its
+kinks (a ground record's samples, ``Mechanism.kinks``), each step that would cross one clipped to
+end on it (``kernels.rk_advance``); on request the loop keeps
 every step's dense output (:class:`DenseOutput`, the metrics' interpolant). Radau, BDF and LSODA,
 and the ``projection`` constraint treatment, run scipy's integrators
 (``inerter.engine.simulation.integrate``) on the compiled right-hand side.
@@ -118,7 +120,7 @@ def _import_kernels():
 # ------------------------------------------------------------------------------------------------
 #: Seconds a run's first compilation of the kernels takes on a 2-core machine, by dimension (its
 #: integrator loop and outputs, docs/benchmarks/first_use.md), for the notice.
-COMPILE_SECONDS = {2: 30, 3: 50}
+COMPILE_SECONDS = {2: 40, 3: 70}
 #: Seconds ``inerter compile`` takes on a 2-core machine with an empty cache, by dimension (every kernel:
 #: the three integrator loops, outputs, co-simulation steps and the FMU's native step).
 AOT_SECONDS = {2: 55, 3: 80}
@@ -734,12 +736,13 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     out[0] = y0
     inp = kernel._inputs(inputs)
     alpha = float(settings.alpha)
-    # One integration per smooth segment: it restarts at each discontinuity of the right-hand side
-    # (a step force's switch, a ground record's sample; Mechanism.discontinuities) with a fresh
-    # first step, the forces evaluated up to it with their values over the segment, as the numpy
-    # path's does.
+    # One integration per segment between jumps of the right-hand side: it restarts at each (a step
+    # force's switch; Mechanism.discontinuities) with a fresh first step, the forces evaluated up to
+    # it with their values over the segment, as the numpy path's does. Through the kinks (a ground
+    # record's samples; Mechanism.kinks) it runs on, its steps clipped to end on each.
     stop = float(settings.stop_time)
-    switches = {float(d) for d in jumps(mech, 0.0, stop)}
+    switches = {float(d) for d in jumps(mech, 0.0, stop, settings.method)}
+    kinks = np.array(getattr(mech, "kinks", ()), dtype=float)
     ends = sorted(d for d in switches if d < stop) + [stop]
     steps = evals = 0
     h, t0, k, status, t_reached = 0.0, 0.0, 1, 0, 0.0
@@ -761,13 +764,13 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         if settings.method == "RK4":
             status, done, s_steps, s_evals, t_reached = _k.integrate_rk4(
                 y, t0, t1, seg, seg_out, float(settings.step), int(settings.max_steps) - steps, inp, alpha,
-                kernel.params, t1 if t1 in switches else 0.0)
+                kernel.params, t1 if t1 in switches else 0.0, kinks)
         else:
             A, B, C, E, E3, D, Pm = tables
             status, done, s_steps, s_evals, t_reached, h, keep = _k.integrate_rk(
                 _RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol), float(settings.atol), 0.0,
                 int(settings.max_steps) - steps, inp, alpha, kernel.params, A, B, C, E, E3, D, Pm,
-                _monitor(settings.method), t1 if t1 in switches else 0.0, keep)
+                _monitor(settings.method), t1 if t1 in switches else 0.0, kinks, keep)
         steps += int(s_steps)
         evals += int(s_evals)
         written = min(done - 1, last - k)                         # grid samples among seg_out[1:done]
@@ -813,7 +816,7 @@ class CompiledRun(Run):
 class DenseOutput:
     """The dense output of a compiled DOP853 or RK45 run (``Run.dense``): every accepted step's
     polynomial with scipy's formulas, kept by :func:`~inerter.engine.kernels.rk_advance` (steps of
-    every segment between discontinuities, one after the other). ``sol(t)`` gives the states at t
+    every segment between jumps, one after the other). ``sol(t)`` gives the states at t
     as scipy's ``OdeSolution`` does: shape (ny,) for a scalar t, (ny, len(t)) for an array,
     evaluated in compiled code (:func:`~inerter.engine.kernels.dense_states`). ``sol.ts``: the
     nodes (the steps' ends)."""
@@ -846,12 +849,13 @@ class CompiledStepper(Stepper):
     communication step shorter than the integrator's costs no extra evaluations. An input that
     changes is a discontinuity of the right-hand side: the integrator restarts at that
     communication point, with the step size the error control proposed last, and its last step in
-    that communication step lands on the next point (as the numpy stepper's always do). A
-    discontinuity of the right-hand side (a step force's switch, a ground record's sample) ends a
-    segment of the integration, which starts afresh there (:func:`compiled_kernels.cosim_step`), as
-    the whole run's does.
+    that communication step lands on the next point (as the numpy stepper's always do). A jump of
+    the right-hand side (a step force's switch) ends a segment of the integration, which starts
+    afresh there (:func:`compiled_kernels.cosim_step`), and its kinks (a ground record's samples)
+    end steps, through which it runs on, as the whole run's does.
 
-    RK4 (fixed step) restarts at every communication point, its last step shortened to land on it.
+    RK4 (fixed step) restarts at every communication point, its last step shortened to land on it,
+    and the step before a kink shortened to end there.
     The outputs are evaluated in the same compiled call. (time, state, inputs, the integrator's
     own state) is the complete state: a rolled-back step repeats bit for bit."""
 
@@ -867,6 +871,7 @@ class CompiledStepper(Stepper):
                       _k.work_arrays(kernel.params, kernel.nq + kernel.n, _k.rk_stages(self._tables[0])))
         self._monitor = _monitor(settings.method)
         self._jumps = np.array(getattr(mech, "discontinuities", ()), dtype=float)
+        self._kinks = np.array(getattr(mech, "kinks", ()), dtype=float)
         self._tol = (float(settings.rtol), float(settings.atol), int(settings.max_steps))
         self._raw = np.empty(len(signal_layout(kernel.flat)))
         self._values = None                   # the outputs at self.time, when the last step made them
@@ -923,7 +928,7 @@ class CompiledStepper(Stepper):
         status, signal_status = _k.cosim_step(
             _RK_CODE[s.method], hdr, rk[1], rk[2], rk[3], rk[4], t_end, np.zeros(1), out, bound, rtol, atol,
             max_steps, self._rk_inputs, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm, self._monitor,
-            self._work, self._need_acc, self._raw, order, values, self._jumps)
+            self._work, self._need_acc, self._raw, order, values, self._jumps, self._kinks)
         if status:
             why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk[1], hdr[_k.RK_T], int(s.max_steps))
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(hdr[_k.RK_T]))
@@ -936,14 +941,14 @@ class CompiledStepper(Stepper):
         self._values = None if signal_status or self._order is None else values.tolist()
 
     def _step_rk4(self, t_end):
-        """RK4 from the communication point, its last step shortened to land on t_end; a
-        discontinuity inside (or at t_end) ends a segment there, as the numpy stepper's
-        (:func:`compiled_kernels.rk4_cosim_step`, which the FMU's native step calls too)."""
+        """RK4 from the communication point, its last step shortened to land on t_end; a jump
+        inside (or at t_end) ends a segment there, as the numpy stepper's, and a kink inside ends a
+        step (:func:`compiled_kernels.rk4_cosim_step`, which the FMU's native step calls too)."""
         s, kernel = self.settings, self.kernel
         y = np.array(self.y, dtype=float)                 # advanced in place, segment by segment
         status, steps, t_reached, t_fail = _k.rk4_cosim_step(
-            y, float(self.time), t_end, self._jumps, np.zeros(2), np.empty((2, len(y))), float(s.step),
-            int(s.max_steps), kernel._inputs(self.inputs.copy()), float(s.alpha), kernel.params)
+            y, float(self.time), t_end, self._jumps, self._kinks, np.zeros(2), np.empty((2, len(y))),
+            float(s.step), int(s.max_steps), kernel._inputs(self.inputs.copy()), float(s.alpha), kernel.params)
         if status:
             why = failure_text(kernel, status, s.method, s.step, y, t_fail, int(s.max_steps))
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
@@ -1022,7 +1027,8 @@ class CompiledStepper(Stepper):
         arrays["spatial"] = kernel.params[-1] if kernel.spatial else np.zeros(0, dtype=np.int64)
         arrays.update(zip(("b_" + name for name, _ in _k.RK_STATE), native["backup"], strict=True))
         arrays.update(ts=native["ts"], out=native["out"], inputs=inputs, monitor=self._monitor,
-                      raw=self._raw, order=self._order, values=native["values"], clock=clock, jumps=self._jumps)
+                      raw=self._raw, order=self._order, values=native["values"], clock=clock, jumps=self._jumps,
+                      kinks=self._kinks)
         code = _k.NATIVE_RK4 if s.method == "RK4" else _RK_CODE[s.method]
         table = np.zeros(_k.TABLE_HEAD + 3 * len(_k.NATIVE_SLOTS), dtype=np.int64)
         table[:_k.TABLE_HEAD] = (len(table), code, int(s.max_steps), int(self._need_acc))

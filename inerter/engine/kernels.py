@@ -20,8 +20,9 @@ from inerter.common.errors import MIN_LENGTH
 
 from inerter.elements import dispatch as law
 from inerter.elements.base import axial_scalars
-from inerter.elements.layout import (AXIS, BODY_A, BODY_B, KIND, MEET_LIMIT, POINT_A, POINT_B, REL0,
-                                     ROT_KIND)
+from inerter.elements.layout import (AXIS, BODY_A, BODY_B, F_AMPLITUDE, F_FREQUENCY, F_INITIAL, F_OFFSET,
+                                     F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, KIND, MEET_LIMIT,
+                                     PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B, REL0, ROT_KIND)
 
 # Joint kinds.
 REVOLUTE, PRISMATIC = 0, 1
@@ -45,14 +46,13 @@ OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLL
 @njit(cache=True, inline="always")
 def _force_magnitude(fa_real, f, code, value, t):
     """The magnitude of applied force f at time t: row f of `fa_real` holds, from column `value`
-    on, value, amplitude, frequency, phase, offset, time, initial (after the direction's 2 or 3
-    components)."""
+    (the direction's 2 or 3 components come first) on, the columns F_VALUE ... F_INITIAL."""
     if code == F_CONSTANT:
-        return fa_real[f, value]
+        return fa_real[f, value + F_VALUE]
     if code == F_SINE:
-        return fa_real[f, value + 4] + fa_real[f, value + 1] * math.sin(
-            2.0 * math.pi * fa_real[f, value + 2] * t + fa_real[f, value + 3])
-    return fa_real[f, value] if t >= fa_real[f, value + 5] else fa_real[f, value + 6]
+        return fa_real[f, value + F_OFFSET] + fa_real[f, value + F_AMPLITUDE] * math.sin(
+            2.0 * math.pi * fa_real[f, value + F_FREQUENCY] * t + fa_real[f, value + F_PHASE])
+    return fa_real[f, value + F_VALUE] if t >= fa_real[f, value + F_TIME] else fa_real[f, value + F_INITIAL]
 
 
 # ------------------------------------------------------------------------------------------------
@@ -239,21 +239,21 @@ def _add_point_forces2(t, q, v, inputs, P, gen):
     mass, pbody, ploc, dims = P[MASS], P[PBODY], P[PLOC], P[DIMS]
     fa_int, fa_real, pd_int, pd_real, in_int = P[FA_INT], P[FA_REAL], P[PD_INT], P[PD_REAL], P[IN_INT]
     for f in range(fa_int.shape[0]):
-        p = fa_int[f, 0]
-        mag = _force_magnitude(fa_real, f, fa_int[f, 1], 2, t)     # columns: dx, dy, value, ...
+        p = fa_int[f, FORCE_POINT]
+        mag = _force_magnitude(fa_real, f, fa_int[f, FORCE_FUNCTION], 2, t)     # after dx, dy
         _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], mag * fa_real[f, 0], mag * fa_real[f, 1], gen)
     for f in range(pd_int.shape[0]):
-        p = pd_int[f, 0]
+        p = pd_int[f, FORCE_POINT]
         rx, ry, vx, vy, ux, uy, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
         dx = pd_real[f, 0]
         dy = pd_real[f, 1]
-        along = dx * rx + dy * ry - pd_real[f, 4]
+        along = dx * rx + dy * ry - pd_real[f, 2 + PD_REFERENCE]
         rate = dx * vx + dy * vy
-        mag = -(pd_real[f, 2] * along + pd_real[f, 3] * rate)
+        mag = -(pd_real[f, 2 + PD_KP] * along + pd_real[f, 2 + PD_KD] * rate)
         _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], mag * dx, mag * dy, gen)
     if inputs.shape[0] > 0:
         for f in range(in_int.shape[0]):
-            p = in_int[f, 0]
+            p = in_int[f, FORCE_POINT]
             _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], inputs[2 * f], inputs[2 * f + 1], gen)
     if dims[GROUND_MODE] != GROUND_NONE:
         agx, agy, agz = ground_acceleration(t, inputs, P)
@@ -1089,25 +1089,25 @@ def _add_point_forces3(t, q, v, inputs, P, gen):
     mass, pbody, ploc, dims = P[MASS], P[PBODY], P[PLOC], P[DIMS]
     fa_int, fa_real, pd_int, pd_real, in_int = P[FA_INT], P[FA_REAL], P[PD_INT], P[PD_REAL], P[IN_INT]
     for f in range(fa_int.shape[0]):
-        p = fa_int[f, 0]
-        mag = _force_magnitude(fa_real, f, fa_int[f, 1], 3, t)     # columns: dx, dy, dz, value, ...
+        p = fa_int[f, FORCE_POINT]
+        mag = _force_magnitude(fa_real, f, fa_int[f, FORCE_FUNCTION], 3, t)     # after dx, dy, dz
         _point_force3(q, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
                       mag * fa_real[f, 0], mag * fa_real[f, 1], mag * fa_real[f, 2], gen)
     for f in range(pd_int.shape[0]):
-        p = pd_int[f, 0]
+        p = pd_int[f, FORCE_POINT]
         b = pbody[p]
         A = _rot(q, b)
         rx, ry, rz, vx, vy, vz, ax, ay, az = _point3(q, v, b, A, ploc[p, 0], ploc[p, 1], ploc[p, 2])
         dx = pd_real[f, 0]
         dy = pd_real[f, 1]
         dz = pd_real[f, 2]
-        along = dx * rx + dy * ry + dz * rz - pd_real[f, 5]
+        along = dx * rx + dy * ry + dz * rz - pd_real[f, 3 + PD_REFERENCE]
         rate = dx * vx + dy * vy + dz * vz
-        mag = -(pd_real[f, 3] * along + pd_real[f, 4] * rate)
+        mag = -(pd_real[f, 3 + PD_KP] * along + pd_real[f, 3 + PD_KD] * rate)
         _point_force3(q, b, ploc[p, 0], ploc[p, 1], ploc[p, 2], mag * dx, mag * dy, mag * dz, gen)
     if inputs.shape[0] > 0:
         for f in range(in_int.shape[0]):
-            p = in_int[f, 0]
+            p = in_int[f, FORCE_POINT]
             _point_force3(q, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
                           inputs[3 * f], inputs[3 * f + 1], inputs[3 * f + 2], gen)
     if dims[GROUND_MODE] != GROUND_NONE:
@@ -1410,7 +1410,8 @@ DENSE_FULL = -1
 @njit(cache=True, inline="always")
 def _before(jump):
     """The last time the right-hand side is evaluated at in a segment that ends at a discontinuity
-    `jump` (a step force's switch, a ground record's sample; 0: none): one ulp before it, so that
+    `jump` (a step force's switch, a ground record's end on a value other than zero; 0: none): one
+    ulp before it, so that
     stages at the segment's end see the values the forces had over the segment (as
     ``simulation.derivative``)."""
     return np.nextafter(jump, -np.inf) if jump > 0.0 else np.inf
@@ -1540,12 +1541,22 @@ def _dense_block(method, nodes, coeffs, count, times, start, end, comps, Y, i):
 
 @njit(cache=True)
 def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-               A, B, C, E, E3, Dm, Pm, monitor, work, keep=None):
+               A, B, C, E, E3, Dm, Pm, monitor, work, kinks, keep=None):
     """Advance an adaptive explicit Runge-Kutta integration until its last step covers the last of
     the increasing times `ts`, writing out[k] = y(ts[k]) for k ≥ k0 as the steps cover them: the step's own
     solution at a node (within 1e-12·max(1 s, t)), its dense output inside a step. Steps are
-    clipped to `t_bound` only, never to a sample time, so samples taken in one call or over many
-    calls lie on the steps of one integration from its start to `t_bound`.
+    clipped to `t_bound` and to the kinks of the right-hand side, never to a sample time, so
+    samples taken in one call or over many calls lie on the steps of one integration from its
+    start to `t_bound`.
+
+    `kinks`: increasing times where the right-hand side's slope jumps but its value does not (a
+    ground record's samples, ``Mechanism.kinks``). A step that would cross one is clipped to end
+    on it, so that no step straddles a kink and the method keeps its order; the integration runs
+    on from there with its last derivative f and the step size the error control proposed before
+    the clip (the clipped step's own proposal would shrink the steps after a short clipped step,
+    whose error estimate is smaller by (h_clipped/h)^(p+1), and round-off for a very short one),
+    as ``simulation._on_through_kink`` does on the numpy path. A clipped trial step that is
+    rejected is tried again shorter, under the error control as any other.
 
     The integration is resumable: its whole state lives in the arrays passed in, `hdr` (time, the
     step size the error control proposes next, the last step's start and length, whether its dense
@@ -1610,11 +1621,15 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
         k += 1
     gaps, z = terminal_gaps(y, P)
+    n_kinks = kinks.shape[0]
+    ik = np.searchsorted(kinks, t, side="right")             # the next kink: kinks[ik] > t
     while k < nts and status == OK:
         if keep is not None:
             if keep[2][0] >= keep[1].shape[0]:
                 status = DENSE_FULL
                 break
+        kink = kinks[ik] if ik < n_kinks else np.inf
+        h_want = h_abs                      # the step size proposed, before any clip
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         if h_abs < min_step:
             h_abs = min_step
@@ -1629,6 +1644,9 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
             t_new = t + h
             if t_new - t_bound > 0:
                 t_new = t_bound
+            clipped = t_new > kink          # ends on the kink instead of straddling it
+            if clipped:
+                t_new = kink
             h = t_new - t
             h_abs = abs(h)
             # stages
@@ -1702,6 +1720,8 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
                 if rejected:
                     factor = min(1.0, factor)
                 h_abs *= factor
+                if clipped and not rejected:
+                    h_abs = h_want          # the step size goes on as proposed before the clip
                 accepted = True
             else:
                 h_abs *= max(0.2, 0.9 * err ** err_exp)
@@ -1794,6 +1814,8 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         if keep is not None:
             _keep_step(keep, t, t_new, y_prev, dense)
         t = t_new
+        while ik < n_kinks and kinks[ik] <= t:
+            ik += 1
         while k < nts and ts[k] <= t + 1e-12 * max(1.0, t):
             _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
             k += 1
@@ -1812,13 +1834,14 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
 
 @njit(cache=True)
 def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_steps, inputs, alpha, P,
-                 A, B, C, E, E3, Dm, Pm, monitor, jump, keep=None):
+                 A, B, C, E, E3, Dm, Pm, monitor, jump, kinks, keep=None):
     """One integration from t0 to t_end with :func:`rk_advance`, sampling `out[k] = y(grid[k])` for
-    k ≥ 1 (grid[-1] = t_end). `keep`: None, or (nodes, coeffs, kept) of :func:`rk_advance`, to
-    which every step's dense output is appended, the arrays replaced by ones twice as long when
-    full. Returns (status, samples written, steps, evaluations, t reached, next step size, keep):
-    the step size is the one the error control proposes after the last accepted step (scipy's
-    ``h_abs``)."""
+    k ≥ 1 (grid[-1] = t_end), running on through the `kinks` (see :func:`rk_advance`); `jump`: the
+    discontinuity it ends at (0: none), see :func:`_before`. `keep`: None, or (nodes, coeffs,
+    kept) of :func:`rk_advance`, to which every step's dense output is appended, the arrays
+    replaced by ones twice as long when full. Returns (status, samples written, steps,
+    evaluations, t reached, next step size, keep): the step size is the one the error control
+    proposes after the last accepted step (scipy's ``h_abs``)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = y0.shape[0]
     hdr = np.zeros(RK_HEADER)
@@ -1833,7 +1856,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     if keep is None:
         # np.int64(1): a literal k0 would compile rk_advance once more, for the literal
         st, k = rk_advance(method, hdr, y, f, y_prev, dense, grid, out, np.int64(1), t_end, rtol, atol, max_steps,
-                           inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work)
+                           inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work, kinks)
         return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H], keep
     else:
         nodes, coeffs, kept = keep
@@ -1842,7 +1865,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
             # the step budget is the whole integration's, over the calls
             st, k = rk_advance(method, hdr, y, f, y_prev, dense, grid, out, k, t_end, rtol, atol,
                                max_steps - int(hdr[RK_STEPS]), inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor,
-                               work, (nodes, coeffs, kept))
+                               work, kinks, (nodes, coeffs, kept))
             if st != DENSE_FULL:
                 break
             room = coeffs.shape[0]
@@ -1997,13 +2020,13 @@ def dense_states(method, nodes, coeffs, count, times, out):
 
 @njit(cache=True)
 def cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-             A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values):
+             A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, kinks):
     """One co-simulation step on the compiled path: :func:`rk_advance` to the one time in `ts`
-    (out[0] = y there), then every output signal there: `raw` in the layout of
+    (out[0] = y there), running on through the `kinks`, then every output signal there: `raw` in the layout of
     :func:`signal_values`, `values[i] = raw[order[i]]`. Returns (integrator status, signal status);
     NOT_FINITE where the state is not finite."""
     st, k = rk_advance(method, hdr, y, f, y_prev, dense, ts, out, np.int64(0), t_bound, rtol, atol, max_steps,
-                       inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work)     # np.int64: as integrate_rk
+                       inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work, kinks)   # np.int64: as integrate_rk
     if st != OK:
         return st, OK
     y_out = out[0]
@@ -2025,13 +2048,15 @@ def next_jump(jumps, t):
 
 @njit(cache=True)
 def cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-               A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, jumps):
+               A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, jumps, kinks):
     """A co-simulation step to t_end on the running integration (:func:`cosim_rk`), segment by
     segment: a segment ends at its discontinuity (RK_JUMP: a step force's switch, a ground record's
-    sample, of the increasing `jumps`), where the integration starts afresh, with the step size
-    chosen as scipy does, from the state there, as :func:`integrate_rk` over the segments of a whole
-    run. Steps are clipped to the segment's end and to `t_bound`. `ts` (one slot) and `out` (one
-    row) take the sample. Returns (integrator status, signal status)."""
+    end on a value other than zero, of the increasing `jumps`), where the integration starts
+    afresh, with the step size chosen as scipy does, from the state there, as :func:`integrate_rk`
+    over the segments of a whole run; through the `kinks` (a ground record's samples) it runs on
+    (:func:`rk_advance`). Steps are clipped to the segment's end, to the kinks and to `t_bound`.
+    `ts` (one slot) and `out` (one row) take the sample. Returns (integrator status, signal
+    status)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     while True:
         jump = hdr[RK_JUMP]
@@ -2052,22 +2077,25 @@ def cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol, 
         ts[0] = min(t_end, jump) if jump > 0.0 else t_end
         st, sst = cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, min(t_bound, jump) if jump > 0.0 else t_bound,
                            rtol, atol, max_steps, inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work, need_acc,
-                           raw, order, values)
+                           raw, order, values, kinks)
         if st != OK or ts[0] == t_end:
             return st, sst
 
 
 @njit(cache=True)
-def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump):
-    """Classical RK4 with a fixed step (the last one shortened), cubic Hermite between nodes; `jump`:
-    a discontinuity the integration ends at (0: none), see :func:`_before`."""
+def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks):
+    """Classical RK4 with a fixed step, cubic Hermite between nodes; `jump`: a discontinuity the
+    integration ends at (0: none), see :func:`_before`. The step before t_end and the step before
+    each of the increasing `kinks` (a ground record's samples, where the right-hand side's slope
+    jumps) are shortened to end there, and from a kink the steps go on with the fixed step and the
+    last derivative, as from a restart there without its evaluation."""
     P = _unowned(P)                 # entered from Python (_unowned)
     work = work_arrays(P, y0.shape[0], 4)
-    return _rk4_run(y0.copy(), t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, work)
+    return _rk4_run(y0.copy(), t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work)
 
 
 @njit(cache=True)
-def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, work):
+def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work):
     """:func:`integrate_rk4` from y (overwritten) with the scratch `work` (:func:`work_arrays`, 4 rows
     of stages), an argument so that it can be taken without reference counting (_unowned)."""
     AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
@@ -2083,8 +2111,13 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, w
     ngrid = grid.shape[0]
     steps = 0
     gaps, z = terminal_gaps(y, P)
+    n_kinks = kinks.shape[0]
+    ik = np.searchsorted(kinks, t, side="right")             # the next kink: kinks[ik] > t
     while t < t_end:
-        h = min(step, abs(t_end - t))
+        while ik < n_kinks and kinks[ik] <= t:
+            ik += 1
+        end = kinks[ik] if ik < n_kinks and kinks[ik] < t_end else t_end
+        h = min(step, abs(end - t))
         for i in range(ny):
             ys[i] = y[i] + h / 2 * f[i]
         st = _rhs(min(t + h / 2, before), ys, inputs, alpha, P, AB, rhs, gen, acc, k2)
@@ -2123,16 +2156,18 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, w
 
 
 @njit(cache=True)
-def rk4_cosim_step(y, t0, t_end, jumps, ts, out, step, max_steps, inputs, alpha, P):
+def rk4_cosim_step(y, t0, t_end, jumps, kinks, ts, out, step, max_steps, inputs, alpha, P):
     """RK4 from (t0, y) to t_end, y left at t_end (a co-simulation step: CompiledStepper.step and
     the FMU's native step), segment by segment: a discontinuity of the increasing `jumps` in
     (t0, t_end) ends a segment there, where :func:`integrate_rk4` restarts; within
     eps = 1e-12·max(1 s, |t_end|) one at t_end ends the last segment and one at t0 starts none.
-    `ts`, `out`: scratch of two samples. Returns (status, steps, the time reached, the start of the
-    segment that failed)."""
+    The increasing `kinks` in (t0 + eps, t_end − eps] end steps, which run on from them
+    (:func:`integrate_rk4`). `ts`, `out`: scratch of two samples. Returns (status, steps, the time
+    reached, the start of the segment that failed)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     eps = 1e-12 * max(1.0, abs(t_end))
     steps = 0
+    inside = kinks[np.searchsorted(kinks, t0 + eps, side="right"):np.searchsorted(kinks, t_end - eps, side="right")]
     i = np.searchsorted(jumps, t0 + eps, side="right")
     while True:
         if i < jumps.shape[0] and jumps[i] <= t_end - eps:
@@ -2145,7 +2180,7 @@ def rk4_cosim_step(y, t0, t_end, jumps, ts, out, step, max_steps, inputs, alpha,
         ts[0] = t0
         ts[1] = end
         st, k, s_steps, evals, t_reached = integrate_rk4(y, t0, end, ts, out, step, max_steps, inputs, alpha, P,
-                                                         jump)
+                                                         jump, inside)
         steps += s_steps
         if st != OK:
             return st, steps, t_reached, t0
@@ -2193,7 +2228,8 @@ WORK = (("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), 
 NATIVE_SLOTS = (RK_STATE + (("ts", "f1"), ("out", "f2"), ("inputs", "f1")) + PARAMS + TABLEAU
                 + (("monitor", "f1"),) + WORK
                 + (("raw", "f1"), ("order", "i1"), ("values", "f1"), ("clock", "f1"))
-                + tuple(("b_" + name, kind) for name, kind in RK_STATE) + (("jumps", "f1"), ("spatial", "i1")))
+                + tuple(("b_" + name, kind) for name, kind in RK_STATE)
+                + (("jumps", "f1"), ("kinks", "f1"), ("spatial", "i1")))
 CLOCK_TIME, CLOCK_BOUND, CLOCK_RTOL, CLOCK_ATOL, CLOCK_ALPHA, CLOCK_BUSY, CLOCK_TOLERANCE, CLOCK_TAKEN, \
     CLOCK_STEP = range(9)
 CLOCK_SIZE = 9
@@ -2205,9 +2241,9 @@ _SLOT = {name: i for i, (name, _) in enumerate(NATIVE_SLOTS)}
 # tableau, the scratch) and each single slot: numba takes these module constants as literals.
 S_RK, S_BACKUP, S_PARAMS, S_TABLEAU, S_WORK = (_SLOT["hdr"], _SLOT["b_hdr"], _SLOT["mass"], _SLOT["A"],
                                                _SLOT["AB"])
-S_TS, S_OUT, S_INPUTS, S_MONITOR, S_RAW, S_ORDER, S_VALUES, S_CLOCK, S_JUMPS, S_SPATIAL = (
+S_TS, S_OUT, S_INPUTS, S_MONITOR, S_RAW, S_ORDER, S_VALUES, S_CLOCK, S_JUMPS, S_KINKS, S_SPATIAL = (
     _SLOT["ts"], _SLOT["out"], _SLOT["inputs"], _SLOT["monitor"], _SLOT["raw"], _SLOT["order"], _SLOT["values"],
-    _SLOT["clock"], _SLOT["jumps"], _SLOT["spatial"])
+    _SLOT["clock"], _SLOT["jumps"], _SLOT["kinks"], _SLOT["spatial"])
 
 
 @intrinsic
@@ -2336,8 +2372,8 @@ def native_step_on(tab, t, h, P):
             _f1(tab, w + 6), _f1(tab, w + 7), _f1(tab, w + 8))
     raw, order, values = _f1(tab, S_RAW), _i1(tab, S_ORDER), _f1(tab, S_VALUES)
     if tab[TABLE_METHOD] == NATIVE_RK4:
-        st, steps, t_reached, t_fail = rk4_cosim_step(y, now, t_end, _f1(tab, S_JUMPS), ts, out, clock[CLOCK_STEP],
-                                                      tab[TABLE_MAX_STEPS], inputs, alpha, P)
+        st, steps, t_reached, t_fail = rk4_cosim_step(y, now, t_end, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), ts, out,
+                                                      clock[CLOCK_STEP], tab[TABLE_MAX_STEPS], inputs, alpha, P)
         if st != OK:
             return 0
         for n in range(y.shape[0]):
@@ -2356,7 +2392,7 @@ def native_step_on(tab, t, h, P):
                              _f2(tab, S_TABLEAU), _f1(tab, S_TABLEAU + 1), _f1(tab, S_TABLEAU + 2),
                              _f1(tab, S_TABLEAU + 3), _f1(tab, S_TABLEAU + 4), _f2(tab, S_TABLEAU + 5),
                              _f2(tab, S_TABLEAU + 6), _f1(tab, S_MONITOR), work, tab[TABLE_NEED_ACC] != 0, raw, order,
-                             values, _f1(tab, S_JUMPS))
+                             values, _f1(tab, S_JUMPS), _f1(tab, S_KINKS))
         if st != OK or sst != OK:
             return 0
     clock[CLOCK_TIME] = t_end

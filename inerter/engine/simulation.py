@@ -49,10 +49,10 @@ class Settings:
 
 
 def derivative(mech, inputs, alpha, jump=None):
-    """y = [q, v] ↦ [q̇ = B(q) v, v̇ from Eq. (33)]. `jump`: a time where the right-hand side is not
-    smooth (a step force switches, a ground record's sample), ending the segment integrated: it is
-    evaluated just before (one ulp), so that stages at the segment's end see the values the forces
-    had over the segment."""
+    """y = [q, v] ↦ [q̇ = B(q) v, v̇ from Eq. (33)]. `jump`: a time where the right-hand side jumps
+    (a step force switches) or, for a method that restarts there, a kink, ending the segment
+    integrated: it is evaluated just before (one ulp), so that stages at the segment's end see the
+    values the forces had over the segment."""
     nq = mech.nq
     before = None if jump is None else float(np.nextafter(jump, -np.inf))
 
@@ -65,11 +65,68 @@ def derivative(mech, inputs, alpha, jump=None):
     return fun
 
 
-def jumps(mech, t0, t1):
-    """Times in (t0, t1] where the right-hand side is not smooth (``mech.discontinuities``: a step
-    force switching, a ground record's sample); the integrators restart there."""
-    times = getattr(mech, "discontinuities", ())
+#: Methods that run on through a kink of the right-hand side (``Mechanism.kinks``: a ground
+#: record's samples) instead of restarting there: the explicit Runge-Kutta methods, whose whole
+#: state (y, its derivative, the step size) is still valid at a kink. A step that would cross a
+#: kink is clipped to end on it (no step straddles one, so the method keeps its order), and the
+#: integration goes on from there with its last derivative (FSAL) and the step size its error
+#: control proposed before the clip (:func:`_on_through_kink`); RK4 goes on with its fixed step.
+#: Radau, BDF and LSODA restart at a kink as at a jump.
+THROUGH_KINKS = ("DOP853", "RK45", "RK4")
+
+
+def _between(times, t0, t1):
     return times[bisect.bisect_right(times, t0):bisect.bisect_right(times, t1)]
+
+
+def jumps(mech, t0, t1, method=None):
+    """Times in (t0, t1] where the integrators restart: ``mech.discontinuities`` (a step force
+    switching, a ground record ending on a value other than zero) and, for a method not in
+    :data:`THROUGH_KINKS` (or no `method`), ``mech.kinks`` (a ground record's samples) too."""
+    times = _between(getattr(mech, "discontinuities", ()), t0, t1)
+    if method not in THROUGH_KINKS:
+        more = _between(getattr(mech, "kinks", ()), t0, t1)
+        if more:
+            times = sorted(set(times).union(more))
+    return times
+
+
+def next_jump(mech, t0, t1, method=None):
+    """The first of :func:`jumps` in (t0, t1], None where there is none."""
+    first = None
+    for times in (getattr(mech, "discontinuities", ()),
+                  getattr(mech, "kinks", ()) if method not in THROUGH_KINKS else ()):
+        i = bisect.bisect_right(times, t0)
+        if i < len(times) and times[i] <= t1 and (first is None or times[i] < first):
+            first = times[i]
+    return first
+
+
+def kinks(mech, t0, t1):
+    """``mech.kinks`` in (t0, t1): where a method of :data:`THROUGH_KINKS` clips its step."""
+    times = getattr(mech, "kinks", ())
+    return list(times[bisect.bisect_right(times, t0):bisect.bisect_left(times, t1)])
+
+
+def next_kink(mech, t0, t1):
+    """The first of ``mech.kinks`` in (t0, t1), else t1."""
+    times = getattr(mech, "kinks", ())
+    i = bisect.bisect_right(times, t0)
+    return times[i] if i < len(times) and times[i] < t1 else t1
+
+
+def _on_through_kink(solver, h_want, bound):
+    """Run a scipy solver that has just reached a kink (its `t_bound`) on towards `bound` (the next
+    kink or its segment's end), with its y and f, and, where its last step was clipped to end on
+    the kink, the step size proposed before that step, `h_want`, as the compiled loop does
+    (``kernels.rk_advance``): the clipped step's own proposal would shrink the steps after a
+    short clipped step, whose error estimate is smaller by (h_clipped/h)^(p+1), and round-off for
+    a very short one."""
+    solver.t_bound = bound
+    solver.status = "running"
+    if h_want is not None and hasattr(solver, "h_abs") and solver.t_old + h_want > solver.t:
+        solver.h_abs = h_want
+    # RK4 (no h_abs): its fixed step goes on
 
 
 #: Hairer's stiffness test for the explicit Runge–Kutta pairs (DOP853 and DOPRI5 in Hairer and
@@ -197,7 +254,12 @@ class Run:
 
 def integrate(mech, settings: Settings, inputs=None) -> Run:
     """Integrate from the mechanism's initial state to settings.stop_time. A failure keeps
-    everything computed up to the last good step (status "failed", message says where and why)."""
+    everything computed up to the last good step (status "failed", message says where and why).
+
+    The integration restarts at each jump of the right-hand side (``mech.discontinuities``); DOP853,
+    RK45 and RK4 run on through its kinks (``mech.kinks``), their steps clipped to end on each
+    (:data:`THROUGH_KINKS`), as the compiled loop does, and take the same steps; the other methods
+    restart at a kink too."""
     n = mech.nq
     fun = derivative(mech, inputs, settings.alpha)
     grid = np.arange(0.0, settings.stop_time + 0.5 * settings.output_interval, settings.output_interval)
@@ -220,18 +282,27 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
     try:
         while t0 < settings.stop_time:
             # With projection, each output interval is a fresh integration from a projected state;
-            # a step force's switching time also ends a segment (the integrator restarts there).
+            # a jump of the right-hand side (a step force's switch) also ends a segment (the
+            # integrator restarts there), and so does a kink (a ground record's sample) for a
+            # method that does not run on through it (THROUGH_KINKS).
             t_end = grid[k] if project else settings.stop_time
-            switch = jumps(mech, t0, t_end)
-            if switch:
-                t_end = switch[0]
-            fun = derivative(mech, inputs, settings.alpha, t_end if switch else None)
-            solver = make_solver(settings.method, fun, t0, y, t_end, settings.rtol, settings.atol,
+            switch = next_jump(mech, t0, t_end, settings.method)
+            if switch is not None:
+                t_end = switch
+            fun = derivative(mech, inputs, settings.alpha, switch)
+            ahead = kinks(mech, t0, t_end) if settings.method in THROUGH_KINKS else []
+            ahead.append(t_end)                 # the bounds the solver is given, one after the other
+            solver = make_solver(settings.method, fun, t0, y, ahead[0], settings.rtol, settings.atol,
                                  settings.step, first_step)
+            i = 0
             dense_prev_y = y.copy()
             while solver.status == "running":
+                h_want = getattr(solver, "h_abs", None)
                 _step(solver, settings.method)
                 steps += 1
+                if solver.status == "finished" and solver.t < t_end:        # at a kink
+                    i += 1
+                    _on_through_kink(solver, h_want, ahead[i])
                 monitor.after_step(solver, dense_prev_y)
                 dense_prev_y = solver.y.copy()
                 dense = solver.dense_output()
@@ -249,7 +320,7 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
                     out[k - 1] = y
             # Projection restarts go on with the step size the error control proposed; after a
             # step force the solution's derivative jumps, and the integrator starts afresh.
-            first_step = getattr(solver, "h_abs", None) if (project and not switch) else None
+            first_step = getattr(solver, "h_abs", None) if (project and switch is None) else None
             max_drift = max(max_drift, mech.constraint_residual(y[:n]))
             t0 = solver.t
     except SimulationError as exc:
@@ -278,7 +349,9 @@ class Stepper:
     step advances it until its last step covers the point and takes the state there from that
     step's dense output, as :func:`integrate` samples its output grid. Its steps are bounded by the
     experiment's stop time (`stop_time`, where the importer gave one; dropped if it steps past it)
-    and by step-force switching times, where it restarts as the whole run does; so while the
+    and by the jumps of the right-hand side (a step force's switch), where it restarts as the whole
+    run does, and clipped to end on its kinks (a ground record's samples), through which DOP853 and
+    RK45 run on as the whole run does (Radau and BDF restart there); so while the
     inputs hold, the states equal the whole run's bit for bit. An input that changes is a
     discontinuity: the integration restarts at that point with the step size the error control
     proposed last, and that segment lands on the next point. RK4, LSODA and the projection
@@ -300,7 +373,7 @@ class Stepper:
         self.t_bound = float(stop_time) if stop_time is not None and stop_time > 0 else np.inf
         self._runs_on = settings.method in RUNS_ON and settings.constraint != "projection"
         self._solver = None                   # the running integration (scipy OdeSolver)
-        self._segment = None                  # its (t_bound, ends at a step force's switch)
+        self._segment = None                  # its (end, ends at a jump)
         self._dense = None                    # the dense output of its last step, once asked for
         self._input_moved = False             # an input changed since the last step
 
@@ -341,16 +414,25 @@ class Stepper:
         self._input_moved = False
 
     def _start(self, t0, y0, h, bound):
-        """A new segment of the integration from (t0, y0), to `bound` or to the first step-force
-        switch before it (with the force's value from before the switch, as :func:`integrate`)."""
+        """A new segment of the integration from (t0, y0), to `bound` or to the first jump before it
+        (with the forces' values from before it, as :func:`integrate`); the solver's own bound is
+        the segment's first kink, where it runs on (:meth:`_next_kink`), or its end."""
         s = self.settings
-        switch = jumps(self.mech, t0, bound)
-        end = switch[0] if switch else bound
-        fun = derivative(self.mech, self.inputs.copy(), s.alpha, end if switch else None)
-        self._solver = make_solver(s.method, fun, t0, np.array(y0, dtype=float), end, s.rtol, s.atol, s.step, h)
-        self._segment = (end, bool(switch))
+        switch = next_jump(self.mech, t0, bound, s.method)
+        end = bound if switch is None else switch
+        fun = derivative(self.mech, self.inputs.copy(), s.alpha, switch)
+        first = next_kink(self.mech, t0, end) if s.method in THROUGH_KINKS else end
+        self._solver = make_solver(s.method, fun, t0, np.array(y0, dtype=float), first, s.rtol, s.atol, s.step, h)
+        self._segment = (end, switch is not None)
         self._dense = None
         return self._solver
+
+    def _next_kink(self, solver, h_want):
+        """After a step: where the solver stopped at a kink inside its segment, it runs on towards
+        the next kink or the segment's end (:func:`_on_through_kink`)."""
+        end = self._segment[0]
+        if solver.status == "finished" and solver.t < end:
+            _on_through_kink(solver, h_want, next_kink(self.mech, solver.t, end))
 
     def _run_on(self, t_end, monitor):
         """Advance the running integration until its last step covers t_end; the state there."""
@@ -371,7 +453,9 @@ class Stepper:
                 solver = self._start(solver.t, solver.y, None if switched else getattr(solver, "h_abs", None),
                                      max(bound, t_end))
             previous = solver.y.copy()
+            h_want = getattr(solver, "h_abs", None)
             _step(solver, s.method)
+            self._next_kink(solver, h_want)
             monitor.after_step(solver, previous)
             self._dense = None
         if self._dense is None:
@@ -380,11 +464,12 @@ class Stepper:
 
     def _restarted(self, t_end, monitor):
         """RK4, LSODA, projection: the integration restarts at the communication point, with the
-        last step size, and its last step lands on t_end (a step-force switch inside ends a segment).
-        The state at t_end and the step size to restart with."""
+        last step size, and its last step lands on t_end (a jump or a kink inside ends a segment,
+        and the next one starts afresh). The state at t_end and the step size to restart with."""
         s, n = self.settings, self.mech.nq
         t0, y, h = self.time, self.y, self.h
         eps = 1e-12 * max(1.0, abs(t_end))
+        # a kink ends a segment too (jumps without a method): this readable reference restarts there
         ends = [t for t in jumps(self.mech, t0 + eps, t_end - eps)] + [t_end]
         for end in ends:
             jump = end if jumps(self.mech, end - eps, end + eps) else None

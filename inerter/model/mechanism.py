@@ -169,14 +169,20 @@ class Mechanism:
                 self.gravity[self.v_index[i]:self.v_index[i] + dim] = b.mass * np.asarray(g)
         self.masses = np.array([b.mass for b in scene.bodies.values()])
         self.ground_motion = scene.effects.get("ground_acceleration")
-        if self.ground_motion is not None and self.ground_motion.record is not None:
-            # A record is interpolated linearly: its slope jumps at every sample (and its value at
-            # the ends, zero outside), so each sample ends a smooth segment of the motion.
-            switches.update(float(t) for t in self.ground_motion.record[0] if t > 0)
-        #: Times where the right-hand side is not smooth (a step force switches, a ground record's
-        #: sample): the integrators restart there (module simulation), so every step integrates a
-        #: smooth right-hand side and the methods keep their order.
+        kinks, record_jumps = self.ground_motion.breaks() if self.ground_motion is not None else ([], [])
+        switches.update(record_jumps)
+        #: Times where the right-hand side jumps (a step force switches; a ground record ends on a
+        #: value other than zero, the motion being zero outside it): the integrators restart there
+        #: (module simulation), with the forces of the segment before up to it.
         self.discontinuities = sorted(switches)
+        #: Times where the right-hand side is continuous but its slope jumps (a ground record's
+        #: samples: it is interpolated linearly). No step may straddle one, or the methods lose
+        #: their order; but the state, its derivative and the step size the error control
+        #: proposes are still valid there, so the explicit Runge-Kutta methods run on through a
+        #: kink, their step clipped to end on it, and the others restart there as at a jump
+        #: (:func:`inerter.engine.simulation.jumps`). A time here that is also in
+        #: ``discontinuities`` is a jump.
+        self.kinks = sorted(set(kinks) - switches)
         if self.ground_motion is not None and self.ground_motion.input:
             self.input_names += [f"ground.a[{i + 1}]" for i in range(dim)]
 

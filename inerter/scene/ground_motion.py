@@ -33,6 +33,22 @@ class GroundMotion:
                                           for i in range(self.dim)])
         return self.scale * self.amplitude * math.sin(2.0 * math.pi * self.frequency * t)
 
+    def breaks(self):
+        """(kinks, jumps) of a record, each an increasing list of times > 0: where the
+        acceleration's slope jumps but its value does not (the samples inside the record, and an
+        end where the record's value is zero) and where its value jumps (an end where the record's
+        value is not zero: outside the record the motion is zero). Empty for a sine and for inputs."""
+        if self.record is None or self.input:
+            return [], []
+        times, values = self.record
+        kinks = [float(t) for t in times[1:-1] if t > 0]
+        jumps = []
+        for i in (0, len(times) - 1):
+            if times[i] > 0:
+                drops = self.scale != 0.0 and bool(np.any(values[:, i] != 0.0))
+                (jumps if drops else kinks).append(float(times[i]))
+        return sorted(kinks), jumps
+
     def describe(self):
         if self.input:
             return "acceleration from the inputs ground.a[i]"

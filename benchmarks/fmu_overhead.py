@@ -206,7 +206,9 @@ def main(argv=None):
         c_floor = c_floor_fmu(floor, scratch)
 
         def whole(path):
-            return model.simulate(stop_time=args.stop_time, output_interval=args.step, metrics=False, path=path)
+            result = model.simulate(stop_time=args.stop_time, output_interval=args.step, metrics=False, path=path)
+            result.values()                     # every output at every sample, as the FMU gives them
+            return result
 
         def stepper(path):
             st = model.stepper(path=path, stop_time=args.stop_time)

@@ -212,6 +212,11 @@ class Result:
         self._values = np.array(values) if values else np.zeros((0, len(sig.names)))
         return self._values
 
+    def values(self) -> np.ndarray:
+        """Every output at every sample (samples × outputs, in the order of ``names``); outputs are
+        otherwise evaluated one signal at a time, when first read."""
+        return self._all_values()
+
     def _column(self, name) -> np.ndarray:
         """One output at every sample: in the kernels on a compiled run, up to a sample where it
         cannot be evaluated, from which the numpy path's signals give the values or the message."""

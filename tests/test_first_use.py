@@ -1,0 +1,129 @@
+"""First use: the notice while the kernels compile (inerter.engine.compiled.CompileNotice), and the
+ahead-of-time `inerter compile`. Nothing here compiles the engine's kernels: the notice is fed
+numba's events by hand, or a one-line kernel compiles in a subprocess."""
+from __future__ import annotations
+
+import io
+import os
+import subprocess
+import sys
+import textwrap
+import types as pytypes
+
+import pytest
+
+compiled = pytest.importorskip("inerter.engine.compiled")
+if not compiled.AVAILABLE:                                   # pragma: no cover
+    pytest.skip(compiled.WHY_NOT, allow_module_level=True)
+
+from numba.core import types  # noqa: E402
+
+from inerter import cli  # noqa: E402
+
+KERNELS = compiled._k
+
+
+def _event(name, args, module=KERNELS.__name__):
+    """A numba:compile event of kernel `name` with argument types `args`."""
+    func = pytypes.SimpleNamespace(__name__=name, __module__=module)
+    return pytypes.SimpleNamespace(data={"dispatcher": pytypes.SimpleNamespace(py_func=func), "args": args})
+
+
+def _params(dim):
+    """The numba type of a scene's P: 2D, or 3D with its `spatial` slot."""
+    arrays = [types.Array(types.float64, 1, "C")] * len(KERNELS.PARAMS)
+    if dim == 3:
+        arrays.append(types.Array(types.int64, 1, "C"))
+    return types.Tuple(arrays)
+
+
+def test_notice_when_a_kernel_compiles():
+    out = io.StringIO()
+    notice = compiled.CompileNotice(stream=out)
+    outer = _event("integrate_rk", (types.int64, _params(2)))
+    inner = _event("assemble", (_params(2),))
+    numba_own = _event("impl", (types.float64,), module="numba.np.arrayobj")
+    notice.on_start(outer)
+    assert "compiling the engine's 2D kernels for this machine" in out.getvalue()
+    for event in (inner, numba_own):                 # compiled inside the outer one: not said again
+        notice.on_start(event)
+        notice.on_end(event)
+    assert out.getvalue().count("inerter:") == 1
+    notice.on_end(outer)
+    assert out.getvalue().splitlines()[-1].startswith("inerter: ... done in")
+    # a second compilation of the same dimension is said only once it has taken LATE seconds
+    notice.on_start(_event("max_residual", (types.float64, _params(2))))
+    notice.on_end(_event("max_residual", (types.float64, _params(2))))
+    assert out.getvalue().count("inerter:") == 2
+    # the other dimension is said at once
+    notice.on_start(_event("signal_history", (_params(3),)))
+    notice.on_end(_event("signal_history", (_params(3),)))
+    assert "3D kernels" in out.getvalue()
+
+
+def test_a_long_compilation_is_said_while_it_happens():
+    out = io.StringIO()
+    notice = compiled.CompileNotice(stream=out)
+    notice.LATE = 0.05
+    notice._announced.add(2)
+    event = _event("signal_history", (_params(2),))
+    notice.on_start(event)
+    notice._timer.join()                             # the compilation goes on past LATE
+    assert "compiling the engine's 2D kernels: the outputs" in out.getvalue()
+    notice.on_end(event)
+    assert "done in" in out.getvalue()
+
+
+def test_silenced():
+    out = io.StringIO()
+    notice = compiled.CompileNotice(stream=out)
+    notice.enabled = False
+    event = _event("integrate_rk", (_params(2),))
+    notice.on_start(event)
+    notice.on_end(event)
+    assert out.getvalue() == "" and notice.seconds > 0.0
+
+
+def test_notice_on_a_cache_miss_only(tmp_path):
+    """A kernel compiled by numba says so on stderr; the next process loads it from numba's cache
+    and says nothing."""
+    (tmp_path / "inerter_kernels_probe.py").write_text(textwrap.dedent("""
+        from numba import njit
+
+        @njit(cache=True)
+        def probe(P):
+            return P[0].shape[0]
+    """))
+    script = textwrap.dedent("""
+        import numpy as np
+        import inerter.engine.compiled as compiled
+        import inerter_kernels_probe as k
+        P = tuple(np.zeros(1) for _ in compiled._k.PARAMS)
+        print(k.probe(P))
+    """)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path)] + sys.path))
+
+    def run():
+        done = subprocess.run([sys.executable, "-c", script], env=env, cwd=tmp_path, capture_output=True,
+                              text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        return done.stderr
+
+    first, second = run(), run()
+    assert "inerter: compiling the engine's 2D kernels" in first and "done in" in first
+    assert "inerter:" not in second
+
+
+def test_compile_command(monkeypatch, capsys):
+    """`inerter compile` says once what it compiles, with the kernels' notice silenced meanwhile."""
+    import inerter.api
+
+    def fake_warm_up(spatial=False):
+        assert not compiled.NOTICE.enabled and spatial
+        return 0.5
+    monkeypatch.setattr(inerter.api, "warm_up", fake_warm_up)
+    assert cli.main(["compile"]) == 0
+    captured = capsys.readouterr()
+    assert "compiling the engine's 2D and 3D kernels" in captured.err
+    assert "(all were in the cache)" in captured.err and "loaded in 0.5 s" in captured.out
+    assert compiled.NOTICE.enabled

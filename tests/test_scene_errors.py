@@ -115,3 +115,15 @@ def test_every_shipped_scene_is_valid():
             tomllib.load(fh)
         model = inerter.load(path)
         assert model.terms()
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    (dict(method="Foo"), "method"), (dict(constraint="x"), "constraint"), (dict(stop_time=-1.0), "stop_time"),
+    (dict(stop_time=float("nan")), "stop_time"), (dict(rtol=0.0), "rtol"), (dict(output_interval=0.0), "output_interval"),
+])
+def test_a_bad_simulate_argument_names_itself(kwargs, field):
+    """From Python as from the command line: the argument, its value and what was expected."""
+    model = inerter.load(LUMPED)
+    with pytest.raises(inerter.SceneError) as info:
+        model.simulate(**kwargs)
+    assert info.value.field == field and f"simulate(): {field}:" in str(info.value)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import bisect
 import copy
 import functools
+import math
 import pickle
 import time as _time
 import types
@@ -18,9 +19,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import OdeSolution
 
-from inerter.common.errors import TerminalsMeet
-from inerter.common.errors import SimulationError
+from inerter.common.errors import SceneError, SimulationError, TerminalsMeet
 from inerter.engine.integrators import make_solver
+from inerter.scene.reader import CONSTRAINT_TREATMENTS, METHODS
 
 
 @dataclass
@@ -41,11 +42,29 @@ class Settings:
                       atol=x.atol, constraint=x.constraint, baumgarte=x.baumgarte, step=x.step,
                       max_steps=x.max_steps)
         values.update({k: v for k, v in overrides.items() if v is not None})
+        _check_settings(values, overrides)
         return cls(**values)
 
     @property
     def alpha(self):
         return self.baumgarte if self.constraint == "baumgarte" else 0.0
+
+
+def _check_settings(values, given):
+    """An argument of ``simulate``/``stepper`` that the integrators cannot take is named with what
+    was expected (a scene's own values are checked by the scene reader)."""
+    def bad(name, expected, problem):
+        raise SceneError("simulate()", name, values[name], expected, problem)
+
+    if values["method"] not in METHODS:
+        bad("method", "one of " + ", ".join(METHODS), "unknown method")
+    if values["constraint"] not in CONSTRAINT_TREATMENTS:
+        bad("constraint", "one of " + ", ".join(CONSTRAINT_TREATMENTS), "unknown constraint treatment")
+    for name in ("stop_time", "output_interval", "rtol", "atol", "step"):
+        value = values[name]
+        if name in given and given[name] is not None and not (
+                isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            bad(name, "a finite number > 0", "out of range")
 
 
 def derivative(mech, inputs, alpha, jump=None):

@@ -472,7 +472,7 @@ class Mechanism:
 
     def mass_matrix(self, q, v):
         M = self.M0.copy()
-        for e in self.inerters:
+        for e in self.elements:                   # a kind whose law has no inertance adds nothing
             e.add_mass(q, v, M)                                    # M + M_I, Eq. (33)
         return M
 

@@ -17,7 +17,7 @@ from inerter.model.mechanism import Mechanism
 from inerter.oracle import OracleElement
 from inerter.engine.outputs import Signals
 from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
-from inerter.common.errors import SimulationError
+from inerter.common.errors import SceneError, SimulationError
 from inerter.engine.simulation import Settings, Stepper, integrate
 
 #: Tolerances at which the oracle is solved (DOP853).
@@ -139,7 +139,7 @@ class Model:
         elif path in ("numpy", "compiled"):
             run = integrate(self.mechanism, s)
         else:
-            raise ValueError(f"path = {path!r}; expected 'numpy' or 'compiled'")
+            raise SceneError("simulate()", "path", path, "'numpy' or 'compiled'", "unknown path")
         result = Result(self, s, run)
         if metrics and run.status == "ok":
             result.metrics = compute_metrics(self, result)
@@ -162,7 +162,7 @@ class Model:
             if stepper is not None:
                 return stepper
         elif path != "numpy" and path != "compiled":
-            raise ValueError(f"path = {path!r}; expected 'numpy' or 'compiled'")
+            raise SceneError("stepper()", "path", path, "'numpy' or 'compiled'", "unknown path")
         return Stepper(self.mechanism, s, self.signals, stop_time)
 
 

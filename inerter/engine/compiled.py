@@ -384,6 +384,31 @@ def sparsity(flat) -> np.ndarray:
     return S
 
 
+def reverse_cuthill_mckee(A):
+    """Reverse Cuthill–McKee order of the symmetric sparsity pattern `A` (boolean, N×N): a
+    breadth-first walk from a lowest-degree unknown of each connected part, neighbours by
+    ascending degree, reversed (Cuthill & McKee 1969; George 1971). The mechanisms' patterns are
+    small, and this avoids importing scipy.sparse (0.2 s) for them."""
+    N = A.shape[0]
+    neighbours = [np.flatnonzero(A[i]) for i in range(N)]
+    degree = np.array([len(nb) for nb in neighbours])
+    seen = np.zeros(N, dtype=bool)
+    order = []
+    for start in np.argsort(degree, kind="stable"):
+        if seen[start]:
+            continue
+        seen[start] = True
+        queue = [int(start)]
+        while queue:
+            i = queue.pop(0)
+            order.append(i)
+            fresh = [j for j in neighbours[i] if not seen[j]]
+            for j in sorted(fresh, key=lambda j: degree[j]):
+                seen[j] = True
+                queue.append(int(j))
+    return np.array(order[::-1], dtype=np.int64)
+
+
 def ordering(S):
     """(perm, kl, ku): perm[i] = position of unknown i after a reverse Cuthill-McKee ordering
     (identity when that does not narrow the band), and the band widths."""
@@ -396,17 +421,12 @@ def ordering(S):
         return (int(max(d.max(), 0)), int(max(-d.min(), 0))) if len(d) else (0, 0)
 
     best = (identity, *widths(identity))
-    try:
-        from scipy.sparse import csr_matrix
-        from scipy.sparse.csgraph import reverse_cuthill_mckee
-        order = reverse_cuthill_mckee(csr_matrix(S | S.T), symmetric_mode=True)
-        perm = np.empty(N, dtype=np.int64)
-        perm[order] = np.arange(N)
-        kl, ku = widths(perm)
-        if kl + ku < best[1] + best[2]:
-            best = (perm, kl, ku)
-    except ImportError:                                       # pragma: no cover
-        pass
+    order = reverse_cuthill_mckee(S | S.T)
+    perm = np.empty(N, dtype=np.int64)
+    perm[order] = np.arange(N)
+    kl, ku = widths(perm)
+    if kl + ku < best[1] + best[2]:
+        best = (perm, kl, ku)
     perm, kl, ku = best
     return np.asarray(perm, dtype=np.int64), kl, ku
 
@@ -680,10 +700,24 @@ class _KernelMechanism:
 _RK_TABLES = {}
 
 
+def _dop853_coefficients():
+    """scipy's DOP853 tables (scipy/integrate/_ivp/dop853_coefficients.py, which needs only numpy),
+    read from their file: importing them as a module imports scipy.integrate whole, 0.15 s of a
+    fresh process's first result."""
+    import importlib.util
+
+    scipy_dir = Path(importlib.util.find_spec("scipy").origin).parent
+    spec = importlib.util.spec_from_file_location(
+        "inerter_dop853_coefficients", scipy_dir / "integrate" / "_ivp" / "dop853_coefficients.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def _tables(method):
     if method not in _RK_TABLES:
         if method == "DOP853":
-            from scipy.integrate._ivp import dop853_coefficients as d
+            d = _dop853_coefficients()
             _RK_TABLES[method] = (np.ascontiguousarray(d.A), np.ascontiguousarray(d.B), np.ascontiguousarray(d.C),
                                   np.ascontiguousarray(d.E5), np.ascontiguousarray(d.E3),
                                   np.ascontiguousarray(d.D), np.zeros((1, 1)))
@@ -747,11 +781,13 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     steps = evals = 0
     h, t0, k, status, t_reached = 0.0, 0.0, 1, 0, 0.0
     tables = None if settings.method == "RK4" else _tables(settings.method)
-    keep = None
+    keep = _k.no_keep(len(y0))
     if dense and tables is not None:          # (nodes, coeffs, kept) of kernels.rk_advance, grown there
         rows = 8 if settings.method == "DOP853" else 1 + tables[6].shape[1]
         room = 256
-        keep = (np.empty(room + 1), np.empty((room, rows, len(y0))), np.zeros(1, dtype=np.int64))
+        kept = np.zeros(2, dtype=np.int64)
+        kept[_k.KEPT_ON] = 1
+        keep = (np.empty(room + 1), np.empty((room, rows, len(y0))), kept)
     start = _time.process_time()
     y = y0
     for t1 in ends:
@@ -788,8 +824,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
                            states[-1], grid[k - 1], int(settings.max_steps))
         message = f"at t = {t_reached:.6g} s: the {settings.method} integrator failed: {why}"
     sol = None
-    if keep is not None and keep[2][0] > 0:
-        sol = DenseOutput(_RK_CODE[settings.method], keep[0], keep[1], int(keep[2][0]))
+    if keep[2][_k.KEPT_COUNT] > 0:
+        sol = DenseOutput(_RK_CODE[settings.method], keep[0], keep[1], int(keep[2][_k.KEPT_COUNT]))
     run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
                       int(evals), cpu, None)
     run.extra.update(path="compiled", kernel=kernel)

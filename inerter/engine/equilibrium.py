@@ -13,8 +13,6 @@ m_e = m + (L_b/L_0)² b, k_e = k (L_b/L_0)².
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import eigh, null_space, orth
-from scipy.optimize import root
 
 from inerter.common.errors import SimulationError
 
@@ -37,8 +35,8 @@ def static_forces(mech, q):
 
 
 def static_equilibrium(mech, q_start=None, tol=1e-12):
-    """q* with static_forces(q*) + C_qᵀλ = 0 and C(q*) = 0, found by Newton (hybrid Powell)
-    from `q_start` (default: the initial pose)."""
+    """q* with static_forces(q*) + C_qᵀλ = 0 and C(q*) = 0, found by Newton's method
+    (MINPACK's hybrid Powell where Newton does not settle) from `q_start` (default: the initial pose)."""
     if mech.dim != 2:
         raise SimulationError("the static equilibrium and linearisation are implemented for planar scenes only; "
                               "give metrics of 3D scenes an explicit reference")
@@ -54,13 +52,44 @@ def static_equilibrium(mech, q_start=None, tol=1e-12):
         C, Cq, _ = mech.constraints(q, z)
         return np.concatenate((Q - Cq.T @ lam, C))
 
-    sol = root(residual, np.concatenate((q_start, np.zeros(m))), method="hybr", options={"xtol": 1e-14})
-    worst = float(np.max(np.abs(residual(sol.x)))) if sol.x.size else 0.0
+    x0 = np.concatenate((q_start, np.zeros(m)))
     scale = max(1.0, float(np.max(np.abs(static_forces(mech, q_start)))))
+    x = _newton(residual, x0, tol * scale)
+    if x is not None:
+        return x[:n]
+    # Newton did not settle (a singular Jacobian, a far start): MINPACK's hybrid Powell method,
+    # imported only here (scipy.optimize costs 0.2 s of a fresh process's first result)
+    from scipy.optimize import root
+
+    sol = root(residual, x0, method="hybr", options={"xtol": 1e-14})
+    worst = float(np.max(np.abs(residual(sol.x)))) if sol.x.size else 0.0
     if not sol.success and worst > tol * scale * 1e3:
         raise SimulationError(f"no static equilibrium found near the initial pose ({sol.message}; "
                               f"residual {worst:.3g})", 0.0)
     return sol.x[:n]
+
+
+def _newton(residual, x0, tol, iterations=30, h=1e-7):
+    """x with max|residual(x)| ≤ tol by Newton's method on a central-difference Jacobian, or None
+    when it does not get there (the caller falls back to a more robust method)."""
+    x = np.array(x0, dtype=float)
+    r = residual(x)
+    for _ in range(iterations):
+        if not np.all(np.isfinite(r)):
+            return None
+        if float(np.max(np.abs(r), initial=0.0)) <= tol:
+            return x
+        J = np.empty((r.size, x.size))
+        for j in range(x.size):
+            dx = np.zeros_like(x)
+            dx[j] = h * max(1.0, abs(x[j]))
+            J[:, j] = (residual(x + dx) - residual(x - dx)) / (2 * dx[j])
+        try:
+            x = x - np.linalg.solve(J, r)
+        except np.linalg.LinAlgError:
+            return None
+        r = residual(x)
+    return None
 
 
 def _tangent_chart(mech, q_star):
@@ -71,8 +100,7 @@ def _tangent_chart(mech, q_star):
         eye = np.eye(n)
         return (lambda z: q_star + z), (lambda z: eye), n
     _, Cq, _ = mech.constraints(q_star, zero)
-    N = null_space(Cq)
-    Y = orth(Cq.T)
+    N, Y = _null_and_range(Cq)
 
     def q_of(zv):
         w = np.zeros(Y.shape[1])
@@ -89,6 +117,15 @@ def _tangent_chart(mech, q_star):
         return N - Y @ np.linalg.solve(Cq_ @ Y, Cq_ @ N)
 
     return q_of, T_of, N.shape[1]
+
+
+def _null_and_range(Cq):
+    """(N, Y): orthonormal bases of the null space of C_q and of the range of C_qᵀ, from one SVD
+    with scipy.linalg's rank rule (singular values above max(shape)·eps·σ_max)."""
+    _, sigma, Vt = np.linalg.svd(Cq)
+    tol = max(Cq.shape) * np.finfo(float).eps * (sigma[0] if sigma.size else 0.0)
+    rank = int(np.sum(sigma > tol))
+    return Vt[rank:].T.conj(), Vt[:rank].T.conj()
 
 
 def linearize(mech, q_star=None, h=1e-6):
@@ -120,5 +157,8 @@ def natural_frequencies(mech, q_star=None):
     M, _, K, _ = linearize(mech, q_star)
     if M.size == 0:
         return np.zeros(0)
-    w2 = eigh(K, M, eigvals_only=True)
+    # K v = ω² M v with M = LLᵀ is the symmetric problem (L⁻¹ K L⁻ᵀ) u = ω² u (as LAPACK's sygv)
+    L = np.linalg.cholesky(M)
+    A = np.linalg.solve(L, np.linalg.solve(L, K).T)
+    w2 = np.linalg.eigvalsh(0.5 * (A + A.T))
     return np.sqrt(np.clip(w2, 0.0, None)) / (2 * np.pi)

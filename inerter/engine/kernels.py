@@ -1456,7 +1456,7 @@ def _keep_step(keep, t, t_new, y_start, dense):
     """Append the accepted step from t to t_new (solution `y_start` at its start, dense-output
     coefficients `dense`) to `keep` = (nodes, coeffs, kept), see :func:`rk_advance`."""
     nodes, coeffs, kept = keep
-    i = kept[0]
+    i = kept[KEPT_COUNT]
     nodes[i] = t
     nodes[i + 1] = t_new
     for j in range(y_start.shape[0]):
@@ -1464,7 +1464,7 @@ def _keep_step(keep, t, t_new, y_start, dense):
     for r in range(1, coeffs.shape[1]):
         for j in range(y_start.shape[0]):
             coeffs[i, r, j] = dense[r - 1, j]
-    kept[0] = i + 1
+    kept[KEPT_COUNT] = i + 1
 
 
 @njit(cache=True, inline="always")
@@ -1539,9 +1539,247 @@ def _dense_block(method, nodes, coeffs, count, times, start, end, comps, Y, i):
     return i
 
 
+# Keeping every accepted step's dense output (rk_advance's `keep`): (nodes, coeffs, kept) with
+# kept[KEPT_COUNT] steps kept so far and kept[KEPT_ON] = 1 where the caller wants them (0: a
+# placeholder, so that rk_advance compiles once for both uses).
+KEPT_COUNT, KEPT_ON = range(2)
+
+
+@njit(cache=True)
+def no_keep(ny):
+    """A `keep` for :func:`rk_advance` that keeps nothing (kept[KEPT_ON] = 0)."""
+    return np.empty(1), np.empty((0, 1, ny)), np.zeros(2, dtype=np.int64)
+
+
+@njit(cache=True, inline="always")
+def _rk_shape(method):
+    """(stages of the step, order of its error estimate's lower solution + 1 = the exponent's base)
+    of DOP853 (method 0) and RK45 (method 1), as scipy's ``n_stages`` and ``error_estimator_order``."""
+    if method == 0:
+        return 12, 7
+    return 6, 4
+
+
+@njit(cache=True)
+def _rk_start(hdr, y, f, t_bound, order, rtol, atol, inputs, alpha, P, work, before):
+    """A fresh integration's derivative at its start and, where RK_H is 0, its first step chosen as
+    scipy's select_initial_step does. Returns the right-hand side's status."""
+    AB, rhs, gen, acc = work[0], work[1], work[2], work[3]
+    t = hdr[RK_T]
+    st = _rhs(min(t, before), y, inputs, alpha, P, AB, rhs, gen, acc, f)
+    hdr[RK_EVALS] += 1
+    if st != OK:
+        return st
+    if not hdr[RK_H] > 0.0:
+        hdr[RK_H] = _initial_step(t, y, f, t_bound, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc, before)
+        hdr[RK_EVALS] += 1
+    hdr[RK_STARTED] = 1.0
+    hdr[RK_DENSE] = 0.0
+    hdr[RK_T_PREV] = t
+    hdr[RK_H_LAST] = 0.0
+    return OK
+
+
+@njit(cache=True)
+def _rk_trial(n_stages, hdr, t, h, y, f, inputs, alpha, P, A, B, C, work, before):
+    """The stages K[0..n_stages] of one trial step of length h from (t, y) with derivative f, its
+    solution y_new and the derivative f_new there (K[n_stages] = f_new). Returns the status of the
+    first right-hand side that failed (OK: none)."""
+    AB, rhs, gen, acc, K, y_new, f_new, ys = work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7]
+    ny = y.shape[0]
+    for i in range(ny):
+        K[0, i] = f[i]
+    for s in range(1, n_stages):
+        for i in range(ny):
+            acc_s = 0.0
+            for j in range(s):
+                acc_s += K[j, i] * A[s, j]
+            ys[i] = y[i] + acc_s * h
+        st = _rhs(min(t + C[s] * h, before), ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
+        hdr[RK_EVALS] += 1
+        if st != OK:
+            return st
+    for i in range(ny):
+        acc_s = 0.0
+        for j in range(n_stages):
+            acc_s += K[j, i] * B[j]
+        y_new[i] = y[i] + h * acc_s
+    st = _rhs(min(t + h, before), y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new)
+    hdr[RK_EVALS] += 1
+    for i in range(ny):
+        K[n_stages, i] = f_new[i]
+    return st
+
+
+@njit(cache=True)
+def _rk_error(method, n_stages, h, y, y_new, K, E, E3, rtol, atol):
+    """The scaled error norm of a trial step as scipy computes it: DOP853's blend of its 5th- and
+    3rd-order estimates (Hairer's), RK45's RMS of its 4th-order estimate."""
+    ny = y.shape[0]
+    if method == 0:
+        e5 = 0.0
+        e3 = 0.0
+        for i in range(ny):
+            sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+            a5 = 0.0
+            a3 = 0.0
+            for j in range(n_stages + 1):
+                a5 += K[j, i] * E[j]
+                a3 += K[j, i] * E3[j]
+            a5 /= sc
+            a3 /= sc
+            e5 += a5 * a5
+            e3 += a3 * a3
+        if e5 == 0.0 and e3 == 0.0:
+            return 0.0
+        return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * ny)
+    e = 0.0
+    for i in range(ny):
+        sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+        a = 0.0
+        for j in range(n_stages + 1):
+            a += K[j, i] * E[j]
+        a = a * h / sc
+        e += a * a
+    return math.sqrt(e / ny)
+
+
+@njit(cache=True)
+def _rk_attempt(method, hdr, t, h_abs, kink, t_bound, y, f, rtol, atol, inputs, alpha, P, A, B, C, E, E3,
+                monitor, work, before):
+    """Trial steps from (t, y) until the error control accepts one, as scipy's ``_step_impl``: each
+    clipped to `t_bound` and to end on the next `kink`; a trial whose stages cannot be evaluated
+    (singular, not finite: a wild stage of too long a step) is tried again `monitor[5]` times as
+    long, as inerter.engine.simulation does with scipy's integrators. Returns (status, t_new, h,
+    the step size proposed next): STEP_TOO_SMALL (or the failing stage's status) below 10 ulp of t.
+    A clipped step accepted at its first trial proposes the size proposed before the clip (see
+    :func:`rk_advance`)."""
+    n_stages, order = _rk_shape(method)
+    err_exp = -1.0 / (order + 1)
+    h_want = h_abs
+    min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+    if h_abs < min_step:
+        h_abs = min_step
+    rejected = False
+    trial_failure = OK
+    while True:
+        if h_abs < min_step:
+            return (STEP_TOO_SMALL if trial_failure == OK else trial_failure), t, 0.0, h_abs
+        t_new = min(t + h_abs, t_bound)
+        clipped = t_new > kink          # ends on the kink instead of straddling it
+        if clipped:
+            t_new = kink
+        h = t_new - t
+        h_abs = abs(h)
+        st = _rk_trial(n_stages, hdr, t, h, y, f, inputs, alpha, P, A, B, C, work, before)
+        if st == SINGULAR or st == NOT_FINITE:
+            trial_failure = st
+            h_abs *= monitor[5]
+            rejected = True
+            continue
+        if st != OK:
+            return st, t, h, h_abs
+        err = _rk_error(method, n_stages, h, y, work[5], work[4], E, E3, rtol, atol)
+        if err < 1.0:
+            factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** err_exp)
+            if rejected:
+                factor = min(1.0, factor)
+            h_abs *= factor
+            if clipped and not rejected:
+                h_abs = h_want          # the step size goes on as proposed before the clip
+            return OK, t_new, h, h_abs
+        h_abs *= max(0.2, 0.9 * err ** err_exp)
+        rejected = True
+
+
+@njit(cache=True)
+def _rk_watch(n_stages, hdr, t_new, h, y, y_new, K, A, monitor):
+    """After an accepted step, the watch of :func:`rk_advance`'s docstring: Hairer's stiffness test
+    (STIFF after `monitor[2]` firings in a row) and a step size collapsing (COLLAPSED), with its
+    counters in `hdr` (RK_HITS, RK_CALM, RK_SMALL). Returns OK or the status that stops the run."""
+    if monitor[0] > 0.0 and (hdr[RK_HITS] > 0 or int(hdr[RK_STEPS]) % int(monitor[1]) == 0):
+        num = 0.0
+        den = 0.0
+        last = n_stages - 1
+        for i in range(y.shape[0]):
+            acc_s = 0.0
+            for j in range(last):
+                acc_s += K[j, i] * A[last, j]
+            d = y_new[i] - (y[i] + h * acc_s)     # y_new − the last stage's argument (c = 1)
+            e = K[n_stages, i] - K[last, i]
+            den += d * d
+            num += e * e
+        if den > 0.0:
+            if abs(h) * math.sqrt(num / den) > monitor[0]:
+                hdr[RK_CALM] = 0.0
+                hdr[RK_HITS] += 1
+                if hdr[RK_HITS] >= monitor[2]:
+                    return STIFF
+            else:
+                hdr[RK_CALM] += 1
+                if hdr[RK_CALM] >= 6:
+                    hdr[RK_HITS] = 0.0
+    if abs(h) < monitor[3] * max(1.0, abs(t_new)):
+        hdr[RK_SMALL] += 1
+        if hdr[RK_SMALL] >= monitor[4]:
+            return COLLAPSED
+    else:
+        hdr[RK_SMALL] = 0.0
+    return OK
+
+
+@njit(cache=True)
+def _rk_dense(method, hdr, t, h, y, inputs, alpha, P, A, C, Dm, Pm, work, before, dense):
+    """The dense-output coefficients of the accepted step from (t, y) of length h into `dense`, as
+    scipy's ``_dense_output_impl`` (DOP853's three extra stages are evaluated here). Returns the
+    status of the right-hand side."""
+    AB, rhs, gen, acc, K, y_new, f_new, ys = work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7]
+    n_stages, _ = _rk_shape(method)
+    ny = y.shape[0]
+    if method != 0:
+        for i in range(ny):
+            for r in range(Pm.shape[1]):
+                qr = 0.0
+                for j in range(n_stages + 1):
+                    qr += K[j, i] * Pm[j, r]
+                dense[r, i] = qr
+        return OK
+    for s in range(n_stages + 1, A.shape[0]):
+        for i in range(ny):
+            acc_s = 0.0
+            for j in range(s):
+                acc_s += K[j, i] * A[s, j]
+            ys[i] = y[i] + acc_s * h
+        st = _rhs(min(t + C[s] * h, before), ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
+        hdr[RK_EVALS] += 1
+        if st != OK:
+            return st
+    for i in range(ny):
+        dlt = y_new[i] - y[i]
+        dense[0, i] = dlt
+        dense[1, i] = h * K[0, i] - dlt
+        dense[2, i] = 2.0 * dlt - h * (f_new[i] + K[0, i])
+        for r in range(4):
+            acc_s = 0.0
+            for j in range(Dm.shape[1]):
+                acc_s += Dm[r, j] * K[j, i]
+            dense[3 + r, i] = h * acc_s
+    return OK
+
+
+@njit(cache=True, inline="always")
+def _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k, out):
+    """out[k] = y(ts[k]) for every sample from k on that the last step covers (:func:`_rk_sample`);
+    returns the first k not written."""
+    while k < ts.shape[0] and ts[k] <= t + 1e-12 * max(1.0, t):
+        _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
+        k += 1
+    return k
+
+
 @njit(cache=True)
 def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-               A, B, C, E, E3, Dm, Pm, monitor, work, kinks, keep=None):
+               A, B, C, E, E3, Dm, Pm, monitor, work, kinks, keep):
     """Advance an adaptive explicit Runge-Kutta integration until its last step covers the last of
     the increasing times `ts`, writing out[k] = y(ts[k]) for k ≥ k0 as the steps cover them: the step's own
     solution at a node (within 1e-12·max(1 s, t)), its dense output inside a step. Steps are
@@ -1562,284 +1800,92 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     step size the error control proposes next, the last step's start and length, whether its dense
     output is computed, counters; slots RK_*), the solution `y` and its derivative `f` at the last
     node, the solution `y_prev` at the start of the last step and that step's dense-output
-    coefficients `dense` (7 × len(y)). A fresh state has RK_STARTED = 0: the derivative is evaluated
-    first and, where RK_H is 0, the first step chosen as scipy's select_initial_step does.
+    coefficients `dense` (7 × len(y)). A fresh state has RK_STARTED = 0 (:func:`_rk_start`).
 
-    Watched as inerter.engine.simulation.StepMonitor watches scipy's integrators, with its constants in
-    `monitor` = (stiffness bound, every, hits, collapse relative, collapse steps, trial shrink):
-    Hairer's stiffness test (h·|λ| from the last two stages, both at t + h, against the bound, checked every `every`
-    accepted steps and then at every step while it fires; `hits` firings in a row: STIFF), a step
-    size collapsing below `collapse relative`·max(1 s, |t|) for `collapse steps` steps in a row
-    (COLLAPSED), the step budget `max_steps` of this call (MAX_STEPS: a whole run is one call, a
-    co-simulation step another).
+    Watched as inerter.engine.simulation.StepMonitor watches scipy's integrators (:func:`_rk_watch`),
+    with its constants in `monitor` = (stiffness bound, every, hits, collapse relative, collapse
+    steps, trial shrink), and the step budget `max_steps` of this call (MAX_STEPS: a whole run is
+    one call, a co-simulation step another).
 
     method 0: DOP853 (A, B, C, E5 = E, E3, D = Dm as in scipy), method 1: RK45 (A, B, C, E, P = Pm).
     `work`: scratch from :func:`work_arrays` with rk_stages(A) rows of stages.
-    `keep`: None, or (nodes, coeffs, kept) to keep every accepted step's dense output, as scipy's
-    ``dense_output=True`` does (DOP853's three extra stages are then evaluated at every step): step
-    i = kept[0] spans nodes[i] to nodes[i + 1], coeffs[i, 0] is the solution at its start and
-    coeffs[i, 1:] its coefficients (:func:`_dop853_at`, :func:`_rk45_at`). When coeffs is full the
-    call returns DENSE_FULL before the next step, resumable once the caller gave it room
-    (:func:`integrate_rk`). Keeping them changes neither the steps nor the samples.
+    `keep`: (nodes, coeffs, kept); where kept[KEPT_ON] is 1, every accepted step's dense output is
+    kept, as scipy's ``dense_output=True`` does (DOP853's three extra stages are then evaluated at
+    every step): step i = kept[KEPT_COUNT] spans nodes[i] to nodes[i + 1], coeffs[i, 0] is the
+    solution at its start and coeffs[i, 1:] its coefficients (:func:`_dop853_at`, :func:`_rk45_at`).
+    When coeffs is full the call returns DENSE_FULL before the next step, resumable once the caller
+    gave it room (:func:`integrate_rk`). Keeping them changes neither the steps nor the samples.
     Returns (status, the first k not written); on failure y, f and the last step's data are those of
     the last good node."""
-    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
-    ny = y.shape[0]
-    if method == 0:
-        n_stages = 12
-        order = 7
-    else:
-        n_stages = 6
-        order = 4
-    err_exp = -1.0 / (order + 1)
-    t = hdr[RK_T]
+    work = _unowned(work)
+    K, y_new, f_new = work[4], work[5], work[6]
+    n_stages, order = _rk_shape(method)
+    keeping = keep[2][KEPT_ON] == 1
     before = _before(hdr[RK_JUMP])
     if hdr[RK_STARTED] == 0.0:
-        st = _rhs(min(t, before), y, inputs, alpha, P, AB, rhs, gen, acc, f)
-        hdr[RK_EVALS] += 1
+        st = _rk_start(hdr, y, f, t_bound, order, rtol, atol, inputs, alpha, P, work, before)
         if st != OK:
             return st, k0
-        if not hdr[RK_H] > 0.0:
-            hdr[RK_H] = _initial_step(t, y, f, t_bound, order, rtol, atol, inputs, alpha, P, AB, rhs, gen, acc,
-                                      before)
-            hdr[RK_EVALS] += 1
-        hdr[RK_STARTED] = 1.0
-        hdr[RK_DENSE] = 0.0
-        hdr[RK_T_PREV] = t
-        hdr[RK_H_LAST] = 0.0
+    t = hdr[RK_T]
     h_abs = hdr[RK_H]
-    steps = int(hdr[RK_STEPS])
-    steps_before = steps
-    evals = int(hdr[RK_EVALS])
-    hits = int(hdr[RK_HITS])
-    calm = int(hdr[RK_CALM])
-    small = int(hdr[RK_SMALL])
+    steps_before = hdr[RK_STEPS]
     status = OK
-    nts = ts.shape[0]
-    k = k0
-    while k < nts and ts[k] <= t + 1e-12 * max(1.0, t):     # covered by the last step already
-        _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
-        k += 1
+    k = _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k0, out)
     gaps, z = terminal_gaps(y, P)
-    n_kinks = kinks.shape[0]
     ik = np.searchsorted(kinks, t, side="right")             # the next kink: kinks[ik] > t
-    while k < nts and status == OK:
-        if keep is not None:
-            if keep[2][0] >= keep[1].shape[0]:
-                status = DENSE_FULL
-                break
-        kink = kinks[ik] if ik < n_kinks else np.inf
-        h_want = h_abs                      # the step size proposed, before any clip
-        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
-        if h_abs < min_step:
-            h_abs = min_step
-        accepted = False
-        rejected = False
-        trial_failure = OK
-        while not accepted:
-            if h_abs < min_step:
-                status = STEP_TOO_SMALL if trial_failure == OK else trial_failure
-                break
-            h = h_abs
-            t_new = t + h
-            if t_new - t_bound > 0:
-                t_new = t_bound
-            clipped = t_new > kink          # ends on the kink instead of straddling it
-            if clipped:
-                t_new = kink
-            h = t_new - t
-            h_abs = abs(h)
-            # stages
-            for i in range(ny):
-                K[0, i] = f[i]
-            for s in range(1, n_stages):
-                for i in range(ny):
-                    acc_s = 0.0
-                    for j in range(s):
-                        acc_s += K[j, i] * A[s, j]
-                    ys[i] = y[i] + acc_s * h
-                st = _rhs(min(t + C[s] * h, before), ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
-                evals += 1
-                if st != OK:
-                    break
-            if st == OK:
-                for i in range(ny):
-                    acc_s = 0.0
-                    for j in range(n_stages):
-                        acc_s += K[j, i] * B[j]
-                    y_new[i] = y[i] + h * acc_s
-                st = _rhs(min(t + h, before), y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new)
-                evals += 1
-            if st == SINGULAR or st == NOT_FINITE:
-                # A stage the accelerations cannot be evaluated at (a wild stage of too long a step,
-                # say): the trial is rejected and tried again `trial shrink` times as long, as
-                # inerter.engine.simulation does with scipy's integrators; fatal below 10 ulp of t.
-                trial_failure = st
-                h_abs *= monitor[5]
-                rejected = True
-                continue
-            if st != OK:
-                status = st
-                break
-            for i in range(ny):
-                K[n_stages, i] = f_new[i]
-            # error norm
-            if method == 0:
-                e5 = 0.0
-                e3 = 0.0
-                for i in range(ny):
-                    sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
-                    a5 = 0.0
-                    a3 = 0.0
-                    for j in range(n_stages + 1):
-                        a5 += K[j, i] * E[j]
-                        a3 += K[j, i] * E3[j]
-                    a5 /= sc
-                    a3 /= sc
-                    e5 += a5 * a5
-                    e3 += a3 * a3
-                if e5 == 0.0 and e3 == 0.0:
-                    err = 0.0
-                else:
-                    err = abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * ny)
-            else:
-                e = 0.0
-                for i in range(ny):
-                    sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
-                    a = 0.0
-                    for j in range(n_stages + 1):
-                        a += K[j, i] * E[j]
-                    a = a * h / sc
-                    e += a * a
-                err = math.sqrt(e / ny)
-            if err < 1.0:
-                if err == 0.0:
-                    factor = 10.0
-                else:
-                    factor = min(10.0, 0.9 * err ** err_exp)
-                if rejected:
-                    factor = min(1.0, factor)
-                h_abs *= factor
-                if clipped and not rejected:
-                    h_abs = h_want          # the step size goes on as proposed before the clip
-                accepted = True
-            else:
-                h_abs *= max(0.2, 0.9 * err ** err_exp)
-                rejected = True
+    while k < ts.shape[0] and status == OK:
+        if keeping and keep[2][KEPT_COUNT] >= keep[1].shape[0]:
+            status = DENSE_FULL
+            break
+        kink = kinks[ik] if ik < kinks.shape[0] else np.inf
+        status, t_new, h, h_abs = _rk_attempt(method, hdr, t, h_abs, kink, t_bound, y, f, rtol, atol, inputs,
+                                              alpha, P, A, B, C, E, E3, monitor, work, before)
         if status != OK:
             break
-        steps += 1
+        hdr[RK_STEPS] += 1
         if terminals_meet(gaps, z, y_new, P):
             status = TERMINALS_MEET
+        else:
+            status = _rk_watch(n_stages, hdr, t_new, h, y, y_new, K, A, monitor)
+        if status != OK:
             h_abs = abs(h)
             break
-        if monitor[0] > 0.0 and (hits > 0 or steps % int(monitor[1]) == 0):
-            num = 0.0
-            den = 0.0
-            last = n_stages - 1
-            for i in range(ny):
-                acc_s = 0.0
-                for j in range(last):
-                    acc_s += K[j, i] * A[last, j]
-                d = y_new[i] - (y[i] + h * acc_s)     # y_new − the last stage's argument (c = 1)
-                e = K[n_stages, i] - K[last, i]
-                den += d * d
-                num += e * e
-            if den > 0.0:
-                hlam = abs(h) * math.sqrt(num / den)
-                if hlam > monitor[0]:
-                    calm = 0
-                    hits += 1
-                    if hits >= monitor[2]:
-                        status = STIFF
-                        h_abs = abs(h)
-                        break
-                else:
-                    calm += 1
-                    if calm >= 6:
-                        hits = 0
-        if abs(h) < monitor[3] * max(1.0, abs(t_new)):
-            small += 1
-            if small >= monitor[4]:
-                status = COLLAPSED
-                h_abs = abs(h)
-                break
-        else:
-            small = 0
         # The step is accepted: it becomes the last step, with its dense output where a sample lies
         # inside it (DOP853's extra stages are evaluated only then) or where every step's is kept.
         hdr[RK_DENSE] = 0.0
-        inside = ts[k] <= t_new + 1e-12 * max(1.0, t_new) and ts[k] < t_new
-        if keep is not None:
-            inside = True
-        if inside:
-            if method == 0:
-                for s in range(n_stages + 1, A.shape[0]):
-                    for i in range(ny):
-                        acc_s = 0.0
-                        for j in range(s):
-                            acc_s += K[j, i] * A[s, j]
-                        ys[i] = y[i] + acc_s * h
-                    st = _rhs(min(t + C[s] * h, before), ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
-                    evals += 1
-                    if st != OK:
-                        status = st
-                        break
-                if status != OK:
-                    break
-                for i in range(ny):
-                    dlt = y_new[i] - y[i]
-                    dense[0, i] = dlt
-                    dense[1, i] = h * K[0, i] - dlt
-                    dense[2, i] = 2.0 * dlt - h * (f_new[i] + K[0, i])
-                    for r in range(4):
-                        acc_s = 0.0
-                        for j in range(Dm.shape[1]):
-                            acc_s += Dm[r, j] * K[j, i]
-                        dense[3 + r, i] = h * acc_s
-            else:
-                for i in range(ny):
-                    for r in range(Pm.shape[1]):
-                        qr = 0.0
-                        for j in range(n_stages + 1):
-                            qr += K[j, i] * Pm[j, r]
-                        dense[r, i] = qr
+        if keeping or (ts[k] <= t_new + 1e-12 * max(1.0, t_new) and ts[k] < t_new):
+            status = _rk_dense(method, hdr, t, h, y, inputs, alpha, P, A, C, Dm, Pm, work, before, dense)
+            if status != OK:
+                break
             hdr[RK_DENSE] = 1.0
-        for i in range(ny):
+        for i in range(y.shape[0]):
             y_prev[i] = y[i]
             y[i] = y_new[i]
             f[i] = f_new[i]
         hdr[RK_T_PREV] = t
         hdr[RK_H_LAST] = h
-        if keep is not None:
+        if keeping:
             _keep_step(keep, t, t_new, y_prev, dense)
         t = t_new
-        while ik < n_kinks and kinks[ik] <= t:
+        while ik < kinks.shape[0] and kinks[ik] <= t:
             ik += 1
-        while k < nts and ts[k] <= t + 1e-12 * max(1.0, t):
-            _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
-            k += 1
-        if steps - steps_before > max_steps:
+        k = _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
+        if hdr[RK_STEPS] - steps_before > max_steps:
             status = MAX_STEPS
     hdr[RK_T] = t
     hdr[RK_H] = h_abs
-    hdr[RK_TOTAL] += steps - steps_before
-    hdr[RK_STEPS] = steps
-    hdr[RK_EVALS] = evals
-    hdr[RK_HITS] = hits
-    hdr[RK_CALM] = calm
-    hdr[RK_SMALL] = small
+    hdr[RK_TOTAL] += hdr[RK_STEPS] - steps_before
     return status, k
 
 
 @njit(cache=True)
 def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_steps, inputs, alpha, P,
-                 A, B, C, E, E3, Dm, Pm, monitor, jump, kinks, keep=None):
+                 A, B, C, E, E3, Dm, Pm, monitor, jump, kinks, keep):
     """One integration from t0 to t_end with :func:`rk_advance`, sampling `out[k] = y(grid[k])` for
     k ≥ 1 (grid[-1] = t_end), running on through the `kinks` (see :func:`rk_advance`); `jump`: the
-    discontinuity it ends at (0: none), see :func:`_before`. `keep`: None, or (nodes, coeffs,
-    kept) of :func:`rk_advance`, to which every step's dense output is appended, the arrays
-    replaced by ones twice as long when full. Returns (status, samples written, steps,
+    discontinuity it ends at (0: none), see :func:`_before`. `keep`: (nodes, coeffs, kept) of
+    :func:`rk_advance` (:func:`no_keep`: nothing kept), to which every step's dense output is
+    appended, the arrays replaced by ones twice as long when full. Returns (status, samples written, steps,
     evaluations, t reached, next step size, keep): the step size is the one the error control
     proposes after the last accepted step (scipy's ``h_abs``)."""
     P = _unowned(P)                 # entered from Python (_unowned)
@@ -1853,30 +1899,24 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     y_prev = y0.copy()
     dense = np.zeros((7, ny))
     work = work_arrays(P, ny, rk_stages(A))
-    if keep is None:
-        # np.int64(1): a literal k0 would compile rk_advance once more, for the literal
-        st, k = rk_advance(method, hdr, y, f, y_prev, dense, grid, out, np.int64(1), t_end, rtol, atol, max_steps,
-                           inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work, kinks)
-        return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H], keep
-    else:
-        nodes, coeffs, kept = keep
-        k = np.int64(1)                 # not a literal: as above
-        while True:
-            # the step budget is the whole integration's, over the calls
-            st, k = rk_advance(method, hdr, y, f, y_prev, dense, grid, out, k, t_end, rtol, atol,
-                               max_steps - int(hdr[RK_STEPS]), inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor,
-                               work, kinks, (nodes, coeffs, kept))
-            if st != DENSE_FULL:
-                break
-            room = coeffs.shape[0]
-            size = max(2 * room, 16)
-            more = np.empty((size, coeffs.shape[1], coeffs.shape[2]))
-            more[:room] = coeffs
-            coeffs = more
-            longer = np.empty(size + 1)
-            longer[:room + 1] = nodes
-            nodes = longer
-        return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H], (nodes, coeffs, kept)
+    nodes, coeffs, kept = keep
+    k = np.int64(1)                     # not a literal: a literal k0 would compile rk_advance once more
+    while True:
+        # the step budget is the whole integration's, over the calls
+        st, k = rk_advance(method, hdr, y, f, y_prev, dense, grid, out, k, t_end, rtol, atol,
+                           max_steps - int(hdr[RK_STEPS]), inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor,
+                           work, kinks, (nodes, coeffs, kept))
+        if st != DENSE_FULL:
+            break
+        room = coeffs.shape[0]
+        size = max(2 * room, 16)
+        more = np.empty((size, coeffs.shape[1], coeffs.shape[2]))
+        more[:room] = coeffs
+        coeffs = more
+        longer = np.empty(size + 1)
+        longer[:room + 1] = nodes
+        nodes = longer
+    return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H], (nodes, coeffs, kept)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -2026,7 +2066,8 @@ def cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, t_bound, rtol, atol, max
     :func:`signal_values`, `values[i] = raw[order[i]]`. Returns (integrator status, signal status);
     NOT_FINITE where the state is not finite."""
     st, k = rk_advance(method, hdr, y, f, y_prev, dense, ts, out, np.int64(0), t_bound, rtol, atol, max_steps,
-                       inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work, kinks)   # np.int64: as integrate_rk
+                       inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work, kinks,
+                       no_keep(y.shape[0]))   # np.int64: as integrate_rk
     if st != OK:
         return st, OK
     y_out = out[0]

@@ -17,11 +17,17 @@ import types
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import OdeSolution
 
 from inerter.common.errors import SceneError, SimulationError, TerminalsMeet
-from inerter.engine.integrators import make_solver
 from inerter.scene.reader import CONSTRAINT_TREATMENTS, METHODS
+
+
+def make_solver(*args, **kwargs):
+    """inerter.engine.integrators.make_solver, imported on first use: the compiled path never needs
+    scipy.integrate, whose import costs about 0.15 s of a fresh process's start."""
+    from inerter.engine.integrators import make_solver as make
+
+    return make(*args, **kwargs)
 
 
 @dataclass
@@ -350,7 +356,11 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
     cpu = _time.process_time() - start
     for i in range(1, k):
         max_drift = max(max_drift, mech.constraint_residual(out[i, :n]))
-    dense = OdeSolution(np.array(ts), interpolants) if interpolants else None
+    dense = None
+    if interpolants:
+        from scipy.integrate import OdeSolution
+
+        dense = OdeSolution(np.array(ts), interpolants)
     return Run(grid[:k].copy(), out[:k].copy(), dense, status, message, steps, evaluations, cpu, max_drift)
 
 

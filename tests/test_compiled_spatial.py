@@ -407,13 +407,13 @@ def test_terminals_meet_is_reported(tmp_path):
     assert ck.signal_values3(q, mech.v0, np.zeros(kern.n + kern.m), kern.P, raw) == ck.TERMINALS_MEET
 
 
-def test_flatten3_rejects_other_scenes():
-    """flatten3 takes 3D quaternion scenes only: a planar scene and Z-X-Z Euler angles are refused."""
+def test_flatten3_takes_3d_scenes_of_either_orientation():
+    """flatten3 refuses a planar scene; Z-X-Z Euler angles give 6 coordinates per body, quaternions 7."""
     with pytest.raises(ValueError):
         flatten3(inerter.load(ROOT / "scenarios" / "two_bar_2d.toml").mechanism)
     euler = inerter.load(ROOT / "scenarios" / "gimbal_lock_3d.toml", **{"scene.orientation": "euler_zxz"})
-    with pytest.raises(ValueError):
-        flatten3(euler.mechanism)
+    quaternion = inerter.load(ROOT / "scenarios" / "gimbal_lock_3d.toml")
+    assert flatten3(euler.mechanism)["nq"] == 6 and flatten3(quaternion.mechanism)["nq"] == 7
 
 
 def test_signal_layout3_order():

@@ -47,12 +47,22 @@ def test_the_default_path_is_the_compiled_one_in_2d_and_3d():
     assert "path" not in numpy_run.run.extra and numpy_run.summary()["statistics"]["path"] == "numpy"
 
 
-def test_euler_angle_scenes_fall_back_to_the_numpy_path_and_say_so():
+def test_euler_angle_scenes_run_compiled_and_stop_at_their_singularity():
+    """Z-X-Z Euler angles run on the compiled path too; through their singularity the loop stops as
+    the numpy path does, naming the body, with the samples before it equal to the numpy path's
+    (the same kinematics: rotations.euler_matrix9 and euler_rates, compiled and uncompiled)."""
     model = inerter.load(GIMBAL, **{"scene.orientation": "euler_zxz"})
     result = model.simulate(stop_time=0.1, metrics=False)
     assert result.status == "ok", result.message
-    assert result.run.extra["path"].startswith("numpy (the compiled path takes quaternion orientations")
-    assert model.stepper().path == "numpy"
+    assert result.run.extra["path"] == "compiled"
+    assert model.stepper().path == "compiled"
+    fast = model.simulate(metrics=False)
+    slow = model.simulate(metrics=False, path="numpy")
+    assert fast.status == slow.status == "failed"
+    assert "spinner" in fast.message and "singularity" in fast.message and "t = " in fast.message
+    k = min(len(fast.time), len(slow.time))
+    assert len(fast.time) == len(slow.time) and k >= 3
+    assert np.max(np.abs(fast.run.states[:k] - slow.run.states[:k])) < 1e-12       # round-off of the same steps
 
 
 # ---------------------------------------------------------------------------------------------

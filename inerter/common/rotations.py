@@ -1,13 +1,24 @@
 """Rotation math shared by every layer (paper Sec. 3.2, Appendix B): quaternions p = (w, x, y, z),
 the paper's Z-X-Z Euler angles (Eq. B.1, singular where sin θ = 0), axis-angle matrices and cross
-products. How bodies use them: :mod:`inerter.model.spatial`."""
+products. How bodies use them: :mod:`inerter.model.spatial`.
+
+An orientation's matrix and its coordinates' rates are written once, as scalar functions
+(``*_matrix9``, ``*_rates``) that the engine's kernels inline compiled and the numpy functions
+below run uncompiled (``.py_func``).
+"""
 from __future__ import annotations
 
 import math
 
 import numpy as np
+from numba import njit
 
 from inerter.common.errors import SimulationError
+
+
+def _scalar(fn):
+    """A scalar kinematic function, compiled for the kernels (inlined where they call it)."""
+    return njit(cache=True, inline="always")(fn)
 
 #: |sin θ| below which Z-X-Z Euler angles are taken to be at their singularity.
 EULER_SINGULARITY = 1e-6
@@ -23,22 +34,31 @@ def skew(u):
 
 
 # -- quaternions ---------------------------------------------------------------------------------
+@_scalar
+def quaternion_matrix9(w, x, y, z):
+    """The rotation matrix (row-major 9-tuple) of a quaternion, normalised on the fly with
+    s = 2/(w² + x² + y² + z²)."""
+    s = 2.0 / (w * w + x * x + y * y + z * z)
+    return (1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y),
+            s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x),
+            s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y))
+
+
+@_scalar
+def quaternion_rates(w, x, y, z, a, b, c):
+    """ṗ = ½ p ⊗ (0, ω), ω = (a, b, c) in the body frame."""
+    return (0.5 * (-x * a - y * b - z * c), 0.5 * (w * a + y * c - z * b), 0.5 * (w * b + z * a - x * c),
+            0.5 * (w * c + x * b - y * a))
+
+
 def quat_matrix(p):
     """Rotation matrix of a quaternion (normalised on the fly)."""
-    w, x, y, z = p
-    s = 2.0 / (w * w + x * x + y * y + z * z)
-    return np.array((
-        (1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)),
-        (s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)),
-        (s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y))))
+    return np.array(quaternion_matrix9.py_func(*p)).reshape(3, 3)
 
 
 def quat_rate(p, omega):
     """ṗ = ½ p ⊗ (0, ω), ω in the body frame."""
-    w, x, y, z = p
-    a, b, c = omega
-    return 0.5 * np.array((-x * a - y * b - z * c, w * a + y * c - z * b, w * b + z * a - x * c,
-                           w * c + x * b - y * a))
+    return np.array(quaternion_rates.py_func(*p, *omega))
 
 
 def quat_from_matrix(A):
@@ -68,14 +88,27 @@ def axis_angle_matrix(axis, angle):
 
 
 # -- Z-X-Z Euler angles (Appendix B) --------------------------------------------------------------
+@_scalar
+def euler_matrix9(phi, th, psi):
+    """Eq. (B.1): A = R_z(φ) R_x(θ) R_z(ψ), row-major 9-tuple."""
+    cf, sf, ct, st, cp, sp = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th), math.cos(psi), math.sin(psi)
+    return (cp * cf - ct * sf * sp, -sp * cf - ct * sf * cp, st * sf,
+            cp * sf + ct * cf * sp, -sp * sf + ct * cf * cp, -st * cf,
+            st * sp, st * cp, ct)
+
+
+@_scalar
+def euler_rates(th, psi, a, b, c):
+    """(φ̇, θ̇, ψ̇) from the body-frame angular velocity ω = (a, b, c): ω = G_b(θ) ė (Eq. 23) inverted,
+    which divides by sin θ (the caller checks it against EULER_SINGULARITY first)."""
+    cp, sp = math.cos(psi), math.sin(psi)
+    phidot = (a * sp + b * cp) / math.sin(th)
+    return phidot, a * cp - b * sp, c - phidot * math.cos(th)
+
+
 def euler_matrix(e):
     """Eq. (B.1): A = R_z(φ) R_x(θ) R_z(ψ)."""
-    phi, th, psi = e
-    cf, sf, ct, st, cp, sp = math.cos(phi), math.sin(phi), math.cos(th), math.sin(th), math.cos(psi), math.sin(psi)
-    return np.array((
-        (cp * cf - ct * sf * sp, -sp * cf - ct * sf * cp, st * sf),
-        (cp * sf + ct * cf * sp, -sp * sf + ct * cf * cp, -st * cf),
-        (st * sp, st * cp, ct)))
+    return np.array(euler_matrix9.py_func(*e)).reshape(3, 3)
 
 
 def euler_from_matrix(A):
@@ -93,7 +126,4 @@ def euler_rate(e, omega, body_name="", t=None):
         raise SimulationError(
             f"body '{body_name}': its Z-X-Z Euler angles reach their singularity (gimbal lock, "
             f"sin θ = {st:.2e}): the angle rates are undefined; use orientation = \"quaternion\"", t)
-    a, b, c = omega
-    cp, sp = math.cos(psi), math.sin(psi)
-    phidot = (a * sp + b * cp) / st
-    return np.array((phidot, a * cp - b * sp, c - phidot * math.cos(th)))
+    return np.array(euler_rates.py_func(th, psi, *omega))

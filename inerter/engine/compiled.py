@@ -9,13 +9,13 @@ A :class:`~inerter.model.mechanism.Mechanism` is flattened once into arrays (bod
 inertia tensors; points as body index and body-frame coordinates; joints; translational elements
 with coefficient, free length and centripetal flag; rotational elements; point forces with their
 time functions; gravity and the ground motion when declared): :func:`flatten` for 2D scenes,
-:func:`inerter.engine.compiled_spatial.flatten3` for 3D scenes with quaternion orientations (Z-X-Z Euler
-angles stay on the numpy path, which watches their singularity). The kernels in
+:func:`inerter.engine.compiled_spatial.flatten3` for 3D scenes (quaternions or Z-X-Z Euler angles, whose
+singularity the loops watch as the numpy path does). The kernels in
 :mod:`inerter.engine.kernels` evaluate the mass matrix with M_I, the constraint Jacobian, γ, the
 forces and Q_Iv from these arrays (the same formulas as ``elements.py``, ``joints.py``,
 ``planar.py``, ``spatial.py``) and solve the augmented system with a band LU with partial
 pivoting after a reverse Cuthill-McKee ordering, so a chain's cost grows linearly with its length.
-The state is y = [q, v] with q̇ = B(q) v (the identity in 2D, the quaternion rates in 3D).
+The state is y = [q, v] with q̇ = B(q) v (the identity in 2D, the orientations' rates in 3D).
 
 Integrators: DOP853 and RK45 with scipy's error control, step-size rule and dense output (the
 same steps as the numpy path at the same tolerances), and RK4 with a fixed step, each in one
@@ -35,6 +35,7 @@ returns a kernel that calls the numpy path and :func:`integrate_compiled` runs
 from __future__ import annotations
 
 import hashlib
+import math
 import importlib.util
 import os
 import pickle
@@ -65,9 +66,10 @@ def _kernel_cache_dir() -> Path:
 
 def kernel_sources() -> list[Path]:
     """The files whose code the kernels compile: :mod:`inerter.engine.kernels`, the element kinds'
-    laws and their dispatch (:mod:`inerter.elements`), and the shared constants."""
+    laws and their dispatch (:mod:`inerter.elements`), the shared constants and orientation kinematics."""
     package = Path(__file__).resolve().parents[1]
-    return ([Path(__file__).with_name("kernels.py"), package / "common" / "errors.py"]
+    return ([Path(__file__).with_name("kernels.py"), package / "common" / "errors.py",
+             package / "common" / "rotations.py"]
             + sorted((package / "elements").glob("*.py")))
 
 
@@ -267,6 +269,8 @@ _STATUS_TEXT = {
        "(Hairer's test fired in {hits} steps in a row); use method = \"Radau\" or \"BDF\" (implicit)",
     7: "the {method} step size collapsed ({steps} steps in a row below {relative:g}·max(1 s, t), the last "
        "{h:.3g} s): the solution is approaching a singularity",
+    8: "a body's Z-X-Z Euler angles reach their singularity (gimbal lock): the angle rates are undefined; "
+       "use orientation = \"quaternion\" (the default)",
 }
 
 
@@ -548,7 +552,8 @@ class Kernel:
                 return False, np.zeros(0, dtype=np.int64)
             # r[c] = R[c] + (A ū)[c] reads R[c] and the orientation (θ; the quaternion); ṙ[c] =
             # Ṙ[c] + (A (ω × ū))[c] reads Ṙ[c], the orientation and the angular velocity
-            nqb, nvb = (3, 3) if d == 2 else (7, 6)
+            nvb = 3 if d == 2 else 6
+            nqb = self.nq * nvb // self.n
             orientation = [nqb * b + j for j in range(d if d == 3 else 2, nqb)]
             if c < d:
                 comps = [nqb * b + c] + orientation
@@ -622,31 +627,16 @@ class Kernel:
 
     def point_positions(self, states) -> dict:
         """Global positions (time × dimension) of every named point along a state history (rows
-        [q, v])."""
-        states = np.atleast_2d(states)
+        [q, v]), from the kernels' point kinematics (r = R + A ū, Eq. 15)."""
+        states = np.ascontiguousarray(np.atleast_2d(states), dtype=float)
+        times = np.zeros(len(states))
+        d = self.flat["dim"]
+        self.signal_index("")
         out = {}
-        spatial = self.flat["dim"] == 3
-        for name, b, local in zip(self.flat["point_names"], self.flat["pbody"], self.flat["ploc"]):
-            if b < 0:
-                out[name] = np.tile(local, (len(states), 1))
-            elif spatial:                                     # r = R + A(p) ū, Eq. (15)
-                k = 7 * b
-                out[name] = states[:, k:k + 3] + np.einsum("tij,j->ti", _quat_matrices(states[:, k + 3:k + 7]), local)
-            else:
-                lx, ly = local
-                x, y, th = states[:, 3 * b], states[:, 3 * b + 1], states[:, 3 * b + 2]
-                c, s = np.cos(th), np.sin(th)
-                out[name] = np.column_stack((x + c * lx - s * ly, y + s * lx + c * ly))
+        for p, name in enumerate(self.flat["point_names"]):
+            columns = [self.signal_column(2 * d * p + c, times, states)[0] for c in range(d)]
+            out[name] = np.column_stack(columns)
         return out
-
-
-def _quat_matrices(p):
-    """Rotation matrices (time × 3 × 3) of a history of quaternions, as ``spatial.quat_matrix``."""
-    w, x, y, z = p.T
-    s = 2.0 / (w * w + x * x + y * y + z * z)
-    return np.stack((np.stack((1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)), -1),
-                     np.stack((s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)), -1),
-                     np.stack((s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)), -1)), 1)
 
 
 class NumpyKernel:
@@ -1145,6 +1135,8 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
         return text.format(method=method, h=h, hits=sim.STIFFNESS_HITS)
     if status == 7:
         return text.format(method=method, h=h, steps=sim.COLLAPSE_STEPS, relative=sim.COLLAPSE_RELATIVE)
+    if status == 8:
+        return _gimbal_lock_text(kernel, y_last, t_last)
     names = kernel.flat["el_names"]
     if status == 5 and names:
         nq = kernel.nq
@@ -1163,6 +1155,17 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
     return text
 
 
+def _gimbal_lock_text(kernel, y_last, t_last) -> str:
+    """The numpy path's words for a body whose Z-X-Z Euler angles reach their singularity: the body
+    nearest to it (smallest |sin θ|) in the last good state `y_last`, at `t_last`."""
+    names = list(kernel.mech.body_names)
+    thetas = np.asarray(y_last, dtype=float)[4:6 * len(names):6]          # (φ, θ, ψ) after R
+    i = int(np.argmin(np.abs(np.sin(thetas))))
+    return (f"body '{names[i]}': its Z-X-Z Euler angles reach their singularity (gimbal lock) within a step of "
+            f"t = {t_last:.6g} s (sin θ = {math.sin(thetas[i]):.2e} there): the angle rates are undefined; use "
+            f"orientation = \"quaternion\" (the default)")
+
+
 def compiled_stepper(mech, settings, signals, stop_time=None):
     """A :class:`CompiledStepper`, or None where the compiled loop cannot take the scene: see
     :func:`unsupported`; an implicit method or the projection treatment."""
@@ -1172,11 +1175,7 @@ def compiled_stepper(mech, settings, signals, stop_time=None):
 
 
 def unsupported(mech) -> str:
-    """Why the compiled kernels cannot take `mech` ("" when they can): numba missing, Z-X-Z Euler
-    angles (the kernels take quaternions; the numpy path checks the Euler singularity)."""
+    """Why the compiled kernels cannot take `mech` ("" when they can): numba missing."""
     if not AVAILABLE:
         return WHY_NOT
-    orientation = getattr(mech, "orientation", None)
-    if orientation is not None and orientation.kind != "quaternion":
-        return f"the compiled path takes quaternion orientations (the scene has {orientation.kind})"
     return ""

@@ -1,4 +1,4 @@
-"""Flattening a 3D mechanism (quaternion orientation) for the 3D section of
+"""Flattening a 3D mechanism (quaternion or Z-X-Z Euler orientation) for the 3D section of
 :mod:`inerter.engine.kernels`: the arrays (the slots of the planar ones, with 3D column
 meanings), the output layout and the structural pattern of Eq. (33); ``compiled.Kernel`` builds
 the parameter tuple from them.
@@ -52,10 +52,11 @@ def _joint_rows3(mech, pidx):
 
 
 def flatten3(mech) -> dict:
-    """The arrays the 3D kernels run on, from a 3D mechanism with quaternion orientation (index
-    maps in ``mech.scene`` order: bodies, points, joints, elements, forces).
+    """The arrays the 3D kernels run on, from a 3D mechanism (index maps in ``mech.scene`` order:
+    bodies, points, joints, elements, forces).
 
-    Coordinates: q = [R(3), p(4)] per body (nq = 7 per body), v = [Ṙ(3), ω(3)] per body with ω in
+    Coordinates: q = [R(3), p(4)] per body with quaternions (nq = 7 per body), [R(3), (φ, θ, ψ)]
+    with Z-X-Z Euler angles (nq = 6 per body), v = [Ṙ(3), ω(3)] per body with ω in
     the body frame (n = 6 per body), as ``Mechanism.q_index`` / ``v_index``. Bodies are numbered
     in scene order, −1 is the ground. Columns of the arrays:
 
@@ -84,12 +85,10 @@ def flatten3(mech) -> dict:
     scene = mech.scene
     if scene.dimension != 3:
         raise ValueError(f"flatten3 takes 3D scenes; scene {scene.name!r} has dimension {scene.dimension}")
-    if mech.orientation.kind != "quaternion":
-        raise ValueError(f"flatten3 takes quaternion orientation; scene {scene.name!r} uses {mech.orientation.kind!r}")
     body_names = list(mech.body_names)
     bidx = {name: i for i, name in enumerate(body_names)}
     nb = len(body_names)
-    n, nq = 6 * nb, 7 * nb
+    n, nq = 6 * nb, (3 + mech.orientation.size) * nb
     point_names = list(scene.points)
     pidx = {name: i for i, name in enumerate(point_names)}
     pbody = np.array([bidx.get(p.body, -1) for p in scene.points.values()], dtype=np.int64)

@@ -17,6 +17,8 @@ from numba.core import cgutils
 from numba.extending import intrinsic, overload
 
 from inerter.common.errors import MIN_LENGTH
+from inerter.common.rotations import (EULER_SINGULARITY, euler_matrix9, euler_rates, quaternion_matrix9,
+                                       quaternion_rates)
 
 from inerter.elements import dispatch as law
 from inerter.elements.base import axial_scalars
@@ -39,7 +41,7 @@ GROUND_NONE, GROUND_RECORD, GROUND_SINE, GROUND_INPUT = 0, 1, 2, 3
 # the ground motion's mode and the offset of its inputs among the held inputs.
 N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND_OFFSET = range(9)
 # Status codes of the integrators.
-OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED = 0, 1, 2, 3, 4, 5, 6, 7
+OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED, GIMBAL_LOCK = range(9)
 
 
 
@@ -658,11 +660,13 @@ def _qdot_of(q, v, P, out):
 def _copy(q, v, P, out):
     for i in range(out.shape[0]):
         out[i] = v[i]
+    return OK
 
 
 @overload(_qdot_of, inline="always")
 def _qdot_by_dimension(q, v, P, out):
-    """q̇ = B(q) v: the identity in 2D, the quaternion rates in 3D."""
+    """q̇ = B(q) v: the identity in 2D, the orientations' rates in 3D (:func:`qdot3`). Returns a
+    status code."""
     if is_spatial(P):
         return lambda q, v, P, out: qdot3(q, v, P, out)
     return lambda q, v, P, out: _copy(q, v, P, out)
@@ -792,6 +796,8 @@ def signal_history(times, states, inputs, alpha, need_acc, P, out):
 
 # Joint kinds (column 0 of ``jt_int`` in 3D; every kind is evaluated from the row counts in columns 3-5).
 SPHERICAL, REVOLUTE3, FIXED, PRISMATIC3 = 0, 1, 2, 3
+# A body's coordinates with a quaternion orientation (R, p); with Z-X-Z Euler angles: 6 (R, φ θ ψ).
+QUATERNION_COORDS = 7
 # Offset of the dot-2 vectors in a row of ``jt_real`` (after three dot-1 pairs).
 DOT2 = 18
 
@@ -800,20 +806,24 @@ DOT2 = 18
 # Small vector helpers on scalar triples and row-major 3×3 tuples
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
-def _rot(q, body):
-    """A body's rotation matrix A (row-major 9-tuple) from its quaternion q[7b+3:7b+7], normalised
-    on the fly with s = 2/(w² + x² + y² + z²) as ``spatial.quat_matrix``; the identity for the ground."""
+def _coords_per_body(q, v):
+    """A 3D body's coordinates: 7 = R(3) and a quaternion, 6 = R(3) and Z-X-Z Euler angles (each
+    body has 6 velocity coordinates, so q and v give it)."""
+    return (6 * q.shape[0]) // v.shape[0]
+
+
+@njit(cache=True, inline="always")
+def _rot(q, v, body):
+    """A body's rotation matrix A (row-major 9-tuple) from its orientation coordinates: a quaternion
+    (normalised on the fly) or Z-X-Z Euler angles (Eq. B.1), ``spatial.Orientation.matrix``; the
+    identity for the ground."""
     if body < 0:
         return (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-    k = 7 * body + 3
-    w = q[k]
-    x = q[k + 1]
-    y = q[k + 2]
-    z = q[k + 3]
-    s = 2.0 / (w * w + x * x + y * y + z * z)
-    return (1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y),
-            s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x),
-            s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y))
+    nqb = _coords_per_body(q, v)
+    k = nqb * body + 3
+    if nqb == QUATERNION_COORDS:
+        return quaternion_matrix9(q[k], q[k + 1], q[k + 2], q[k + 3])
+    return euler_matrix9(q[k], q[k + 1], q[k + 2])
 
 
 @njit(cache=True, inline="always")
@@ -872,7 +882,7 @@ def _point3(q, v, body, A, lx, ly, lz):
     wx, wy, wz = _omega(v, body)
     u0, u1, u2, d0, d1, d2, a0, a1, a2 = _vector(A, wx, wy, wz, lx, ly, lz)
     k = 6 * body
-    j = 7 * body
+    j = _coords_per_body(q, v) * body
     return q[j] + u0, q[j + 1] + u1, q[j + 2] + u2, v[k] + d0, v[k + 1] + d1, v[k + 2] + d2, a0, a1, a2
 
 
@@ -882,8 +892,8 @@ def _pair3(q, v, pa, pb, pbody, ploc):
     r, ṙ and a_n = acc_b − acc_a."""
     ba = pbody[pa]
     bb = pbody[pb]
-    Aa = _rot(q, ba)
-    Ab = _rot(q, bb)
+    Aa = _rot(q, v, ba)
+    Ab = _rot(q, v, bb)
     rax, ray, raz, vax, vay, vaz, aax, aay, aaz = _point3(q, v, ba, Aa, ploc[pa, 0], ploc[pa, 1], ploc[pa, 2])
     rbx, rby, rbz, vbx, vby, vbz, abx, aby, abz = _point3(q, v, bb, Ab, ploc[pb, 0], ploc[pb, 1], ploc[pb, 2])
     return (ba, bb, Aa, Ab, rbx - rax, rby - ray, rbz - raz, vbx - vax, vby - vay, vbz - vaz,
@@ -939,8 +949,8 @@ def _rotational3(q, v, e, rot_int, rot_real):
     (restoring positive) and the axis in the global frame n = A_a n̄, with A_a, A_b."""
     ia = rot_int[e, BODY_A]
     ib = rot_int[e, BODY_B]
-    Aa = _rot(q, ia)
-    Ab = _rot(q, ib)
+    Aa = _rot(q, v, ia)
+    Ab = _rot(q, v, ib)
     nx = rot_real[e, AXIS]
     ny = rot_real[e, AXIS + 1]
     nz = rot_real[e, AXIS + 2]
@@ -970,11 +980,11 @@ def _rotational3(q, v, e, rot_int, rot_real):
 
 
 @njit(cache=True, inline="always")
-def _point_force3(q, body, lx, ly, lz, Fx, Fy, Fz, gen):
+def _point_force3(q, v, body, lx, ly, lz, Fx, Fy, Fz, gen):
     """A force F at a point ū: Hᵀ F (virtual work, δr = H δv): F into Ṙ's and ū × (Aᵀ F) into ω's."""
     if body < 0:
         return
-    A = _rot(q, body)
+    A = _rot(q, v, body)
     mx, my, mz = _wcol(A, lx, ly, lz, Fx, Fy, Fz)
     k = 6 * body
     gen[k] += Fx
@@ -1091,12 +1101,12 @@ def _add_point_forces3(t, q, v, inputs, P, gen):
     for f in range(fa_int.shape[0]):
         p = fa_int[f, FORCE_POINT]
         mag = _force_magnitude(fa_real, f, fa_int[f, FORCE_FUNCTION], 3, t)     # after dx, dy, dz
-        _point_force3(q, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
+        _point_force3(q, v, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
                       mag * fa_real[f, 0], mag * fa_real[f, 1], mag * fa_real[f, 2], gen)
     for f in range(pd_int.shape[0]):
         p = pd_int[f, FORCE_POINT]
         b = pbody[p]
-        A = _rot(q, b)
+        A = _rot(q, v, b)
         rx, ry, rz, vx, vy, vz, ax, ay, az = _point3(q, v, b, A, ploc[p, 0], ploc[p, 1], ploc[p, 2])
         dx = pd_real[f, 0]
         dy = pd_real[f, 1]
@@ -1104,11 +1114,11 @@ def _add_point_forces3(t, q, v, inputs, P, gen):
         along = dx * rx + dy * ry + dz * rz - pd_real[f, 3 + PD_REFERENCE]
         rate = dx * vx + dy * vy + dz * vz
         mag = -(pd_real[f, 3 + PD_KP] * along + pd_real[f, 3 + PD_KD] * rate)
-        _point_force3(q, b, ploc[p, 0], ploc[p, 1], ploc[p, 2], mag * dx, mag * dy, mag * dz, gen)
+        _point_force3(q, v, b, ploc[p, 0], ploc[p, 1], ploc[p, 2], mag * dx, mag * dy, mag * dz, gen)
     if inputs.shape[0] > 0:
         for f in range(in_int.shape[0]):
             p = in_int[f, FORCE_POINT]
-            _point_force3(q, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
+            _point_force3(q, v, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
                           inputs[3 * f], inputs[3 * f + 1], inputs[3 * f + 2], gen)
     if dims[GROUND_MODE] != GROUND_NONE:
         agx, agy, agz = ground_acceleration(t, inputs, P)
@@ -1208,26 +1218,45 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def qdot3(q, v, P, out):
-    """out = q̇ = B(q) v: Ṙ, and the quaternion rate ṗ = ½ p ⊗ (0, ω) (``spatial.quat_rate``, p not
-    normalised)."""
+    """out = q̇ = B(q) v: Ṙ, and the orientation's rates from ω (``spatial.Orientation.rate``): the
+    quaternion rate ṗ = ½ p ⊗ (0, ω) (p not normalised), or the Z-X-Z Euler angles' rates, which
+    do not exist where |sin θ| < EULER_SINGULARITY (returns GIMBAL_LOCK there; OK otherwise)."""
     nb = P[DIMS][N_VELOCITY] // 6
+    nqb = _coords_per_body(q, v)
     for b in range(nb):
-        j = 7 * b
+        j = nqb * b
         k = 6 * b
         out[j] = v[k]
         out[j + 1] = v[k + 1]
         out[j + 2] = v[k + 2]
-        w = q[j + 3]
-        x = q[j + 4]
-        y = q[j + 5]
-        z = q[j + 6]
-        a = v[k + 3]
-        bb = v[k + 4]
-        c = v[k + 5]
-        out[j + 3] = 0.5 * (-x * a - y * bb - z * c)
-        out[j + 4] = 0.5 * (w * a + y * c - z * bb)
-        out[j + 5] = 0.5 * (w * bb + z * a - x * c)
-        out[j + 6] = 0.5 * (w * c + x * bb - y * a)
+        if nqb == QUATERNION_COORDS:
+            out[j + 3], out[j + 4], out[j + 5], out[j + 6] = quaternion_rates(
+                q[j + 3], q[j + 4], q[j + 5], q[j + 6], v[k + 3], v[k + 4], v[k + 5])
+        else:
+            if abs(math.sin(q[j + 4])) < EULER_SINGULARITY:
+                return GIMBAL_LOCK
+            out[j + 3], out[j + 4], out[j + 5] = euler_rates(q[j + 4], q[j + 5], v[k + 3], v[k + 4], v[k + 5])
+    return OK
+
+
+@njit(cache=True)
+def euler_lock_within(y, y_new, P):
+    """Whether a step from y to y_new takes a body's Z-X-Z Euler angles through their singularity
+    (sin θ changes sign or ends below EULER_SINGULARITY), as ``Mechanism.check_step``: the rates
+    there are undefined and the result past it would be garbage. False for quaternions and in 2D."""
+    dims = P[DIMS]
+    n = dims[N_VELOCITY]
+    if dims[DIMENSION] != 3 or n == 0:
+        return False
+    nq = dims[N_COORD]
+    if (6 * nq) // n == QUATERNION_COORDS:
+        return False
+    for b in range(n // 6):
+        s0 = math.sin(y[6 * b + 4])
+        s1 = math.sin(y_new[6 * b + 4])
+        if s0 * s1 <= 0.0 or abs(s1) < EULER_SINGULARITY:
+            return True
+    return False
 
 
 @njit(cache=True)
@@ -1273,7 +1302,7 @@ def signal_values3(q, v, qdd, P, out):
     k = 0
     for p in range(pbody.shape[0]):
         b = pbody[p]
-        A = _rot(q, b)
+        A = _rot(q, v, b)
         rx, ry, rz, vx, vy, vz, ax, ay, az = _point3(q, v, b, A, ploc[p, 0], ploc[p, 1], ploc[p, 2])
         out[k] = rx
         out[k + 1] = ry
@@ -1294,7 +1323,7 @@ def signal_values3(q, v, qdd, P, out):
     if dims[HAS_GRAVITY]:
         for b in range(nb):
             for i in range(3):
-                energy -= gravity[6 * b + i] * q[7 * b + i]
+                energy -= gravity[6 * b + i] * q[_coords_per_body(q, v) * b + i]
     ga = np.empty(6)
     gb = np.empty(6)
     for e in range(el_int.shape[0]):
@@ -1345,7 +1374,8 @@ def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
     q = y[:nq]
     v = y[nq:]
     st = accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, acc)
-    _qdot_of(q, v, P, dy[:nq])
+    if _qdot_of(q, v, P, dy[:nq]) == GIMBAL_LOCK:
+        return GIMBAL_LOCK
     for i in range(n):
         dy[nq + i] = acc[i]
     if st == OK:
@@ -1845,6 +1875,8 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         hdr[RK_STEPS] += 1
         if terminals_meet(gaps, z, y_new, P):
             status = TERMINALS_MEET
+        elif euler_lock_within(y, y_new, P):
+            status = GIMBAL_LOCK
         else:
             status = _rk_watch(n_stages, hdr, t_new, h, y, y_new, K, A, monitor)
         if status != OK:
@@ -1941,7 +1973,7 @@ def _point_value2(q, v, p, c, P):
 def _point_value3(q, v, p, c, P):
     pbody, ploc = P[PBODY], P[PLOC]
     b = pbody[p]
-    A = _rot(q, b)
+    A = _rot(q, v, b)
     rx, ry, rz, vx, vy, vz, ax, ay, az = _point3(q, v, b, A, ploc[p, 0], ploc[p, 1], ploc[p, 2])
     if c == 0:
         return rx
@@ -2178,6 +2210,8 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
         steps += 1
         if terminals_meet(gaps, z, y_new, P):
             return TERMINALS_MEET, k, steps, evals, t
+        if euler_lock_within(y, y_new, P):
+            return GIMBAL_LOCK, k, steps, evals, t
         while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
             s = (grid[k] - t) / h
             h00 = 2 * s ** 3 - 3 * s ** 2 + 1

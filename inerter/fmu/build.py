@@ -6,7 +6,8 @@ FMUs of several scenes can run in one process. The FMU's ``resources/`` hold
 
 - the generated model module (from ``fmu_src/model_module.py.template``),
 - the generic slave ``fmu_src/inerter_slave.py``, which does the work,
-- a copy of the ``inerter`` package, the scene file, and ``requirements.txt`` (numpy, scipy),
+- the modules of the ``inerter`` package the slave can import (:mod:`.payload`; not the
+  command line, sweeps, studies or this builder), the scene file, and ``requirements.txt``,
 - pythonfmu's own runtime, added by pythonfmu.
 
 On Linux, ``binaries/linux64/<model>.so`` is the status shim compiled from
@@ -49,6 +50,7 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from inerter.fmu import native as fmu_native
+from inerter.fmu import payload as fmu_payload
 from inerter.common.errors import InerterError
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1]
@@ -165,8 +167,8 @@ def module_name(model_name: str) -> str:
 
 
 def _shipped_package_files() -> list[Path]:
-    return sorted(p for p in PACKAGE_DIR.rglob("*")
-                  if p.is_file() and "__pycache__" not in p.parts and p.suffix not in (".pyc", ".pyo"))
+    """The package's files the FMU carries: those the slave can import (:mod:`.payload`)."""
+    return fmu_payload.package_files(FMU_SRC / SLAVE_FILE, PACKAGE_DIR)
 
 
 def source_hash(scene_path: Path, data_files=()) -> str:
@@ -279,8 +281,10 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
             description_repr=repr(_scene_description(scene_path, model)),
             version_repr=repr(None if version is None else str(version))), encoding="utf-8")
         shutil.copy2(FMU_SRC / SLAVE_FILE, stage / SLAVE_FILE)
-        shutil.copytree(PACKAGE_DIR, stage / "inerter",
-                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo"))
+        for path in _shipped_package_files():
+            target = stage / "inerter" / path.relative_to(PACKAGE_DIR)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(path, target)
         shutil.copy2(scene_path, stage / scene_path.name)
         (stage / "requirements.txt").write_text("\n".join(RUNTIME_REQUIREMENTS) + "\n")
         extra = []

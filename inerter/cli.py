@@ -164,12 +164,24 @@ def cmd_build_fmu(args):
     return build_main(args.scenes + (["--force"] if args.force else []))
 
 
+def paper_scenes(folder=None) -> list[Path]:
+    """The paper's scene files in `folder`, by default the scenes shipped with inerter (the
+    repository's scenarios/, or their copy in an installed package); both checked before any run."""
+    from inerter.common.locations import scenarios
+    root = Path(folder) if folder else scenarios()
+    paths = [root / f"{name}.toml" for name in PAPER_SCENES]
+    missing = [p.name for p in paths if not p.is_file()]
+    if missing:
+        raise OptionError("--scenarios", str(root), "a folder holding " + " and ".join(p.name for p in paths),
+                          "no " + " nor ".join(missing) + " there")
+    return paths
+
+
 def cmd_paper(args):
     """The main job: both paper scenes end to end, with and without the correction."""
-    root = Path(args.scenarios)
     status = 0
-    for name in PAPER_SCENES:
-        ns = argparse.Namespace(scene=str(root / f"{name}.toml"), set=[], out=str(Path(args.out) / name),
+    for scene in paper_scenes(args.scenarios):
+        ns = argparse.Namespace(scene=str(scene), set=[], out=str(Path(args.out) / scene.stem),
                                 model=args.model, stop_time=None, method=None, rtol=None, step=None)
         status |= cmd_compare(ns)
     return status
@@ -248,7 +260,9 @@ def build_parser():
         sub.add_parser(name, help=text + f" (inerter {name} -h)")
     pp = sub.add_parser("paper", help="both paper scenes end to end (the main job)")
     pp.add_argument("--out", default="out/paper")
-    pp.add_argument("--scenarios", default="scenarios")
+    pp.add_argument("--scenarios", default=None,
+                    help="folder holding lumped_mass_2d.toml and two_bar_2d.toml (default: the scenes "
+                         "shipped with inerter)")
     pp.add_argument("--model", choices=("solver", "fmu"), default="solver")
     pp.set_defaults(func=cmd_paper)
     k = sub.add_parser("compile", help="compile the engine's kernels ahead of time (the set-up does it once)")

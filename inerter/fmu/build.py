@@ -51,11 +51,12 @@ from xml.etree import ElementTree as ET
 
 from inerter.fmu import native as fmu_native
 from inerter.fmu import payload as fmu_payload
+from inerter.common import locations
 from inerter.common.errors import InerterError
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1]
-REPO_DIR = PACKAGE_DIR.parent
-FMU_SRC = REPO_DIR / "fmu_src"
+#: fmu_src/ in a checkout, its copy in an installed package (inerter.common.locations).
+FMU_SRC = locations.fmu_sources()
 SLAVE_FILE = "inerter_slave.py"
 TEMPLATE_FILE = "model_module.py.template"
 SHIM_FILE = "status_shim.c"
@@ -65,7 +66,7 @@ STATUS_VARIABLE = "fmi_status"
 #: Where pythonfmu's own Linux binary goes when the shim takes its place.
 ORIGINAL_SUFFIX = ".pythonfmu.so"
 DEFAULT_OUT_DIR = Path("build") / "fmu"
-DEFAULT_SCENES_DIR = REPO_DIR / "scenarios"
+DEFAULT_SCENES_DIR = locations.scenarios()
 RUNTIME_REQUIREMENTS = ("numpy", "scipy")
 HASH_SUFFIX = ".fmu.source-hash"
 #: Bump when the layout of a built FMU changes without any shipped source changing.
@@ -259,6 +260,10 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
 
     if not scene_path.is_file():
         raise FmuBuildError(f"{scene_path}: no such scene file")
+    if not (FMU_SRC / SLAVE_FILE).is_file():
+        raise FmuBuildError(f"{scene_path}: the FMU sources are missing ({FMU_SRC / SLAVE_FILE} "
+                            f"does not exist; expected fmu_src/ beside the package or its copy "
+                            f"in an installed one: reinstall inerter)")
     model = inerter.load(scene_path)
     units = _check_model(scene_path, model)
     name = model.name

@@ -1,4 +1,4 @@
-"""Command line: ``inerter run | compare | describe | build-fmu | paper | compile``."""
+"""Command line: ``inerter run | compare | describe | build-fmu | build-system | paper | compile``."""
 from __future__ import annotations
 
 import argparse
@@ -164,6 +164,15 @@ def cmd_build_fmu(args):
     return build_main(args.scenes + (["--force"] if args.force else []))
 
 
+def cmd_build_system(args):
+    """The coupled example as system-structure files beside its two FMUs."""
+    from inerter.fmu.cosim import build_system
+    paths = build_system(args.out_dir, step=args.step or 0.01)
+    for role in ("plant", "controller", "osp", "ssd"):
+        print(f"{role}: {paths[role]}")
+    return 0
+
+
 def paper_scenes(folder=None) -> list[Path]:
     """The paper's scene files in `folder`, by default the scenes shipped with inerter (the
     repository's scenarios/, or their copy in an installed package); both checked before any run."""
@@ -256,6 +265,11 @@ def build_parser():
     b.add_argument("scenes", nargs="+")
     b.add_argument("--force", action="store_true")
     b.set_defaults(func=cmd_build_fmu)
+    y = sub.add_parser("build-system", help="the two-bar FMU and the PD-controller FMU coupled, as an OSP "
+                                           "system structure and an SSP SystemStructure.ssd (libcosim reads both)")
+    y.add_argument("-o", "--out-dir", default="build/system", help="where the FMUs and the files go (default: %(default)s)")
+    y.add_argument("--step", type=float, default=None, help="communication step (s; default 0.01)")
+    y.set_defaults(func=cmd_build_system)
     for name, (module, func, text) in DELEGATED.items():
         sub.add_parser(name, help=text + f" (inerter {name} -h)")
     pp = sub.add_parser("paper", help="both paper scenes end to end (the main job)")

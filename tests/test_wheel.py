@@ -126,3 +126,17 @@ def test_the_installed_paper_command_finds_its_scenes(installed):
     done = _run([python.with_name("inerter"), "paper", "--scenarios", work / "none"], work, env, check=False)
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert done.stderr.strip().count("\n") == 0 and "--scenarios" in done.stderr
+
+
+def test_the_installed_package_builds_the_coupled_system(installed, tmp_path):
+    """`inerter build-system`: the controller's source and the scenes come from the installed
+    package; the system files are those built from the repository."""
+    from inerter.fmu import cosim
+
+    python, env, work = installed
+    _run([python.with_name("inerter"), "build-system", "-o", "system"], work, env)
+    reference = cosim.build_system(tmp_path)
+    for role in ("osp", "ssd"):
+        assert (work / "system" / reference[role].name).read_bytes() == reference[role].read_bytes()
+    for role in ("plant", "controller"):
+        assert zipfile.is_zipfile(work / "system" / reference[role].name)

@@ -129,3 +129,19 @@ def test_the_fmu_runs_on_what_it_carries_in_a_process_without_the_repository(fmu
         assert np.allclose(result["time"], ref.time, rtol=0, atol=1e-12)
         worst = max(np.max(np.abs(np.array(result[n]) - ref[n])) for n in outputs if ".r[" in n)
         assert worst <= 1e-9, f"{path} path: FMU and solver differ by {worst:.3g} m"
+
+
+def test_the_requirements_the_fmu_states_are_the_packages(fmu):
+    """resources/requirements.txt: numpy and scipy with pyproject.toml's lower bounds, and a note
+    naming the Python and numba versions pyproject.toml requires."""
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    bounds = {d.split(">=")[0]: d.split(">=")[1] for d in project["dependencies"] if ">=" in d}
+    with zipfile.ZipFile(fmu) as z:
+        text = z.read("resources/requirements.txt").decode()
+    lines = [line for line in text.splitlines() if line and not line.startswith("#")]
+    assert lines == [f"numpy>={bounds['numpy']}", f"scipy>={bounds['scipy']}"]
+    note = " ".join(line for line in text.splitlines() if line.startswith("#"))
+    assert f"({project['requires-python'].removeprefix('>=')} or later)" in note
+    assert f"numba ({bounds['numba']} or later)" in note

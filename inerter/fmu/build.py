@@ -7,7 +7,8 @@ FMUs of several scenes can run in one process. The FMU's ``resources/`` hold
 - the generated model module (from ``fmu_src/model_module.py.template``),
 - the generic slave ``fmu_src/inerter_slave.py``, which does the work,
 - the modules of the ``inerter`` package the slave can import (:mod:`.payload`; not the
-  command line, sweeps, studies or this builder), the scene file, and ``requirements.txt``,
+  command line, sweeps, studies or this builder), the scene file, and ``requirements.txt``
+  (numpy, scipy, with a note on Python and numba),
 - pythonfmu's own runtime, added by pythonfmu.
 
 On Linux, ``binaries/linux64/<model>.so`` is the status shim compiled from
@@ -67,7 +68,12 @@ STATUS_VARIABLE = "fmi_status"
 ORIGINAL_SUFFIX = ".pythonfmu.so"
 DEFAULT_OUT_DIR = Path("build") / "fmu"
 DEFAULT_SCENES_DIR = locations.scenarios()
-RUNTIME_REQUIREMENTS = ("numpy", "scipy")
+#: The packages the FMU imports from the importer's environment, with pyproject.toml's lower bounds:
+#: its resources/requirements.txt (``pythonfmu deploy`` installs it), under a note on the rest.
+RUNTIME_REQUIREMENTS = ("numpy>=1.26", "scipy>=1.11")
+REQUIREMENTS_NOTE = ("# The FMU runs in the importing process's Python (3.11 or later) and imports these from\n"
+                     "# its environment. numba (0.60 or later), where installed there, runs the compiled path;\n"
+                     "# without it the FMU runs the numpy path.\n")
 HASH_SUFFIX = ".fmu.source-hash"
 #: Bump when the layout of a built FMU changes without any shipped source changing.
 BUILD_FORMAT = "inerter-fmu-build/2"
@@ -167,6 +173,10 @@ def module_name(model_name: str) -> str:
     return MODULE_PREFIX + model_name
 
 
+def _requirements_text() -> str:
+    return REQUIREMENTS_NOTE + "\n".join(RUNTIME_REQUIREMENTS) + "\n"
+
+
 def _shipped_package_files() -> list[Path]:
     """The package's files the FMU carries: those the slave can import (:mod:`.payload`)."""
     return fmu_payload.package_files(FMU_SRC / SLAVE_FILE, PACKAGE_DIR)
@@ -183,7 +193,7 @@ def source_hash(scene_path: Path, data_files=()) -> str:
 
     add("format", BUILD_FORMAT.encode())
     add("pythonfmu", pythonfmu.__version__.encode())
-    add("requirements", "\n".join(RUNTIME_REQUIREMENTS).encode())
+    add("requirements", _requirements_text().encode())
     add("scene:" + scene_path.name, scene_path.read_bytes())
     for rel in data_files:                                 # records the scene reads (ground motion)
         add("data:" + rel, (scene_path.parent / rel).read_bytes())
@@ -291,7 +301,7 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(path, target)
         shutil.copy2(scene_path, stage / scene_path.name)
-        (stage / "requirements.txt").write_text("\n".join(RUNTIME_REQUIREMENTS) + "\n")
+        (stage / "requirements.txt").write_text(_requirements_text())
         extra = []
         for rel in model.scene.data_files:                 # beside the scene, as the scene names them
             target = stage / rel

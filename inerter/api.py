@@ -414,7 +414,8 @@ def warm_up(spatial: bool = False):
         return 0.0
 
     t0 = _time.perf_counter()
-    folder = Path(__file__).resolve().parents[1] / "scenarios"
+    from inerter.common.locations import scenarios
+    folder = scenarios()
     for name in ("two_bar_2d.toml", "two_bar_2d_as_3d.toml")[:2 if spatial else 1]:
         if not (folder / name).exists():
             continue

@@ -1,4 +1,4 @@
-"""Command line: ``inerter run | compare | describe | build-fmu | paper | compile``."""
+"""Command line: ``inerter run | compare | describe | build-fmu | build-system | paper | compile``."""
 from __future__ import annotations
 
 import argparse
@@ -164,12 +164,33 @@ def cmd_build_fmu(args):
     return build_main(args.scenes + (["--force"] if args.force else []))
 
 
+def cmd_build_system(args):
+    """The coupled example as system-structure files beside its two FMUs."""
+    from inerter.fmu.cosim import build_system
+    paths = build_system(args.out_dir, step=args.step or 0.01)
+    for role in ("plant", "controller", "osp", "ssd"):
+        print(f"{role}: {paths[role]}")
+    return 0
+
+
+def paper_scenes(folder=None) -> list[Path]:
+    """The paper's scene files in `folder`, by default the scenes shipped with inerter (the
+    repository's scenarios/, or their copy in an installed package); both checked before any run."""
+    from inerter.common.locations import scenarios
+    root = Path(folder) if folder else scenarios()
+    paths = [root / f"{name}.toml" for name in PAPER_SCENES]
+    missing = [p.name for p in paths if not p.is_file()]
+    if missing:
+        raise OptionError("--scenarios", str(root), "a folder holding " + " and ".join(p.name for p in paths),
+                          "no " + " nor ".join(missing) + " there")
+    return paths
+
+
 def cmd_paper(args):
     """The main job: both paper scenes end to end, with and without the correction."""
-    root = Path(args.scenarios)
     status = 0
-    for name in PAPER_SCENES:
-        ns = argparse.Namespace(scene=str(root / f"{name}.toml"), set=[], out=str(Path(args.out) / name),
+    for scene in paper_scenes(args.scenarios):
+        ns = argparse.Namespace(scene=str(scene), set=[], out=str(Path(args.out) / scene.stem),
                                 model=args.model, stop_time=None, method=None, rtol=None, step=None)
         status |= cmd_compare(ns)
     return status
@@ -244,11 +265,18 @@ def build_parser():
     b.add_argument("scenes", nargs="+")
     b.add_argument("--force", action="store_true")
     b.set_defaults(func=cmd_build_fmu)
+    y = sub.add_parser("build-system", help="the two-bar FMU and the PD-controller FMU coupled, as an OSP "
+                                           "system structure and an SSP SystemStructure.ssd (libcosim reads both)")
+    y.add_argument("-o", "--out-dir", default="build/system", help="where the FMUs and the files go (default: %(default)s)")
+    y.add_argument("--step", type=float, default=None, help="communication step (s; default 0.01)")
+    y.set_defaults(func=cmd_build_system)
     for name, (module, func, text) in DELEGATED.items():
         sub.add_parser(name, help=text + f" (inerter {name} -h)")
     pp = sub.add_parser("paper", help="both paper scenes end to end (the main job)")
     pp.add_argument("--out", default="out/paper")
-    pp.add_argument("--scenarios", default="scenarios")
+    pp.add_argument("--scenarios", default=None,
+                    help="folder holding lumped_mass_2d.toml and two_bar_2d.toml (default: the scenes "
+                         "shipped with inerter)")
     pp.add_argument("--model", choices=("solver", "fmu"), default="solver")
     pp.set_defaults(func=cmd_paper)
     k = sub.add_parser("compile", help="compile the engine's kernels ahead of time (the set-up does it once)")

@@ -6,7 +6,9 @@ FMUs of several scenes can run in one process. The FMU's ``resources/`` hold
 
 - the generated model module (from ``fmu_src/model_module.py.template``),
 - the generic slave ``fmu_src/inerter_slave.py``, which does the work,
-- a copy of the ``inerter`` package, the scene file, and ``requirements.txt`` (numpy, scipy),
+- the modules of the ``inerter`` package the slave can import (:mod:`.payload`; not the
+  command line, sweeps, studies or this builder), the scene file, and ``requirements.txt``
+  (numpy, scipy, with a note on Python and numba),
 - pythonfmu's own runtime, added by pythonfmu.
 
 On Linux, ``binaries/linux64/<model>.so`` is the status shim compiled from
@@ -49,11 +51,13 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from inerter.fmu import native as fmu_native
+from inerter.fmu import payload as fmu_payload
+from inerter.common import locations
 from inerter.common.errors import InerterError
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1]
-REPO_DIR = PACKAGE_DIR.parent
-FMU_SRC = REPO_DIR / "fmu_src"
+#: fmu_src/ in a checkout, its copy in an installed package (inerter.common.locations).
+FMU_SRC = locations.fmu_sources()
 SLAVE_FILE = "inerter_slave.py"
 TEMPLATE_FILE = "model_module.py.template"
 SHIM_FILE = "status_shim.c"
@@ -63,8 +67,13 @@ STATUS_VARIABLE = "fmi_status"
 #: Where pythonfmu's own Linux binary goes when the shim takes its place.
 ORIGINAL_SUFFIX = ".pythonfmu.so"
 DEFAULT_OUT_DIR = Path("build") / "fmu"
-DEFAULT_SCENES_DIR = REPO_DIR / "scenarios"
-RUNTIME_REQUIREMENTS = ("numpy", "scipy")
+DEFAULT_SCENES_DIR = locations.scenarios()
+#: The packages the FMU imports from the importer's environment, with pyproject.toml's lower bounds:
+#: its resources/requirements.txt (``pythonfmu deploy`` installs it), under a note on the rest.
+RUNTIME_REQUIREMENTS = ("numpy>=1.26", "scipy>=1.11")
+REQUIREMENTS_NOTE = ("# The FMU runs in the importing process's Python (3.11 or later) and imports these from\n"
+                     "# its environment. numba (0.60 or later), where installed there, runs the compiled path;\n"
+                     "# without it the FMU runs the numpy path.\n")
 HASH_SUFFIX = ".fmu.source-hash"
 #: Bump when the layout of a built FMU changes without any shipped source changing.
 BUILD_FORMAT = "inerter-fmu-build/2"
@@ -164,9 +173,13 @@ def module_name(model_name: str) -> str:
     return MODULE_PREFIX + model_name
 
 
+def _requirements_text() -> str:
+    return REQUIREMENTS_NOTE + "\n".join(RUNTIME_REQUIREMENTS) + "\n"
+
+
 def _shipped_package_files() -> list[Path]:
-    return sorted(p for p in PACKAGE_DIR.rglob("*")
-                  if p.is_file() and "__pycache__" not in p.parts and p.suffix not in (".pyc", ".pyo"))
+    """The package's files the FMU carries: those the slave can import (:mod:`.payload`)."""
+    return fmu_payload.package_files(FMU_SRC / SLAVE_FILE, PACKAGE_DIR)
 
 
 def source_hash(scene_path: Path, data_files=()) -> str:
@@ -180,7 +193,7 @@ def source_hash(scene_path: Path, data_files=()) -> str:
 
     add("format", BUILD_FORMAT.encode())
     add("pythonfmu", pythonfmu.__version__.encode())
-    add("requirements", "\n".join(RUNTIME_REQUIREMENTS).encode())
+    add("requirements", _requirements_text().encode())
     add("scene:" + scene_path.name, scene_path.read_bytes())
     for rel in data_files:                                 # records the scene reads (ground motion)
         add("data:" + rel, (scene_path.parent / rel).read_bytes())
@@ -257,6 +270,10 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
 
     if not scene_path.is_file():
         raise FmuBuildError(f"{scene_path}: no such scene file")
+    if not (FMU_SRC / SLAVE_FILE).is_file():
+        raise FmuBuildError(f"{scene_path}: the FMU sources are missing ({FMU_SRC / SLAVE_FILE} "
+                            f"does not exist; expected fmu_src/ beside the package or its copy "
+                            f"in an installed one: reinstall inerter)")
     model = inerter.load(scene_path)
     units = _check_model(scene_path, model)
     name = model.name
@@ -279,10 +296,12 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
             description_repr=repr(_scene_description(scene_path, model)),
             version_repr=repr(None if version is None else str(version))), encoding="utf-8")
         shutil.copy2(FMU_SRC / SLAVE_FILE, stage / SLAVE_FILE)
-        shutil.copytree(PACKAGE_DIR, stage / "inerter",
-                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo"))
+        for path in _shipped_package_files():
+            target = stage / "inerter" / path.relative_to(PACKAGE_DIR)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(path, target)
         shutil.copy2(scene_path, stage / scene_path.name)
-        (stage / "requirements.txt").write_text("\n".join(RUNTIME_REQUIREMENTS) + "\n")
+        (stage / "requirements.txt").write_text(_requirements_text())
         extra = []
         for rel in model.scene.data_files:                 # beside the scene, as the scene names them
             target = stage / rel

@@ -25,7 +25,10 @@ from pathlib import Path
 from inerter.studies.sweep import (SweepError, Sweep, _number, add_run_arguments, parse_vary, print_report, read_results,
                     run_sweep, status_code)
 
-REPO_SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+from inerter.common.locations import scenarios as _shipped_scenarios
+
+#: The shipped scenes: the repository's scenarios/, or their copy in an installed package.
+REPO_SCENARIOS = _shipped_scenarios()
 CORRECTION = "effects.centripetal"
 
 

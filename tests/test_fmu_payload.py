@@ -1,0 +1,147 @@
+"""What an FMU carries (inerter/fmu/payload.py): the modules of `inerter` its slave can import, and
+nothing else; and those suffice, which only a run in a process that cannot reach the repository
+shows (a build followed by a run in one process would take a missing module from the repository).
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import grimp
+import numpy as np
+import pytest
+
+import inerter
+from inerter.engine.compiled import kernel_sources
+from inerter.fmu import build as fmu_build
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "scenarios" / "two_bar_2d.toml"
+RUN_TIME = 0.5
+RTOL = 1e-10
+#: Never imported by the slave; each would be in an FMU that shipped the whole package.
+NOT_RUN = ["inerter/cli.py", "inerter/studies/__init__.py", "inerter/studies/sweep.py",
+           "inerter/studies/bench.py", "inerter/fmu/build.py", "inerter/fmu/cosim.py",
+           "inerter/fmu/run.py", "inerter/fmu/payload.py"]
+
+
+@pytest.fixture(scope="module")
+def fmu(tmp_path_factory) -> Path:
+    return fmu_build.build(SCENE, tmp_path_factory.mktemp("fmu"), force=True)
+
+
+def _module(relative: str) -> str:
+    """``inerter/a/b.py`` -> ``inerter.a.b``; ``inerter/a/__init__.py`` -> ``inerter.a``."""
+    parts = Path(relative).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def imported_by_the_slave() -> set[str]:
+    """The reference, found without inerter.fmu.payload: the modules a fresh interpreter has after
+    importing the slave, and everything those import anywhere in their code (grimp's graph, which
+    counts imports inside functions), with their parent packages."""
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); import inerter_slave; "
+            "print(' '.join(m for m in sys.modules if m == 'inerter' or m.startswith('inerter.')))")
+    done = subprocess.run([sys.executable, "-c", code, str(ROOT / "fmu_src")], cwd=ROOT,
+                          env=dict(os.environ, PYTHONPATH=str(ROOT)), capture_output=True,
+                          text=True, check=True)
+    graph = grimp.build_graph("inerter", include_external_packages=False)
+    found, todo = set(), done.stdout.split()
+    while todo:
+        name = todo.pop()
+        if name not in found:
+            found.add(name)
+            todo.extend(graph.find_modules_directly_imported_by(name))
+            todo.extend(name.rsplit(".", i)[0] for i in range(1, name.count(".") + 1))
+    return found
+
+
+def test_the_fmu_carries_the_modules_the_slave_imports_and_no_other(fmu):
+    with zipfile.ZipFile(fmu) as z:
+        names = [n[len("resources/"):] for n in z.namelist() if n.startswith("resources/inerter/")]
+    assert all(n.endswith(".py") for n in names), names
+    shipped = {_module(n) for n in names}
+    # The kernels' sources, loaded from a copy of their file and listed by inerter.elements,
+    # are no import statements: the FMU carries them as the kernels' cache key needs them.
+    package = Path(inerter.__file__).parent
+    kernels = {_module(str(Path("inerter") / p.relative_to(package))) for p in kernel_sources()}
+    expected = imported_by_the_slave() | kernels
+    assert shipped == expected, (f"shipped but not imported: {sorted(shipped - expected)}; "
+                                 f"imported but not shipped: {sorted(expected - shipped)}")
+    assert not set(NOT_RUN) & set(names)
+    every = {_module(str(p.relative_to(package.parent))) for p in package.rglob("*.py")}
+    assert len(every - shipped) >= len(NOT_RUN)
+
+
+RUN_SCRIPT = r"""
+import importlib.util, json, sys
+# Nothing but the FMU may provide the package: no entry of sys.path in the repository, and no
+# editable install's finder (it would resolve a module the FMU lacks from the repository).
+sys.meta_path[:] = [f for f in sys.meta_path if "__editable__" not in getattr(f, "__module__", "")]
+sys.path[:] = [p for p in sys.path if not p.startswith(sys.argv[3])]
+assert importlib.util.find_spec("inerter") is None, "inerter is importable without the FMU"
+from fmpy import extract, simulate_fmu
+job = json.loads(sys.argv[1])
+folder = extract(job["fmu"], sys.argv[2])
+results = {}
+for compiled in (True, False):
+    r = simulate_fmu(folder, stop_time=job["stop_time"], output_interval=job["output_interval"],
+                     start_values={"rtol": job["rtol"], "compiled": compiled}, output=job["outputs"])
+    results[str(compiled)] = {n: r[n].tolist() for n in ["time"] + job["outputs"]}
+print(json.dumps({"results": results, "folder": str(folder),
+                  "files": {m: str(getattr(sys.modules[m], "__file__", None)) for m in list(sys.modules)
+                            if m == "inerter" or m.startswith(("inerter.", "inerter_"))}}))
+"""
+
+
+def test_the_fmu_runs_on_what_it_carries_in_a_process_without_the_repository(fmu, tmp_path):
+    """Both integration paths run (the compiled one loads the kernels from their shipped source)
+    and every module of `inerter` they import comes from the FMU's resources/."""
+    model = inerter.load(SCENE)
+    dt = model.experiment["output_interval"]
+    outputs = [o["name"] for o in model.output_info()]
+    job = dict(fmu=str(fmu), stop_time=RUN_TIME, output_interval=dt, rtol=RTOL, outputs=outputs)
+    repository = str(Path(inerter.__file__).resolve().parents[1])
+    proc = subprocess.run([sys.executable, "-I", "-c", RUN_SCRIPT, json.dumps(job),
+                           str(tmp_path / "unzipped"), repository],
+                          cwd=tmp_path, env={"PATH": os.environ.get("PATH", "")},
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    resources = Path(out["folder"]).resolve() / "resources"
+    # The compiled engine imports its kernels from a copy of kernels.py in the kernel cache.
+    kernels = [m for m in out["files"] if m.startswith("inerter_kernels_")]
+    assert len(kernels) == 1 and "inerter.engine.compiled" in out["files"], sorted(out["files"])
+    with zipfile.ZipFile(fmu) as z:
+        assert Path(out["files"].pop(kernels[0])).read_bytes() == \
+            z.read("resources/inerter/engine/kernels.py")
+    outside = {m: f for m, f in out["files"].items()
+               if resources not in Path(f).resolve().parents}
+    assert not outside, f"imported from outside the FMU: {outside}"
+    for compiled, result in out["results"].items():
+        path = "compiled" if compiled == "True" else "numpy"
+        ref = model.simulate(stop_time=RUN_TIME, output_interval=dt, rtol=RTOL, metrics=False,
+                             path=path)
+        assert np.allclose(result["time"], ref.time, rtol=0, atol=1e-12)
+        worst = max(np.max(np.abs(np.array(result[n]) - ref[n])) for n in outputs if ".r[" in n)
+        assert worst <= 1e-9, f"{path} path: FMU and solver differ by {worst:.3g} m"
+
+
+def test_the_requirements_the_fmu_states_are_the_packages(fmu):
+    """resources/requirements.txt: numpy and scipy with pyproject.toml's lower bounds, and a note
+    naming the Python and numba versions pyproject.toml requires."""
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    bounds = {d.split(">=")[0]: d.split(">=")[1] for d in project["dependencies"] if ">=" in d}
+    with zipfile.ZipFile(fmu) as z:
+        text = z.read("resources/requirements.txt").decode()
+    lines = [line for line in text.splitlines() if line and not line.startswith("#")]
+    assert lines == [f"numpy>={bounds['numpy']}", f"scipy>={bounds['scipy']}"]
+    note = " ".join(line for line in text.splitlines() if line.startswith("#"))
+    assert f"({project['requires-python'].removeprefix('>=')} or later)" in note
+    assert f"numba ({bounds['numba']} or later)" in note

@@ -80,9 +80,10 @@ def test_the_fmu_carries_the_modules_the_slave_imports_and_no_other(fmu):
 RUN_SCRIPT = r"""
 import importlib.util, json, sys
 # Nothing but the FMU may provide the package: no entry of sys.path in the repository, and no
-# editable install's finder (it would resolve a module the FMU lacks from the repository).
+# editable install's finder (it would resolve a module the FMU lacks from the repository). The
+# environment's own folders stay, even where it lives inside the repository (make's .venv).
 sys.meta_path[:] = [f for f in sys.meta_path if "__editable__" not in getattr(f, "__module__", "")]
-sys.path[:] = [p for p in sys.path if not p.startswith(sys.argv[3])]
+sys.path[:] = [p for p in sys.path if not p.startswith(sys.argv[3]) or p.startswith(sys.prefix)]
 assert importlib.util.find_spec("inerter") is None, "inerter is importable without the FMU"
 from fmpy import extract, simulate_fmu
 job = json.loads(sys.argv[1])

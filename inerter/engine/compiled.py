@@ -34,6 +34,7 @@ returns a kernel that calls the numpy path and :func:`integrate_compiled` runs
 """
 from __future__ import annotations
 
+import copy
 import hashlib
 import importlib.util
 import os
@@ -898,6 +899,43 @@ class CompiledStepper(Stepper):
             self._rk = None                   # a discontinuity: the integration restarts here
             self._input_moved = True
             self._values = None               # outputs depend on the inputs (inerter forces)
+
+    def retune(self, mech, signals):
+        """Go on from the current state with the element coefficients and point-force numbers of
+        `mech` (the same scene read with other parameter values), written in place into this
+        stepper's tables: a discontinuity, the integration restarts here. The tables are the
+        model's until the first retune, which copies them, so the model and its other steppers keep
+        theirs. Raises ValueError, the stepper unchanged, where `mech` differs in anything else, or
+        gives an inertance to an element whose inertance was 0 when the kernel's band was laid out."""
+        from inerter.engine.tables import check_retune, retune_rows
+        check_retune(self.mech.scene, mech.scene)
+        self._own_tables()
+        lacking = retune_rows(self.kernel.flat, mech.scene, self._coupled)
+        if lacking:
+            raise ValueError(f"element {', '.join(lacking)}: an inertance that was 0 when the model was "
+                             f"compiled cannot become non-zero between steps (its coupling is not in the "
+                             f"compiled band); give it a non-zero value before initialisation")
+        self.mech, self.signals = mech, signals
+        self._rk = None
+        self._input_moved = True
+        self._values = None
+        self._native = None                   # its table points to the arrays it was made with
+
+    def _own_tables(self):
+        """Copy the kernel's tables that :meth:`retune` writes, once: the kernel is shared with the
+        model it was compiled for."""
+        if getattr(self, "_owns_tables", False):
+            return
+        from inerter.engine.tables import coupled_elements
+        self._coupled = coupled_elements(self.kernel.flat)
+        kernel = copy.copy(self.kernel)
+        kernel.flat = dict(kernel.flat)
+        copies = {}
+        for key in ("el_real", "rot_real", "fa_real", "pd_real"):
+            copies[id(kernel.flat[key])] = kernel.flat[key] = kernel.flat[key].copy()
+        kernel.params = tuple(copies.get(id(a), a) for a in kernel.params)
+        self.kernel = kernel
+        self._owns_tables = True
 
     def step(self, t_end):
         t_end = float(t_end)

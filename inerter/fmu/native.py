@@ -45,8 +45,8 @@ import numpy as np
 #: The context's slots: CTX_MAP points to one int64 per value reference, -1 or
 #: (kind << 32) + index into the array of that kind (CTX_VALUES for OUTPUT, CTX_REALS, ...).
 CTX_MAGIC, CTX_ARMED, CTX_FUNCTION, CTX_TABLE, CTX_MAP_SIZE, CTX_MAP, CTX_VALUES, CTX_REALS, CTX_INTEGERS, \
-    CTX_BOOLEANS, CTX_STRINGS = range(11)
-CTX_SIZE = 11
+    CTX_BOOLEANS, CTX_STRINGS, CTX_LOG_FUNCTION, CTX_LOG_TARGET = range(13)
+CTX_SIZE = 13
 #: Kinds of variables in the map: an output (float64 values the C function writes), another Real
 #: (float64), an Integer or a Boolean (int64), a String (int64: the address of a NUL-terminated
 #: UTF-8 string).
@@ -140,6 +140,21 @@ class NativeLink:
         enters Python after them); returns how many there were."""
         take_over = getattr(stepper, "native_sync", None)
         return take_over() if take_over is not None else 0
+
+    def live_log(self, status: int, category: str, message: str) -> bool:
+        """Hand `message` to the importer's logger now, through the shim (which wrote its logging
+        function into CTX_LOG_FUNCTION after fmi2Instantiate; it logs only where the importer
+        turned logging on, as pythonfmu does). False where there is no shim to do it: pythonfmu
+        then delivers the message when the call in progress returns. Only from the thread of that
+        call: FMI 2.0 does not let an FMU call the logger from another."""
+        address = int(self.ctx[CTX_LOG_FUNCTION])
+        if not address:
+            return False
+        function = ctypes.CFUNCTYPE(None, ctypes.c_int64, ctypes.c_int32, ctypes.c_char_p,
+                                    ctypes.c_char_p)(address)
+        function(int(self.ctx[CTX_LOG_TARGET]), status, category.encode("utf-8"),
+                 message.encode("utf-8", errors="replace"))
+        return True
 
     def disarm(self) -> None:
         self.ctx[CTX_ARMED] = 0

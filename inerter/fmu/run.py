@@ -35,8 +35,8 @@ def start_values(model: Model, overrides: dict) -> dict:
     for key, value in overrides.items():
         if key in names or key.startswith("effects."):
             out[key] = value
-        elif key == "experiment.method":
-            out["solver"] = value
+        elif key == "experiment.method":             # the solver Enumeration's item (1, 2, ...)
+            out["solver"] = list(model.methods).index(value) + 1
         elif key in ("experiment.rtol", "experiment.atol"):
             out[key.split(".")[1]] = value
         else:

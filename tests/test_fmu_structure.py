@@ -330,16 +330,25 @@ def solver_with_a_change(scene: Path, t_change: float, stop: float, h: float, na
     return np.array(rows), first.signals.names
 
 
-@pytest.mark.parametrize("scene, name, factor", [
-    (TWO_BAR, "b", 2.0), (TWO_BAR, "Fa", 0.25), (TWO_BAR, "f", 1.5),
-    (ROOT / "scenarios" / "two_bar_2d_pd.toml", "kp", 3.0),
-    (ROOT / "scenarios" / "double_pendulum_3d.toml", "c", 4.0)], ids=lambda x: getattr(x, "stem", x))
+def _case(scene: str, name: str, factor: float, compiled: bool = True):
+    path = ROOT / "scenarios" / f"{scene}.toml"
+    return pytest.param(path, name, factor, compiled, id=f"{scene}-{name}-{'compiled' if compiled else 'numpy'}")
+
+
+@pytest.mark.parametrize("scene, name, factor, compiled", [
+    _case("two_bar_2d", "b", 2.0), _case("two_bar_2d", "Fa", 0.25), _case("two_bar_2d", "f", 1.5),
+    _case("two_bar_2d", "b", 2.0, compiled=False), _case("two_bar_2d_pd", "kp", 3.0),
+    _case("double_pendulum_3d", "c", 4.0)])
 def test_a_tunable_parameter_changed_mid_run_equals_the_solver_changing_it(fmus, instance, scene, name,
-                                                                          factor):
+                                                                          factor, compiled):
+    """Through fmpy's FMU2Slave on the FMU's compiled and numpy paths; the reference is the
+    solver's default stepper, which goes on at t = 1 s from the same state with a model loaded
+    with the new value."""
     rtol, h, t_change, stop = 1e-10, 0.01, 1.0, 1.5
     inst = instance(fmus[scene])
     assert inst.variables[name].variability == "tunable"
-    inst.initialise(reals={"rtol": rtol})
+    inst.initialise(reals={"rtol": rtol}, booleans={"compiled": compiled})
+    assert f"{'compiled' if compiled else 'numpy'} path" in inst.logged()
     value = factor * inst.get([name])[0]
     rows = [inst.get(inst.outputs)]
     t = 0.0

@@ -621,13 +621,14 @@ class InerterSlave(Fmi2Slave):
         if notice is None or self._call_thread is not None:
             yield
             return
-        previous = notice.stream
+        previous = notice.stream, notice.eager
         notice.stream = _LogLines(self._log_now)
+        notice.eager = True                       # said on this thread, which may log at once
         self._call_thread = threading.get_ident()
         try:
             yield
         finally:
-            notice.stream = previous
+            notice.stream, notice.eager = previous
             self._call_thread = None
 
     def _log_now(self, message: str, status: Fmi2Status = Fmi2Status.ok):

@@ -447,23 +447,29 @@ def test_the_compile_notice_reaches_the_importers_logger_while_it_compiles(fmus,
     from numba.core import types
     from inerter.engine import compiled
     kernels = compiled._k
-    func = pytypes.SimpleNamespace(__name__="integrate_rk", __module__=kernels.__name__)
-    event = pytypes.SimpleNamespace(data={"dispatcher": pytypes.SimpleNamespace(py_func=func), "args": (
-        types.int64, types.Tuple([types.Array(types.float64, 1, "C")] * len(kernels.PARAMS)))})
+    params = types.Tuple([types.Array(types.float64, 1, "C")] * len(kernels.PARAMS))
+
+    def event(name):
+        func = pytypes.SimpleNamespace(__name__=name, __module__=kernels.__name__)
+        return pytypes.SimpleNamespace(data={"dispatcher": pytypes.SimpleNamespace(py_func=func),
+                                             "args": (types.int64, params)})
     monkeypatch.setattr(compiled.NOTICE, "_announced", set())
     inst = instance(fmus[TWO_BAR])
     seen_during = []
     original = compiled.CompiledStepper.__init__
 
     def compiling(self, *args, **kwargs):
-        compiled.NOTICE.on_start(event)
-        seen_during.extend(m for _, m in inst.messages)
-        compiled.NOTICE.on_end(event)
+        for name in ("integrate_rk", "signal_values"):     # the first of the dimension, another one
+            compiled.NOTICE.on_start(event(name))
+            seen_during.append([m for _, m in inst.messages])
+            compiled.NOTICE.on_end(event(name))
         original(self, *args, **kwargs)
     monkeypatch.setattr(compiled.CompiledStepper, "__init__", compiling)
     inst.initialise()
-    assert any("compiling the engine's 2D kernels for this machine" in m for m in seen_during), seen_during
-    assert any(m.startswith("inerter: ... done in") for _, m in inst.messages)
+    assert any("compiling the engine's 2D kernels for this machine" in m for m in seen_during[0]), seen_during
+    assert any("compiling the engine's 2D kernels: the outputs" in m for m in seen_during[1]), seen_during
+    assert sum(m.startswith("inerter: ... done in") for _, m in inst.messages) == 2
+    assert compiled.NOTICE.stream is None and not compiled.NOTICE.eager       # as the FMU found them
 
 
 # ----------------------------------------------------------------------------------------------

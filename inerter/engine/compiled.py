@@ -142,12 +142,15 @@ class CompileNotice:
     compilation of a kernel (the kernels it calls compile inside it): the first one of a dimension
     in the process is announced at once, with what the dimension's first compilation takes
     (:data:`COMPILE_SECONDS`); any other is announced once it has taken 2 s. An announced one says
-    "done" with its time. ``enabled = False`` silences it (``inerter compile`` says it once)."""
+    "done" with its time. ``enabled = False`` silences it (``inerter compile`` says it once).
+    ``eager = True`` announces every one at once, on the compiling thread: an FMU sets it while its
+    stream is the importer's logger, which it may call from that thread only."""
 
     LATE = 2.0
 
     def __init__(self, stream=None):
         self.enabled = True
+        self.eager = False                  # announce every compilation at its start (no timer)
         self.stream = stream                # None: sys.stderr at the time of writing
         self.seconds = 0.0                  # time spent in outermost compilations of the kernels
         self._depth = 0
@@ -191,6 +194,10 @@ class CompileNotice:
             self._loud = True
             self._say(f"compiling the engine's {dim}D kernels for this machine (once; about "
                       f"{COMPILE_SECONDS[dim]} s on 2 cores, later runs load them from the cache)...")
+        elif self.eager:
+            label = f"{dim}D kernels" if dim else "kernels"
+            self._loud = True
+            self._say(f"compiling the engine's {label}: {_WHAT.get(name, name)} (once for this machine)...")
         else:
             label = f"{dim}D kernels" if dim else "kernels"
             self._timer = threading.Timer(self.LATE, self._late, (f"{label}: {_WHAT.get(name, name)}",))

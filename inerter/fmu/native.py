@@ -32,6 +32,11 @@ entering Python, whenever the slave has *armed* it:
   (:meth:`~inerter.engine.compiled.CompiledStepper.native_sync`). Every call but a doStep and the
   getters disarms the shim until the next doStep the slave takes.
 
+The same context carries the shim's live logger: after fmi2Instantiate the shim writes the address
+of its ``live_log`` function and of its instance into CTX_LOG_FUNCTION and CTX_LOG_TARGET, so that
+the slave can hand a message to the importer's logger during a long call (the kernels' first
+compilation, inside exitInitializationMode) instead of when it returns (:meth:`NativeLink.live_log`).
+
 So the native steps are the steps the slave would take, on the same arrays with the same compiled
 code: the results are identical bit for bit (tests/test_fmu_native.py).
 """

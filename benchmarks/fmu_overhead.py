@@ -58,6 +58,7 @@ import inerter
 from inerter.engine import compiled
 from inerter.studies.bench import settle
 from inerter.fmu.build import build
+from inerter.fmu.run import solver_item
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -199,7 +200,7 @@ def main(argv=None):
         name = scene.stem if solver is None else f"{scene.stem}, {solver}"
         fmu = str(build(scene, scratch / "fmu"))
         model = inerter.load(scene, **({} if solver is None else {"experiment.method": solver}))
-        solver_start = {} if solver is None else {"solver": solver}
+        solver_start = {} if solver is None else {"solver": solver_item(solver)}
         n = int(round(args.stop_time / args.step))
         lengths = [o["name"] for o in model.output_info() if o["unit"] == "m"]
         floor = floor_fmu(len(model.output_info()), scratch)

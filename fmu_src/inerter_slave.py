@@ -6,11 +6,18 @@ the scene file shipped beside it. The slave loads that scene with the solver pac
 the same ``resources/`` and exposes it as
 
 - every scene parameter as a Real parameter (``b``, ``k``, ...), every effect switch as a
-  Boolean parameter (``effects.centripetal``), and the integrator settings ``solver`` (String),
-  ``rtol`` and ``atol`` (Real). All are *fixed*: they can be set until
+  Boolean parameter (``effects.centripetal``), and the integrator settings ``solver`` (an
+  Enumeration of the methods), ``rtol`` and ``atol`` (Real). The parameters the running engine
+  takes between steps (the class's :attr:`~InerterSlave.tunable`: element coefficients, point-force
+  amplitudes, frequencies and gains) are *tunable*: set between steps, they hold from the current
+  communication point on (``Stepper.retune``). The others are *fixed*: they can be set until
   exitInitializationMode, not after.
 - every model input as a Real input (``C.f[1]``), held constant over a communication step;
-- every model output as a Real output (``C.r[2]``, ``spring.f``, ``energy``, ...).
+- every model output as a Real output (``C.r[2]``, ``spring.f``, ``energy``, ...), *calculated*:
+  in initialization mode from the settings and inputs set so far, then at each communication
+  point. An output computed from the accelerations (an inerter's force) follows an input set at a
+  communication point at once (direct feedthrough, declared in the ModelStructure); positions and
+  velocities do not.
 
 Statuses. pythonfmu 0.7.0 turns any Python exception into fmi2Fatal and destroys the instance,
 and its binary returns fmi2OK from every call but doStep, which gives fmi2Discard when
@@ -44,10 +51,12 @@ outputs. The serialized form is JSON with the solver state in base64.
 from __future__ import annotations
 
 import base64
+import contextlib
 import hashlib
 import json
 import math
 import operator
+import threading
 import traceback
 from pathlib import Path
 
@@ -81,6 +90,34 @@ TERMINATED = "terminated"
 TIME_TOLERANCE = 1e-9
 
 
+def _compile_notice():
+    """The engine's CompileNotice (None without numba)."""
+    try:
+        from inerter.engine import compiled
+    except Exception:
+        return None
+    return getattr(compiled, "NOTICE", None)
+
+
+class _LogLines:
+    """A text stream that hands each line written to it to `log` (CompileNotice prints to it)."""
+
+    def __init__(self, log):
+        self._log = log
+        self._text = ""
+
+    def write(self, text: str) -> int:
+        self._text += text
+        while "\n" in self._text:
+            line, self._text = self._text.split("\n", 1)
+            if line.strip():
+                self._log(line.strip())
+        return len(text)
+
+    def flush(self):
+        pass
+
+
 class ExactReal(Real):
     """pythonfmu's Real, with its start value written so that it reads back as the same float.
 
@@ -109,6 +146,9 @@ class InerterSlave(Fmi2Slave):
 
     #: The scene file, relative to the FMU's resources folder (set by the generated subclass).
     scene_file: str = ""
+    #: The parameters the running engine takes between steps (``Model.tunable_parameters()``,
+    #: found at build time and set by the generated subclass); the others are fixed.
+    tunable: tuple = ()
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -135,6 +175,7 @@ class InerterSlave(Fmi2Slave):
             self._defaults[p["name"]] = float(p["value"])
         for e in model.effect_info():
             self._defaults[e["name"]] = bool(e["value"])
+        self._methods = list(model.methods)       # the solver Enumeration's items, 1, 2, ...
         self._defaults["solver"] = str(experiment["method"])
         self._defaults["rtol"] = float(experiment["rtol"])
         self._defaults["atol"] = float(experiment["atol"])
@@ -158,9 +199,13 @@ class InerterSlave(Fmi2Slave):
         self._slave_steps = 0                     # communication steps taken here
         self._native_steps = 0                    # ... and by the FMU's binary (fmu_native)
         self._getters: dict = {}                  # (class, value references) -> their getter
-        # Outputs before initialisation are those of the scene as written (the start values),
-        # in the order of _output_names.
-        self._outputs = [float(v) for v in model.stepper().output_values()]
+        # The outputs, in the order of _output_names: calculated when first read (in
+        # initialization mode from the settings and inputs set so far), so that instantiating
+        # compiles nothing.
+        self._outputs = [math.nan] * len(self._output_names)
+        self._stale = True                        # the outputs must be evaluated again
+        self._preview = None                      # (key, stepper) of initialization mode's outputs
+        self._call_thread = None                  # the thread inside an FMI call that may compile
 
         self._register(model)
         # The native doStep (inerter/fmu/native.py): the FMU's binary steps in compiled code
@@ -179,18 +224,23 @@ class InerterSlave(Fmi2Slave):
     # ------------------------------------------------------------------------------------------
     def _register(self, model):
         fixed = dict(causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed)
-        methods = ", ".join(model.methods)
+        tunable = dict(causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable)
+        methods = ", ".join(f"{i} {m}" for i, m in enumerate(model.methods, start=1))
         for p in model.parameter_info():
-            self.register_variable(ExactReal(p["name"], description=p["description"], **fixed,
+            kind = tunable if p["name"] in self.tunable else fixed
+            note = " (tunable: may change between steps)" if p["name"] in self.tunable else ""
+            self.register_variable(ExactReal(p["name"], description=p["description"] + note, **kind,
                                         getter=self._setting_getter(p["name"]),
                                         setter=self._setting_setter(p["name"], float)))
         for e in model.effect_info():
             self.register_variable(Boolean(e["name"], description=e["description"], **fixed,
                                            getter=self._setting_getter(e["name"]),
                                            setter=self._setting_setter(e["name"], bool)))
-        self.register_variable(String(
-            "solver", description=f"integration method, one of: {methods}", **fixed,
-            getter=self._setting_getter("solver"), setter=self._setting_setter("solver", str)))
+        # An Integer here; the build declares it an Enumeration of the methods (pythonfmu 0.7.0
+        # has no Enumeration variable), whose items are the integers 1, 2, ... in this order.
+        self.register_variable(Integer(
+            "solver", description=f"integration method: {methods}", **fixed,
+            getter=self._solver_getter, setter=self._setting_setter("solver", self._solver_item)))
         self.register_variable(ExactReal(
             "rtol", description="relative tolerance of the integrator (fmi2SetupExperiment's "
                                 "tolerance is used when rtol is not set)", **fixed,
@@ -215,7 +265,7 @@ class InerterSlave(Fmi2Slave):
             self.register_variable(ExactReal(o["name"], description=o["description"],
                                         causality=Fmi2Causality.output,
                                         variability=Fmi2Variability.continuous,
-                                        initial=Fmi2Initial.exact,
+                                        initial=Fmi2Initial.calculated,
                                         getter=self._output_getter(o["name"]),
                                         setter=self._output_setter(o["name"])))
         # Last, so that the value references of the other variables do not depend on it.
@@ -229,17 +279,56 @@ class InerterSlave(Fmi2Slave):
     def _setting_getter(self, name):
         return lambda: self._settings[name]
 
+    def _solver_getter(self) -> int:
+        method = self._settings["solver"]
+        return self._methods.index(method) + 1 if method in self._methods else int(method)
+
+    def _solver_item(self, value):
+        """The method of Enumeration item `value`; an integer that is no item is kept as it is and
+        refused by exitInitializationMode."""
+        item = int(value)
+        return self._methods[item - 1] if 1 <= item <= len(self._methods) else item
+
     def _setting_setter(self, name, kind):
         def setter(value):
             value = kind(value)
             if self._phase in (INSTANTIATED, INITIALIZATION):
                 self._settings[name] = value
                 self._explicit.add(name)
+                self._stale = True
+            elif name in self.tunable and self._phase == STEPPING:
+                self._retune(name, value)
             else:
-                self._reject(f"{name}: a fixed parameter cannot be changed after "
-                             f"initialisation (got {value!r}; it stays {self._settings[name]!r}); "
+                kind_of = "a tunable" if name in self.tunable else "a fixed"
+                self._reject(f"{name}: {kind_of} parameter cannot be changed "
+                             f"{'after initialisation' if kind_of == 'a fixed' else 'now'} (got "
+                             f"{value!r}; it stays {self._settings[name]!r}; phase {self._phase}); "
                              f"set it before exitInitializationMode, or reset the FMU")
         return setter
+
+    def _retune(self, name: str, value: float):
+        """A tunable parameter set between steps: the running stepper goes on from the current
+        communication point with the scene's numbers read with the new value (the integration
+        restarts there). A value the scene refuses, or one that would change more than the
+        engine can take, is rejected and nothing changes."""
+        t = self._stepper.time
+        if not math.isfinite(value):
+            self._reject(f"{name}: not finite (got {value!r}; expected a finite number): ignored, "
+                         f"it stays {self._settings[name]!r}")
+            return
+        settings = dict(self._settings)
+        settings[name] = value
+        try:
+            model = self._model_for(self._overrides(settings))
+            self._stepper.retune(model.mechanism, model.signals)
+        except (InerterError, ValueError) as exc:
+            self._reject(f"{name}: cannot change to {value!r} at t = {t!r} s: {exc}; it stays "
+                         f"{self._settings[name]!r}")
+            return
+        self._settings[name] = value
+        self._explicit.add(name)
+        self._stale = True
+        self.log(f"{name} = {value!r} from t = {t!r} s on", Fmi2Status.ok)
 
     def _input_getter(self, name):
         return lambda: self._inputs[name]
@@ -248,6 +337,8 @@ class InerterSlave(Fmi2Slave):
         def setter(value):
             value = float(value)
             if math.isfinite(value):
+                if value != self._inputs[name]:
+                    self._stale = True            # the outputs that read q̈ follow at once
                 self._inputs[name] = value
                 self._inputs_pending = True
             else:
@@ -348,6 +439,8 @@ class InerterSlave(Fmi2Slave):
                 self._reject(f"set{cls.__name__}: {exc}")
 
     def get_real(self, vrs):
+        if self._stale:
+            self._refresh_outputs()
         return self._get(vrs, Real, float, math.nan)
 
     def get_integer(self, vrs):
@@ -395,7 +488,8 @@ class InerterSlave(Fmi2Slave):
     def exit_initialization_mode(self):
         self._begin_call()
         try:
-            self._initialise()
+            with self._compile_notices():
+                self._initialise()
         except Exception as exc:  # a bug: report it rather than end the importer with fmi2Fatal
             self._fail(f"exitInitializationMode: unexpected error: {exc!r}\n{traceback.format_exc()}")
 
@@ -428,6 +522,10 @@ class InerterSlave(Fmi2Slave):
             if isinstance(value, float) and not math.isfinite(value):
                 raise ValueError(f"{self.scene_file}: {name}: not finite (got {value!r}; "
                                  f"expected a finite number)")
+        if settings["solver"] not in self._methods:
+            items = ", ".join(f"{i} ({m})" for i, m in enumerate(self._methods, start=1))
+            raise ValueError(f"{self.scene_file}: solver: no such item (got {settings['solver']!r}; "
+                             f"expected one of {items})")
         model = self._model_for(self._overrides(settings))
         # The solver settings that differ from the scene's, read and checked as a load with
         # experiment.method/rtol/atol overrides would read them (same defaults, same errors).
@@ -450,7 +548,7 @@ class InerterSlave(Fmi2Slave):
             return
         settings = self._effective_settings()
         try:
-            stepper = self._new_stepper(settings)
+            stepper = self._preview_stepper(settings)
             outputs = [float(v) for v in stepper.output_values()]
         except (InerterError, ValueError) as exc:
             changed = ", ".join(f"{k} = {v!r}" for k, v in settings.items()
@@ -462,14 +560,86 @@ class InerterSlave(Fmi2Slave):
                        f"{changed or 'none'}{origin}]")
             return
         self._stepper, self._outputs, self._phase = stepper, outputs, STEPPING
+        self._preview = None
+        self._stale = False
         self._native.stale = True
-        self._inputs_pending = True
+        self._inputs_pending = False              # the stepper holds them (_preview_stepper)
         changed = ", ".join(f"{k} = {v!r}" for k, v in settings.items()
                             if not _same(v, self._defaults[k]))
         used = stepper.settings          # atol follows rtol where the scene states no atol
         self.log(f"initialised at t = 0 s with solver {used.method}, "
                  f"rtol {used.rtol:g}, atol {used.atol:g}, {stepper.path} path; "
                  f"changed from the scene: {changed or 'nothing'}", Fmi2Status.ok)
+
+    def _preview_stepper(self, settings: dict):
+        """A stepper at t = 0 for `settings` with the inputs set so far: the one initialization
+        mode's outputs came from, when nothing changed since (raises as _new_stepper)."""
+        key = json.dumps([sorted((k, repr(v)) for k, v in settings.items()),
+                          sorted(self._inputs.items()), self._stop_time])
+        if self._preview is None or self._preview[0] != key:
+            self._preview = None
+            stepper = self._new_stepper(settings)
+            self._push_inputs(stepper)
+            self._preview = (key, stepper)
+        return self._preview[1]
+
+    def _push_inputs(self, stepper):
+        for name, value in self._inputs.items():
+            stepper.set_input(name, value)
+        self._inputs_pending = False
+
+    def _refresh_outputs(self):
+        """The outputs at the current time, for the settings and inputs as they are now: in
+        initialization mode those of t = 0 with the settings set so far, while stepping after an
+        input or a tunable parameter changed at the communication point."""
+        self._stale = False
+        try:
+            with self._compile_notices():
+                if self._phase in (INSTANTIATED, INITIALIZATION):
+                    stepper = self._preview_stepper(self._effective_settings())
+                elif self._phase == STEPPING:
+                    stepper = self._stepper
+                    self._push_inputs(stepper)
+                else:
+                    return
+                self._outputs = [float(v) for v in stepper.output_values()]
+        except (InerterError, ValueError) as exc:
+            self._outputs = [math.nan] * len(self._output_names)
+            self.log(f"the outputs cannot be calculated (they read NaN): {exc}",
+                     Fmi2Status.warning if self._phase != STEPPING else Fmi2Status.error)
+        except Exception as exc:  # a bug: report it rather than end the importer with fmi2Fatal
+            self._outputs = [math.nan] * len(self._output_names)
+            self.log(f"the outputs cannot be calculated (they read NaN): unexpected error: "
+                     f"{exc!r}\n{traceback.format_exc()}", Fmi2Status.error)
+
+    @contextlib.contextmanager
+    def _compile_notices(self):
+        """While the engine may compile its kernels (its first use on a machine: about a minute),
+        its CompileNotice writes to the FMU's logger: at once through the status shim (Linux),
+        else when the call returns (pythonfmu delivers its messages then)."""
+        notice = _compile_notice()
+        if notice is None or self._call_thread is not None:
+            yield
+            return
+        previous = notice.stream, notice.eager
+        notice.stream = _LogLines(self._log_now)
+        notice.eager = True                       # said on this thread, which may log at once
+        self._call_thread = threading.get_ident()
+        try:
+            yield
+        finally:
+            notice.stream, notice.eager = previous
+            self._call_thread = None
+
+    def _log_now(self, message: str, status: Fmi2Status = Fmi2Status.ok):
+        """Log `message` to the importer at once where the status shim gives its logger (on the
+        thread of the call in progress), else through pythonfmu's queue."""
+        category = f"logStatus{status.name.capitalize()}"
+        if category not in self.log_categories:
+            category = "logAll"
+        if threading.get_ident() != self._call_thread or \
+                not self._native.live_log(int(status), category, message):
+            self.log(message, status)
 
     def _fail(self, message: str):
         self._native.disarm()
@@ -487,7 +657,8 @@ class InerterSlave(Fmi2Slave):
     def do_step(self, current_time, step_size):
         self._begin_call()
         try:
-            return self._do_step(float(current_time), float(step_size))
+            with self._compile_notices():
+                return self._do_step(float(current_time), float(step_size))
         except Exception as exc:  # a bug: stop stepping rather than end the importer
             self._fail(f"doStep at t = {current_time!r} s: unexpected error: {exc!r}\n"
                        f"{traceback.format_exc()}")
@@ -543,6 +714,7 @@ class InerterSlave(Fmi2Slave):
             return self._refuse(f"doStep at t = {t!r} s (step {h!r} s) discarded: {exc}; the FMU "
                                 f"stays at t = {stepper.time!r} s", Fmi2Status.discard)
         self._outputs = stepper.output_values()    # floats, in the order of _output_names
+        self._stale = False
         self._slave_steps += 1
         self._arm_native(stepper)
         return True
@@ -564,6 +736,7 @@ class InerterSlave(Fmi2Slave):
             if taken:
                 self._native_steps += taken
                 self._outputs = self._stepper.output_values()
+                self._stale = False
         except Exception as exc:  # a bug: stop stepping rather than end the importer
             self._fail(f"taking over the native steps: unexpected error: {exc!r}\n"
                        f"{traceback.format_exc()}")
@@ -581,6 +754,8 @@ class InerterSlave(Fmi2Slave):
     # FMU state
     # ------------------------------------------------------------------------------------------
     def _get_fmu_state(self):
+        if self._stale and self._phase == STEPPING:
+            self._refresh_outputs()               # the state holds the outputs of its inputs
         try:
             return {
                 "format": STATE_FORMAT,
@@ -640,6 +815,8 @@ class InerterSlave(Fmi2Slave):
         self._inputs = dict(state["inputs"])
         self._inputs_pending = True
         self._outputs = list(state["outputs"])
+        self._stale = self._phase in (INSTANTIATED, INITIALIZATION)
+        self._preview = None
         self._stepper = stepper
 
     @staticmethod

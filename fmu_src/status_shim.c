@@ -25,6 +25,14 @@
  * NATIVE_SYNC_VR, and the slave takes them over. Every call but fmi2DoStep and the getters disarms
  * it until the next step the slave takes.
  *
+ * The live logger. pythonfmu's binary hands the slave's messages to the importer's logger when
+ * the call that made them returns. A long call (exitInitializationMode while the kernels compile,
+ * about a minute on a machine's first use) would say nothing until its end, so the shim writes the
+ * address of live_log and of the instance into the context's CTX_LOG_FUNCTION and CTX_LOG_TARGET:
+ * the slave calls it from within the call, on its thread, and the message reaches the importer's
+ * logger at once, when the importer turned logging on (at fmi2Instantiate or with
+ * fmi2SetDebugLogging), as pythonfmu's binary does.
+ *
  * Build (inerter/fmu/build.py does it, with the value reference from modelDescription.xml):
  *   gcc -shared -fPIC -O2 -fvisibility=hidden -pthread -DSTATUS_VR=<n> \
  *       -DNATIVE_LINK_VR=<n> -DNATIVE_SYNC_VR=<n> -DNATIVE_MAGIC=<n> \
@@ -225,7 +233,7 @@ __attribute__((destructor)) static void unload_original(void)
 /* The context's slots and the kinds of variables in its map (inerter/fmu/native.py). */
 enum {
     CTX_MAGIC, CTX_ARMED, CTX_FUNCTION, CTX_TABLE, CTX_MAP_SIZE, CTX_MAP, CTX_VALUES, CTX_REALS,
-    CTX_INTEGERS, CTX_BOOLEANS, CTX_STRINGS
+    CTX_INTEGERS, CTX_BOOLEANS, CTX_STRINGS, CTX_LOG_FUNCTION, CTX_LOG_TARGET
 };
 enum { KIND_OUTPUT, KIND_REAL, KIND_INTEGER, KIND_BOOLEAN, KIND_STRING };
 
@@ -238,7 +246,38 @@ struct instance {
     const int64_t *ctx;       /* the slave's context, or NULL: no native steps */
     int armed;                /* the next doStep may be taken natively */
     int dirty;                /* native steps (or a declined one) the slave has not taken over */
+    fmi2CallbackLogger logger;            /* the importer's, for live_log */
+    fmi2ComponentEnvironment environment;
+    char *name;                           /* the instance name, copied */
+    int logging_on;                       /* as the importer last set it */
 };
+
+/* A message from the slave to the importer's logger, now (see the top). The message is passed as
+ * the format, with no argument, '%' doubled, as fmi2Instantiate's own. */
+static void live_log(int64_t target, int32_t status, const char *category, const char *message)
+{
+    const struct instance *w = (const struct instance *)(uintptr_t)target;
+    size_t n = 0;
+    const char *from;
+    char *text, *to;
+
+    if (w == NULL || w->logger == NULL || !w->logging_on || message == NULL)
+        return;
+    for (from = message; *from != '\0'; from++)
+        n += *from == '%' ? 2 : 1;
+    text = malloc(n + 1);
+    if (text == NULL)
+        return;
+    for (from = message, to = text; *from != '\0'; from++) {
+        if (*from == '%')
+            *to++ = '%';
+        *to++ = *from;
+    }
+    *to = '\0';
+    w->logger(w->environment, w->name, (fmi2Status)status, category != NULL ? category : "logAll",
+              text);
+    free(text);
+}
 
 #define INNER(c) (((struct instance *)(c))->inner)
 
@@ -398,6 +437,17 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     w->inner = inner;
     w->ctx = native_context(inner);
+    if (functions != NULL) {
+        w->logger = functions->logger;
+        w->environment = functions->componentEnvironment;
+    }
+    w->logging_on = loggingOn == fmi2True;
+    w->name = strdup(instanceName != NULL ? instanceName : "");
+    if (w->ctx != NULL && w->name != NULL) {
+        int64_t *ctx = (int64_t *)(uintptr_t)w->ctx;
+        ctx[CTX_LOG_TARGET] = (int64_t)(uintptr_t)w;
+        ctx[CTX_LOG_FUNCTION] = (int64_t)(uintptr_t)&live_log;
+    }
     return w;
 }
 
@@ -422,6 +472,7 @@ void fmi2FreeInstance(fmi2Component c)
 {
     if (handle != NULL && c != NULL) {
         original.FreeInstance(INNER(c));
+        free(((struct instance *)c)->name);
         free(c);
     }
 }
@@ -430,6 +481,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
                                const fmi2String categories[])
 {
     ENTER
+    ((struct instance *)c)->logging_on = loggingOn == fmi2True;
     return original.SetDebugLogging(INNER(c), loggingOn, nCategories, categories);
 }
 

@@ -78,6 +78,23 @@ class Model:
                              description=KNOWN_EFFECTS["centripetal"]))
         return info
 
+    def tunable_parameters(self) -> list[str]:
+        """The parameters a running stepper takes between steps (``Stepper.retune``): each one that
+        changes the model, and only in element coefficients or point-force values, amplitudes,
+        frequencies or gains, found by reading the scene with it changed. The others need a new
+        model (geometry, masses, free lengths...), or change nothing in it (the experiment's)."""
+        from inerter.engine.tables import untunable_changes
+        from inerter.scene.changes import differences
+        out = []
+        for p in self.scene.parameters.values():
+            try:
+                changed = load_scene(self.path, {**self.overrides, p.name: 1.5 * p.value + 1.0})
+            except SceneError:
+                continue                     # a changed value the scene refuses: keep it fixed
+            if differences(self.scene, changed) and not untunable_changes(self.scene, changed):
+                out.append(p.name)
+        return out
+
     def input_info(self):
         info = []
         for n in self.mechanism.input_names:
@@ -304,6 +321,7 @@ class Result:
             "status": self.status,
             "message": self.message,
             "metrics": self.metrics,
+            "metric_units": {k: u for k, u in metric_units(self.model).items() if k in self.metrics},
             "metric_errors": self.metric_errors,
             "settings": {"stop_time": s.stop_time, "output_interval": s.output_interval, "method": s.method,
                          "rtol": s.rtol, "atol": s.atol, "constraint": s.constraint, "baumgarte": s.baumgarte,
@@ -353,6 +371,23 @@ def sample_spline(time, values):
 
 def _key(prefix, name):
     return f"{prefix}_{name}" if prefix else name
+
+
+def metric_units(model: Model) -> dict[str, str]:
+    """The unit of each metric the scene's [[metrics]] define, by its key in ``result.metrics``:
+    frequencies in Hz, every other metric in its signal's unit (a peak of ``C.r[2]`` in m)."""
+    units: dict[str, str] = {}
+    signal_unit = dict(zip(model.signals.names, model.signals.units))
+    for m in model.scene.metrics:
+        unit = signal_unit.get(m.signal, "1")
+        keys = {"natural_frequency": {"natural_frequency": "Hz", "natural_frequencies": "Hz"},
+                "peak": {"peak": unit},
+                "free_oscillation": {"fundamental_frequency": "Hz", "fundamental_amplitude": unit,
+                                     "mean_offset": unit},
+                "harmonics": {"mean": unit, "amplitude": unit},
+                "steady_state": {"peak_to_peak": unit, "mean_offset": unit}}[m.kind]
+        units.update({_key(m.prefix, k): u for k, u in keys.items()})
+    return units
 
 
 def compute_metrics(model: Model, result) -> dict:

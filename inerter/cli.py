@@ -91,13 +91,19 @@ def cmd_run(args):
     plot_runs([(args.model, result, {})], out / f"{stem}.png", f"{stem} ({args.model})")
     print(f"{stem}: {result.status} ({result.message}); {len(result.time)} samples to t = "
           f"{result.time[-1]:.6g} s in {wall:.2f} s wall; path: {summary['statistics']['path']}")
+    units = summary.get("metric_units", {})
     for k, v in summary["metrics"].items():
-        print(f"  {k} = {v}")
+        print(f"  {k} = {_with_unit(v, units.get(k))}")
     for k, v in summary.get("metric_errors", {}).items():
         print(f"  {k}: not computed: {v}")
     print(f"  max constraint drift = {summary['statistics']['max_constraint_drift']:.3g}")
     print(f"wrote {out / (stem + '.csv')}, {out / 'summary.json'}, {out / (stem + '.png')}")
     return 0 if result.status == "ok" else 3
+
+
+def _with_unit(value, unit) -> str:
+    """A metric's value for the console, with its unit (none for a dimensionless one)."""
+    return f"{value} {unit}" if unit and unit != "1" else str(value)
 
 
 def cmd_compare(args):
@@ -123,12 +129,14 @@ def cmd_compare(args):
     png = plot_runs(runs, out / f"{name}_compare.png", f"{name}: with and without the centripetal term")
     print(f"{name}:")
     keys = sorted(set(summaries["corrected"]["metrics"]) | set(summaries["uncorrected"]["metrics"]))
-    print(f"  {'metric':32s} {'corrected':>16s} {'uncorrected':>16s} {'oracle':>16s}")
+    units = {**summaries["uncorrected"].get("metric_units", {}), **summaries["corrected"].get("metric_units", {})}
+    print(f"  {'metric':32s} {'unit':>6s} {'corrected':>16s} {'uncorrected':>16s} {'oracle':>16s}")
     for k in keys:
         vals = [summaries[v]["metrics"].get(k) for v in ("corrected", "uncorrected", "oracle")]
         if any(isinstance(v, list) for v in vals):
             continue
-        print(f"  {k:32s} " + " ".join(f"{v:16.6g}" if v is not None else f"{'-':>16s}" for v in vals))
+        print(f"  {k:32s} {units.get(k, ''):>6s} "
+              + " ".join(f"{v:16.6g}" if v is not None else f"{'-':>16s}" for v in vals))
     print(f"  largest |{args.model} − oracle| over point positions: "
           + (f"{diff:.3g} m" if math.isfinite(diff) else "not computed (the runs' time grids differ)"))
     print(f"wrote {png} and {out / 'summary.json'}")

@@ -25,7 +25,14 @@ def test_run_writes_csv_summary_and_plot(tmp_path, capsys):
     assert data["time"][-1] == 5.0
     assert abs(data["Pr2"][0] - 1.2) < 1e-12          # genfromtxt strips '.[]' from "P.r[2]"
     assert (out / "lumped_mass_2d.png").stat().st_size > 10_000
-    assert "fundamental_frequency" in capsys.readouterr().out
+    # every metric carries its unit: frequencies in Hz, P.r[2]'s in m, the inerter force's in N
+    assert summary["metric_units"] == {
+        "natural_frequency": "Hz", "natural_frequencies": "Hz", "fundamental_frequency": "Hz",
+        "fundamental_amplitude": "m", "mean_offset": "m", "inerter_force_mean": "N",
+        "inerter_force_amplitude": "N"}
+    console = capsys.readouterr().out
+    assert f"fundamental_frequency = {summary['metrics']['fundamental_frequency']} Hz" in console
+    assert f"inerter_force_amplitude = {summary['metrics']['inerter_force_amplitude']} N" in console
 
 
 def test_set_switches_the_correction_off(tmp_path):

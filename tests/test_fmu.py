@@ -132,6 +132,7 @@ class Instance:
     def __init__(self, unzipdir: str, name: str = "instance", messages=None):
         self.md = read_model_description(unzipdir)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.variables = {v.name: v for v in self.md.modelVariables}
         self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
         self.messages: list[tuple[int, str]] = [] if messages is None else messages
         # The callbacks must live as long as the instance.
@@ -153,10 +154,20 @@ class Instance:
         for name, value in (reals or {}).items():
             self.fmu.setReal([self.vr[name]], [value])
         for name, value in (strings or {}).items():
-            self.fmu.setString([self.vr[name]], [value])
+            if self.variables[name].type == "Enumeration":    # by item name, or an integer
+                self.fmu.setInteger([self.vr[name]], [self.item(name, value)])
+            else:
+                self.fmu.setString([self.vr[name]], [value])
         for name, value in (booleans or {}).items():
             self.fmu.setBoolean([self.vr[name]], [value])
         self.fmu.exitInitializationMode()
+
+    def item(self, name: str, value) -> int:
+        """The value of Enumeration `name`'s item named `value` (an integer is taken as it is)."""
+        if isinstance(value, int):
+            return value
+        items = self.variables[name].declaredType.items
+        return next(int(i.value) for i in items if i.name == value)
 
     def get(self, names):
         return self.fmu.getReal([self.vr[n] for n in names])
@@ -250,9 +261,10 @@ def assert_matches_solver(scene: Path, result: dict, stop_time=RUN_TIME):
     assert worst <= 1e-6, f"FMU and solver differ by {worst:.3g} m"
 
 
-def first_parameter(inst: Instance) -> str:
+def first_parameter(inst: Instance, variability=None) -> str:
     return next(v.name for v in inst.md.modelVariables
-                if v.causality == "parameter" and v.type == "Real" and v.name not in ("rtol", "atol"))
+                if v.causality == "parameter" and v.type == "Real" and v.name not in ("rtol", "atol")
+                and variability in (None, v.variability))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -294,13 +306,15 @@ def test_variables_are_named_and_united_like_the_model(fmus, scene):
     assert all(v.description for v in md.modelVariables)
     for p in model.parameter_info():
         v = vars_[p["name"]]
-        assert (v.causality, v.variability, v.type) == ("parameter", "fixed", "Real")
+        assert (v.causality, v.type) == ("parameter", "Real") and v.variability in ("fixed", "tunable")
         assert v.unit == p["unit"] and float(v.start) == p["value"]
     for e in model.effect_info():
         v = vars_[e["name"]]
         assert (v.causality, v.variability, v.type) == ("parameter", "fixed", "Boolean")
         assert v.start == ("true" if e["value"] else "false")
-    assert vars_["solver"].type == "String" and vars_["solver"].start == model.experiment["method"]
+    solver = vars_["solver"]
+    assert solver.type == "Enumeration" and solver.variability == "fixed"
+    assert [i.name for i in solver.declaredType.items][int(solver.start) - 1] == model.experiment["method"]
     assert float(vars_["rtol"].start) == model.experiment["rtol"]
     assert float(vars_["atol"].start) == model.experiment["atol"]
     assert (vars_["compiled"].type, vars_["compiled"].variability, vars_["compiled"].start) == \
@@ -311,7 +325,7 @@ def test_variables_are_named_and_united_like_the_model(fmus, scene):
     outputs = [v for v in md.modelVariables if v.causality == "output"]
     assert [v.name for v in outputs] == [o["name"] for o in model.output_info()]
     assert [v.unit for v in outputs] == [o["unit"] for o in model.output_info()]
-    assert all(v.initial == "exact" for v in outputs)
+    assert all(v.initial == "calculated" and v.start is None for v in outputs)
     status = vars_[fmu_build.STATUS_VARIABLE]     # read by the status shim
     assert (status.type, status.causality, status.variability) == ("Integer", "local", "discrete")
     assert status.valueReference == max(v.valueReference for v in md.modelVariables)
@@ -330,7 +344,7 @@ def test_the_fmu_ships_the_solver_and_the_scene(fmus, scene):
         assert z.read(f"resources/{scene.name}") == scene.read_bytes()
         requirements = [line for line in z.read("resources/requirements.txt").decode().splitlines()
                         if line and not line.startswith("#")]
-    assert [r.split(">=")[0] for r in requirements] == ["numpy", "scipy"]
+    assert [r.split(">=")[0] for r in requirements] == ["numpy", "scipy", "numba"]
     assert {f"resources/inerter_fmu_{name}.py", "resources/inerter_slave.py",
             "resources/inerter/__init__.py", f"binaries/linux64/{name}.so"} <= files
     # The modules the slave can import (tests/test_fmu_payload.py checks which those are).
@@ -726,7 +740,7 @@ def raises_status(status: int, call, *args):
 
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
 @pytest.mark.parametrize("setting, value, field", [
-    ("rtol", 5.0, "experiment.rtol"), ("solver", "Euler", "experiment.method"),
+    ("rtol", 5.0, "experiment.rtol"), ("solver", 99, "solver: no such item"),
     # b: whichever inerter element uses it (its name differs between scenes), e.g. "inerter.b"
     ("b", -1.0, ".b: out of range"), ("M1", 0.0, "bodies.bar1.mass"),
     ("first parameter", math.nan, "not finite")])
@@ -737,7 +751,8 @@ def test_an_invalid_setting_fails_initialisation_with_fmi2error(fmus, scene, ins
         setting = first_parameter(inst)
     if setting not in inst.vr:
         pytest.skip(f"the scene has no {setting}")
-    strings, reals = ({setting: value}, {}) if isinstance(value, str) else ({}, {setting: value})
+    enumeration = inst.variables[setting].type == "Enumeration"
+    strings, reals = ({setting: value}, {}) if enumeration else ({}, {setting: value})
     raises_status(FMI_ERROR, inst.initialise, reals, strings)
     # The message names the scene's field and the FMU variable with the value set.
     errors = inst.errors()
@@ -798,7 +813,7 @@ def test_setting_a_fixed_parameter_after_initialisation_gives_fmi2error(fmus, sc
     for i in (inst, clean):
         i.initialise()
         i.fmu.doStep(0.0, h)
-    name = first_parameter(inst)
+    name = first_parameter(inst, "fixed")
     before = inst.get([name])
     raises_status(FMI_ERROR, inst.set, name, 2.0 * before[0] + 1.0)
     assert inst.get([name]) == before

@@ -83,7 +83,7 @@ def replay(inst, scene_has_input: bool, stop_time: float, solver: str | None = N
     inst.fmu.setupExperiment(startTime=0.0, stopTime=stop_time)
     inst.fmu.enterInitializationMode()
     if solver is not None:
-        inst.fmu.setString([inst.vr["solver"]], [solver])
+        inst.fmu.setInteger([inst.vr["solver"]], [inst.item("solver", solver)])
     inst.fmu.exitInitializationMode()
     h, t = 0.01, 0.0
     parameter = next(v.name for v in inst.md.modelVariables if v.causality == "parameter"
@@ -94,7 +94,7 @@ def replay(inst, scene_has_input: bool, stop_time: float, solver: str | None = N
         tr.outputs()
     # Every variable is served between native steps; each kind as the slave gives it.
     tr.call("parameter", inst.get, [parameter])
-    tr.call("solver", inst.fmu.getString, [inst.vr["solver"]])
+    tr.call("solver", inst.fmu.getInteger, [inst.vr["solver"]])
     tr.call("compiled", inst.fmu.getBoolean, [inst.vr["compiled"]])
     tr.call("fmi_status", inst.fmu.getInteger, [inst.vr["fmi_status"]])
     tr.call("mixed", inst.get, [inst.outputs[0], parameter, inst.outputs[-1]])

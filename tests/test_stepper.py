@@ -126,3 +126,55 @@ def test_a_failed_numpy_step_leaves_the_state_and_fails_again():
         assert "terminals O and P meet" in str(failed.value)
         assert st.time <= failed.value.time < (k + 1) * STEP
     assert st.time < impact <= (k + 1) * STEP
+
+
+# ----------------------------------------------------------------------------------------------
+# Retuning between steps (what an FMU's tunable parameters do)
+# ----------------------------------------------------------------------------------------------
+def _stepped(model, path, until, h=STEP):
+    st = model.stepper(path=path)
+    for k in range(1, round(until / h) + 1):
+        st.step(k * h)
+    return st
+
+
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
+def test_a_retuned_stepper_goes_on_as_a_stepper_of_the_scene_loaded_with_the_new_values(path):
+    """Retuned at t = 0.2 s to b = 20, Fa = 2 (with an input changed there, a discontinuity both
+    take alike), the stepper gives, bit for bit, what a stepper of the scene loaded with those
+    values, put at the same state and step size, gives with the same input change."""
+    if path == "compiled":
+        pytest.importorskip("numba")
+    base, tuned = inerter.load(PLANAR), inerter.load(PLANAR, b=20.0, Fa=2.0)
+    st = _stepped(base, path, 0.2)
+    ref = tuned.stepper(path=path)
+    ref.time, ref.y, ref.h = st.time, st.y.copy(), st.h
+    st.retune(tuned.mechanism, tuned.signals)
+    for s in (st, ref):
+        s.set_input("C.f[2]", 1.0)
+    assert st.output_values() == ref.output_values()        # inerter.f follows b at once
+    for k in range(21, 41):
+        st.step(k * STEP)
+        ref.step(k * STEP)
+        assert np.array_equal(st.y, ref.y), k
+    assert st.output_values() == ref.output_values()
+    # the model's own tables are untouched: a new stepper of it is the untuned run
+    again = _stepped(base, path, 0.4)
+    assert np.array_equal(again.y, _stepped(inerter.load(PLANAR), path, 0.4).y)
+    assert not np.array_equal(again.y, st.y)
+
+
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
+def test_a_retune_that_changes_more_than_numbers_is_refused_naming_the_fields(path):
+    if path == "compiled":
+        pytest.importorskip("numba")
+    st = _stepped(inerter.load(PLANAR), path, 0.05)
+    state = st.get_state()
+    other = inerter.load(PLANAR, th1=0.7, M1=2.0)
+    with pytest.raises(ValueError) as caught:
+        st.retune(other.mechanism, other.signals)
+    message = str(caught.value)
+    # M1 is bar1's mass; th1 its angle, its position and the rotational spring's free angle
+    assert all(field in message for field in ("bodies.bar1.mass", "bodies.bar1.angle",
+                                              "bodies.bar1.position", "elements.kr.angle"))
+    assert st.get_state() == state

@@ -34,6 +34,7 @@ returns a kernel that calls the numpy path and :func:`integrate_compiled` runs
 """
 from __future__ import annotations
 
+import copy
 import hashlib
 import math
 import importlib.util
@@ -143,12 +144,15 @@ class CompileNotice:
     compilation of a kernel (the kernels it calls compile inside it): the first one of a dimension
     in the process is announced at once, with what the dimension's first compilation takes
     (:data:`COMPILE_SECONDS`); any other is announced once it has taken 2 s. An announced one says
-    "done" with its time. ``enabled = False`` silences it (``inerter compile`` says it once)."""
+    "done" with its time. ``enabled = False`` silences it (``inerter compile`` says it once).
+    ``eager = True`` announces every one at once, on the compiling thread: an FMU sets it while its
+    stream is the importer's logger, which it may call from that thread only."""
 
     LATE = 2.0
 
     def __init__(self, stream=None):
         self.enabled = True
+        self.eager = False                  # announce every compilation at its start (no timer)
         self.stream = stream                # None: sys.stderr at the time of writing
         self.seconds = 0.0                  # time spent in outermost compilations of the kernels
         self._depth = 0
@@ -192,6 +196,10 @@ class CompileNotice:
             self._loud = True
             self._say(f"compiling the engine's {dim}D kernels for this machine (once; about "
                       f"{COMPILE_SECONDS[dim]} s on 2 cores, later runs load them from the cache)...")
+        elif self.eager:
+            label = f"{dim}D kernels" if dim else "kernels"
+            self._loud = True
+            self._say(f"compiling the engine's {label}: {_WHAT.get(name, name)} (once for this machine)...")
         else:
             label = f"{dim}D kernels" if dim else "kernels"
             self._timer = threading.Timer(self.LATE, self._late, (f"{label}: {_WHAT.get(name, name)}",))
@@ -924,6 +932,43 @@ class CompiledStepper(Stepper):
             self._rk = None                   # a discontinuity: the integration restarts here
             self._input_moved = True
             self._values = None               # outputs depend on the inputs (inerter forces)
+
+    def retune(self, mech, signals):
+        """Go on from the current state with the element coefficients and point-force numbers of
+        `mech` (the same scene read with other parameter values), written in place into this
+        stepper's tables: a discontinuity, the integration restarts here. The tables are the
+        model's until the first retune, which copies them, so the model and its other steppers keep
+        theirs. Raises ValueError, the stepper unchanged, where `mech` differs in anything else, or
+        gives an inertance to an element whose inertance was 0 when the kernel's band was laid out."""
+        from inerter.engine.tables import check_retune, retune_rows
+        check_retune(self.mech.scene, mech.scene)
+        self._own_tables()
+        lacking = retune_rows(self.kernel.flat, mech.scene, self._coupled)
+        if lacking:
+            raise ValueError(f"element {', '.join(lacking)}: an inertance that was 0 when the model was "
+                             f"compiled cannot become non-zero between steps (its coupling is not in the "
+                             f"compiled band); give it a non-zero value before initialisation")
+        self.mech, self.signals = mech, signals
+        self._rk = None
+        self._input_moved = True
+        self._values = None
+        self._native = None                   # its table points to the arrays it was made with
+
+    def _own_tables(self):
+        """Copy the kernel's tables that :meth:`retune` writes, once: the kernel is shared with the
+        model it was compiled for."""
+        if getattr(self, "_owns_tables", False):
+            return
+        from inerter.engine.tables import coupled_elements
+        self._coupled = coupled_elements(self.kernel.flat)
+        kernel = copy.copy(self.kernel)
+        kernel.flat = dict(kernel.flat)
+        copies = {}
+        for key in ("el_real", "rot_real", "fa_real", "pd_real"):
+            copies[id(kernel.flat[key])] = kernel.flat[key] = kernel.flat[key].copy()
+        kernel.params = tuple(copies.get(id(a), a) for a in kernel.params)
+        self.kernel = kernel
+        self._owns_tables = True
 
     def step(self, t_end):
         t_end = float(t_end)

@@ -21,6 +21,7 @@ class Signals:
         # one evaluation.
         self._groups = []
         self._where = {}      # name -> (group, position in it)
+        self._reads = {}      # name -> whether that signal itself reads q̈
         for pname in mech.point_names:
             point = mech.points[pname]
             d = mech.dim
@@ -33,8 +34,9 @@ class Signals:
             spec = elements.KINDS[e.kind].outputs
             # an element whose law has an inertance reports a force that depends on q̈
             needs_a = e.kind == "inerter" or getattr(e, "inertance", 0.0) != 0.0
+            # of its three outputs, only the force reads q̈ (the distance and its rate do not)
             self._group([(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}") for suffix, unit, text in spec],
-                        needs_a, lambda t, q, v, a, e=e: e.outputs(q, v, a)[:3])
+                        needs_a, lambda t, q, v, a, e=e: e.outputs(q, v, a)[:3], reads=(False, False, needs_a))
         self._group([("energy", "J", "kinetic + potential energy, with ½·b·(dL/dt)² per inerter")], False,
                     lambda t, q, v, a: (mech.energy(q, v),))
         self._group([("constraint_residual", "m", "largest |C_i(q)| of the joint constraints (m or rad)")], False,
@@ -42,16 +44,24 @@ class Signals:
         self.index = {n: i for i, n in enumerate(self.names)}
         self.needs_accelerations = any(needs_a for needs_a, _ in self._groups)
 
-    def _group(self, signals, needs_a, fn):
+    def _group(self, signals, needs_a, fn, reads=None):
         for k, (name, unit, description) in enumerate(signals):
             self._where[name] = (len(self._groups), k)
+            self._reads[name] = needs_a if reads is None else reads[k]
             self.names.append(name)
             self.units.append(unit)
             self.descriptions.append(description)
         self._groups.append((needs_a, fn))
 
     def info(self):
-        return [dict(name=n, unit=u, description=d) for n, u, d in zip(self.names, self.units, self.descriptions)]
+        """Name, unit, description of each signal, and whether it reads the accelerations (then it
+        depends on the inputs at the same instant: an FMU declares that feedthrough)."""
+        return [dict(name=n, unit=u, description=d, reads_accelerations=self.reads_accelerations(n))
+                for n, u, d in zip(self.names, self.units, self.descriptions)]
+
+    def reads_accelerations(self, name) -> bool:
+        """Whether signal `name` is computed from q̈ (an inerter's force), not from (t, q, v) alone."""
+        return self._reads[name]
 
     def evaluate(self, t, q, v, inputs=None, alpha=0.0, accelerations=None) -> np.ndarray:
         """Every signal at one state. `accelerations`: the function giving (q̈, λ) of Eq. (33)

@@ -417,6 +417,17 @@ class Stepper:
             self._input_moved = True
         self.inputs[i] = value
 
+    def retune(self, mech, signals):
+        """Go on from the current state with the element coefficients and point-force numbers of
+        `mech`, the same scene read with other parameter values (``Model.with_overrides``): a
+        discontinuity, the integration restarts here, as after an input change. Raises ValueError,
+        the stepper unchanged, where `mech` differs in anything else (geometry, masses, ...)."""
+        from inerter.engine.tables import check_retune
+        check_retune(self.mech.scene, mech.scene)
+        self.mech, self.signals = mech, signals
+        self._solver = None
+        self._input_moved = True
+
     def step(self, t_end):
         t_end = float(t_end)
         if not t_end > self.time:

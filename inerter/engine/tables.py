@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from inerter import elements
 from inerter.elements import layout
+from inerter.scene.changes import differences
 
 
 def _by_name(objects):
@@ -119,3 +120,80 @@ def element_tables(mech, pidx, rotational) -> dict:
         out[prefix + "_real"].append(row_real)
         out[prefix + "_names"].append(e.name)
     return out
+
+
+# ------------------------------------------------------------------------------------------------
+# Between steps: what the tables take without a new model
+# ------------------------------------------------------------------------------------------------
+#: Fields of a point force that its table row holds as plain numbers the kernels read at every
+#: evaluation (a step force's time and a sine's phase are not: they place discontinuities).
+TUNABLE_FORCE_FIELDS = ("value", "amplitude", "frequency", "kp", "kd")
+_FORCE_COLUMN = {"value": layout.F_VALUE, "amplitude": layout.F_AMPLITUDE, "frequency": layout.F_FREQUENCY}
+_PD_COLUMN = {"kp": layout.PD_KP, "kd": layout.PD_KD}
+
+
+def tunable_field(scene, path: str) -> bool:
+    """Whether the scene field `path` (``elements.inerter.b``, ``forces.Fa.amplitude``) is a number
+    the running engine can change between steps: an element's coefficient, a point force's value,
+    amplitude, frequency or gains."""
+    parts = path.split(".")
+    if len(parts) != 3:
+        return False
+    section, name, key = parts
+    if section == "elements" and name in scene.elements:
+        return key == elements.KINDS[scene.elements[name].type].coefficient.key
+    if section == "forces" and name in scene.forces:
+        return key in TUNABLE_FORCE_FIELDS
+    return False
+
+
+def untunable_changes(old, new) -> list[str]:
+    """The fields in which scene `new` (the file of `old` read with other parameter values)
+    differs from `old` that the running engine cannot take between steps: they need a new model."""
+    return [path for path in differences(old, new) if not tunable_field(old, path)]
+
+
+def check_retune(old, new) -> None:
+    """Raise ValueError unless scene `new` differs from `old` only in tunable fields."""
+    fixed = untunable_changes(old, new)
+    if fixed:
+        raise ValueError(f"it would change {', '.join(fixed)}, which the running model cannot take "
+                         f"between steps (only element coefficients and point-force values, amplitudes, "
+                         f"frequencies and gains can change)")
+
+
+def coupled_elements(flat) -> list[bool]:
+    """Whether each translational element of `flat` couples its bodies in the mass matrix (its
+    inertance is not 0): the band the kernels solve in is laid out for these."""
+    return [adds_mass(row_int, row_real) for row_int, row_real in zip(flat["el_int"], flat["el_real"])]
+
+
+def retune_rows(flat, scene, coupled) -> list[str]:
+    """Write the tunable numbers of `scene` (the running scene read with other parameter values)
+    into the tables `flat` in place: element coefficients, point-force values, amplitudes,
+    frequencies and PD gains. `coupled`: :func:`coupled_elements` of the tables the band was laid
+    out for. Returns the elements that would need a coupling the band lacks (an inertance that was
+    0 there): nothing is written then."""
+    lacking = [name for i, name in enumerate(flat["el_names"])
+               if not coupled[i] and adds_mass(flat["el_int"][i], _with_coefficient(
+                   flat["el_real"][i], scene.elements[name].coefficient))]
+    if lacking:
+        return lacking
+    for i, name in enumerate(flat["el_names"]):
+        flat["el_real"][i, layout.COEFFICIENT] = scene.elements[name].coefficient
+    for i, name in enumerate(flat["rot_names"]):
+        flat["rot_real"][i, layout.COEFFICIENT] = scene.elements[name].coefficient
+    dim = flat["dim"]
+    pidx = {name: i for i, name in enumerate(flat["point_names"])}
+    _, fa_real, _, pd_real, _ = force_rows(scene, pidx, dim)
+    for table, rows, columns in (("fa_real", fa_real, _FORCE_COLUMN), ("pd_real", pd_real, _PD_COLUMN)):
+        for i, row in enumerate(rows):
+            for column in columns.values():
+                flat[table][i, dim + column] = row[dim + column]
+    return []
+
+
+def _with_coefficient(row_real, value):
+    row = list(row_real)
+    row[layout.COEFFICIENT] = float(value)
+    return row

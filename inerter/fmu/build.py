@@ -23,10 +23,17 @@ build warns (FmuBuildWarning): errors then come as fmi2Discard from the next doS
 binary is always pythonfmu's own.
 
 The FMU runs inside the importing process with its Python interpreter (pythonfmu's binary does
-not link libpython), importing numpy and scipy from that environment (``pythonfmu deploy -f X.fmu``
-installs ``requirements.txt``). pythonfmu 0.7.0 cannot give units, so the model description it
-writes is completed here: ``<UnitDefinitions>`` with each unit's SI exponents, and ``unit=`` on
-every Real variable.
+not link libpython), importing numpy, scipy and numba from that environment (``pythonfmu deploy -f
+X.fmu`` installs ``requirements.txt``); its ``description`` says which versions
+(:data:`HOST_REQUIREMENTS`). pythonfmu 0.7.0 writes a model description without units, types or
+dependencies, so it is completed here (:func:`declarations`):
+
+- ``<UnitDefinitions>`` with each unit's SI exponents and display units (mm, deg), ``unit=`` and
+  ``displayUnit=`` on every Real variable, ``min``/``max`` where the scene format has a range;
+- the integration method as an Enumeration (``<TypeDefinitions>``) instead of pythonfmu's Integer;
+- ``<ModelStructure>``: each output's ``dependencies`` on the inputs, from the model's signals
+  (an output computed from the accelerations depends on every input at once, the others on none),
+  and ``<InitialUnknowns>`` for the outputs, which are calculated.
 
 A build is skipped when the FMU is current: ``<name>.fmu.source-hash`` next to it holds a hash of
 the scene file and of every shipped source, and a build with the same hash does nothing.
@@ -50,6 +57,8 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from dataclasses import dataclass, field
+
 from inerter.fmu import native as fmu_native
 from inerter.fmu import payload as fmu_payload
 from inerter.common import locations
@@ -68,15 +77,20 @@ STATUS_VARIABLE = "fmi_status"
 ORIGINAL_SUFFIX = ".pythonfmu.so"
 DEFAULT_OUT_DIR = Path("build") / "fmu"
 DEFAULT_SCENES_DIR = locations.scenarios()
-#: The packages the FMU imports from the importer's environment, with pyproject.toml's lower bounds:
-#: its resources/requirements.txt (``pythonfmu deploy`` installs it), under a note on the rest.
-RUNTIME_REQUIREMENTS = ("numpy>=1.26", "scipy>=1.11")
+#: What the FMU needs of the Python that loads it: the package's own requirements (pyproject.toml).
+HOST_REQUIREMENTS = {"python": ">=3.11", "numpy": ">=1.26", "scipy": ">=1.11", "numba": ">=0.60"}
+#: The packages the FMU imports from the importer's environment: its resources/requirements.txt
+#: (``pythonfmu deploy`` installs it), under a note on the interpreter.
+RUNTIME_REQUIREMENTS = tuple(f"{name}{spec}" for name, spec in HOST_REQUIREMENTS.items() if name != "python")
 REQUIREMENTS_NOTE = ("# The FMU runs in the importing process's Python (3.11 or later) and imports these from\n"
-                     "# its environment. numba (0.60 or later), where installed there, runs the compiled path;\n"
-                     "# without it the FMU runs the numpy path.\n")
+                     "# its environment.\n")
+#: Display units offered where users think in them; values stay in the unit.
+DISPLAY_UNITS = {"m": "mm", "m/s": "mm/s", "rad": "deg", "rad/s": "deg/s"}
+#: The type of the ``solver`` Enumeration.
+METHOD_TYPE = "IntegrationMethod"
 HASH_SUFFIX = ".fmu.source-hash"
 #: Bump when the layout of a built FMU changes without any shipped source changing.
-BUILD_FORMAT = "inerter-fmu-build/2"
+BUILD_FORMAT = "inerter-fmu-build/3"
 MODULE_PREFIX = "inerter_fmu_"
 
 
@@ -152,8 +166,9 @@ def si_unit(unit: str) -> tuple[dict[str, int], float]:
     return {b: exponents[b] for b in BASE_UNITS if exponents.get(b, 0) != 0}, factor
 
 
-def unit_definitions(units) -> ET.Element:
-    """A ``<UnitDefinitions>`` element for the given unit strings."""
+def unit_definitions(units, display=None) -> ET.Element:
+    """A ``<UnitDefinitions>`` element for the given unit strings, with a ``<DisplayUnit>`` for
+    those `display` maps to one (``{"m": "mm"}``: value in mm = factor · value in m)."""
     root = ET.Element("UnitDefinitions")
     for unit in sorted(set(units)):
         exponents, factor = si_unit(unit)
@@ -162,6 +177,12 @@ def unit_definitions(units) -> ET.Element:
         if factor != 1.0:
             attrib["factor"] = repr(factor)
         ET.SubElement(node, "BaseUnit", attrib)
+        shown = (display or {}).get(unit)
+        if shown is not None:
+            shown_exponents, shown_factor = si_unit(shown)
+            if shown_exponents != exponents:
+                raise ValueError(f"display unit {shown!r} is not a unit of {unit!r}")
+            ET.SubElement(node, "DisplayUnit", name=shown, factor=repr(factor / shown_factor))
     return root
 
 
@@ -194,6 +215,7 @@ def source_hash(scene_path: Path, data_files=()) -> str:
     add("format", BUILD_FORMAT.encode())
     add("pythonfmu", pythonfmu.__version__.encode())
     add("requirements", _requirements_text().encode())
+    add("host", _host_versions().encode())
     add("scene:" + scene_path.name, scene_path.read_bytes())
     for rel in data_files:                                 # records the scene reads (ground motion)
         add("data:" + rel, (scene_path.parent / rel).read_bytes())
@@ -216,6 +238,78 @@ def _scene_description(scene_path: Path, model) -> str:
     except Exception:
         pass
     return f"inerter scene {model.name}"
+
+
+def _host_versions() -> str:
+    """The versions of Python and of the required packages here, where the FMU is built."""
+    from importlib.metadata import PackageNotFoundError, version
+    found = [f"Python {platform.python_version()}"]
+    for name in HOST_REQUIREMENTS:
+        if name != "python":
+            try:
+                found.append(f"{name} {version(name)}")
+            except PackageNotFoundError:
+                found.append(f"{name} (not installed)")
+    return ", ".join(found)
+
+
+def host_requirements_text() -> str:
+    """What the FMU needs of its host, for its description and the docs."""
+    from inerter.engine import compiled
+    need = ", ".join(f"{'Python' if name == 'python' else name} {spec}" for name, spec in HOST_REQUIREMENTS.items())
+    seconds = getattr(compiled, "COMPILE_SECONDS", {2: 40, 3: 70})
+    return (f"Host requirements: it runs in the importer's own Python process and needs {need} installed "
+            f"there (built with {_host_versions()}). Its first use on a machine compiles the engine's "
+            f"kernels (about {seconds[2]} s for a 2D scene, {seconds[3]} s for a 3D one, on 2 cores; logged "
+            f"as it happens), cached for later runs.")
+
+
+def fmu_description(scene_path: Path, model, tunable) -> str:
+    """The FMU's ``description``: the scene's, which parameters are tunable, the host requirements."""
+    fixed = [p["name"] for p in model.parameter_info() if p["name"] not in tunable]
+    text = _scene_description(scene_path, model).rstrip(".") + "."
+    if tunable:
+        text += (f" Tunable between steps: {', '.join(tunable)}"
+                 + (f"; fixed (set before initialisation): {', '.join(fixed)}." if fixed else "."))
+    elif fixed:
+        text += " Every parameter is fixed (set before initialisation)."
+    return f"{text} {host_requirements_text()}"
+
+
+@dataclass
+class Declarations:
+    """What the build adds to pythonfmu's model description, by variable name."""
+    units: dict[str, str] = field(default_factory=dict)
+    minimums: dict[str, float] = field(default_factory=dict)
+    maximums: dict[str, float] = field(default_factory=dict)
+    #: variable -> (type name, items in the order of their values 1, 2, ...)
+    enumerations: dict[str, tuple[str, list[str]]] = field(default_factory=dict)
+    #: output -> the inputs it depends on at the same instant (ModelStructure/Outputs)
+    output_dependencies: dict[str, list[str]] | None = None
+    #: output -> the knowns it depends on in initialization mode (InitialUnknowns)
+    initial_dependencies: dict[str, list[str]] | None = None
+
+
+def declarations(model, units: dict[str, str]) -> Declarations:
+    """The declarations of the FMU of `model`, derived from the model: an output depends on the
+    inputs where its signal reads the accelerations (``reads_accelerations``: an inerter's
+    force), which every input enters; in initialization mode every output is calculated from the
+    scene's parameters and effects, and those that read the accelerations from the inputs too."""
+    from inerter.scene.ranges import parameter_minimums
+    from inerter.scene.reader import RTOL_RANGE
+
+    inputs = [i["name"] for i in model.input_info()]
+    knowns = [p["name"] for p in model.parameter_info()] + [e["name"] for e in model.effect_info()]
+    outputs = model.output_info()
+    minimums = {name: value for name, value in parameter_minimums(model.scene.raw).items()
+                if name in {p["name"] for p in model.parameter_info()}}
+    minimums["rtol"] = RTOL_RANGE[0]
+    return Declarations(
+        units=units, minimums=minimums, maximums={"rtol": RTOL_RANGE[1]},
+        enumerations={"solver": (METHOD_TYPE, list(model.methods))},
+        output_dependencies={o["name"]: (inputs if o["reads_accelerations"] else []) for o in outputs},
+        initial_dependencies={o["name"]: knowns + (inputs if o["reads_accelerations"] else [])
+                              for o in outputs})
 
 
 def _check_model(scene_path: Path, model) -> dict[str, str]:
@@ -276,6 +370,7 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
                             f"in an installed one: reinstall inerter)")
     model = inerter.load(scene_path)
     units = _check_model(scene_path, model)
+    tunable = model.tunable_parameters()
     name = model.name
     fmu_path = out_dir / f"{name}.fmu"
     hash_path = out_dir / f"{name}{HASH_SUFFIX}"
@@ -293,8 +388,9 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
         version = getattr(inerter, "__version__", None)
         (stage / f"{module}.py").write_text(template.substitute(
             name=name, scene_file=scene_path.name, scene_file_repr=repr(scene_path.name),
-            description_repr=repr(_scene_description(scene_path, model)),
-            version_repr=repr(None if version is None else str(version))), encoding="utf-8")
+            description_repr=repr(fmu_description(scene_path, model, tunable)),
+            version_repr=repr(None if version is None else str(version)),
+            tunable_repr=repr(tuple(tunable))), encoding="utf-8")
         shutil.copy2(FMU_SRC / SLAVE_FILE, stage / SLAVE_FILE)
         for path in _shipped_package_files():
             target = stage / "inerter" / path.relative_to(PACKAGE_DIR)
@@ -315,7 +411,8 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
                                [stage / SLAVE_FILE, stage / "inerter", stage / scene_path.name,
                                 stage / "requirements.txt", *extra])
         final = Path(tmp) / f"{name}.fmu"
-        _complete_model_description(built, final, units, digest, Path(tmp) / "shim")
+        _complete_model_description(built, final, units, digest, Path(tmp) / "shim",
+                                    declarations(model, units))
         hash_path.unlink(missing_ok=True)
         shutil.move(str(final), str(fmu_path))
     hash_path.write_text(digest + "\n")
@@ -343,9 +440,79 @@ def _run_pythonfmu(script: Path, dest: Path, project_files: list[Path]) -> Path:
         sys.modules.update(saved_modules)
 
 
+#: The integration methods, as the solver Enumeration's items describe them.
+METHOD_DESCRIPTIONS = {
+    "DOP853": "explicit Runge-Kutta 8(5,3), adaptive step",
+    "RK45": "explicit Runge-Kutta 5(4) (Dormand-Prince), adaptive step",
+    "Radau": "implicit Radau IIA of order 5, adaptive step (stiff scenes)",
+    "BDF": "implicit backward differentiation formulas, variable order (stiff scenes)",
+    "LSODA": "Adams / BDF switching on stiffness",
+    "RK4": "classical Runge-Kutta 4 with the fixed step experiment.step",
+}
+
+
+def _declare(root: ET.Element, units: dict[str, str], extra: Declarations | None) -> set[str]:
+    """Write units (and, with `extra`, display units, ranges, enumerations and the model
+    structure) into the model description `root`; returns the units used."""
+    variables = list(root.find("ModelVariables"))
+    index = {var.get("name"): i + 1 for i, var in enumerate(variables)}
+    used = set()
+    for var in variables:
+        name = var.get("name")
+        real = var.find("Real")
+        unit = units.get(name)
+        if real is not None and unit:
+            real.set("unit", unit)
+            used.add(unit)
+            if extra is not None and unit in DISPLAY_UNITS:
+                real.set("displayUnit", DISPLAY_UNITS[unit])
+        if extra is None:
+            continue
+        if real is not None:
+            for key, bounds in (("min", extra.minimums), ("max", extra.maximums)):
+                if name in bounds:
+                    real.set(key, repr(float(bounds[name])))
+        if name in extra.enumerations and var.find("Integer") is not None:
+            integer = var.find("Integer")
+            enumeration = ET.Element("Enumeration", {"declaredType": extra.enumerations[name][0],
+                                                     **dict(integer.attrib)})
+            var.remove(integer)
+            var.append(enumeration)
+    if extra is None:
+        return used
+    # Schema order: CoSimulation, UnitDefinitions, TypeDefinitions, LogCategories, ...
+    if extra.enumerations:
+        types = ET.Element("TypeDefinitions")
+        for type_name, items in sorted(set((t, tuple(i)) for t, i in extra.enumerations.values())):
+            simple = ET.SubElement(types, "SimpleType", name=type_name)
+            node = ET.SubElement(simple, "Enumeration")
+            for value, item in enumerate(items, start=1):
+                ET.SubElement(node, "Item", name=item, value=str(value),
+                              **({"description": METHOD_DESCRIPTIONS[item]} if item in METHOD_DESCRIPTIONS else {}))
+        root.insert([child.tag for child in root].index("CoSimulation") + 1, types)
+    if extra.output_dependencies is not None:
+        structure = root.find("ModelStructure")
+        for child in list(structure):
+            structure.remove(child)
+        outputs = [var.get("name") for var in variables if var.get("causality") == "output"]
+        for tag, dependencies in (("Outputs", extra.output_dependencies),
+                                  ("InitialUnknowns", extra.initial_dependencies)):
+            if not outputs or dependencies is None:
+                continue
+            node = ET.SubElement(structure, tag)
+            for name in outputs:
+                knowns = sorted(index[k] for k in dependencies[name])
+                attrib = {"index": str(index[name]), "dependencies": " ".join(map(str, knowns))}
+                if knowns:
+                    attrib["dependenciesKind"] = " ".join("dependent" for _ in knowns)
+                ET.SubElement(node, "Unknown", attrib)
+    return used
+
+
 def _complete_model_description(src: Path, dest: Path, units: dict[str, str], digest: str,
-                                shim_dir: Path | None = None):
-    """Copy the FMU `src` to `dest` with units and a content-derived GUID in its description.
+                                shim_dir: Path | None = None, extra: Declarations | None = None):
+    """Copy the FMU `src` to `dest` with units and a content-derived GUID in its description,
+    and with `extra` (:func:`declarations`) the rest the build declares.
 
     With `shim_dir` (a scratch folder), the status shim is compiled there for the slave's
     STATUS_VARIABLE and put in front of pythonfmu's Linux binary (see :func:`_compile_shim`).
@@ -353,23 +520,18 @@ def _complete_model_description(src: Path, dest: Path, units: dict[str, str], di
     with zipfile.ZipFile(src) as zin:
         root = ET.fromstring(zin.read("modelDescription.xml"))
         root.set("guid", "{%s}" % uuid.uuid5(uuid.NAMESPACE_URL, f"inerter-fmu:{digest}"))
-        used = set()
         status_vr = -1
         for var in root.iter("ScalarVariable"):
-            real = var.find("Real")
-            unit = units.get(var.get("name"))
-            if real is not None and unit:
-                real.set("unit", unit)
-                used.add(unit)
             if var.get("name") == STATUS_VARIABLE and var.find("Integer") is not None:
                 status_vr = int(var.get("valueReference"))
         if shim_dir is not None and status_vr < 0:
             raise FmuBuildError(f"{src.name}: the model description has no Integer "
                                 f"{STATUS_VARIABLE!r} (fmu_src/{SLAVE_FILE} registers it)")
+        used = _declare(root, units, extra)
         if used:
             # Schema order: CoSimulation, UnitDefinitions, TypeDefinitions, LogCategories, ...
             position = [child.tag for child in root].index("CoSimulation") + 1
-            root.insert(position, unit_definitions(used))
+            root.insert(position, unit_definitions(used, DISPLAY_UNITS if extra is not None else {}))
         ET.indent(root, space="  ")
         xml = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 

@@ -32,6 +32,11 @@ entering Python, whenever the slave has *armed* it:
   (:meth:`~inerter.engine.compiled.CompiledStepper.native_sync`). Every call but a doStep and the
   getters disarms the shim until the next doStep the slave takes.
 
+The same context carries the shim's live logger: after fmi2Instantiate the shim writes the address
+of its ``live_log`` function and of its instance into CTX_LOG_FUNCTION and CTX_LOG_TARGET, so that
+the slave can hand a message to the importer's logger during a long call (the kernels' first
+compilation, inside exitInitializationMode) instead of when it returns (:meth:`NativeLink.live_log`).
+
 So the native steps are the steps the slave would take, on the same arrays with the same compiled
 code: the results are identical bit for bit (tests/test_fmu_native.py).
 """
@@ -45,8 +50,8 @@ import numpy as np
 #: The context's slots: CTX_MAP points to one int64 per value reference, -1 or
 #: (kind << 32) + index into the array of that kind (CTX_VALUES for OUTPUT, CTX_REALS, ...).
 CTX_MAGIC, CTX_ARMED, CTX_FUNCTION, CTX_TABLE, CTX_MAP_SIZE, CTX_MAP, CTX_VALUES, CTX_REALS, CTX_INTEGERS, \
-    CTX_BOOLEANS, CTX_STRINGS = range(11)
-CTX_SIZE = 11
+    CTX_BOOLEANS, CTX_STRINGS, CTX_LOG_FUNCTION, CTX_LOG_TARGET = range(13)
+CTX_SIZE = 13
 #: Kinds of variables in the map: an output (float64 values the C function writes), another Real
 #: (float64), an Integer or a Boolean (int64), a String (int64: the address of a NUL-terminated
 #: UTF-8 string).
@@ -140,6 +145,21 @@ class NativeLink:
         enters Python after them); returns how many there were."""
         take_over = getattr(stepper, "native_sync", None)
         return take_over() if take_over is not None else 0
+
+    def live_log(self, status: int, category: str, message: str) -> bool:
+        """Hand `message` to the importer's logger now, through the shim (which wrote its logging
+        function into CTX_LOG_FUNCTION after fmi2Instantiate; it logs only where the importer
+        turned logging on, as pythonfmu does). False where there is no shim to do it: pythonfmu
+        then delivers the message when the call in progress returns. Only from the thread of that
+        call: FMI 2.0 does not let an FMU call the logger from another."""
+        address = int(self.ctx[CTX_LOG_FUNCTION])
+        if not address:
+            return False
+        function = ctypes.CFUNCTYPE(None, ctypes.c_int64, ctypes.c_int32, ctypes.c_char_p,
+                                    ctypes.c_char_p)(address)
+        function(int(self.ctx[CTX_LOG_TARGET]), status, category.encode("utf-8"),
+                 message.encode("utf-8", errors="replace"))
+        return True
 
     def disarm(self) -> None:
         self.ctx[CTX_ARMED] = 0

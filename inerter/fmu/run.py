@@ -28,6 +28,11 @@ class FmuRunInfo:
     extra: dict = field(default_factory=dict)
 
 
+def solver_item(method: str) -> int:
+    """The value of the FMU's ``solver`` Enumeration item for an integration method (1, 2, ...)."""
+    return list(Model.methods).index(method) + 1
+
+
 def start_values(model: Model, overrides: dict) -> dict:
     """FMU start values for the overrides that ``inerter.load`` would take."""
     names = {p["name"] for p in model.parameter_info()}
@@ -35,8 +40,8 @@ def start_values(model: Model, overrides: dict) -> dict:
     for key, value in overrides.items():
         if key in names or key.startswith("effects."):
             out[key] = value
-        elif key == "experiment.method":
-            out["solver"] = value
+        elif key == "experiment.method":             # the solver Enumeration's item (1, 2, ...)
+            out["solver"] = solver_item(value)
         elif key in ("experiment.rtol", "experiment.atol"):
             out[key.split(".")[1]] = value
         else:

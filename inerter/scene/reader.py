@@ -39,6 +39,8 @@ FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
 METRIC_KINDS = ("natural_frequency", "free_oscillation", "harmonics", "steady_state", "peak")
 METHODS = ("DOP853", "RK45", "Radau", "BDF", "LSODA", "RK4")
 CONSTRAINT_TREATMENTS = ("baumgarte", "projection")
+#: The relative tolerances the integrators take (inclusive).
+RTOL_RANGE = (1e-14, 0.1)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -670,9 +672,10 @@ def _read_experiment(r: _Reader, raw, overrides):
     interval = r.number(merged, "output_interval", fld, default=0.01, minimum=0.0, exclusive=True)
     if interval > stop:
         raise r.error("experiment.output_interval", interval, f"at most stop_time = {stop:g} s", "out of range")
-    rtol = r.number(merged, "rtol", fld, default=1e-8, minimum=1e-14)
-    if rtol > 0.1:
-        raise r.error("experiment.rtol", rtol, "a relative tolerance in [1e-14, 0.1]", "out of range")
+    rtol = r.number(merged, "rtol", fld, default=1e-8, minimum=RTOL_RANGE[0])
+    if rtol > RTOL_RANGE[1]:
+        raise r.error("experiment.rtol", rtol, f"a relative tolerance in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}]",
+                      "out of range")
     return Experiment(
         stop_time=stop, output_interval=interval,
         method=r.string(merged, "method", fld, METHODS, default="DOP853"),

@@ -215,6 +215,7 @@ def fmu_sweep(study: Study, scene, overrides, reference, names, interval, method
     import fmpy
 
     from inerter.fmu.build import build
+    from inerter.fmu.run import solver_item
 
     fmu = str(build(scene))
     fmpy.simulate_fmu(fmu, stop_time=min(study.stop_time, 0.1), start_values=dict(overrides))   # warm up
@@ -233,7 +234,7 @@ def fmu_sweep(study: Study, scene, overrides, reference, names, interval, method
         for method in methods:
             label = f"FMU {method}, {1e3 * h:g} ms step"
             for rtol in sweeps[method]:
-                start = dict(overrides, solver=method, rtol=rtol, atol=rtol * 1e-2)
+                start = dict(overrides, solver=solver_item(method), rtol=rtol, atol=rtol * 1e-2)
 
                 def run():
                     t0 = time.process_time()

@@ -18,7 +18,8 @@ from inerter.engine.tables import _by_name, adds_mass, element_tables, force_row
 from inerter.model.joints import Coincident, SpatialJoint
 
 # Joint kinds (column 0 of ``jt_int``), as in :mod:`inerter.engine.kernels` (its 3D section).
-_JOINT_KIND = {"spherical": 0, "revolute": 1, "fixed": 2, "prismatic": 3}
+_JOINT_KIND = {"spherical": 0, "revolute": 1, "fixed": 2, "prismatic": 3, "cylindrical": 4, "universal": 5,
+               "planar": 6}
 #: Width of a ``jt_real`` row: three dot-1 pairs (s̄_a, s̄_b) and two dot-2 vectors s̄_a.
 JOINT_WIDTH = 24
 DOT2 = 18
@@ -71,7 +72,8 @@ def flatten3(mech) -> dict:
     * ``rot_int`` (rotational elements, 3): kind (0 spring, 1 damper), body a, body b;
       ``rot_real`` (rotational elements, 14): coefficient (k or d), free angle, axis n̄ in body a's
       frame (3), rel0 = A_aᵀA_b at the initial pose (9, row-major).
-    * ``jt_int`` (joints, 6): kind (0 spherical, 1 revolute, 2 fixed, 3 prismatic), point a,
+    * ``jt_int`` (joints, 6): kind (0 spherical, 1 revolute, 2 fixed, 3 prismatic, 4 cylindrical,
+      5 universal, 6 planar: a label; the kernels evaluate the rows the counts give), point a,
       point b, coincident rows (1: three rows r_b − r_a = 0), number of dot-1 rows, number of
       dot-2 rows; the joint's rows are in that order. ``jt_real`` (joints, 24): the dot-1 pairs
       (s̄_a in a's frame, s̄_b in b's frame) at columns 6k..6k+5 (k < 3), the dot-2 vectors s̄_a

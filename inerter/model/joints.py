@@ -172,9 +172,38 @@ def make_joint(spec, mech, q0):
         return SpatialJoint(spec.name, "fixed", pair, fa, fb, dot1=dot1)
     axis = np.asarray(spec.axis, dtype=float)
     p1, p2 = _perpendiculars(axis)
-    if spec.type == "revolute":
-        # b's copy of the axis stays perpendicular to a's two normals
-        return SpatialJoint(spec.name, "revolute", pair, fa, fb, dot1=[(p1, in_b(axis)), (p2, in_b(axis))])
-    # prismatic: axes parallel, no twist about them, and b's point on a's line
-    dot1 = [(p1, in_b(axis)), (p2, in_b(axis)), (p1, in_b(p2))]
-    return SpatialJoint(spec.name, "prismatic", pair, fa, fb, dot1=dot1, dot2=[p1, p2], coincident=False)
+    rows = _SPATIAL_ROWS[spec.type](axis, p1, p2, in_b, spec)
+    return SpatialJoint(spec.name, spec.type, pair, fa, fb, **rows)
+
+
+def _revolute_rows(axis, p1, p2, in_b, spec):
+    """Points coincide; b's copy of the axis stays perpendicular to a's two normals (1 DOF)."""
+    return dict(dot1=[(p1, in_b(axis)), (p2, in_b(axis))])
+
+
+def _prismatic_rows(axis, p1, p2, in_b, spec):
+    """Axes parallel, no twist about them, and b's point on a's line through its point (1 DOF)."""
+    return dict(dot1=[(p1, in_b(axis)), (p2, in_b(axis)), (p1, in_b(p2))], dot2=[p1, p2], coincident=False)
+
+
+def _cylindrical_rows(axis, p1, p2, in_b, spec):
+    """The prismatic joint without its twist row: b slides along and turns about a's axis (2 DOF)."""
+    return dict(dot1=[(p1, in_b(axis)), (p2, in_b(axis))], dot2=[p1, p2], coincident=False)
+
+
+def _universal_rows(axis, p1, p2, in_b, spec):
+    """Points coincide, and b's axis (`axis2`, fixed in b) stays perpendicular to a's `axis`: the
+    Cardan (Hooke) joint, two rotations and no twist (2 DOF)."""
+    return dict(dot1=[(axis, in_b(np.asarray(spec.axis2, dtype=float)))])
+
+
+def _planar_rows(axis, p1, p2, in_b, spec):
+    """b's copy of the normal `axis` stays parallel to a's, and b's point in the plane through a's
+    point normal to it: two slides in the plane and a turn about the normal (3 DOF)."""
+    return dict(dot1=[(p1, in_b(axis)), (p2, in_b(axis))], dot2=[axis], coincident=False)
+
+
+#: The rows of each 3D joint kind with an axis (Shabana 2009's dot-1/dot-2 conditions), from the
+#: axis in a's frame, two perpendiculars completing it, and a's vectors carried into b's frame.
+_SPATIAL_ROWS = {"revolute": _revolute_rows, "prismatic": _prismatic_rows, "cylindrical": _cylindrical_rows,
+                 "universal": _universal_rows, "planar": _planar_rows}

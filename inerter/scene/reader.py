@@ -33,7 +33,10 @@ KNOWN_EFFECTS = {
 #: The element kinds (inerter.elements: one module each, with its parameters).
 ELEMENT_TYPES = tuple(elements.KINDS)
 JOINT_TYPES = ("revolute", "prismatic")
-JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed")
+JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed", "cylindrical", "universal", "planar")
+#: The joint kinds that take an axis (in P1's frame): the sliding or turning axis, a universal
+#: joint's first axis (fixed in P1's body), a planar joint's normal.
+_AXIS_JOINTS = {2: ("prismatic",), 3: ("revolute", "prismatic", "cylindrical", "universal", "planar")}
 ORIENTATIONS = ("quaternion", "euler_zxz")
 FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
 METRIC_KINDS = ("natural_frequency", "free_oscillation", "harmonics", "steady_state", "peak")
@@ -77,10 +80,14 @@ class Point:
 @dataclass(frozen=True)
 class Joint:
     name: str
-    type: str                 # "revolute" | "prismatic"
+    type: str                 # one of JOINT_TYPES (2D) or JOINT_TYPES_3D
     point_a: str
     point_b: str
-    axis: tuple[float, ...] | None = None   # prismatic: sliding axis in the frame of point_a's body
+    axis: tuple[float, ...] | None = None   # the joint's axis in the frame of point_a's body (_AXIS_JOINTS)
+    axis2: tuple[float, ...] | None = None  # universal: the second axis, fixed in point_b's body, given in
+                                            # point_a's frame at the initial pose (perpendicular to axis)
+    stiffness: float = 0.0    # revolute: a rotational spring about the joint (N.m/rad) ...
+    damping: float = 0.0      # ... and damper (N.m.s/rad), as the elements JOINT_spring, JOINT_damper
 
 
 @dataclass(frozen=True)
@@ -373,6 +380,7 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     bodies, points = _read_bodies(r, data, dimension)
     joints = _read_joints(r, data.get("joints", {}), points, dimension)
     element_specs = _read_elements(r, data.get("elements", {}), points, bodies, dimension)
+    element_specs.update(_joint_elements(r, joints, points, element_specs, dimension))
     forces = _read_forces(r, data.get("forces", {}), points, dimension)
     experiment = _read_experiment(r, data.get("experiment", {}), x_over)
     outputs = _signal_names(points, element_specs, dimension)
@@ -556,21 +564,54 @@ def _read_joints(r: _Reader, raw, points, dimension):
     for jname, spec in raw.items():
         fld = f"joints.{jname}"
         _check_name(r, jname, fld)
-        r.table(spec, fld, {"type": True, "between": True, "axis": False})
+        if not isinstance(spec, dict):
+            raise r.error(fld, spec, "a table", "not a table")
         jtype = r.string(spec, "type", fld, JOINT_TYPES if dimension == 2 else JOINT_TYPES_3D)
+        needs_axis = jtype in _AXIS_JOINTS[dimension]
+        allowed = {"type": True, "between": True}
+        if needs_axis:
+            allowed["axis"] = True
+        if jtype == "universal":
+            allowed["axis2"] = True
+        if jtype == "revolute":
+            allowed.update(stiffness=False, damping=False)
+        r.table(spec, fld, allowed)
         a, b = r.name_pair(spec, "between", fld, points, "point")
         if points[a].body == points[b].body:
             raise r.error(f"{fld}.between", [a, b], "points on two different bodies (or a body and the ground)",
                           f"both points are on {points[a].body}")
-        axis = None
-        needs_axis = jtype == "prismatic" or (dimension == 3 and jtype == "revolute")
-        if needs_axis:
-            axis = r.vector(spec, "axis", fld, dimension, unit_length=True)
-        elif "axis" in spec:
-            raise r.error(f"{fld}.axis", spec["axis"], f"no axis for a {jtype} joint in {dimension}D",
-                          "unexpected field")
-        joints[jname] = Joint(jname, jtype, a, b, axis)
+        axis = r.vector(spec, "axis", fld, dimension, unit_length=True) if needs_axis else None
+        axis2 = None
+        if jtype == "universal":
+            axis2 = r.vector(spec, "axis2", fld, 3, unit_length=True)
+            if abs(sum(x * y for x, y in zip(axis, axis2))) > 1e-9:
+                raise r.error(f"{fld}.axis2", list(axis2), f"a unit vector perpendicular to axis = {list(axis)}",
+                              "not perpendicular (a universal joint's two axes cross at a right angle)")
+        stiffness = r.number(spec, "stiffness", fld, default=0.0, minimum=0.0) if jtype == "revolute" else 0.0
+        damping = r.number(spec, "damping", fld, default=0.0, minimum=0.0) if jtype == "revolute" else 0.0
+        joints[jname] = Joint(jname, jtype, a, b, axis, axis2, stiffness, damping)
     return joints
+
+
+def _joint_elements(r: _Reader, joints, points, elements_read, dimension):
+    """The rotational spring and damper a revolute joint declares with `stiffness` and `damping`
+    (a column base's spring without a separate element): elements named JOINT_spring and
+    JOINT_damper between the joint's two bodies, about its axis in 3D, the spring's free angle the
+    initial one."""
+    out = {}
+    for j in joints.values():
+        for key, etype, coefficient in (("stiffness", "rotational_spring", j.stiffness),
+                                        ("damping", "rotational_damper", j.damping)):
+            if not coefficient:
+                continue
+            ename = f"{j.name}_{etype.split('_')[1]}"
+            if ename in elements_read or ename in points:
+                raise r.error(f"joints.{j.name}.{key}", coefficient,
+                              f"no element or point named {ename!r} (the joint's {etype.replace('_', ' ')})",
+                              "name clash")
+            out[ename] = Element(ename, etype, body_a=points[j.point_a].body, body_b=points[j.point_b].body,
+                                 coefficient=coefficient, axis=j.axis if dimension == 3 else None)
+    return out
 
 
 def _read_elements(r: _Reader, raw, points, bodies, dimension):

@@ -1,5 +1,6 @@
 """Writes synthetic_bidirectional.csv: a synthetic two-component ground acceleration (not a
-recorded earthquake): sums of sines under a build-up / strong-motion / decay envelope.
+recorded earthquake): sums of sines under a build-up / strong-motion / decay envelope; and
+synthetic_x.csv, its X component alone for planar scenes (time, a_x, a_y = 0).
 
     python scenarios/records/make_synthetic_record.py
 """
@@ -17,3 +18,8 @@ out = Path(__file__).with_name("synthetic_bidirectional.csv")
 np.savetxt(out, np.column_stack((t, ax, ay, np.zeros_like(t))), delimiter=",", fmt="%.6f",
            header="time (s), a_x (m/s2), a_y (m/s2), a_z (m/s2): synthetic, not a recorded earthquake")
 print(f"wrote {out} ({len(t)} rows)")
+planar = Path(__file__).with_name("synthetic_x.csv")
+np.savetxt(planar, np.column_stack((t, ax, np.zeros_like(t))), delimiter=",", fmt="%.6f",
+           header="time (s), a_x (m/s2), a_y (m/s2): the X component of synthetic_bidirectional.csv, "
+                  "synthetic, not a recorded earthquake")
+print(f"wrote {planar} ({len(t)} rows)")

@@ -323,6 +323,7 @@ class Result:
             "metrics": self.metrics,
             "metric_units": {k: u for k, u in metric_units(self.model).items() if k in self.metrics},
             "metric_errors": self.metric_errors,
+            "warnings": self.model.scene.warnings,
             "settings": {"stop_time": s.stop_time, "output_interval": s.output_interval, "method": s.method,
                          "rtol": s.rtol, "atol": s.atol, "constraint": s.constraint, "baumgarte": s.baumgarte,
                          "oracle": self.model.is_oracle,

@@ -84,6 +84,8 @@ def cmd_run(args):
     t0 = time.perf_counter()
     result = simulate(args.scene, overrides, args.model, args)
     wall = time.perf_counter() - t0
+    for warning in result.model.scene.warnings:
+        print(f"inerter: warning: {warning}", file=sys.stderr)
     stem = result.model.name
     summary = _write(result, out, stem)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))

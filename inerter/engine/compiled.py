@@ -50,6 +50,7 @@ import numpy as np
 
 from inerter.common.errors import SimulationError
 from inerter.engine.simulation import Run, Stepper, jumps
+from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.elements import layout
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
@@ -70,7 +71,7 @@ def kernel_sources() -> list[Path]:
     laws and their dispatch (:mod:`inerter.elements`), the shared constants and orientation kinematics."""
     package = Path(__file__).resolve().parents[1]
     return ([Path(__file__).with_name("kernels.py"), package / "common" / "errors.py",
-             package / "common" / "rotations.py"]
+             package / "common" / "rotations.py", package / "scene" / "ground_motion.py"]
             + sorted((package / "elements").glob("*.py")))
 
 
@@ -447,19 +448,21 @@ def ordering(S):
 # The kernel
 # ------------------------------------------------------------------------------------------------
 def ground_arrays(mech):
-    """(mode, input offset, ground_t, ground_a) of the mechanism's ground motion for
-    :func:`compiled_kernels.ground_acceleration`."""
+    """(mode, input offset, ground_t, ground_a, ground_terms) of the mechanism's ground motion for
+    :func:`kernels.ground_acceleration`: a record's times and scaled values (one sample of zeros
+    where there is none) and the analytic terms with scaled amplitudes."""
     g = getattr(mech, "ground_motion", None)
+    no_terms = np.zeros((0, TERM_COLUMNS))
     if g is None:
-        return _k.GROUND_NONE, 0, np.zeros(1), np.zeros((1, 1))
+        return _k.GROUND_NONE, 0, np.zeros(1), np.zeros((mech.dim, 1)), no_terms
     if g.input:
-        return _k.GROUND_INPUT, mech.dim * len(mech.input_forces), np.zeros(1), np.full((1, 1), g.scale)
-    if g.record is not None:
-        times, values = g.record
-        return (_k.GROUND_RECORD, 0, np.ascontiguousarray(times, dtype=float),
-                np.ascontiguousarray(g.scale * np.asarray(values, dtype=float).reshape(mech.dim, -1)))
-    return (_k.GROUND_SINE, 0, np.array([float(g.frequency)]),
-            np.ascontiguousarray((g.scale * g.amplitude).reshape(mech.dim, 1)))
+        return _k.GROUND_INPUT, mech.dim * len(mech.input_forces), np.zeros(1), np.full((1, 1), g.scale), no_terms
+    times, values = g.record if g.record is not None else (np.zeros(1), np.zeros((mech.dim, 1)))
+    terms = np.array(g.terms, dtype=float).reshape(-1, TERM_COLUMNS)
+    terms[:, TERM_AMPLITUDE] *= g.scale
+    return (_k.GROUND_PRESCRIBED, 0, np.ascontiguousarray(times, dtype=float),
+            np.ascontiguousarray(g.scale * np.asarray(values, dtype=float).reshape(mech.dim, -1)),
+            np.ascontiguousarray(terms))
 
 
 class Kernel:
@@ -475,13 +478,13 @@ class Kernel:
         self.flat = flat
         self.n, self.m, self.nq = flat["n"], flat["m"], flat["nq"]
         self.perm, self.kl, self.ku = ordering(sparsity3(flat) if spatial else sparsity(flat))
-        mode, offset, ground_t, ground_a = ground_arrays(mech)
+        mode, offset, ground_t, ground_a, ground_terms = ground_arrays(mech)
         dims = np.array([self.n, self.m, self.kl, self.ku, int(flat["has_gravity"]), flat["dim"], self.nq, mode,
                          offset], dtype=np.int64)
         self.params = (flat["mass"], flat["pbody"], flat["ploc"], flat["el_int"], flat["el_real"],
                        flat["rot_int"], flat["rot_real"], flat["jt_int"], flat["jt_real"], flat["fa_int"],
                        flat["fa_real"], flat["pd_int"], flat["pd_real"], flat["in_int"], flat["gravity"],
-                       self.perm, dims, ground_t, ground_a) + ((np.ones(1, dtype=np.int64),) if spatial else ())
+                       self.perm, dims, ground_t, ground_a, ground_terms) + ((np.ones(1, dtype=np.int64),) if spatial else ())
         self.spatial = spatial                # P has the slot `spatial`: the kernels compile its 3D code
         N = self.n + self.m
         self._AB = _k.band_storage(self.kl, self.ku, N)

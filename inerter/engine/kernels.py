@@ -17,6 +17,8 @@ from numba.core import cgutils
 from numba.extending import intrinsic, overload
 
 from inerter.common.errors import MIN_LENGTH
+from inerter.scene.ground_motion import (TERM_AMPLITUDE, TERM_AXIS, TERM_FREQUENCY, TERM_PHASE, TERM_START,
+                                         TERM_STOP, burst)
 from inerter.common.rotations import (EULER_SINGULARITY, euler_matrix9, euler_rates, quaternion_matrix9,
                                        quaternion_rates)
 
@@ -30,12 +32,13 @@ from inerter.elements.layout import (AXIS, BODY_A, BODY_B, F_AMPLITUDE, F_FREQUE
 REVOLUTE, PRISMATIC = 0, 1
 # Time functions of applied forces.
 F_CONSTANT, F_SINE, F_STEP = 0, 1, 2
-# Ground motion (dims[GROUND_MODE]): none, a record (linearly interpolated, zero outside), a sine, FMU inputs.
-GROUND_NONE, GROUND_RECORD, GROUND_SINE, GROUND_INPUT = 0, 1, 2, 3
+# Ground motion (dims[GROUND_MODE]): none; prescribed (a record, linearly interpolated and zero
+# outside, plus analytic terms, scene.ground_motion.burst); FMU inputs.
+GROUND_NONE, GROUND_PRESCRIBED, GROUND_INPUT = 0, 1, 2
 # The slots of P, the scene's tables (PARAMS below, in this order; a 3D scene's P has one more,
 # ``spatial``), by name: numba takes these module constants as literal indices.
 (MASS, PBODY, PLOC, EL_INT, EL_REAL, ROT_INT, ROT_REAL, JT_INT, JT_REAL, FA_INT, FA_REAL, PD_INT, PD_REAL,
- IN_INT, GRAVITY, PERM, DIMS, GROUND_T, GROUND_A) = range(19)
+ IN_INT, GRAVITY, PERM, DIMS, GROUND_T, GROUND_A, GROUND_TERMS) = range(20)
 # The entries of P[DIMS] (Kernel.__init__ writes them): velocity coordinates n, constraint rows m,
 # the band's lower and upper widths, whether gravity is declared, the dimension, coordinates nq,
 # the ground motion's mode and the offset of its inputs among the held inputs.
@@ -361,36 +364,36 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
 @njit(cache=True)
 def ground_acceleration(t, inputs, P):
     """The ground's acceleration a_g(t) (3 components; the third 0 in 2D), as
-    ``GroundMotion.acceleration``: `ground_t` holds a record's sample times (a sine: its frequency),
-    `ground_a` the scaled values, one row per axis (a sine: its scaled amplitude per axis in column
-    0; inputs: the scale in [0, 0]), dims[GROUND_OFFSET] the offset of ``ground.a[1]`` among the inputs."""
+    ``GroundMotion.acceleration``: a record (`ground_t` its sample times, `ground_a` the scaled
+    values, one row per axis; no record: one sample) plus the analytic terms (`ground_terms`, rows
+    of scene.ground_motion's TERM_* columns, amplitudes scaled); or the inputs (the scale in
+    ground_a[0, 0], dims[GROUND_OFFSET] the offset of ``ground.a[1]`` among the inputs)."""
     dims = P[DIMS]
     ground_t = P[GROUND_T]
     ground_a = P[GROUND_A]
+    terms = P[GROUND_TERMS]
     dim = dims[DIMENSION]
-    mode = dims[GROUND_MODE]
     a = np.zeros(3)
-    if mode == GROUND_INPUT:
+    if dims[GROUND_MODE] == GROUND_INPUT:
         off = dims[GROUND_OFFSET]
         if inputs.shape[0] >= off + dim:
             for i in range(dim):
                 a[i] = ground_a[0, 0] * inputs[off + i]
-    elif mode == GROUND_SINE:
-        s = math.sin(2.0 * math.pi * ground_t[0] * t)
-        for i in range(dim):
-            a[i] = ground_a[i, 0] * s
-    elif mode == GROUND_RECORD:
-        last = ground_t.shape[0] - 1
-        if ground_t[0] <= t <= ground_t[last]:
-            j = np.searchsorted(ground_t, t, side="right") - 1
-            if j >= last:
-                for i in range(dim):
-                    a[i] = ground_a[i, last]
-            else:
-                x = t - ground_t[j]
-                width = ground_t[j + 1] - ground_t[j]
-                for i in range(dim):
-                    a[i] = ground_a[i, j] + x * (ground_a[i, j + 1] - ground_a[i, j]) / width
+        return a[0], a[1], a[2]
+    last = ground_t.shape[0] - 1
+    if last > 0 and ground_t[0] <= t <= ground_t[last]:
+        j = np.searchsorted(ground_t, t, side="right") - 1
+        if j >= last:
+            for i in range(dim):
+                a[i] = ground_a[i, last]
+        else:
+            x = t - ground_t[j]
+            width = ground_t[j + 1] - ground_t[j]
+            for i in range(dim):
+                a[i] = ground_a[i, j] + x * (ground_a[i, j + 1] - ground_a[i, j]) / width
+    for k in range(terms.shape[0]):
+        a[int(terms[k, TERM_AXIS])] += burst(t, terms[k, TERM_AMPLITUDE], terms[k, TERM_FREQUENCY],
+                                             terms[k, TERM_PHASE], terms[k, TERM_START], terms[k, TERM_STOP])
     return a[0], a[1], a[2]
 
 
@@ -557,8 +560,8 @@ def signal_values2(q, v, qdd, P, out):
     v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd), every
     rotational element's φ_rel, ω_rel and torque (3 each), the energy (as ``Mechanism.energy``)
     and the largest constraint residual of a 2D scene. Returns a status code."""
-    (mass, pbody, ploc, el_int, el_real, rot_int, rot_real, jt_int, jt_real,
-     fa_int, fa_real, pd_int, pd_real, in_int, gravity, perm, dims, ground_t, ground_a) = P
+    mass, pbody, ploc, el_int, el_real = P[MASS], P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    rot_int, rot_real, jt_int, gravity, dims = P[ROT_INT], P[ROT_REAL], P[JT_INT], P[GRAVITY], P[DIMS]
     n = dims[N_VELOCITY]
     status = OK
     k = 0
@@ -2296,7 +2299,7 @@ RK_STATE = (("hdr", "f1"), ("y", "f1"), ("f", "f1"), ("y_prev", "f1"), ("dense",
 PARAMS = (("mass", "f1"), ("pbody", "i1"), ("ploc", "f2"), ("el_int", "i2"), ("el_real", "f2"),
           ("rot_int", "i2"), ("rot_real", "f2"), ("jt_int", "i2"), ("jt_real", "f2"), ("fa_int", "i2"),
           ("fa_real", "f2"), ("pd_int", "i2"), ("pd_real", "f2"), ("in_int", "i2"), ("gravity", "f1"),
-          ("perm", "i1"), ("dims", "i1"), ("ground_t", "f1"), ("ground_a", "f2"))
+          ("perm", "i1"), ("dims", "i1"), ("ground_t", "f1"), ("ground_a", "f2"), ("ground_terms", "f2"))
 TABLEAU = (("A", "f2"), ("B", "f1"), ("C", "f1"), ("E", "f1"), ("E3", "f1"), ("D", "f2"), ("Pm", "f2"))
 WORK = (("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), ("y_new", "f1"), ("f_new", "f1"),
         ("ys", "f1"), ("sig_acc", "f1"))
@@ -2395,7 +2398,7 @@ def _native_params(tab):
             _f2(tab, s + EL_REAL), _i2(tab, s + ROT_INT), _f2(tab, s + ROT_REAL), _i2(tab, s + JT_INT),
             _f2(tab, s + JT_REAL), _i2(tab, s + FA_INT), _f2(tab, s + FA_REAL), _i2(tab, s + PD_INT),
             _f2(tab, s + PD_REAL), _i2(tab, s + IN_INT), _f1(tab, s + GRAVITY), _i1(tab, s + PERM),
-            _i1(tab, s + DIMS), _f1(tab, s + GROUND_T), _f2(tab, s + GROUND_A))
+            _i1(tab, s + DIMS), _f1(tab, s + GROUND_T), _f2(tab, s + GROUND_A), _f2(tab, s + GROUND_TERMS))
 
 
 @njit(cache=True)

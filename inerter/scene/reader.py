@@ -10,6 +10,8 @@ Errors name the file, the field path (``elements.inerter.b``), the value and wha
 from __future__ import annotations
 
 import math
+
+import numpy as np
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -178,7 +180,13 @@ class Scene:
     def data_files(self) -> list[str]:
         """Files the scene reads besides itself (paths relative to the scene file)."""
         g = self.effects.get("ground_acceleration")
-        return [g.source] if g is not None and g.record is not None else []
+        return list(g.files) if g is not None else []
+
+    @property
+    def warnings(self) -> list[str]:
+        """What the scene does that its author may not expect (a record that does not end at rest)."""
+        g = self.effects.get("ground_acceleration")
+        return list(g.warnings) if g is not None else []
 
 
 # ----------------------------------------------------------------------------------------------
@@ -411,36 +419,120 @@ def _read_effects(r: _Reader, raw, overrides, dimension, folder):
 
 
 def _read_ground_motion(r: _Reader, spec, fld, dimension, folder):
-    from inerter.scene.ground_motion import GroundMotion
-    r.table(spec, fld, {"file": False, "amplitude": False, "frequency": False, "scale": False, "input": False})
+    """The ground's acceleration: records (CSV, one column per axis; PEER NGA .AT2, one axis, in g),
+    analytic terms per axis, a sine on every axis, or FMU inputs (see docs/scene_format.md)."""
+    from inerter.scene.ground_motion import GroundMotion, combine_records
+    r.table(spec, fld, {"file": False, "axis": False, "unit": False, "records": False, "terms": False,
+                        "amplitude": False, "frequency": False, "scale": False, "input": False})
     scale = r.number(spec, "scale", fld, default=1.0)
-    kinds = [k for k in ("file", "amplitude", "input") if k in spec]
-    if len(kinds) != 1:
-        raise r.error(fld, spec, "exactly one of: file (a CSV record), amplitude + frequency (a sine), "
-                      "input = true (FMU inputs)", "ambiguous or missing source")
+    sources = [k for k in ("file", "records", "terms", "amplitude", "input") if k in spec]
+    allowed = ({"file", "terms"}, {"records", "terms"}, {"file"}, {"records"}, {"terms"}, {"amplitude"}, {"input"})
+    if set(sources) not in allowed:
+        raise r.error(fld, spec, "one source: file (a record), records = [...], terms = [...] (either of the "
+                      "first two with terms), amplitude + frequency (a sine), or input = true (FMU inputs)",
+                      "ambiguous or missing source" if sources else "no source")
     if "input" in spec:
         if spec["input"] is not True:
             raise r.error(f"{fld}.input", spec["input"], "true", "wrong value")
         return GroundMotion(dimension, scale=scale, input=True)
     if "amplitude" in spec:
-        return GroundMotion(dimension, amplitude=r.vector(spec, "amplitude", fld, dimension),
-                            frequency=r.number(spec, "frequency", fld, minimum=0.0, exclusive=True), scale=scale)
+        return GroundMotion.sine(dimension, r.vector(spec, "amplitude", fld, dimension),
+                                 r.number(spec, "frequency", fld, minimum=0.0, exclusive=True), scale=scale)
+    record, names = None, []
+    if "file" in spec:
+        record, names = _read_record(r, spec, fld, dimension, folder), [str(spec["file"])]
+    elif "records" in spec:
+        listed = spec["records"]
+        if not isinstance(listed, list) or not listed:
+            raise r.error(f"{fld}.records", listed, "a list of records, e.g. [{ file = \"H1.AT2\", axis = 1 }]",
+                          "not a list")
+        parts = [_read_record(r, item, f"{fld}.records[{i}]", dimension, folder, single_axis=True)
+                 for i, item in enumerate(listed)]
+        record = combine_records(dimension, [(axis, t, v[0]) for axis, (t, v) in parts])
+        names = [str(item.get("file")) for item in listed]
+    terms = _read_terms(r, spec["terms"], f"{fld}.terms", dimension) if "terms" in spec else None
+    return GroundMotion(dimension, record=record, terms=terms, scale=scale, source=" + ".join(names), files=names)
+
+
+def _read_record(r: _Reader, spec, fld, dimension, folder, single_axis=False):
+    """A record: (times, values[dim, n]) in m/s², or with `single_axis` (axis index, (times,
+    values[1, n])). A CSV file has time and one column per axis (an `axis` only with one column);
+    a .AT2 file (PEER NGA) one axis in g."""
+    from inerter.scene.ground_motion import STANDARD_GRAVITY, read_at2
+    if single_axis:
+        r.table(spec, fld, {"file": True, "axis": False, "unit": False})
     name = spec["file"]
     if not isinstance(name, str):
-        raise r.error(f"{fld}.file", name, "a CSV file name, relative to the scene file", "wrong type")
-    path = (folder / name)
-    try:
-        import numpy as np
-        table = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
-    except OSError:
-        raise r.error(f"{fld}.file", str(path), "an existing CSV file (time, a_1 ... a_dim)", "file not found")
-    except ValueError as exc:
-        raise r.error(f"{fld}.file", str(path), "numeric CSV columns: time, a_1 ... a_dim", f"unreadable ({exc})")
-    if table.shape[1] != dimension + 1 or table.shape[0] < 2 or not np.all(np.isfinite(table)) \
-            or np.any(np.diff(table[:, 0]) <= 0):
-        raise r.error(f"{fld}.file", str(path), f"≥ 2 rows of {dimension + 1} finite columns (time increasing, "
-                      f"then {dimension} accelerations in m/s²)", "wrong shape or values")
-    return GroundMotion(dimension, record=(table[:, 0], table[:, 1:].T.copy()), scale=scale, source=name)
+        raise r.error(f"{fld}.file", name, "a record's file name (.csv or .AT2), relative to the scene file",
+                      "wrong type")
+    path = folder / name
+    at2 = path.suffix.lower() == ".at2"
+    unit = spec.get("unit", "g" if at2 else "m/s2")
+    if unit not in ("m/s2", "g") or (at2 and unit != "g"):
+        raise r.error(f"{fld}.unit", unit, "\"g\" (an .AT2 record is in g)" if at2 else "\"m/s2\" or \"g\"",
+                      "unknown unit")
+    to_si = STANDARD_GRAVITY if unit == "g" else 1.0
+    axis = None
+    if at2 or single_axis or "axis" in spec:
+        value = r.number(spec, "axis", fld, default=1.0, minimum=1.0)
+        axis = int(value) - 1
+        if axis >= dimension or axis + 1 != value:
+            raise r.error(f"{fld}.axis", value, f"an axis 1..{dimension}", "out of range")
+    if at2:
+        try:
+            times, values = read_at2(path)
+        except FileNotFoundError:
+            raise r.error(f"{fld}.file", str(path), "an existing PEER NGA record (.AT2)", "file not found")
+        except (OSError, ValueError) as exc:
+            raise r.error(f"{fld}.file", str(path), "a PEER NGA record (.AT2: 4 header lines, NPTS and DT "
+                          "in the fourth, then NPTS values in g)", f"unreadable ({exc})")
+        values = values[None, :]
+    else:
+        columns = 1 if axis is not None else dimension
+        try:
+            table = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
+        except OSError:
+            raise r.error(f"{fld}.file", str(path), "an existing CSV file (time, a_1 ... a_dim)", "file not found")
+        except ValueError as exc:
+            raise r.error(f"{fld}.file", str(path), "numeric CSV columns: time, a_1 ... a_dim", f"unreadable ({exc})")
+        if table.shape[1] != columns + 1 or table.shape[0] < 2 or not np.all(np.isfinite(table)) \
+                or np.any(np.diff(table[:, 0]) <= 0):
+            raise r.error(f"{fld}.file", str(path), f"≥ 2 rows of {columns + 1} finite columns (time increasing, "
+                          f"then {columns} acceleration{'s' if columns > 1 else ''} in {unit})",
+                          "wrong shape or values")
+        times, values = table[:, 0], table[:, 1:].T.copy()
+    values = values * to_si
+    if single_axis:
+        return axis, (times, values)
+    if axis is not None:                       # one axis of a dim-axis scene
+        full = np.zeros((dimension, len(times)))
+        full[axis] = values[0]
+        values = full
+    return times, values
+
+
+def _read_terms(r: _Reader, raw, fld, dimension):
+    """Analytic terms: rows (axis, amplitude, frequency, phase, start, stop) of GroundMotion.terms."""
+    import math as _math
+    if not isinstance(raw, list) or not raw:
+        raise r.error(fld, raw, "a list of terms, e.g. [{ axis = 1, amplitude = 2.0, frequency = 1.5 }]",
+                      "not a list")
+    rows = []
+    for i, term in enumerate(raw):
+        f = f"{fld}[{i}]"
+        r.table(term, f, {"axis": True, "amplitude": True, "frequency": True, "phase": False, "start": False,
+                          "stop": False})
+        value = r.number(term, "axis", f, minimum=1.0)
+        axis = int(value)
+        if axis > dimension or axis != value:
+            raise r.error(f"{f}.axis", term["axis"], f"an axis 1..{dimension}", "out of range")
+        start = r.number(term, "start", f, default=0.0, minimum=0.0)
+        stop = r.number(term, "stop", f, default=_math.inf)
+        if not stop > start:
+            raise r.error(f"{f}.stop", stop, f"a time after start = {start:g} s", "out of range")
+        rows.append((axis - 1, r.number(term, "amplitude", f), r.number(term, "frequency", f, minimum=0.0),
+                     r.number(term, "phase", f, default=0.0), start, stop))
+    return rows
 
 
 def _read_bodies(r: _Reader, data, dimension):

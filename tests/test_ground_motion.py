@@ -1,0 +1,180 @@
+"""Ground motion as studies give it: analytic terms (sine bursts and their sums), PEER NGA .AT2
+records besides CSV, several single-axis records, and the end-of-record policy.
+
+References: the same burst sampled as a record converges on the analytic one as the record's
+linear interpolation does (error ∝ Δt², the test halves Δt); an .AT2 record and its CSV twin in
+m/s² (values × 9.80665) give the same run to round-off; two single-axis records equal the
+two-column CSV of the same samples; the compiled engine equals the numpy path on analytic terms
+(the term's value is one function, scene.ground_motion.burst, run compiled and uncompiled, and the
+numpy path's kinematics are the model layer's).
+"""
+import math
+
+import numpy as np
+import pytest
+
+import inerter
+from inerter.common.errors import SceneError
+from inerter.scene.ground_motion import STANDARD_GRAVITY, read_at2
+
+OSCILLATOR = """
+[scene]
+name = "{name}"
+dimension = 2
+
+[effects]
+ground_acceleration = {motion}
+
+[ground.points]
+S0 = [0, 1]
+G0 = [-1, 0]
+
+[bodies.mass]
+mass = 2.0
+inertia = 1.0
+position = [0, 1]
+points = {{ J = [0, 0], E = [0, -1] }}
+
+[joints.slide]
+type = "prismatic"
+between = ["S0", "J"]
+axis = [1, 0]
+
+[elements.spring]
+type = "spring"
+between = ["G0", "E"]
+k = 80.0
+
+[elements.damper]
+type = "damper"
+between = ["G0", "E"]
+c = 0.4
+
+[experiment]
+stop_time = 6.0
+output_interval = 0.01
+method = "DOP853"
+rtol = 1e-11
+atol = 1e-13
+"""
+BURST = dict(amplitude=1.5, frequency=1.25, phase=0.0, start=0.5, stop=2.9)      # three whole cycles
+
+
+def _model(tmp_path, name, motion):
+    path = tmp_path / f"{name}.toml"
+    path.write_text(OSCILLATOR.format(name=name, motion=motion))
+    return inerter.load(path)
+
+
+def _x(model, **kw):
+    r = model.simulate(metrics=False, **kw)
+    assert r.status == "ok", r.message
+    return r, r["E.r[1]"] - r["E.r[1]"][0]
+
+
+def _burst(t):
+    b = BURST
+    inside = (t >= b["start"]) & (t < b["stop"])
+    return np.where(inside, b["amplitude"] * np.sin(2 * np.pi * b["frequency"] * (t - b["start"]) + b["phase"]), 0.0)
+
+
+def _analytic(tmp_path):
+    terms = ", ".join(f"{k} = {v}" for k, v in BURST.items())
+    return _model(tmp_path, "burst", f"{{ terms = [{{ axis = 1, {terms} }}] }}")
+
+
+def _sampled(tmp_path, dt):
+    t = np.round(np.arange(0.0, 6.0 + dt / 2, dt), 12)
+    np.savetxt(tmp_path / f"burst_{dt}.csv", np.column_stack((t, _burst(t), np.zeros_like(t))), delimiter=",")
+    return _model(tmp_path, f"sampled_{int(round(1 / dt))}", f'{{ file = "burst_{dt}.csv" }}')
+
+
+def test_a_burst_written_analytically_is_its_sampled_records_limit(tmp_path):
+    _, exact = _x(_analytic(tmp_path))
+    assert np.max(np.abs(exact)) > 1e-3
+    errors = [np.max(np.abs(_x(_sampled(tmp_path, dt))[1] - exact)) for dt in (0.01, 0.005)]
+    # the record's interpolation error is at most Δt²/8·(2πf)²·A = 1.2e-3 m/s² of the burst's 1.5
+    assert errors[0] < 2e-3 * np.max(np.abs(exact))
+    assert 3.0 < errors[0] / errors[1] < 5.0           # linear interpolation: error ∝ Δt²
+
+
+def test_analytic_terms_give_the_numpy_paths_run(tmp_path):
+    model = _analytic(tmp_path)
+    fast, x = _x(model)
+    slow, y = _x(model, path="numpy")
+    assert fast.run.extra["path"] == "compiled"
+    assert np.max(np.abs(x - y)) < 1e-9 * np.max(np.abs(x))
+
+
+def test_a_term_starting_off_zero_is_a_jump_and_on_zero_a_kink(tmp_path):
+    on_zero = _analytic(tmp_path).mechanism
+    assert 0.5 in on_zero.kinks and 0.5 not in on_zero.discontinuities
+    phased = _model(tmp_path, "phased", "{ terms = [{ axis = 1, amplitude = 1.0, frequency = 1.0, phase = 0.5, "
+                                        "start = 0.25, stop = 1.0 }] }").mechanism
+    assert 0.25 in phased.discontinuities and 1.0 in phased.discontinuities
+
+
+def _write_at2(path, dt, values_g):
+    lines = ["PEER NGA STRONG MOTION DATABASE RECORD", "synthetic test record, not an earthquake",
+             "ACCELERATION TIME SERIES IN UNITS OF G", f"NPTS= {len(values_g):6d}, DT= {dt:.4f} SEC"]
+    rows = [" ".join(f"{v: .10E}" for v in values_g[i:i + 5]) for i in range(0, len(values_g), 5)]
+    path.write_text("\n".join(lines + rows) + "\n")
+
+
+def test_an_at2_record_and_its_csv_twin_give_the_same_run(tmp_path):
+    dt = 0.01
+    t = np.arange(0, 401) * dt
+    g_values = np.array([float(f"{v:.10E}") for v in 0.2 * np.sin(2 * np.pi * 1.7 * t) * np.exp(-t)])
+    _write_at2(tmp_path / "rec.AT2", dt, g_values)
+    times, read = read_at2(tmp_path / "rec.AT2")
+    assert np.array_equal(read, g_values) and np.allclose(times, t, rtol=0, atol=1e-12)
+    np.savetxt(tmp_path / "rec.csv", np.column_stack((times, STANDARD_GRAVITY * read, np.zeros_like(t))),
+               delimiter=",", fmt="%.17g")
+    _, from_at2 = _x(_model(tmp_path, "at2", '{ file = "rec.AT2", axis = 1 }'))
+    _, from_csv = _x(_model(tmp_path, "csv", '{ file = "rec.csv" }'))
+    assert np.max(np.abs(from_at2)) > 1e-4
+    assert np.max(np.abs(from_at2 - from_csv)) <= 1e-15
+    np.savetxt(tmp_path / "rec_g.csv", np.column_stack((times, read)), delimiter=",", fmt="%.17g")
+    _, in_g = _x(_model(tmp_path, "csv_g", '{ records = [{ file = "rec_g.csv", axis = 1, unit = "g" }] }'))
+    assert np.max(np.abs(in_g - from_csv)) <= 1e-15
+
+
+def test_two_single_axis_records_equal_the_two_column_csv(tmp_path):
+    t = np.arange(0, 301) * 0.01
+    ax, ay = 0.5 * np.sin(3 * t) * (t < 2.5), 0.3 * np.cos(2 * t) * t * (t < 2.5)
+    np.savetxt(tmp_path / "both.csv", np.column_stack((t, ax, ay)), delimiter=",", fmt="%.17g")
+    np.savetxt(tmp_path / "x.csv", np.column_stack((t, ax)), delimiter=",", fmt="%.17g")
+    np.savetxt(tmp_path / "y.csv", np.column_stack((t, ay)), delimiter=",", fmt="%.17g")
+    a = _model(tmp_path, "both", '{ file = "both.csv" }')
+    b = _model(tmp_path, "split", '{ records = [{ file = "x.csv", axis = 1 }, { file = "y.csv", axis = 2 }] }')
+    for s in (0.3, 1.7, 2.49, 2.6):
+        assert np.array_equal(a.mechanism.ground_motion.acceleration(s), b.mechanism.ground_motion.acceleration(s))
+    assert np.array_equal(_x(a)[1], _x(b)[1])
+
+
+def test_a_record_that_does_not_end_at_rest_is_warned_about(tmp_path):
+    t = np.arange(0, 101) * 0.01
+    np.savetxt(tmp_path / "open.csv", np.column_stack((t, np.full_like(t, 0.2), 0 * t)), delimiter=",")
+    model = _model(tmp_path, "open", '{ file = "open.csv" }')
+    assert len(model.scene.warnings) == 1 and "steps to zero" in model.scene.warnings[0]
+    assert 1.0 in model.mechanism.discontinuities
+    r = model.simulate(stop_time=1.5, metrics=False)
+    assert r.summary()["warnings"] == model.scene.warnings
+    quiet = _analytic(tmp_path)
+    assert quiet.scene.warnings == []
+
+
+@pytest.mark.parametrize("motion, field", [
+    ('{ file = "bad.AT2" }', "effects.ground_acceleration.file"),
+    ('{ terms = [{ axis = 3, amplitude = 1.0, frequency = 1.0 }] }', "effects.ground_acceleration.terms[0].axis"),
+    ('{ terms = [{ axis = 1, amplitude = 1.0, frequency = 1.0, start = 2.0, stop = 1.0 }] }',
+     "effects.ground_acceleration.terms[0].stop"),
+    ('{ file = "x.AT2", unit = "m/s2" }', "effects.ground_acceleration.unit"),
+    ('{ amplitude = [1, 0], frequency = 1.0, terms = [{ axis = 1, amplitude = 1.0, frequency = 1.0 }] }',
+     "effects.ground_acceleration"),
+])
+def test_bad_ground_motion_is_one_error_naming_the_field(tmp_path, motion, field):
+    (tmp_path / "bad.AT2").write_text("header\nheader\nheader\nno sizes here\n0.1 0.2\n")
+    with pytest.raises(SceneError) as err:
+        _model(tmp_path, "bad", motion)
+    assert f": {field}:" in str(err.value) and "\n" not in str(err.value)

@@ -577,8 +577,8 @@ def _read_bodies(r: _Reader, data, dimension):
         else:
             massless = _read_massless(r, raw, fld)
             r.table(raw, fld, {"mass": not massless, "inertia": not massless, "position": True, "axis": False,
-                               "angle": False, "euler": False, "velocity": False, "angular_velocity": False,
-                               "points": False, "massless": False})
+                               "angle": False, "euler": False, "quaternion": False, "velocity": False,
+                               "angular_velocity": False, "points": False, "massless": False})
             bodies[bname] = Body(
                 bname,
                 mass=_read_mass(r, raw, fld, massless),
@@ -637,11 +637,23 @@ def _read_inertia(r: _Reader, raw, fld):
 
 
 def _read_rotation(r: _Reader, raw, fld):
-    """Initial rotation: axis (default Z) and angle, or Z-X-Z Euler angles [φ, θ, ψ]."""
-    from inerter.common.rotations import axis_angle_matrix, euler_matrix
-    if "euler" in raw:
-        if "axis" in raw or "angle" in raw:
-            raise r.error(f"{fld}.euler", raw["euler"], "either euler = [φ, θ, ψ] or axis and angle", "both given")
+    """Initial rotation: axis (default Z) and angle, Z-X-Z Euler angles [φ, θ, ψ], or a unit
+    quaternion [w, x, y, z]: one of the three."""
+    from inerter.common.rotations import axis_angle_matrix, euler_matrix, quat_matrix
+    given = [k for k in ("euler", "quaternion") if k in raw] + (["axis/angle"] if "axis" in raw or "angle" in raw
+                                                                 else [])
+    if len(given) > 1:
+        key = "euler" if "euler" in raw else "quaternion"
+        raise r.error(f"{fld}.{key}", raw[key], "one of: euler = [φ, θ, ψ], quaternion = [w, x, y, z], "
+                      "or axis and angle", "more than one given: " + ", ".join(given))
+    if "quaternion" in raw:
+        p = r.vector(raw, "quaternion", fld, 4)
+        norm = math.sqrt(sum(x * x for x in p))
+        if abs(norm - 1.0) > 1e-9:
+            raise r.error(f"{fld}.quaternion", list(p), "a unit quaternion [w, x, y, z] (|p| = 1 to 1e-9)",
+                          f"|p| = {norm:.12g}")
+        A = quat_matrix(p)
+    elif "euler" in raw:
         A = euler_matrix(r.vector(raw, "euler", fld, 3))
     else:
         axis = r.vector(raw, "axis", fld, 3, default=(0.0, 0.0, 1.0), unit_length=True)

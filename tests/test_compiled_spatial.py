@@ -356,8 +356,8 @@ def test_parameter_tuple_matches_planar_contract(tmp_path):
     """Reference: the planar kernel's P (compiled.Kernel on two_bar_2d): the same slots with the
     same dtypes, dimensions and C-contiguity (the FMU's native table holds both), and one more,
     `spatial`, by whose presence the kernels compile the 3D code only for 3D scenes;
-    dims = [n, m, kl, ku, has_gravity, 3, nq, ground mode, input offset]; the flat dict has the
-    planar keys."""
+    dims = [n, m, kl, ku, has_gravity, 3, nq, ground mode, input offset, the Euler-output sequence's
+    three axes (Z-Y-X by default)]; the flat dict has the planar keys."""
     planar_mech = inerter.load(ROOT / "scenarios" / "two_bar_2d.toml").mechanism
     planar = compiled.Kernel(planar_mech).params
     mech = _load(_every_branch_scene(tmp_path), True)
@@ -367,7 +367,8 @@ def test_parameter_tuple_matches_planar_contract(tmp_path):
     assert ck.is_spatial(P) and not ck.is_spatial(planar)
     for a, b in zip(P, planar):
         assert a.dtype == b.dtype and a.ndim == b.ndim and a.flags.c_contiguous
-    assert list(P[16]) == [flat["n"], flat["m"], kernel.kl, kernel.ku, 1, 3, flat["nq"], ck.GROUND_NONE, 0]
+    assert list(P[ck.DIMS]) == [flat["n"], flat["m"], kernel.kl, kernel.ku, 1, 3, flat["nq"], ck.GROUND_NONE, 0,
+                                2, 1, 0]
     assert flat["n"] == mech.n and flat["m"] == mech.m and flat["nq"] == mech.nq and flat["dim"] == 3
     assert set(compiled.flatten(planar_mech)) <= set(flat)
 
@@ -417,13 +418,18 @@ def test_flatten3_takes_3d_scenes_of_either_orientation():
 
 
 def test_signal_layout3_order():
-    """The layout is points (r, v: 6 each), translational elements, rotational elements, then
-    energy and constraint_residual (the order signal_values3 writes)."""
+    """The layout is points (r, v: 6 each), translational elements, rotational elements, bodies
+    (quaternion, Euler angles, ω: 10 each), then energy and constraint_residual (the order
+    signal_values3 writes)."""
     mech = _load(ROOT / "scenarios" / "two_bar_2d_as_3d.toml", True)
     layout = signal_layout3(flatten3(mech))
     first = mech.point_names[0]
     assert layout[:6] == [f"{first}.r[1]", f"{first}.r[2]", f"{first}.r[3]", f"{first}.v[1]", f"{first}.v[2]",
                           f"{first}.v[3]"]
     assert layout[-2:] == ["energy", "constraint_residual"]
-    assert layout[-5:-2] == ["kr.phi_rel", "kr.w_rel", "kr.tau"]
-    assert len(layout) == 6 * len(mech.point_names) + 3 * len(mech.elements) + 2
+    bodies = 10 * len(mech.body_names)
+    assert layout[-5 - bodies:-2 - bodies] == ["kr.phi_rel", "kr.w_rel", "kr.tau"]
+    last = mech.body_names[-1]
+    assert layout[-12:-2] == [f"{last}.{x}" for x in ("q[1]", "q[2]", "q[3]", "q[4]", "euler[1]", "euler[2]",
+                                                        "euler[3]", "w[1]", "w[2]", "w[3]")]
+    assert len(layout) == 6 * len(mech.point_names) + 3 * len(mech.elements) + bodies + 2

@@ -61,23 +61,57 @@ def quat_rate(p, omega):
     return np.array(quaternion_rates.py_func(*p, *omega))
 
 
-def quat_from_matrix(A):
-    """A unit quaternion (w ≥ 0) for a rotation matrix."""
-    tr = A[0, 0] + A[1, 1] + A[2, 2]
+@_scalar
+def quaternion_of_matrix9(a00, a01, a02, a10, a11, a12, a20, a21, a22):
+    """The unit quaternion (w, x, y, z), w ≥ 0, of a rotation matrix given row by row (Shepperd's
+    method: the largest of w, x, y, z first, for accuracy)."""
+    tr = a00 + a11 + a22
     if tr > 0:
         s = 2.0 * math.sqrt(tr + 1.0)
-        p = (0.25 * s, (A[2, 1] - A[1, 2]) / s, (A[0, 2] - A[2, 0]) / s, (A[1, 0] - A[0, 1]) / s)
-    elif A[0, 0] > A[1, 1] and A[0, 0] > A[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + A[0, 0] - A[1, 1] - A[2, 2])
-        p = ((A[2, 1] - A[1, 2]) / s, 0.25 * s, (A[0, 1] + A[1, 0]) / s, (A[0, 2] + A[2, 0]) / s)
-    elif A[1, 1] > A[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + A[1, 1] - A[0, 0] - A[2, 2])
-        p = ((A[0, 2] - A[2, 0]) / s, (A[0, 1] + A[1, 0]) / s, 0.25 * s, (A[1, 2] + A[2, 1]) / s)
+        w, x, y, z = 0.25 * s, (a21 - a12) / s, (a02 - a20) / s, (a10 - a01) / s
+    elif a00 > a11 and a00 > a22:
+        s = 2.0 * math.sqrt(1.0 + a00 - a11 - a22)
+        w, x, y, z = (a21 - a12) / s, 0.25 * s, (a01 + a10) / s, (a02 + a20) / s
+    elif a11 > a22:
+        s = 2.0 * math.sqrt(1.0 + a11 - a00 - a22)
+        w, x, y, z = (a02 - a20) / s, (a01 + a10) / s, 0.25 * s, (a12 + a21) / s
     else:
-        s = 2.0 * math.sqrt(1.0 + A[2, 2] - A[0, 0] - A[1, 1])
-        p = ((A[1, 0] - A[0, 1]) / s, (A[0, 2] + A[2, 0]) / s, (A[1, 2] + A[2, 1]) / s, 0.25 * s)
-    p = np.array(p)
-    return p if p[0] >= 0 else -p
+        s = 2.0 * math.sqrt(1.0 + a22 - a00 - a11)
+        w, x, y, z = (a10 - a01) / s, (a02 + a20) / s, (a12 + a21) / s, 0.25 * s
+    if w < 0.0:
+        return -w, -x, -y, -z
+    return w, x, y, z
+
+
+def quat_from_matrix(A):
+    """A unit quaternion (w ≥ 0) for a rotation matrix."""
+    return np.array(quaternion_of_matrix9.py_func(*np.asarray(A, dtype=float).ravel()))
+
+
+#: Euler-angle sequences for outputs, intrinsic (R = R_i(α) R_j(β) R_k(γ)), by name; axes 0 = x.
+EULER_SEQUENCES = {name: tuple("xyz".index(c) for c in name)
+                   for name in ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx",
+                                "xyx", "xzx", "yxy", "yzy", "zxz", "zyz")}
+
+
+@_scalar
+def euler_angles9(A, i, j, k):
+    """(α, β, γ) with A = R_i(α) R_j(β) R_k(γ) (intrinsic axes i, j, k; A a row-major 9-tuple):
+    Tait–Bryan angles (i, j, k distinct; β in [−π/2, π/2]) or proper Euler angles (k = i;
+    β in [0, π]). At β's singularity (gimbal lock) γ is 0 and α carries the whole turn."""
+    s = 1.0 if (j - i) % 3 == 1 else -1.0            # the sign of the permutation (i, j, third axis)
+    if i != k:
+        cb = math.hypot(A[3 * i + i], A[3 * i + j])     # β from atan2: well conditioned near ±π/2
+        beta = math.atan2(s * A[3 * i + k], cb)
+        if cb > 1e-12:
+            return math.atan2(-s * A[3 * j + k], A[3 * k + k]), beta, math.atan2(-s * A[3 * i + j], A[3 * i + i])
+        return math.atan2(s * A[3 * k + j], A[3 * j + j]), beta, 0.0
+    m = 3 - i - j                                     # the third axis
+    sb = math.hypot(A[3 * i + j], A[3 * i + m])
+    beta = math.atan2(sb, A[3 * i + i])               # well conditioned near 0 and π
+    if sb > 1e-12:
+        return math.atan2(A[3 * j + i], -s * A[3 * m + i]), beta, math.atan2(A[3 * i + j], s * A[3 * i + m])
+    return math.atan2(s * A[3 * m + j], A[3 * j + j]), beta, 0.0
 
 
 def axis_angle_matrix(axis, angle):

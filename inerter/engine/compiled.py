@@ -51,6 +51,7 @@ import numpy as np
 from inerter.common.errors import SimulationError
 from inerter.engine.simulation import Run, Stepper, jumps
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
+from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import layout
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
@@ -479,8 +480,9 @@ class Kernel:
         self.n, self.m, self.nq = flat["n"], flat["m"], flat["nq"]
         self.perm, self.kl, self.ku = ordering(sparsity3(flat) if spatial else sparsity(flat))
         mode, offset, ground_t, ground_a, ground_terms = ground_arrays(mech)
+        euler_axes = EULER_SEQUENCES[mech.scene.euler_sequence]
         dims = np.array([self.n, self.m, self.kl, self.ku, int(flat["has_gravity"]), flat["dim"], self.nq, mode,
-                         offset], dtype=np.int64)
+                         offset, *euler_axes], dtype=np.int64)
         self.params = (flat["mass"], flat["pbody"], flat["ploc"], flat["el_int"], flat["el_real"],
                        flat["rot_int"], flat["rot_real"], flat["jt_int"], flat["jt_real"], flat["fa_int"],
                        flat["fa_real"], flat["pd_int"], flat["pd_real"], flat["in_int"], flat["gravity"],

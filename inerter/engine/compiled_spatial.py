@@ -140,7 +140,12 @@ def signal_layout3(flat) -> list[str]:
     names = [f"{p}.{x}" for p in flat["point_names"] for x in axes]
     names += [f"{e}.{x}" for e in flat["el_names"] for x in ("s_rel", "v_rel", "f")]
     names += [f"{e}.{x}" for e in flat["rot_names"] for x in ("phi_rel", "w_rel", "tau")]
+    names += [f"{b}.{x}" for b in flat["body_names"] for x in BODY_OUTPUTS]
     return names + ["energy", "constraint_residual"]
+
+
+#: Each 3D body's outputs, in the order the kernels write them (kernels._body_outputs3).
+BODY_OUTPUTS = ("q[1]", "q[2]", "q[3]", "q[4]", "euler[1]", "euler[2]", "euler[3]", "w[1]", "w[2]", "w[3]")
 
 
 def _joint_rows(flat):

@@ -19,8 +19,8 @@ from numba.extending import intrinsic, overload
 from inerter.common.errors import MIN_LENGTH
 from inerter.scene.ground_motion import (TERM_AMPLITUDE, TERM_AXIS, TERM_FREQUENCY, TERM_PHASE, TERM_START,
                                          TERM_STOP, burst)
-from inerter.common.rotations import (EULER_SINGULARITY, euler_matrix9, euler_rates, quaternion_matrix9,
-                                       quaternion_rates)
+from inerter.common.rotations import (EULER_SINGULARITY, euler_angles9, euler_matrix9, euler_rates,
+                                       quaternion_matrix9, quaternion_of_matrix9, quaternion_rates)
 
 from inerter.elements import dispatch as law
 from inerter.elements.base import axial_scalars
@@ -41,8 +41,10 @@ GROUND_NONE, GROUND_PRESCRIBED, GROUND_INPUT = 0, 1, 2
  IN_INT, GRAVITY, PERM, DIMS, GROUND_T, GROUND_A, GROUND_TERMS) = range(20)
 # The entries of P[DIMS] (Kernel.__init__ writes them): velocity coordinates n, constraint rows m,
 # the band's lower and upper widths, whether gravity is declared, the dimension, coordinates nq,
-# the ground motion's mode and the offset of its inputs among the held inputs.
-N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND_OFFSET = range(9)
+# the ground motion's mode and the offset of its inputs among the held inputs, the axes (0 = x) of
+# the intrinsic sequence of the 3D bodies' Euler-angle outputs.
+N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND_OFFSET, EULER_I, EULER_J, \
+    EULER_K = range(12)
 # Status codes of the integrators.
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED, GIMBAL_LOCK = range(9)
 
@@ -1295,8 +1297,9 @@ def constraint_residual3(q, P):
 def signal_values3(q, v, qdd, P, out):
     """Every point's position and velocity (6 per point), every translational element's s_rel,
     v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd), every
-    rotational element's φ_rel, ω_rel and torque (3 each), the energy (as ``Mechanism.energy``)
-    and the largest constraint residual. Returns a status code."""
+    rotational element's φ_rel, ω_rel and torque (3 each), every body's orientation and angular
+    velocity (BODY_OUTPUTS3 each), the energy (as ``Mechanism.energy``) and the largest
+    constraint residual. Returns a status code."""
     mass, pbody, ploc, el_int, el_real = P[MASS], P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     rot_int, rot_real, jt_int, gravity, dims = P[ROT_INT], P[ROT_REAL], P[JT_INT], P[GRAVITY], P[DIMS]
     n = dims[N_VELOCITY]
@@ -1359,9 +1362,35 @@ def signal_values3(q, v, qdd, P, out):
         out[k + 1] = w
         out[k + 2] = tau
         k += 3
+    for b in range(nb):
+        k = _body_outputs3(q, v, b, dims, out, k)
     out[k] = energy
     out[k + 1] = constraint_residual3(q, P) if jt_int.shape[0] else 0.0
     return status
+
+
+@njit(cache=True, inline="always")
+def _body_outputs3(q, v, b, dims, out, k):
+    """Body b's orientation and angular velocity from out[k] on (``outputs.Signals``): its unit
+    quaternion (the state's, normalised, with quaternions; w ≥ 0 from its matrix with Euler
+    angles), its Euler angles in the scene's sequence, ω in the global frame. Returns the next k."""
+    A = _rot(q, v, b)
+    nqb = _coords_per_body(q, v)
+    if nqb == QUATERNION_COORDS:
+        j = nqb * b + 3
+        norm = math.sqrt(q[j] * q[j] + q[j + 1] * q[j + 1] + q[j + 2] * q[j + 2] + q[j + 3] * q[j + 3])
+        pw, px, py, pz = q[j] / norm, q[j + 1] / norm, q[j + 2] / norm, q[j + 3] / norm
+    else:
+        pw, px, py, pz = quaternion_of_matrix9(A[0], A[1], A[2], A[3], A[4], A[5], A[6], A[7], A[8])
+    out[k], out[k + 1], out[k + 2], out[k + 3] = pw, px, py, pz
+    out[k + 4], out[k + 5], out[k + 6] = euler_angles9(A, dims[EULER_I], dims[EULER_J], dims[EULER_K])
+    wx, wy, wz = _omega(v, b)
+    out[k + 7], out[k + 8], out[k + 9] = _mul(A, wx, wy, wz)
+    return k + BODY_OUTPUTS3
+
+
+#: Outputs of each 3D body (_body_outputs3): quaternion (4), Euler angles (3), ω (3).
+BODY_OUTPUTS3 = 10
 
 
 # ------------------------------------------------------------------------------------------------

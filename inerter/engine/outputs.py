@@ -2,14 +2,17 @@
 
 Points: ``P.r[i]`` (m), ``P.v[i]`` (m/s). Translational elements: ``E.s_rel`` (m, terminal
 distance), ``E.v_rel`` (m/s, its rate), ``E.f`` (N, axial force, tension positive). Rotational
-elements: ``E.phi_rel`` (rad), ``E.w_rel`` (rad/s), ``E.tau`` (N.m). Mechanism: ``energy`` (J),
-``constraint_residual`` (largest |C_i| of the joint constraints, m or rad).
+elements: ``E.phi_rel`` (rad), ``E.w_rel`` (rad/s), ``E.tau`` (N.m). 3D bodies: ``B.q[i]`` (unit
+quaternion w, x, y, z), ``B.euler[i]`` (rad, the scene's ``euler_sequence``), ``B.w[i]`` (rad/s,
+angular velocity in the global frame). Mechanism: ``energy`` (J), ``constraint_residual`` (largest
+|C_i| of the joint constraints, m or rad).
 """
 from __future__ import annotations
 
 import numpy as np
 
 from inerter import elements
+from inerter.common.rotations import EULER_SEQUENCES, euler_angles9, quat_from_matrix
 
 
 class Signals:
@@ -37,12 +40,37 @@ class Signals:
             # of its three outputs, only the force reads q̈ (the distance and its rate do not)
             self._group([(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}") for suffix, unit, text in spec],
                         needs_a, lambda t, q, v, a, e=e: e.outputs(q, v, a)[:3], reads=(False, False, needs_a))
+        if mech.dim == 3:
+            for bname in mech.body_names:
+                self._body(mech, bname)
         self._group([("energy", "J", "kinetic + potential energy, with ½·b·(dL/dt)² per inerter")], False,
                     lambda t, q, v, a: (mech.energy(q, v),))
         self._group([("constraint_residual", "m", "largest |C_i(q)| of the joint constraints (m or rad)")], False,
                     lambda t, q, v, a: (mech.constraint_residual(q),))
         self.index = {n: i for i, n in enumerate(self.names)}
         self.needs_accelerations = any(needs_a for needs_a, _ in self._groups)
+
+    def _body(self, mech, bname):
+        """A 3D body's orientation (unit quaternion, Euler angles) and global angular velocity."""
+        frame = mech.frames[bname]
+        sequence = mech.scene.euler_sequence
+        axes = EULER_SEQUENCES[sequence]
+        quaternion_state = mech.orientation.kind == "quaternion"
+
+        def values(t, q, v, a):
+            A, w = frame.evaluate(q, v)
+            if quaternion_state:
+                p = q[frame.qi + 3:frame.qi + 7]
+                p = p / np.linalg.norm(p)
+            else:
+                p = quat_from_matrix(A)
+            return (*p, *euler_angles9.py_func(tuple(A.ravel()), *axes), *(A @ w))
+        self._group([(f"{bname}.q[{i + 1}]", "1", f"body {bname}: unit quaternion, component {c}")
+                     for i, c in enumerate("wxyz")]
+                    + [(f"{bname}.euler[{i + 1}]", "rad", f"body {bname}: Euler angle {i + 1} of the {sequence} "
+                                                         "sequence (intrinsic)") for i in range(3)]
+                    + [(f"{bname}.w[{i + 1}]", "rad/s", f"body {bname}: angular velocity, global axis {i + 1}")
+                       for i in range(3)], False, values)
 
     def _group(self, signals, needs_a, fn, reads=None):
         for k, (name, unit, description) in enumerate(signals):

@@ -19,6 +19,7 @@ from typing import Any, Mapping
 
 from inerter import elements
 from inerter.common.errors import SceneError
+from inerter.common.rotations import EULER_SEQUENCES
 from inerter.scene.expressions import evaluate, evaluate_parameters, parameter_meta
 
 GROUND = "ground"
@@ -164,6 +165,8 @@ class Scene:
     forces: dict[str, Force]
     experiment: Experiment
     metrics: tuple[Metric, ...]
+    euler_sequence: str = "zyx"   # 3D: the intrinsic sequence of the bodies' B.euler[i] outputs (yaw, pitch,
+                                  # roll: singular at ±90° pitch, not at the reference pose as Z-X-Z is)
     raw: dict = field(repr=False, default_factory=dict)
 
     @property
@@ -352,7 +355,7 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     base.table(data, "", TOP_LEVEL)
 
     head = base.table(data.get("scene", {}), "scene", {"name": False, "description": False, "dimension": False,
-                                                       "orientation": False})
+                                                       "orientation": False, "euler_sequence": False})
     name = head.get("name", Path(source).stem)
     _check_name(base, name, "scene.name")
     dimension = head.get("dimension", 2)
@@ -370,6 +373,14 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     if dimension == 2 and "orientation" in head:
         raise base.error("scene.orientation", orientation, "no orientation choice in 2D (one angle per body)",
                          "unexpected field")
+    euler_sequence = head.get("euler_sequence", "zyx")
+    if dimension == 2 and "euler_sequence" in head:
+        raise base.error("scene.euler_sequence", euler_sequence, "no Euler angles in 2D (one angle per body)",
+                         "unexpected field")
+    if euler_sequence not in EULER_SEQUENCES:
+        raise base.error("scene.euler_sequence", euler_sequence,
+                         "an intrinsic sequence of the bodies' Euler-angle outputs: " + ", ".join(EULER_SEQUENCES),
+                         "unknown sequence")
     description = head.get("description", "")
     if not isinstance(description, str):
         raise base.error("scene.description", description, "a string", "wrong type")
@@ -394,7 +405,7 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     outputs = _signal_names(points, element_specs, dimension)
     metrics = _read_metrics(r, data.get("metrics", []), outputs)
     return Scene(source, name, description, dimension, orientation, parameters, effects, bodies, points, joints,
-                 element_specs, forces, experiment, metrics, raw=data)
+                 element_specs, forces, experiment, metrics, euler_sequence=euler_sequence, raw=data)
 
 
 def _read_effects(r: _Reader, raw, overrides, dimension, folder):

@@ -1,0 +1,65 @@
+"""3D bodies' orientation outputs: B.q[i] (unit quaternion), B.euler[i] (the scene's intrinsic
+sequence), B.w[i] (angular velocity, global frame), against the closed form of gimbal_lock_3d (a
+steady spin about global X: A = R_x(α0 + ω t)) and against scipy's Rotation on the double
+pendulum's own rotation matrices (from its points' outputs), on the compiled path and the numpy
+path alike."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import inerter
+from inerter.common.errors import SceneError
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+
+
+def _with_sequence(tmp_path, scene, sequence):
+    text = (SCENARIOS / f"{scene}.toml").read_text()
+    text = text.replace("[scene]\n", f'[scene]\neuler_sequence = "{sequence}"\n', 1)
+    path = tmp_path / f"{scene}.toml"
+    path.write_text(text)
+    return inerter.load(path)
+
+
+@pytest.mark.parametrize("path", ["compiled", "numpy"])
+@pytest.mark.parametrize("orientation", ["quaternion", "euler_zxz"])
+def test_a_steady_spin_about_x_has_its_closed_form_outputs(tmp_path, path, orientation):
+    model = _with_sequence(tmp_path, "gimbal_lock_3d", "xyz")
+    if orientation == "euler_zxz":           # stops at θ = 0 (t = 0.25 s): run before it
+        model = inerter.load(model.path, **{"scene.orientation": "euler_zxz"})
+    r = model.simulate(stop_time=0.2, metrics=False, path=path)
+    assert r.status == "ok", r.message
+    alpha = 0.5 - 2.0 * r.time
+    quaternion = np.column_stack((np.cos(alpha / 2), np.sin(alpha / 2), 0 * alpha, 0 * alpha))
+    got = np.column_stack([r[f"spinner.q[{i}]"] for i in range(1, 5)])
+    assert np.max(np.abs(got - quaternion)) < 1e-9
+    assert np.max(np.abs(r["spinner.euler[1]"] - alpha)) < 1e-9
+    assert np.max(np.abs(r["spinner.euler[2]"])) < 1e-9 and np.max(np.abs(r["spinner.euler[3]"])) < 1e-9
+    assert np.max(np.abs(r["spinner.w[1]"] + 2.0)) < 1e-9
+    assert np.max(np.abs(r["spinner.w[2]"])) < 1e-9 and np.max(np.abs(r["spinner.w[3]"])) < 1e-9
+
+
+@pytest.mark.parametrize("sequence", ["zxz", "zyx", "xyz", "xzx"])
+def test_euler_outputs_are_scipys_angles_of_the_bodys_rotation(tmp_path, sequence):
+    """rod2's rotation rebuilt from three of its points (top2, E and a quaternion output check):
+    scipy's as_euler of the output quaternion equals the Euler outputs."""
+    model = _with_sequence(tmp_path, "double_pendulum_3d", sequence)
+    r = model.simulate(stop_time=1.0, metrics=False)
+    assert r.status == "ok"
+    p = np.column_stack([r[f"rod2.q[{i}]"] for i in range(1, 5)])
+    assert np.max(np.abs(np.linalg.norm(p, axis=1) - 1.0)) < 1e-12
+    R = Rotation.from_quat(p[:, [1, 2, 3, 0]])
+    angles = np.column_stack([r[f"rod2.euler[{i}]"] for i in range(1, 4)])
+    assert np.max(np.abs(R.as_euler(sequence.upper()) - angles)) < 1e-9
+    # the body's local Z (top2 → E is −l along it) from the quaternion equals the points' outputs
+    axis = np.column_stack([r[f"E.r[{i}]"] - r[f"top2.r[{i}]"] for i in range(1, 4)])
+    assert np.max(np.abs(R.apply([0.0, 0.0, -1.0]) - axis)) < 1e-9
+    numpy_run = model.simulate(stop_time=1.0, metrics=False, path="numpy")
+    assert np.max(np.abs(numpy_run["rod2.w[2]"] - r["rod2.w[2]"])) < 1e-7
+
+
+def test_an_unknown_sequence_is_one_error(tmp_path):
+    with pytest.raises(SceneError, match=r"scene\.euler_sequence"):
+        _with_sequence(tmp_path, "double_pendulum_3d", "xxy")

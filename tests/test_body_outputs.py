@@ -63,3 +63,16 @@ def test_euler_outputs_are_scipys_angles_of_the_bodys_rotation(tmp_path, sequenc
 def test_an_unknown_sequence_is_one_error(tmp_path):
     with pytest.raises(SceneError, match=r"scene\.euler_sequence"):
         _with_sequence(tmp_path, "double_pendulum_3d", "xxy")
+
+
+def test_an_initial_quaternion_is_its_axis_angle_twin(tmp_path):
+    """bodies.B.quaternion = [cos(a/2), sin(a/2) n] gives the pose of axis = n, angle = a."""
+    text = (SCENARIOS / "gimbal_lock_3d.toml").read_text()
+    twin = text.replace('axis = [1, 0, 0]\nangle = "alpha0"', 'quaternion = ["cos(alpha0/2)", "sin(alpha0/2)", 0, 0]')
+    assert twin != text
+    (tmp_path / "twin.toml").write_text(twin)
+    a, b = inerter.load(SCENARIOS / "gimbal_lock_3d.toml"), inerter.load(tmp_path / "twin.toml")
+    assert np.max(np.abs(np.asarray(a.mechanism.q0) - np.asarray(b.mechanism.q0))) < 1e-15
+    (tmp_path / "bad.toml").write_text(twin.replace('"cos(alpha0/2)"', "1"))
+    with pytest.raises(SceneError, match=r"bodies\.spinner\.quaternion"):
+        inerter.load(tmp_path / "bad.toml")

@@ -73,9 +73,10 @@ class Model:
     def effect_info(self):
         """Boolean effect switches (``effects.centripetal``), present when the scene has inerters."""
         info = []
-        if self.mechanism.inerters or "centripetal" in self.scene.effects:
-            info.append(dict(name="effects.centripetal", value=self.scene.centripetal,
-                             description=KNOWN_EFFECTS["centripetal"]))
+        for name in ("centripetal", "small_displacement"):
+            if self.mechanism.inerters or name in self.scene.effects:
+                info.append(dict(name=f"effects.{name}", value=bool(getattr(self.scene, name)),
+                                 description=KNOWN_EFFECTS[name]))
         return info
 
     def tunable_parameters(self) -> list[str]:

@@ -16,7 +16,10 @@ COEFFICIENT = 0          # k (N/m), c (N.s/m) or b (kg)
 FREE_LENGTH = 1          # a spring's free length L0 (m); 0 for the other kinds
 CENTRIPETAL = 2          # an inerter: 1.0 with the centripetal term (Eq. 9), 0.0 without (Eq. 8)
 MEET_LIMIT = 3           # the distance below which the terminals meet (m); 0: a pair checked earlier
-ELEMENT_REAL_COLUMNS = 4
+FIXED_DIRECTION = 4      # 1.0: the element acts along DIRECTION, its initial one (the small-displacement
+                         # law of structural codes), not along the current r̂
+DIRECTION = 5            # that direction, a unit vector in the global frame (3 columns; z = 0 in 2D)
+ELEMENT_REAL_COLUMNS = 8
 
 # -- rot_int: a rotational element's integers
 ROT_KIND = 0             # its code: its place in inerter.elements.KINDS

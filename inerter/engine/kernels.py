@@ -26,7 +26,8 @@ from inerter.elements import dispatch as law
 from inerter.elements.base import axial_scalars
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, F_AMPLITUDE, F_FREQUENCY, F_INITIAL, F_OFFSET,
                                      F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, KIND, MEET_LIMIT,
-                                     PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B, REL0, ROT_KIND)
+                                     PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B, REL0, ROT_KIND, FIXED_DIRECTION,
+                                     DIRECTION)
 
 # Joint kinds.
 REVOLUTE, PRISMATIC = 0, 1
@@ -109,15 +110,26 @@ def _row_pair(q, v, table, row, pbody, ploc):
 
 
 @njit(cache=True, inline="always")
-def _element(q, v, e, el_int, pbody, ploc):
-    """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, the θ-columns of H, L, r̂,
-    whether the terminals meet); L is held at MIN_LENGTH where they do."""
+def _direction(row, ex, ey, ez):
+    """The direction an element acts along: r̂ = (ex, ey, ez), or its fixed initial direction under
+    the small-displacement law (``row[FIXED_DIRECTION]``)."""
+    if row[FIXED_DIRECTION] != 0.0:
+        return row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2]
+    return ex, ey, ez
+
+
+@njit(cache=True, inline="always")
+def _element(q, v, e, el_int, el_real, pbody, ploc):
+    """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, the θ-columns of H, L, the
+    direction it acts along (:func:`_direction`), whether the terminals meet); L is held at
+    MIN_LENGTH where they do."""
     ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, v, el_int, e, pbody, ploc)
     L = math.hypot(rx, ry)
     meets = not L > MIN_LENGTH
     if meets:
         L = MIN_LENGTH
-    return el_int[e, KIND], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, rx / L, ry / L, meets
+    ex, ey, _ = _direction(el_real[e], rx / L, ry / L, 0.0)
+    return el_int[e, KIND], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets
 
 
 # ------------------------------------------------------------------------------------------------
@@ -211,7 +223,7 @@ def _add_elements2(q, v, P, AB, perm, off, gen):
     gb = np.empty(3)
     for e in range(el_int.shape[0]):
         kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
-            q, v, e, el_int, pbody, ploc)
+            q, v, e, el_int, el_real, pbody, ploc)
         if meets:
             status = TERMINALS_MEET
         # g = Hᵀ r̂ over a's then b's coordinates
@@ -582,7 +594,7 @@ def signal_values2(q, v, qdd, P, out):
             energy -= gravity[i] * q[i] + gravity[i + 1] * q[i + 1]
     for e in range(el_int.shape[0]):
         kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
-            q, v, e, el_int, pbody, ploc)
+            q, v, e, el_int, el_real, pbody, ploc)
         if meets:
             status = TERMINALS_MEET
         F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
@@ -906,10 +918,11 @@ def _pair3(q, v, pa, pb, pbody, ploc):
 
 
 @njit(cache=True, inline="always")
-def _element3(q, v, e, el_int, pbody, ploc, ga, gb):
-    """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, L, r̂, whether the terminals
-    meet), with g = Hᵀ r̂ written to ga (a's six coordinates) and gb (b's); L is held at MIN_LENGTH
-    where the terminals meet."""
+def _element3(q, v, e, el_int, el_real, pbody, ploc, ga, gb):
+    """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, L, the direction ê it acts
+    along (:func:`_direction`: r̂, or its fixed initial one), whether the terminals meet), with
+    g = Hᵀ ê written to ga (a's six coordinates) and gb (b's); L is held at MIN_LENGTH where the
+    terminals meet."""
     pa = el_int[e, POINT_A]
     pb = el_int[e, POINT_B]
     ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
@@ -917,9 +930,7 @@ def _element3(q, v, e, el_int, pbody, ploc, ga, gb):
     meets = not L > MIN_LENGTH
     if meets:
         L = MIN_LENGTH
-    ex = rx / L
-    ey = ry / L
-    ez = rz / L
+    ex, ey, ez = _direction(el_real[e], rx / L, ry / L, rz / L)
     # g = Hᵀ r̂ = [−r̂, −ū_a × (A_aᵀ r̂), r̂, ū_b × (A_bᵀ r̂)] (H = [−H_a, H_b], Eq. 18)
     wx, wy, wz = _wcol(Aa, ploc[pa, 0], ploc[pa, 1], ploc[pa, 2], ex, ey, ez)
     ga[0] = -ex
@@ -1068,7 +1079,7 @@ def _add_elements3(q, v, P, AB, perm, off, gen):
     gb = np.empty(6)
     for e in range(el_int.shape[0]):
         kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
-            q, v, e, el_int, pbody, ploc, ga, gb)
+            q, v, e, el_int, el_real, pbody, ploc, ga, gb)
         if meets:
             status = TERMINALS_MEET
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
@@ -1334,7 +1345,7 @@ def signal_values3(q, v, qdd, P, out):
     gb = np.empty(6)
     for e in range(el_int.shape[0]):
         kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
-            q, v, e, el_int, pbody, ploc, ga, gb)
+            q, v, e, el_int, el_real, pbody, ploc, ga, gb)
         if meets:
             status = TERMINALS_MEET
         F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)

@@ -20,8 +20,9 @@ FORCE_CODE = {"constant": 0, "sine": 1, "step": 2}
 
 def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
     """The ``el_int`` and ``el_real`` rows of translational element `e` of the scene (`me`: the
-    mechanism's element of that name, whose free length a spring takes, else the scene's;
-    `meet_limit`: its column of :func:`meet_limits`)."""
+    mechanism's element of that name, whose free length a spring takes, else the scene's, and
+    whose fixed direction an inerter under the small-displacement law takes; `meet_limit`: its
+    column of :func:`meet_limits`)."""
     free = 0.0
     if e.type == "spring":
         free = getattr(me, "free_length", None)
@@ -38,6 +39,11 @@ def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
     row_real[layout.FREE_LENGTH] = float(free)
     row_real[layout.CENTRIPETAL] = 1.0 if centripetal else 0.0
     row_real[layout.MEET_LIMIT] = float(meet_limit)
+    direction = getattr(me, "fixed_direction", None)
+    if direction is not None:
+        row_real[layout.CENTRIPETAL] = 0.0
+        row_real[layout.FIXED_DIRECTION] = 1.0
+        row_real[layout.DIRECTION:layout.DIRECTION + len(direction)] = [float(x) for x in direction]
     return tuple(row_int), tuple(row_real)
 
 

@@ -29,7 +29,7 @@ class TranslationalElement:
     """A two-terminal uniaxial element between points a and b, of any translational kind."""
 
     def __init__(self, name: str, kind: str, pair: PointPair, coefficient: float, labels: tuple[str, str],
-                 free_length: float | None = None, centripetal: bool = True):
+                 free_length: float | None = None, centripetal: bool = True, fixed_direction=None):
         self.name = name
         self.kind = kind
         self.pair = pair
@@ -44,6 +44,12 @@ class TranslationalElement:
         row[layout.COEFFICIENT] = self.coefficient
         row[layout.FREE_LENGTH] = self.free_length or 0.0
         row[layout.CENTRIPETAL] = 1.0 if self.centripetal else 0.0
+        #: The small-displacement law: the element acts along this initial direction (not r̂).
+        self.fixed_direction = None if fixed_direction is None else np.asarray(fixed_direction, dtype=float)
+        if self.fixed_direction is not None:
+            row[layout.CENTRIPETAL] = 0.0
+            row[layout.FIXED_DIRECTION] = 1.0
+            row[layout.DIRECTION:layout.DIRECTION + len(self.fixed_direction)] = self.fixed_direction
         self.row = row
         self.inertance = self._inertance(row)
 
@@ -54,7 +60,7 @@ class TranslationalElement:
             raise TerminalsMeet(
                 f"element '{self.name}': its terminals {self.labels[0]} and {self.labels[1]} meet "
                 f"(distance {length:.3g} m < {MIN_LENGTH:g} m), so its direction is undefined")
-        rhat = r / length
+        rhat = r / length if self.fixed_direction is None else self.fixed_direction
         return r, rdot, a_n, H, length, rhat
 
     def length(self, q):

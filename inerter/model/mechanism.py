@@ -100,12 +100,16 @@ class Mechanism:
         self.points = {p.name: self._point(p) for p in scene.points.values()}
         self.joints = [make_joint(j, self, q0) for j in scene.joints.values()]
         self.m = sum(j.rows for j in self.joints)
+        #: The scene's pose the elements are built at (an element factory reads initial directions here).
+        self.initial_q = np.array(q0, dtype=float)
         self.elements = [self._element(e, q0) for e in scene.elements.values()]
         self.inerters = [e for e in self.elements if e.kind == "inerter"]
-        # Elements on the same pair of terminals share one evaluation of the pair's geometry.
+        # Elements on the same pair of terminals share one evaluation of the pair's geometry (one
+        # acting along a fixed direction has geometry of its own).
         groups = {}
         for spec, e in zip(scene.elements.values(), self.elements):
-            key = (spec.point_a, spec.point_b) if spec.point_a else ("rotational", spec.name)
+            fixed = getattr(e, "fixed_direction", None) is not None
+            key = (spec.point_a, spec.point_b, fixed) if spec.point_a else ("rotational", spec.name)
             groups.setdefault(key, []).append(e)
         self.groups = list(groups.values())
         self._forces(scene)
@@ -191,13 +195,20 @@ class Mechanism:
         meet (also by element name, for the compiled kernels: meet_limit)."""
         self._meet = []
         self.meet_limit = {}
+        checked = {}
         for spec, group in zip(groups, self.groups):
             if not elements.translational(group[0].kind):
                 continue
-            pair = self.pair(*spec)
+            terminals = spec[:2]
+            if terminals in checked:              # the same terminals, in a group of its own
+                checked[terminals][1].extend(e.name for e in group)
+                self.meet_limit.update((e.name, checked[terminals][3]) for e in group)
+                continue
+            pair = self.pair(*terminals)
             r0 = pair.evaluate(self.q0, np.zeros(self.n))[0]
             limit = max(el.MIN_LENGTH, MEET_RELATIVE * math.sqrt(float(r0 @ r0)))
-            self._meet.append((pair, [e.name for e in group], spec, limit))
+            checked[terminals] = (pair, [e.name for e in group], terminals, limit)
+            self._meet.append(checked[terminals])
             self.meet_limit.update((e.name, limit) for e in group)
 
     # -- compilation helpers ---------------------------------------------------------------
@@ -240,7 +251,12 @@ class Mechanism:
         free = (e.free_length if e.free_length is not None else L_initial) if has_free else None
         if self.element_factory is not None:
             return self.element_factory(e, pair, self.scene.centripetal, free, labels, self)
-        return el.TranslationalElement(e.name, e.type, pair, e.coefficient, labels, free, self.scene.centripetal)
+        fixed = None
+        if e.type == "inerter" and self.scene.small_displacement:     # along r̂ at t = 0
+            r0 = pair.evaluate(q0, np.zeros(self.n))[0]
+            fixed = r0 / L_initial
+        return el.TranslationalElement(e.name, e.type, pair, e.coefficient, labels, free, self.scene.centripetal,
+                                       fixed)
 
     def _initial_length(self, e, pair, q0):
         r, _, _, _ = pair.evaluate(q0, np.zeros(self.n))
@@ -529,7 +545,7 @@ class Mechanism:
         for e in self.elements:
             extra = ""
             if e.kind == "inerter":
-                extra = " with centripetal term (Eq. 9)" if s.centripetal else " without centripetal term (Eq. 8)"
+                extra = f" {s.inerter_law}"
             lines.append(f"element {e.name}: {e.kind}, {getattr(e, 'coefficient_name', 'k')} = {e.coefficient:g}{extra}")
         for f, _, _ in self.applied:
             lines.append(f"force {f.name}: {f.function} at {f.point} along {list(f.direction)}")

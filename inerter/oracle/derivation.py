@@ -10,6 +10,8 @@ L(q) from the bodies' poses and differentiates it with forward-mode automatic di
 
 Inerter with the centripetal term: F = b L̈ (Eq. 9). Without it (Eq. 8): F = b r̈·r̂, which the
 oracle obtains as b(L̈ − |ṙ⊥|²/L) with ṙ from the Jacobian of r(q), again by differentiation.
+Under the small-displacement law: F = b s̈ with s(q) = ê0·r(q), ê0 the initial r̂, acting along
+ê0 (generalised force −F ∇s), s differentiated on Jets as L is.
 An error in either the fast path or this module shows up as a disagreement between the two.
 
 Planar rotational elements (:class:`OracleRotational`) are derived in the same way from the relative
@@ -114,6 +116,18 @@ def point_position(point, coords):
     return [P + u[i] + k * (w * t[i] + tt[i]) for i, P in enumerate((X, Y, Z))]
 
 
+def _plain(q, point):
+    """A point's body coordinates as constant Jets (None for the ground): (x, y, θ) or (R, p)."""
+    if point.body < 0:
+        return None
+    return [Jet.constant(x, 1) for x in q[point.qi:point.qi + (3 if len(point.local) == 2 else 7)]]
+
+
+def _position(q, point):
+    """r of a point at pose q, as floats."""
+    return [c.v if isinstance(c, Jet) else float(c) for c in point_position(point, _plain(q, point))]
+
+
 def _seed(q, v, qi, vi, dim, n, k):
     """Jets for one body's coordinates along the motion, with gradients w.r.t. its velocity
     coordinates (placed at columns k...). 2D: q = (x, y, θ), q̇ = v, q̈|v̇=0 = 0. 3D: R with
@@ -151,8 +165,9 @@ def _seed(q, v, qi, vi, dim, n, k):
 class DistanceProbe:
     """L(q) between two points, with ∇L, L̇, q̇ᵀ∇²Lq̇ and the terminal velocity ṙ, by Jets."""
 
-    def __init__(self, pair, labels, name, mech):
+    def __init__(self, pair, labels, name, mech, direction=None):
         self.pair = pair
+        self.direction = direction          # ê0: evaluate s = ê0·r instead of L (small-displacement law)
         self.dofs = pair.dofs
         self.labels = labels
         self.name = name
@@ -182,9 +197,18 @@ class DistanceProbe:
             raise TerminalsMeet(
                 f"element '{self.name}': its terminals {self.labels[0]} and {self.labels[1]} meet "
                 f"(distance {math.sqrt(L2.v):.3g} m < {MIN_LENGTH:g} m), so its direction is undefined")
-        L = jsqrt(L2)
         rdot = np.array([c.d1 for c in r])                      # ṙ = J_r q̇
-        return L, rdot
+        if self.direction is not None:
+            s = r[0] * float(self.direction[0])
+            for c, e in zip(r[1:], self.direction[1:]):
+                s = s + c * float(e)
+            return s, rdot
+        return jsqrt(L2), rdot
+
+    def distance(self, q):
+        """|r(q)|, whatever the probe differentiates."""
+        ra, rb = _position(q, self.pair.a), _position(q, self.pair.b)
+        return math.sqrt(sum((b - a) ** 2 for a, b in zip(ra, rb)))
 
 
 class OracleRotational:
@@ -274,7 +298,14 @@ class OracleElement:
         self.coefficient_name = {"spring": "k", "damper": "c", "inerter": "b"}[spec.type]
         self.centripetal = bool(centripetal)
         self.free_length = free_length
-        self.probe = DistanceProbe(pair, labels, spec.name, mech)
+        direction = None
+        if spec.type == "inerter" and mech.scene.small_displacement:
+            # the small-displacement law: s = ê0·r, ê0 the direction at the scene's pose; F = b s̈
+            r0 = np.subtract(_position(mech.initial_q, pair.b), _position(mech.initial_q, pair.a))
+            direction = r0 / np.linalg.norm(r0)
+            self.centripetal = True                     # F = b s̈ as it is: no |ṙ⊥|²/L to remove
+        self.fixed_direction = direction
+        self.probe = DistanceProbe(pair, labels, spec.name, mech, direction)
         self.pair = pair
 
     def _force_parts(self, L, rdot):
@@ -308,7 +339,8 @@ class OracleElement:
         L, rdot = self.probe.evaluate(q, v)
         mass, rest = self._force_parts(L, rdot)
         F = rest + mass * float(L.g @ a[self.probe.dofs])
-        return L.v, L.d1, F
+        distance = L.v if self.fixed_direction is None else self.probe.distance(q)
+        return distance, L.d1, F
 
     def length(self, q):
         return self.probe.evaluate(q, np.zeros_like(q))[0].v

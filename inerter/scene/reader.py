@@ -28,6 +28,8 @@ GROUND = "ground"
 KNOWN_EFFECTS = {
     "centripetal": "inerter force with the centripetal term, F = b d²L/dt² (Eq. 9); "
                    "false gives the uncorrected F = b r̈·r̂ (Eq. 8)",
+    "small_displacement": "inerters act along their initial direction with F = b ê0·(r̈_b − r̈_a), the "
+                          "linear element of structural codes (OpenSees-style); true overrides centripetal",
     "gravity": "uniform gravity, a vector in m/s²",
     "ground_acceleration": "the ground moved with a prescribed acceleration (a CSV record, a sine or FMU "
                            "inputs ground.a[i]); coordinates are relative to the ground",
@@ -171,7 +173,19 @@ class Scene:
 
     @property
     def centripetal(self) -> bool:
-        return bool(self.effects.get("centripetal", True))
+        return bool(self.effects.get("centripetal", True)) and not self.small_displacement
+
+    @property
+    def small_displacement(self) -> bool:
+        """Inerters under the small-displacement law (a fixed direction, no centripetal term)."""
+        return bool(self.effects.get("small_displacement", False))
+
+    @property
+    def inerter_law(self) -> str:
+        """Which of the three inerter laws the scene's inerters follow."""
+        if self.small_displacement:
+            return "small-displacement law (F = b ê0·r̈ along the initial direction ê0)"
+        return "with centripetal term (Eq. 9)" if self.centripetal else "without centripetal term (Eq. 8)"
 
     def experiment_with(self, overrides: Mapping[str, Any]) -> Experiment:
         """The experiment with `overrides` (``{"rtol": 1e-6}``), read and checked as a load with
@@ -418,7 +432,7 @@ def _read_effects(r: _Reader, raw, overrides, dimension, folder):
         fld = f"effects.{name}"
         if name not in KNOWN_EFFECTS:
             raise r.error(fld, value, "one of: " + ", ".join(KNOWN_EFFECTS), "unknown effect")
-        if name == "centripetal":
+        if name in ("centripetal", "small_displacement"):
             if not isinstance(value, bool):
                 raise r.error(fld, value, "true or false", "wrong type")
             effects[name] = value

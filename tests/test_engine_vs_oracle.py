@@ -84,11 +84,15 @@ TOL_RUN = 2e-10
 RUN_TIME = 2.0
 RUN_TIME_GROUND_RECORD = 0.5
 
-#: Cases that are not shipped scenes as they stand: a shipped scene with an override that the
-#: compiled engine does not take, so that the skip and the numpy fallback of this file run (no
-#: shipped scene needs them today). gimbal_lock_3d has no elements, so there the oracle is the
-#: numpy Mechanism itself: this case checks the plumbing, not the physics.
-EXTRA_CASES = [("gimbal_lock_3d", ROOT / "scenarios" / "gimbal_lock_3d.toml", {"scene.orientation": "euler_zxz"})]
+#: Cases that are not shipped scenes as they stand: Z-X-Z Euler angles (gimbal_lock_3d has no
+#: elements, so there the oracle is the numpy Mechanism itself: this case checks the kinematics'
+#: plumbing, not the elements' physics), and the small-displacement inerter law in 2D and 3D (the
+#: oracle differentiates s = ê0·r on Jets).
+EXTRA_CASES = [("gimbal_lock_3d", ROOT / "scenarios" / "gimbal_lock_3d.toml", {"scene.orientation": "euler_zxz"}),
+               ("portal_frame_brace_2d-small", ROOT / "scenarios" / "portal_frame_brace_2d.toml",
+                {"effects.small_displacement": True, "drift0": 0.2}),
+               ("double_pendulum_3d-small", ROOT / "scenarios" / "double_pendulum_3d.toml",
+                {"effects.small_displacement": True})]
 
 
 @dataclass(frozen=True)

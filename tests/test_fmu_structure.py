@@ -217,7 +217,9 @@ def test_a_value_below_a_parameters_min_is_refused_by_the_scene(fmus, scene):
                and v.min is not None and v.name not in ("rtol", "atol")]
     for v in bounded:
         low = float(v.min) - 1e-3 * max(1.0, abs(float(v.min)))
-        with pytest.raises(SceneError, match="out of range"):
+        # refused where the value is used, or earlier where another parameter is an expression of
+        # it (tid_storey_2d: c = 0.04·sqrt(k·m) fails for k < 0 before the spring's range is checked)
+        with pytest.raises(SceneError, match="out of range|out of the domain"):
             inerter.load(scene, **{v.name: low})
     rtol = next(v for v in md.modelVariables if v.name == "rtol")
     for bad in (float(rtol.min) / 2, float(rtol.max) * 2):

@@ -416,12 +416,12 @@ def _compute_metric(model, result, m, out, windows):
         return
     x = result[m.signal]            # first: a sample where it is undefined ends the result before it
     t = result.time
-    if m.kind == "peak":
-        # largest excursion from the reference (default: the signal's initial value)
-        ref = m.reference if m.reference is not None else float(x[0])
-        out[_key(m.prefix, "peak")] = float(np.max(np.abs(x - ref)))
-        return
     dense = result.dense(m.signal)
+    if m.kind == "peak":
+        # largest excursion from the reference (default: the signal's initial value), between samples too
+        ref = m.reference if m.reference is not None else float(x[0])
+        out[_key(m.prefix, "peak")] = float(metric_fns.peak(t, x, ref, dense=dense))
+        return
     reference = m.reference if m.reference is not None else model.static_value(m.signal)
     if m.kind == "free_oscillation":
         r = metric_fns.free_oscillation(t, x, reference, dense=dense)

@@ -335,6 +335,22 @@ def _vertex(x: np.ndarray, f: np.ndarray, fallback: np.ndarray) -> np.ndarray:
     return np.where(concave, vertex, best)
 
 
+def peak(t, x, reference, dense=None, candidates=8) -> float:
+    """The largest excursion |x − reference| over the history. With `dense`, the samples' best
+    maxima and minima (`candidates` of each, :func:`_candidates`) are refined on the dense
+    interpolant (:func:`_extremes`): a peak between two samples is not flattened (a sine sampled
+    at 10 ms is off by up to (ω·5 ms)²/2 of its amplitude at the samples)."""
+    t, x = _history(t, x)
+    steps = np.diff(t)
+    if steps.size and np.allclose(steps, steps[0], rtol=1e-9, atol=0.0):
+        tau, values = t, x
+    else:                                     # _extremes refines on a uniform grid
+        tau = np.linspace(t[0], t[-1], t.size)
+        values = _resample(t, x, tau, dense)
+    high, low = _extremes(dense, tau, values, candidates)
+    return max(high - reference, reference - low)
+
+
 def steady_state(t, x, period, periods, reference, dense=None, samples_per_period=2048) -> dict:
     """Peak-to-peak and mean of a forced steady state over its last whole periods.
 

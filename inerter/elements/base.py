@@ -26,12 +26,27 @@ def law(fn):
 
 @dataclass(frozen=True)
 class Parameter:
-    """One parameter of an element kind as a scene declares it (``elements.NAME.<key>``)."""
+    """One parameter of an element kind as a scene declares it (``elements.NAME.<key>``, or
+    ``elements.NAME.device.EFFECT.<key>`` for a device effect's): its physical range is
+    [minimum, maximum], or (minimum, maximum] where `strict`; an optional one (`required` False)
+    takes `default` where the scene leaves it out (None: absent)."""
     key: str
     unit: str
     description: str
     minimum: float = -math.inf
     required: bool = True
+    maximum: float = math.inf
+    strict: bool = False
+    default: float | None = None
+
+    def expected(self) -> str:
+        """The range in words, for an error message: "a number ≥ 0 (N/m)"."""
+        parts = []
+        if self.minimum != -math.inf:
+            parts.append(f"{'>' if self.strict else '≥'} {self.minimum:g}")
+        if self.maximum != math.inf:
+            parts.append(f"≤ {self.maximum:g}")
+        return "a number" + (" " + " and ".join(parts) if parts else "") + f" ({self.unit})"
 
 
 @dataclass(frozen=True)
@@ -45,6 +60,9 @@ class ElementKind:
     description: str
     free: Parameter | None = None          # a spring's free length, a rotational spring's angle
     equation: str = ""
+    #: The device effects an element of this kind may declare (``elements.NAME.device.EFFECT``),
+    #: each an :class:`inerter.elements.device.Effect`; only the inerter has them.
+    device: tuple = ()
 
     @property
     def outputs(self) -> tuple[tuple[str, str, str], ...]:

@@ -240,7 +240,8 @@ class Mechanism:
         free = (e.free_length if e.free_length is not None else L_initial) if has_free else None
         if self.element_factory is not None:
             return self.element_factory(e, pair, self.scene.centripetal, free, labels, self)
-        return el.TranslationalElement(e.name, e.type, pair, e.coefficient, labels, free, self.scene.centripetal)
+        return el.TranslationalElement(e.name, e.type, pair, e.coefficient, labels, free, self.scene.centripetal,
+                                       device=e.device)
 
     def _initial_length(self, e, pair, q0):
         r, _, _, _ = pair.evaluate(q0, np.zeros(self.n))
@@ -531,6 +532,9 @@ class Mechanism:
             if e.kind == "inerter":
                 extra = " with centripetal term (Eq. 9)" if s.centripetal else " without centripetal term (Eq. 8)"
             lines.append(f"element {e.name}: {e.kind}, {getattr(e, 'coefficient_name', 'k')} = {e.coefficient:g}{extra}")
+            device = getattr(s.elements.get(e.name), "device", None)
+            if device is not None:
+                lines.append(f"element {e.name}: device: {device.describe()}")
         for f, _, _ in self.applied:
             lines.append(f"force {f.name}: {f.function} at {f.point} along {list(f.direction)}")
         for f, _ in self.feedback:

@@ -12,7 +12,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic, overload
 
 #: The families of element kinds: two-terminal elements acting along the line between their
 #: terminals (uniaxial, Sec. 2.2), and rotational ones between two bodies' orientations.
@@ -22,6 +25,29 @@ TRANSLATIONAL, ROTATIONAL = "translational", "rotational"
 def law(fn):
     """Compile a law for the kernels (inlined where they call it; cached on disk)."""
     return njit(cache=True, inline="always")(fn)
+
+
+def rarely(condition):
+    """`condition`, marked for the compiler as almost always false: a law's branch that most
+    elements never take (an ideal inerter's device) is laid out and register-allocated as a cold
+    path, so that the loop it sits in runs as fast as without it. Plain Python returns it as it
+    is (``law.py_func``)."""
+    return condition
+
+
+@intrinsic
+def _expect_false(typingctx, condition):
+    """llvm.expect(condition, false)."""
+    def codegen(context, builder, signature, args):
+        bit = ir.IntType(1)
+        fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(bit, [bit, bit]), "llvm.expect.i1")
+        return builder.call(fn, [args[0], ir.Constant(bit, 0)])
+    return types.boolean(types.boolean), codegen
+
+
+@overload(rarely, inline="always")
+def _rarely(condition):
+    return lambda condition: _expect_false(condition)
 
 
 @dataclass(frozen=True)

@@ -79,6 +79,8 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
+from numba import njit
+
 from inerter.elements.base import Parameter, law
 from inerter.elements.layout import (COULOMB, DEVICE, FLUID, FLUID_LINEAR, FLUID_QUADRATIC, FLYWHEEL_RATIO,
                                      FRICTION, STOP_DAMPING, STOP_EXPONENT, STOP_MAX, STOP_MIN, STOP_STIFFNESS,
@@ -86,8 +88,15 @@ from inerter.elements.layout import (COULOMB, DEVICE, FLUID, FLUID_LINEAR, FLUID
 
 
 # ------------------------------------------------------------------------------------------------
-# The laws (scalar arithmetic on the element's row, inlined into the kernels)
+# The laws (scalar arithmetic on the element's row). The effects' laws are inlined into the three
+# entry points below, and those are called, not inlined, from the inerter's law: an ideal inerter's
+# kernels then hold only the test of row[DEVICE] and a call never made, not the device's code.
 # ------------------------------------------------------------------------------------------------
+def entry(fn):
+    """Compile a device law that the inerter's law calls without inlining it (cached on disk)."""
+    return njit(cache=True)(fn)
+
+
 @law
 def friction(row, Ldot):
     """F_f = F_c tanh(L̇/v_s) + c_f L̇ (N, tension positive)."""
@@ -131,7 +140,7 @@ def stop_energy(row, L):
     return row[STOP_STIFFNESS] * d ** (n + 1.0) / (n + 1.0)
 
 
-@law
+@entry
 def force(row, L, Ldot):
     """The device's axial force (N, tension positive): friction, channel damping and end stops,
     each where declared."""
@@ -145,7 +154,7 @@ def force(row, L, Ldot):
     return F
 
 
-@law
+@entry
 def energy(row, L):
     """The energy the device stores beyond ½ b L̇²: the end stops' elastic energy (J)."""
     if row[STOPS] != 0.0:
@@ -153,7 +162,7 @@ def energy(row, L):
     return 0.0
 
 
-@law
+@entry
 def outputs(row, L, Ldot, out, k):
     """Write the device's outputs at out[k], out[k + 1], ... in the order of
     :meth:`Device.outputs` (flywheel speed; friction, channel and end-stop forces; dissipated

@@ -8,7 +8,9 @@ With r = r_b − r_a, L = |r|, r̂ = r/L and r̈ = H q̈ + a_n (Eqs. 18-19):
 
 The part b gᵀ q̈ goes into the mass matrix, M_I = b g gᵀ (Eq. 33): :func:`inertance` is b. The rest,
 b (a_n·r̂ + |ṙ⊥|²/L), is :func:`force`, the right side's Q_Iv (Eq. 31), to which a declared device
-adds its forces of L and L̇ (a branch an ideal inerter, ``row[DEVICE] == 0``, never takes). Its
+adds its forces of L and L̇ (a branch an ideal inerter, ``row[DEVICE] == 0``, never takes: marked
+:func:`~inerter.elements.base.rarely` and calling the device's laws without inlining them, it
+leaves the kernels' loops as fast as without it). Its
 kinetic energy is ½ b L̇² (the correct model is Lagrangian, Sec. 2.2); the model without the term
 has none, and its energy output keeps the same ½ b L̇² for comparison. A device's end stops add
 their elastic energy.
@@ -17,7 +19,7 @@ The inertance is the scene's ``b``, or what the device's flywheel (b = J (2π/p)
 (b = ρ ℓ A_p²/A_c) gives: the scene reader computes it (:meth:`device.Device.inertance`).
 """
 from inerter.elements import device
-from inerter.elements.base import TRANSLATIONAL, ElementKind, Parameter, law
+from inerter.elements.base import TRANSLATIONAL, ElementKind, Parameter, law, rarely
 from inerter.elements.layout import CENTRIPETAL, COEFFICIENT, DEVICE
 
 KIND = ElementKind(
@@ -41,7 +43,7 @@ def force(row, L, Ldot, an, perp2):
     if row[CENTRIPETAL] != 0.0:
         term += perp2 / L
     F = row[COEFFICIENT] * term
-    if row[DEVICE] != 0.0:
+    if rarely(row[DEVICE] != 0.0):
         F += device.force(row, L, Ldot)
     return F
 
@@ -50,7 +52,7 @@ def force(row, L, Ldot, an, perp2):
 def energy(row, L, Ldot):
     """Kinetic energy ½ b L̇² (and a device's end stops' elastic energy)."""
     E = 0.5 * row[COEFFICIENT] * Ldot * Ldot
-    if row[DEVICE] != 0.0:
+    if rarely(row[DEVICE] != 0.0):
         E += device.energy(row, L)
     return E
 
@@ -58,7 +60,7 @@ def energy(row, L, Ldot):
 @law
 def extra_outputs(row, L, Ldot, out, k):
     """A device's outputs at out[k], ... (:func:`device.outputs`); returns the index after them."""
-    if row[DEVICE] != 0.0:
+    if rarely(row[DEVICE] != 0.0):
         return device.outputs(row, L, Ldot, out, k)
     return k
 

@@ -124,10 +124,11 @@ def end_stop(row, L, Ldot):
             return 0.0, 0.0
     dn = d ** row[STOP_EXPONENT]
     elastic = row[STOP_STIFFNESS] * dn
-    N = elastic + row[STOP_DAMPING] * dn * rate
-    if N < 0.0:
-        N = 0.0
-    return sign * N, (N - elastic) * rate
+    damping = row[STOP_DAMPING] * dn * rate
+    N = elastic + damping
+    if N < 0.0:                       # the contact would pull: it lets go, and its stored energy is lost
+        return 0.0, -elastic * rate
+    return sign * N, damping * rate
 
 
 @law
@@ -362,7 +363,8 @@ class Device:
         for name, values in self.effects:
             effect = EFFECT[name]
             units = {p.key: p.unit for p in effect.parameters}
-            given = ", ".join(f"{k} = {v:g} {units[k]}" for k, v in values if v is not None)
+            given = ", ".join(f"{k} = {v:g}" + (f" {units[k]}" if units[k] != "1" else "")
+                              for k, v in values if v is not None)
             parts.append(f"{name} ({given})")
         b = self.inertance()
         return "; ".join(parts) + (f"; inertance from the device b = {b:g} kg" if b is not None else "")

@@ -364,9 +364,14 @@ class OracleDevice:
         d, ddot, sign = hit
         elastic = self._slope(self._stop_potential, d)                               # dV/dδ
         n, c = self.stops["exponent"], self.stops["damping"]
-        damping = self._slope(lambda x: 0.5 * c * d ** n * (x * x), ddot)            # ∂R/∂δ̇
-        N = max(0.0, elastic + damping)
-        return sign * N, (N - elastic) * ddot
+
+        def rayleigh(x):
+            return 0.5 * c * d ** n * (x * x)
+        damping = self._slope(rayleigh, ddot)                                         # ∂R/∂δ̇
+        N = elastic + damping
+        if not N > 0.0:                    # a contact only pushes: released, its energy V is lost
+            return 0.0, -elastic * ddot
+        return sign * N, 2.0 * rayleigh(ddot)                                         # R quadratic in δ̇
 
     def potential(self, L):
         """The end stops' elastic energy at the terminal distance L (a float)."""

@@ -57,17 +57,19 @@ def main(argv=None):
             exact, rest, _, _ = _coulomb_closed_form(r.time, 0.25, 2.0, 100.0, 2.0)
             err = float(np.max(np.abs(x - exact)))
             status = "ok" if r.run.status == "ok" else f"stopped at {r.time[-1]:.3f} s (stiff)"
-            rows.append((vs, method, rtol, status, r.run.steps, r.run.evaluations, err, err / vs, x[-1], wall))
+            rows.append((vs, method, rtol, status, r.run.steps, r.run.evaluations, err, err / vs, x[-1],
+                         wall))
             print(f"v_s {vs:g} {method} rtol {rtol:g}: {status}, {r.run.steps} steps, error {err:.3e} m "
                   f"({err / vs:.3f} s·v_s), final x {x[-1]:.6f} m, {wall:.2f} s")
     lines = [
         "# Coulomb friction: convergence as the velocity scale shrinks", "",
-        f"`python benchmarks/coulomb_convergence.py`, {datetime.date.today().isoformat()}. A mass (m = 1 kg) with an "
-        "inerter device (b = 1 kg) and a spring (k = 100 N/m) on the X axis; the device's friction F_c tanh(L̇/v_s), "
+        f"`python benchmarks/coulomb_convergence.py`, {datetime.date.today().isoformat()}. A mass (m = 1 kg) "
+        "with an inerter device (b = 1 kg) and a spring (k = 100 N/m) on the X axis; the device's friction F_c tanh(L̇/v_s), "
         "F_c = 2 N; released from 0.25 m, 4 s. Error: max over the samples (1 ms) of |x − x_exact|, x_exact the "
         "closed form of M ẍ + k x + F_c sgn ẋ = 0 (turning points 0.25, −0.21, 0.17, −0.13, 0.09, −0.05 m; at rest "
         "at 0.01 m, inside the dead band |x| ≤ F_c/k = 0.02 m, from 2.67 s).", "",
-        "| v_s (m/s) | method | rtol | status | steps | evaluations | error (m) | error / v_s (s) | final x (m) | wall (s) |",
+        "| v_s (m/s) | method | rtol | status | steps | evaluations | error (m) | error / v_s (s) | final x (m) "
+        "| wall (s) |",
         "|---|---|---|---|---|---|---|---|---|---|"]
     for vs, method, rtol, status, steps, evals, err, ratio, xf, wall in rows:
         lines.append(f"| {vs:g} | {method} | {rtol:g} | {status} | {steps} | {evals} | {err:.3e} | {ratio:.3f} | "

@@ -255,7 +255,8 @@ IDEAL_VARIANTS = {
 
 
 @pytest.mark.parametrize("variant", list(IDEAL_VARIANTS))
-@pytest.mark.parametrize("scene, stop_time", [(TWO_BAR, 10.0), (DOUBLE_PENDULUM, 5.0)], ids=["2d-two-bar", "3d-double-pendulum"])
+@pytest.mark.parametrize("scene, stop_time", [(TWO_BAR, 10.0), (DOUBLE_PENDULUM, 5.0)],
+                         ids=["2d-two-bar", "3d-double-pendulum"])
 def test_a_device_with_every_effect_at_zero_is_the_ideal_inerter(tmp_path, scene, stop_time, variant):
     """Reference: the ideal scene's own compiled DOP853 run. Friction, channel damping and end-stop
     contact all zero (the stops' stroke wider than the motion too), the inertance given, or from a
@@ -426,11 +427,12 @@ def test_a_damped_end_stop_dissipates_what_the_mass_loses_and_never_pulls(tmp_pa
 
 def test_energy_plus_dissipated_work_is_the_initial_energy(tmp_path):
     """Reference: the initial energy. A free oscillation from x = 0.25 m at 1 m/s through friction
-    (v_s = 10 mm/s), channel damping and both end stops (b = 1 kg from the channel), no forcing: energy(t) (½ m v² + ½ b L̇² + ½ k x² + the stops'
-    k_s δⁿ⁺¹/(n+1)) plus ∫₀ᵗ p_loss stays energy(0), every 0.2 s. DOP853 at rtol 1e-11; the
-    integral by Simpson on 20 µs samples. The error is the quadrature's (the friction's tanh turns
-    over 0.2 ms at each reversal, the contacts start with a kink): 4e-8, 2e-9 and 7e-10 of
-    energy(0) on 100, 50 and 20 µs samples; the bound is 5e-9."""
+    (v_s = 10 mm/s), channel damping and both end stops (b = 1 kg from the channel), no forcing:
+    energy(t) (½ m v² + ½ b L̇² + ½ k x² + the stops' k_s δⁿ⁺¹/(n+1)) plus ∫₀ᵗ p_loss stays
+    energy(0), every 0.2 s. DOP853 at rtol 1e-11; the integral by Simpson on 20 µs samples. The
+    error is the quadrature's (the friction's tanh turns over 0.2 ms at each reversal, the contacts
+    start with a kink): 4e-8, 2e-9 and 7e-10 of energy(0) on 100, 50 and 20 µs samples; the bound
+    is 5e-9."""
     text = OSCILLATOR + """
 [elements.inerter.device.friction]
 coulomb = 0.5
@@ -505,8 +507,8 @@ quadratic_damping = {c2}
         per_cycle = 0.5 * quarter * float(np.tile(weights, 4) @ table[:, index["inerter.p_loss"]])
         assert per_cycle == pytest.approx(math.pi * (c1 + c_eq) * w * X ** 2, rel=1e-13)
         fluid = table[:, index["inerter.f_fluid"]]
-        assert np.max(np.abs(fluid - (c1 * states[:, mech.nq] + c2 * states[:, mech.nq] * np.abs(states[:, mech.nq])))) \
-            <= 1e-13 * np.max(np.abs(fluid))
+        v = states[:, mech.nq]
+        assert np.max(np.abs(fluid - (c1 * v + c2 * v * np.abs(v)))) <= 1e-13 * np.max(np.abs(fluid))
     assert (8.0 / 3.0) * c2 * w ** 2 * X ** 3 == pytest.approx(math.pi * c_eq * w * X ** 2, rel=1e-15)
 
 

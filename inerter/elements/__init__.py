@@ -41,7 +41,9 @@ Adding a kind, e.g. a linear spring with a preload F0 (``elements.NAME.type = "p
 A kind may also report outputs beyond its family's three: a law ``extra_outputs(row, L, Ldot, out,
 k)`` that writes them at ``out[k]``... and returns the index after them, and
 ``extra_output_names(spec)`` that names them for a scene element (the inerter's device,
-:mod:`.device`, does so). A translational law returns the axial force less its inertance times gᵀq̈: ``inertance(row)`` is
+:mod:`.device`, does so).
+
+A translational law returns the axial force less its inertance times gᵀq̈: ``inertance(row)`` is
 the factor that goes into the mass matrix (M += b g gᵀ, Eq. 33; zero for all but the inerter) and
 ``force(row, L, Ldot, an, perp2)`` the rest (Q −= F g, Eqs. 29 and 31).
 """

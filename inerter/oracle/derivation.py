@@ -331,7 +331,8 @@ class OracleDevice:
             friction = friction + 0.5 * (fr["viscous"] or 0.0) * (rate * rate)
         if self.fluid is not None:
             f = self.fluid
-            channel = 0.5 * f["linear_damping"] * (rate * rate) + (f["quadratic_damping"] / 3.0) * (rate * rate * jabs(rate))
+            channel = (0.5 * f["linear_damping"] * (rate * rate)
+                       + (f["quadratic_damping"] / 3.0) * (rate * rate * jabs(rate)))
         return friction, channel
 
     def dissipation(self, rate):

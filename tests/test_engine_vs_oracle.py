@@ -22,6 +22,10 @@ Three checks per scene:
 * a run: the compiled DOP853 loop against the oracle's DOP853 run, both at rtol 1e-12 and
   atol 1e-14, every output at every sample.
 
+An inerter's device (scenarios/two_bar_2d_device.toml) is covered as any element: the oracle derives
+it from its kinetic energy, dissipation function and contact potential; its outputs are compared
+over the slope of their laws (device_scales), as a force over its coefficient.
+
 Tolerances (module constants below, each with its reason) are as tight as those of the
 numpy-vs-compiled checks these replace (accelerations 1e-12 relative, outputs 1e-12) or tighter
 (runs: 2e-10 against 1e-9 m). A scene the compiled engine does not take (Z-X-Z Euler angles) is
@@ -37,6 +41,7 @@ import numpy as np
 import pytest
 
 import inerter
+from inerter.elements import layout
 from inerter.engine import compiled
 from inerter.engine.simulation import integrate
 from inerter.oracle.derivation import OracleElement, OracleRotational
@@ -245,12 +250,44 @@ def _states(mech, run, rng, samples=6, random=6):
 
 
 def _output_scale(model):
-    """Each output's unit of comparison: an element's force (torque) over its coefficient."""
+    """Each output's unit of comparison: an element's force (torque) over its coefficient, and an
+    inerter device's outputs over the slope of their law (device_scales)."""
     coef = {}
     for e in model.mechanism.elements:
         if e.coefficient > 0:
             coef[f"{e.name}.tau" if e.kind.startswith("rotational") else f"{e.name}.f"] = e.coefficient
+        spec = model.scene.elements[e.name]
+        if getattr(spec, "device", None) is not None:
+            coef.update(device_scales(spec))
     return np.array([coef.get(name, 1.0) for name in model.signals.names])
+
+
+def device_scales(spec) -> dict:
+    """An inerter device's outputs in the units of the motion, as an element's force over its
+    coefficient: the friction force over its slope F_c/v_s + c_f (in m/s: near L̇ = 0 the
+    regularised law turns an error δL̇ into (F_c/v_s) δL̇, 1000 times δL̇ for v_s = 1 mm/s), the
+    channel damping over c₁ + c₂·(1 m/s), the end-stop force over k_s, the flywheel speed over its
+    ratio, the dissipated power over the sum of those slopes times 1 m/s."""
+    d = spec.device
+    out, total = {}, 0.0
+    if d.has("friction"):
+        v = d.values("friction")
+        slope = (v["coulomb"] or 0.0) / (v["velocity_scale"] or 1.0) + (v["viscous"] or 0.0)
+        out[f"{spec.name}.f_friction"] = max(slope, 1.0)
+        total += slope
+    if d.has("fluid"):
+        v = d.values("fluid")
+        out[f"{spec.name}.f_fluid"] = max(v["linear_damping"] + v["quadratic_damping"], 1.0)
+        total += v["linear_damping"] + v["quadratic_damping"]
+    if d.has("end_stops"):
+        v = d.values("end_stops")
+        out[f"{spec.name}.f_stop"] = max(v["stiffness"], 1.0)
+        total += v["stiffness"] + v["damping"]
+    if d.has("flywheel"):
+        out[f"{spec.name}.w_flywheel"] = d.columns()[layout.FLYWHEEL_RATIO]
+    if d.dissipative():
+        out[f"{spec.name}.p_loss"] = max(total, 1.0)
+    return out
 
 
 @pytest.fixture(scope="module")

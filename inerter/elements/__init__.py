@@ -38,6 +38,11 @@ Adding a kind, e.g. a linear spring with a preload F0 (``elements.NAME.type = "p
 3. Its tests: the law against a closed form, and a scene using it through the engine against the
    oracle (``tests/test_elements.py`` shows both for the shipped kinds).
 
+A kind may also report outputs beyond its family's three: a law ``extra_outputs(row, L, Ldot, out,
+k)`` that writes them at ``out[k]``... and returns the index after them, and
+``extra_output_names(spec)`` that names them for a scene element (the inerter's device,
+:mod:`.device`, does so).
+
 A translational law returns the axial force less its inertance times gᵀq̈: ``inertance(row)`` is
 the factor that goes into the mass matrix (M += b g gᵀ, Eq. 33; zero for all but the inerter) and
 ``force(row, L, Ldot, an, perp2)`` the rest (Q −= F g, Eqs. 29 and 31).
@@ -49,7 +54,7 @@ import pkgutil
 
 from inerter.elements.base import ROTATIONAL, TRANSLATIONAL, ElementKind, Parameter  # noqa: F401
 
-_NOT_KINDS = {"base", "layout", "dispatch", "generate"}
+_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device"}
 
 
 def _kind_modules():
@@ -71,3 +76,12 @@ MODULE = {m.KIND.name: m for m in MODULES}
 
 def translational(name: str) -> bool:
     return KINDS[name].family == TRANSLATIONAL
+
+
+def outputs(spec) -> tuple[tuple[str, str, str], ...]:
+    """(suffix, unit, description) of every output of scene element `spec`: its family's three
+    and, where its kind has them (an inerter's device), those its law writes after them
+    (``extra_outputs``, named by the module's ``extra_output_names(spec)``)."""
+    module = MODULE[spec.type]
+    extra = getattr(module, "extra_output_names", None)
+    return KINDS[spec.type].outputs + (tuple(extra(spec)) if extra is not None else ())

@@ -12,7 +12,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic, overload
 
 #: The families of element kinds: two-terminal elements acting along the line between their
 #: terminals (uniaxial, Sec. 2.2), and rotational ones between two bodies' orientations.
@@ -24,14 +27,52 @@ def law(fn):
     return njit(cache=True, inline="always")(fn)
 
 
+def rarely(condition):
+    """`condition`, marked for the compiler as almost always false: a law's branch that most
+    elements never take (an ideal inerter's device) is laid out and register-allocated as a cold
+    path, so that the loop it sits in runs as fast as without it. Plain Python returns it as it
+    is (``law.py_func``)."""
+    return condition
+
+
+@intrinsic
+def _expect_false(typingctx, condition):
+    """llvm.expect(condition, false)."""
+    def codegen(context, builder, signature, args):
+        bit = ir.IntType(1)
+        fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(bit, [bit, bit]), "llvm.expect.i1")
+        return builder.call(fn, [args[0], ir.Constant(bit, 0)])
+    return types.boolean(types.boolean), codegen
+
+
+@overload(rarely, inline="always")
+def _rarely(condition):
+    return lambda condition: _expect_false(condition)
+
+
 @dataclass(frozen=True)
 class Parameter:
-    """One parameter of an element kind as a scene declares it (``elements.NAME.<key>``)."""
+    """One parameter of an element kind as a scene declares it (``elements.NAME.<key>``, or
+    ``elements.NAME.device.EFFECT.<key>`` for a device effect's): its physical range is
+    [minimum, maximum], or (minimum, maximum] where `strict`; an optional one (`required` False)
+    takes `default` where the scene leaves it out (None: absent)."""
     key: str
     unit: str
     description: str
     minimum: float = -math.inf
     required: bool = True
+    maximum: float = math.inf
+    strict: bool = False
+    default: float | None = None
+
+    def expected(self) -> str:
+        """The range in words, for an error message: "a number ≥ 0 (N/m)"."""
+        parts = []
+        if self.minimum != -math.inf:
+            parts.append(f"{'>' if self.strict else '≥'} {self.minimum:g}")
+        if self.maximum != math.inf:
+            parts.append(f"≤ {self.maximum:g}")
+        return "a number" + (" " + " and ".join(parts) if parts else "") + f" ({self.unit})"
 
 
 @dataclass(frozen=True)
@@ -45,6 +86,9 @@ class ElementKind:
     description: str
     free: Parameter | None = None          # a spring's free length, a rotational spring's angle
     equation: str = ""
+    #: The device effects an element of this kind may declare (``elements.NAME.device.EFFECT``),
+    #: each an :class:`inerter.elements.device.Effect`; only the inerter has them.
+    device: tuple = ()
 
     @property
     def outputs(self) -> tuple[tuple[str, str, str], ...]:

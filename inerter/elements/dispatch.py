@@ -36,6 +36,13 @@ def energy(kind, row, L, Ldot):
 
 
 @law
+def extra_outputs(kind, row, L, Ldot, out, k):
+    if kind == 1:
+        return kind_inerter.extra_outputs(row, L, Ldot, out, k)
+    return k
+
+
+@law
 def torque(kind, row, phi, w):
     if kind == 2:
         return kind_rotational_damper.torque(row, phi, w)

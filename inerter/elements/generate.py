@@ -10,10 +10,14 @@ from inerter.elements import MODULES, ROTATIONAL, TRANSLATIONAL
 TARGET = Path(__file__).with_name("dispatch.py")
 
 _FUNCTIONS = {
-    TRANSLATIONAL: (("inertance", "row"), ("force", "row, L, Ldot, an, perp2"), ("energy", "row, L, Ldot")),
+    TRANSLATIONAL: (("inertance", "row"), ("force", "row, L, Ldot, an, perp2"), ("energy", "row, L, Ldot"),
+                    ("extra_outputs", "row, L, Ldot, out, k")),
     ROTATIONAL: (("torque", "row, phi, w"), ("rotational_energy", "row, phi, w")),
 }
 _LAW = {"rotational_energy": "energy"}
+#: Laws a kind may leave out, with what the dispatch returns for it: ``extra_outputs`` writes a
+#: kind's outputs beyond the family's three (an inerter's device) and returns the next index.
+_OPTIONAL = {"extra_outputs": "k"}
 
 
 def source() -> str:
@@ -23,16 +27,24 @@ def source() -> str:
              "from inerter.elements.base import law"]
     lines += [f"from inerter.elements import {m.__name__.rsplit('.', 1)[1]} as {alias[m]}" for m in MODULES]
     for family, functions in _FUNCTIONS.items():
-        members = [(code, m) for code, m in enumerate(MODULES) if m.KIND.family == family]
+        of_family = [(code, m) for code, m in enumerate(MODULES) if m.KIND.family == family]
         for name, args in functions:
+            law = _LAW.get(name, name)
+            members = [(code, m) for code, m in of_family if hasattr(m, law)]
             lines += ["", "", "@law", f"def {name}(kind, {args}):"]
+            if name in _OPTIONAL:
+                for code, m in members:
+                    lines.append(f"    if kind == {code}:")
+                    lines.append(f"        return {alias[m]}.{law}({args})")
+                lines.append(f"    return {_OPTIONAL[name]}")
+                continue
             if not members:
                 lines.append("    return 0.0")
                 continue
             for code, m in members[:-1]:
                 lines.append(f"    if kind == {code}:")
-                lines.append(f"        return {alias[m]}.{_LAW.get(name, name)}({args})")
-            lines.append(f"    return {alias[members[-1][1]]}.{_LAW.get(name, name)}({args})"
+                lines.append(f"        return {alias[m]}.{law}({args})")
+            lines.append(f"    return {alias[members[-1][1]]}.{law}({args})"
                          f"  # kind == {members[-1][0]}")
     return "\n".join(lines) + "\n"
 

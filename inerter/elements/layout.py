@@ -16,10 +16,26 @@ COEFFICIENT = 0          # k (N/m), c (N.s/m) or b (kg)
 FREE_LENGTH = 1          # a spring's free length L0 (m); 0 for the other kinds
 CENTRIPETAL = 2          # an inerter: 1.0 with the centripetal term (Eq. 9), 0.0 without (Eq. 8)
 MEET_LIMIT = 3           # the distance below which the terminals meet (m); 0: a pair checked earlier
-FIXED_DIRECTION = 4      # 1.0: the element acts along DIRECTION, its initial one (the small-displacement
+# An inerter's device (inerter.elements.device; all 0.0 for an ideal inerter and the other kinds):
+DEVICE = 4               # 1.0: the element declares a device (elements.NAME.device); its laws are skipped at 0.0
+FLYWHEEL_RATIO = 5       # flywheel angle per unit of stroke, 2π/p or the gear ratio (rad/m); 0: no flywheel
+FRICTION = 6             # 1.0: friction declared
+COULOMB = 7              # Coulomb friction force F_c (N)
+VISCOUS = 8              # viscous friction coefficient c_f (N.s/m)
+VELOCITY_SCALE = 9       # the regularisation's velocity scale v_s (m/s); 1.0 where F_c is not declared
+STOPS = 10               # 1.0: end stops declared
+STOP_MIN = 11            # shortest terminal distance L_min (m); 0.0: no lower stop
+STOP_MAX = 12            # longest terminal distance L_max (m); inf: no upper stop
+STOP_STIFFNESS = 13      # contact stiffness k_s (N/m^n)
+STOP_DAMPING = 14        # Hunt-Crossley contact damping c_s (N.s/m^(n+1))
+STOP_EXPONENT = 15       # contact force exponent n (1: linear, 1.5: Hertz)
+FLUID = 16               # 1.0: a helical-channel fluid inerter's channel damping declared
+FLUID_LINEAR = 17        # its linear damping c_1 (N.s/m)
+FLUID_QUADRATIC = 18     # its quadratic damping c_2 (N.s²/m²)
+FIXED_DIRECTION = 19     # 1.0: the element acts along DIRECTION, its initial one (the small-displacement
                          # law of structural codes), not along the current r̂
-DIRECTION = 5            # that direction, a unit vector in the global frame (3 columns; z = 0 in 2D)
-ELEMENT_REAL_COLUMNS = 8
+DIRECTION = 20           # that direction, a unit vector in the global frame (3 columns; z = 0 in 2D)
+ELEMENT_REAL_COLUMNS = 23
 
 # -- rot_int: a rotational element's integers
 ROT_KIND = 0             # its code: its place in inerter.elements.KINDS

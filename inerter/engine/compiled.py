@@ -358,7 +358,8 @@ def flatten(mech) -> dict:
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 9, float),
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 5, float),
                 in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
-                point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names)
+                point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names,
+                el_extra=tables["el_extra"])
 
 
 def signal_layout(flat) -> list[str]:
@@ -366,7 +367,8 @@ def signal_layout(flat) -> list[str]:
     if flat["dim"] == 3:
         return signal_layout3(flat)
     names = [f"{p}.{x}" for p in flat["point_names"] for x in ("r[1]", "r[2]", "v[1]", "v[2]")]
-    names += [f"{e}.{x}" for e in flat["el_names"] for x in ("s_rel", "v_rel", "f")]
+    names += [f"{e}.{x}" for e, extra in zip(flat["el_names"], flat["el_extra"])
+              for x in ("s_rel", "v_rel", "f", *extra)]
     names += [f"{e}.{x}" for e in flat["rot_names"] for x in ("phi_rel", "w_rel", "tau")]
     return names + ["energy", "constraint_residual"]
 

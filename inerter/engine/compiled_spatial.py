@@ -131,14 +131,16 @@ def flatten3(mech) -> dict:
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 10, float),
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 6, float),
                 in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
-                point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names)
+                point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names,
+                el_extra=tables["el_extra"])
 
 
 def signal_layout3(flat) -> list[str]:
     """The names of the values :func:`compiled_kernels.signal_values3` writes, in its order."""
     axes = ("r[1]", "r[2]", "r[3]", "v[1]", "v[2]", "v[3]")
     names = [f"{p}.{x}" for p in flat["point_names"] for x in axes]
-    names += [f"{e}.{x}" for e in flat["el_names"] for x in ("s_rel", "v_rel", "f")]
+    names += [f"{e}.{x}" for e, extra in zip(flat["el_names"], flat["el_extra"])
+              for x in ("s_rel", "v_rel", "f", *extra)]
     names += [f"{e}.{x}" for e in flat["rot_names"] for x in ("phi_rel", "w_rel", "tau")]
     names += [f"{b}.{x}" for b in flat["body_names"] for x in BODY_OUTPUTS]
     return names + ["energy", "constraint_residual"]

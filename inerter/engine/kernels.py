@@ -571,7 +571,8 @@ def signal_values(q, v, qdd, P, out):
 @njit(cache=True)
 def signal_values2(q, v, qdd, P, out):
     """Every point's position and velocity (4 per point), every translational element's s_rel,
-    v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd), every
+    v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd) and its
+    kind's extra outputs (an inerter's device: ``signal_layout``), every
     rotational element's φ_rel, ω_rel and torque (3 each), the energy (as ``Mechanism.energy``)
     and the largest constraint residual of a 2D scene. Returns a status code."""
     mass, pbody, ploc, el_int, el_real = P[MASS], P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
@@ -613,6 +614,7 @@ def signal_values2(q, v, qdd, P, out):
         out[k + 1] = along
         out[k + 2] = F
         k += 3
+        k = law.extra_outputs(kind, el_real[e], L, along, out, k)     # a device's outputs, if declared
     for e in range(rot_int.shape[0]):
         ia, ib, phi, w = _rotational2(q, v, e, rot_int)
         kind = rot_int[e, ROT_KIND]
@@ -1307,10 +1309,11 @@ def constraint_residual3(q, P):
 @njit(cache=True)
 def signal_values3(q, v, qdd, P, out):
     """Every point's position and velocity (6 per point), every translational element's s_rel,
-    v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd), every
-    rotational element's φ_rel, ω_rel and torque (3 each), every body's orientation and angular
-    velocity (BODY_OUTPUTS3 each), the energy (as ``Mechanism.energy``) and the largest
-    constraint residual. Returns a status code."""
+    v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd) and its
+    kind's extra outputs (an inerter's device: ``signal_layout3``), every rotational element's
+    φ_rel, ω_rel and torque (3 each), every body's orientation and angular velocity
+    (BODY_OUTPUTS3 each), the energy (as ``Mechanism.energy``) and the largest constraint
+    residual. Returns a status code."""
     mass, pbody, ploc, el_int, el_real = P[MASS], P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     rot_int, rot_real, jt_int, gravity, dims = P[ROT_INT], P[ROT_REAL], P[JT_INT], P[GRAVITY], P[DIMS]
     n = dims[N_VELOCITY]
@@ -1366,6 +1369,7 @@ def signal_values3(q, v, qdd, P, out):
         out[k + 1] = along
         out[k + 2] = F
         k += 3
+        k = law.extra_outputs(kind, el_real[e], L, along, out, k)     # a device's outputs, if declared
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
         energy += law.rotational_energy(rot_int[e, ROT_KIND], rot_real[e], phi, w)

@@ -1,7 +1,9 @@
 """Output signals, named and united as a Modelica user expects (the FMU uses the same names).
 
 Points: ``P.r[i]`` (m), ``P.v[i]`` (m/s). Translational elements: ``E.s_rel`` (m, terminal
-distance), ``E.v_rel`` (m/s, its rate), ``E.f`` (N, axial force, tension positive). Rotational
+distance), ``E.v_rel`` (m/s, its rate), ``E.f`` (N, axial force, tension positive); an inerter's
+device adds ``E.w_flywheel`` (rad/s), ``E.f_friction``, ``E.f_fluid``, ``E.f_stop`` (N) and
+``E.p_loss`` (W), those of its effects (:mod:`inerter.elements.device`). Rotational
 elements: ``E.phi_rel`` (rad), ``E.w_rel`` (rad/s), ``E.tau`` (N.m). 3D bodies: ``B.q[i]`` (unit
 quaternion w, x, y, z), ``B.euler[i]`` (rad, the scene's ``euler_sequence``), ``B.w[i]`` (rad/s,
 angular velocity in the global frame). Mechanism: ``energy`` (J), ``constraint_residual`` (largest
@@ -34,12 +36,13 @@ class Signals:
                            for i in range(d)],
                         False, lambda t, q, v, a, p=point: np.concatenate(p.evaluate(q, v)[:2]))
         for e in mech.elements:
-            spec = elements.KINDS[e.kind].outputs
+            spec = elements.outputs(mech.scene.elements[e.name])
             # an element whose law has an inertance reports a force that depends on q̈
             needs_a = e.kind == "inerter" or getattr(e, "inertance", 0.0) != 0.0
             # of its three outputs, only the force reads q̈ (the distance and its rate do not)
             self._group([(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}") for suffix, unit, text in spec],
-                        needs_a, lambda t, q, v, a, e=e: e.outputs(q, v, a)[:3], reads=(False, False, needs_a))
+                        needs_a, lambda t, q, v, a, e=e, k=len(spec): e.outputs(q, v, a)[:k],
+                        reads=(False, False, needs_a) + (False,) * (len(spec) - 3))
         if mech.dim == 3:
             for bname in mech.body_names:
                 self._body(mech, bname)

@@ -44,6 +44,9 @@ def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
         row_real[layout.CENTRIPETAL] = 0.0
         row_real[layout.FIXED_DIRECTION] = 1.0
         row_real[layout.DIRECTION:layout.DIRECTION + len(direction)] = [float(x) for x in direction]
+    if getattr(e, "device", None) is not None:
+        for column, value in e.device.columns().items():          # DEVICE ... FLUID_QUADRATIC
+            row_real[column] = float(value)
     return tuple(row_int), tuple(row_real)
 
 
@@ -107,12 +110,13 @@ def force_rows(scene, pidx, dim) -> tuple[list, list, list, list, list]:
 
 def element_tables(mech, pidx, rotational) -> dict:
     """The element tables of a mechanism: ``el_int``/``el_real`` rows of its translational elements
-    and ``rot_int``/``rot_real`` rows of its rotational ones, with their names, in scene order.
+    and ``rot_int``/``rot_real`` rows of its rotational ones, with their names, in scene order, and
+    ``el_extra``: each translational element's outputs beyond s_rel, v_rel and f (a device's).
     ``rotational(spec, element)`` gives a rotational element's (body a, body b, free angle, extra
     columns) as the kernels of its dimension index them."""
     scene = mech.scene
     mech_elements = _by_name(getattr(mech, "elements", []))
-    out = {key: [] for key in ("el_int", "el_real", "el_names", "rot_int", "rot_real", "rot_names")}
+    out = {key: [] for key in ("el_int", "el_real", "el_names", "el_extra", "rot_int", "rot_real", "rot_names")}
     limits = meet_limits(mech, scene.elements.values())
     for e in scene.elements.values():
         me = mech_elements.get(e.name)
@@ -125,6 +129,8 @@ def element_tables(mech, pidx, rotational) -> dict:
         out[prefix + "_int"].append(row_int)
         out[prefix + "_real"].append(row_real)
         out[prefix + "_names"].append(e.name)
+        if prefix == "el":
+            out["el_extra"].append([suffix for suffix, _, _ in elements.outputs(e)[3:]])
     return out
 
 

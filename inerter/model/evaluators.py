@@ -29,7 +29,8 @@ class TranslationalElement:
     """A two-terminal uniaxial element between points a and b, of any translational kind."""
 
     def __init__(self, name: str, kind: str, pair: PointPair, coefficient: float, labels: tuple[str, str],
-                 free_length: float | None = None, centripetal: bool = True, fixed_direction=None):
+                 free_length: float | None = None, centripetal: bool = True, device=None,
+                 fixed_direction=None):
         self.name = name
         self.kind = kind
         self.pair = pair
@@ -40,10 +41,14 @@ class TranslationalElement:
         self.centripetal = bool(centripetal)
         law = elements.MODULE[kind]
         self._force, self._inertance, self._energy = law.force.py_func, law.inertance.py_func, law.energy.py_func
+        self.device = device
         row = np.zeros(layout.ELEMENT_REAL_COLUMNS)
         row[layout.COEFFICIENT] = self.coefficient
         row[layout.FREE_LENGTH] = self.free_length or 0.0
         row[layout.CENTRIPETAL] = 1.0 if self.centripetal else 0.0
+        if device is not None:
+            for column, value in device.columns().items():     # DEVICE ... FLUID_QUADRATIC
+                row[column] = value
         #: The small-displacement law: the element acts along this initial direction (not r̂).
         self.fixed_direction = None if fixed_direction is None else np.asarray(fixed_direction, dtype=float)
         if self.fixed_direction is not None:
@@ -52,6 +57,10 @@ class TranslationalElement:
             row[layout.DIRECTION:layout.DIRECTION + len(self.fixed_direction)] = self.fixed_direction
         self.row = row
         self.inertance = self._inertance(row)
+        # the kind's outputs beyond s_rel, v_rel, f (a device's), by its law extra_outputs
+        self.extra = len(device.outputs()) if device is not None else 0
+        self._extra = getattr(law, "extra_outputs", None)
+        self._extra = self._extra.py_func if self._extra is not None and self.extra else None
 
     def geometry(self, q, v):
         r, rdot, a_n, H = self.pair.evaluate(q, v)
@@ -83,9 +92,15 @@ class TranslationalElement:
         return F
 
     def outputs(self, q, v, a):
-        """(s_rel, v_rel, f) at accelerations `a`."""
+        """(s_rel, v_rel, f) at accelerations `a`, then the kind's extra outputs (a device's)."""
         geo = self.geometry(q, v)
-        return geo[4], float(geo[1] @ geo[5]), self.force(q, v, a, geo)
+        L, Ldot = geo[4], float(geo[1] @ geo[5])
+        values = (L, Ldot, self.force(q, v, a, geo))
+        if self._extra is None:
+            return values
+        extra = np.zeros(self.extra)
+        self._extra(self.row, L, Ldot, extra, 0)
+        return values + tuple(float(x) for x in extra)
 
     def add_mass(self, q, v, M, geo=None):
         if self.inertance == 0.0:

@@ -256,7 +256,7 @@ class Mechanism:
             r0 = pair.evaluate(q0, np.zeros(self.n))[0]
             fixed = r0 / L_initial
         return el.TranslationalElement(e.name, e.type, pair, e.coefficient, labels, free, self.scene.centripetal,
-                                       fixed)
+                                       device=e.device, fixed_direction=fixed)
 
     def _initial_length(self, e, pair, q0):
         r, _, _, _ = pair.evaluate(q0, np.zeros(self.n))
@@ -547,6 +547,9 @@ class Mechanism:
             if e.kind == "inerter":
                 extra = f" {s.inerter_law}"
             lines.append(f"element {e.name}: {e.kind}, {getattr(e, 'coefficient_name', 'k')} = {e.coefficient:g}{extra}")
+            device = getattr(s.elements.get(e.name), "device", None)
+            if device is not None:
+                lines.append(f"element {e.name}: device: {device.describe()}")
         for f, _, _ in self.applied:
             lines.append(f"force {f.name}: {f.function} at {f.point} along {list(f.direction)}")
         for f, _ in self.feedback:

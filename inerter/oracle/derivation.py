@@ -12,6 +12,9 @@ Inerter with the centripetal term: F = b L̈ (Eq. 9). Without it (Eq. 8): F = b 
 oracle obtains as b(L̈ − |ṙ⊥|²/L) with ṙ from the Jacobian of r(q), again by differentiation.
 Under the small-displacement law: F = b s̈ with s(q) = ê0·r(q), ê0 the initial r̂, acting along
 ê0 (generalised force −F ∇s), s differentiated on Jets as L is.
+An inerter's device (:class:`OracleDevice`) takes its inertance from the kinetic energy of its
+flywheel or channel fluid, its friction and channel damping from their dissipation function, its
+end stops from their potential and Hunt-Crossley dissipation function.
 An error in either the fast path or this module shows up as a disagreement between the two.
 
 Planar rotational elements (:class:`OracleRotational`) are derived in the same way from the relative
@@ -95,6 +98,22 @@ def jsin(x: Jet) -> Jet:
 def jcos(x: Jet) -> Jet:
     s, c = math.sin(x.v), math.cos(x.v)
     return x._chain(c, -s, -c)
+
+
+def jpow(x: Jet, p: float) -> Jet:
+    """x**p for x > 0."""
+    return x._chain(x.v ** p, p * x.v ** (p - 1.0), p * (p - 1.0) * x.v ** (p - 2.0))
+
+
+def jabs(x: Jet) -> Jet:
+    return x._chain(abs(x.v), math.copysign(1.0, x.v), 0.0)
+
+
+def jlogcosh(x: Jet) -> Jet:
+    """ln cosh x, written |x| + ln(1 + e^{−2|x|}) − ln 2 so that it does not overflow."""
+    a = abs(x.v)
+    t = math.tanh(x.v)
+    return x._chain(a + math.log1p(math.exp(-2.0 * a)) - math.log(2.0), t, 1.0 - t * t)
 
 
 def point_position(point, coords):
@@ -284,9 +303,134 @@ class OracleRotational:
         return self._definition(self.angle(q, np.zeros_like(q)).v)
 
 
+class OracleDevice:
+    """An inerter's device from its energies, written here from the device literature's
+    definitions (not read from :mod:`inerter.elements`), each derivative taken on Jets.
+
+    * Inertance from the kinetic energy T(L̇) of what the stroke drives: a flywheel of inertia J
+      turned at ω = n L̇ (n = 2π/p for a ball screw of lead p, or the gear ratio), T = ½ J ω²; the
+      fluid in a helical channel of length ℓ and area A_c, driven by a piston of area A_p at
+      u = (A_p/A_c) L̇, T = ½ ρ ℓ A_c u². b = d²T/dL̇².
+    * Friction and channel damping from their dissipation function D(L̇) = F_c v_s ln cosh(L̇/v_s)
+      + ½ c_f L̇² + ½ c₁ L̇² + ⅓ c₂ |L̇|³: the generalised force is −∂D/∂q̇ (D on the Jet of L̇,
+      whose gradient is ∂L̇/∂q̇ = ∇L), the axial force ∂D/∂L̇.
+    * End stops: penetration δ = L_min − L or L − L_max, the potential V = k_s δⁿ⁺¹/(n+1) and
+      the Hunt-Crossley dissipation R = ½ c_s δⁿ δ̇²; a contact pushes only, so its normal force is
+      N = max(0, dV/dδ + ∂R/∂δ̇), acting as −N (lower stop) or +N (upper) along the element.
+    """
+
+    def __init__(self, device):
+        self.spec = device
+        self.flywheel = device.values("flywheel") if device.has("flywheel") else None
+        self.friction = device.values("friction") if device.has("friction") else None
+        self.stops = device.values("end_stops") if device.has("end_stops") else None
+        self.fluid = device.values("fluid") if device.has("fluid") else None
+        if self.flywheel is not None:
+            lead = self.flywheel.get("lead")
+            self.ratio = 2.0 * math.pi / lead if lead is not None else self.flywheel["ratio"]
+
+    def kinetic_energy(self, rate):
+        """T(L̇) of the flywheel or the channel's fluid (None: the scene gives b)."""
+        if self.flywheel is not None:
+            w = rate * self.ratio
+            return 0.5 * self.flywheel["inertia"] * (w * w)
+        if self.fluid is not None:
+            f = self.fluid
+            u = rate * (f["piston_area"] / f["channel_area"])
+            return 0.5 * f["density"] * f["channel_length"] * f["channel_area"] * (u * u)
+        return None
+
+    def inertance(self):
+        T = self.kinetic_energy(Jet(0.0, 1.0, 0.0, np.zeros(0)))
+        return None if T is None else T.d2
+
+    def _parts(self, rate):
+        """(friction, channel) dissipation functions of L̇ (a Jet or a float)."""
+        friction = channel = 0.0
+        if self.friction is not None:
+            fr = self.friction
+            if fr["coulomb"] is not None:
+                vs = fr["velocity_scale"]
+                friction = fr["coulomb"] * vs * jlogcosh(rate * (1.0 / vs))
+            friction = friction + 0.5 * (fr["viscous"] or 0.0) * (rate * rate)
+        if self.fluid is not None:
+            f = self.fluid
+            channel = (0.5 * f["linear_damping"] * (rate * rate)
+                       + (f["quadratic_damping"] / 3.0) * (rate * rate * jabs(rate)))
+        return friction, channel
+
+    def dissipation(self, rate):
+        friction, channel = self._parts(rate)
+        return friction + channel
+
+    def _slope(self, fn, x):
+        """dfn/dx at the float x, on a Jet."""
+        y = fn(Jet(x, 1.0, 0.0, np.zeros(0)))
+        return y.d1 if isinstance(y, Jet) else 0.0
+
+    def _penetration(self, L, rate):
+        """(δ, δ̇, sign of the axial force) past a stop, or None within the stroke."""
+        st = self.stops
+        if st["min"] is not None and st["min"] - L > 0.0:
+            return st["min"] - L, -rate, -1.0
+        if st["max"] is not None and L - st["max"] > 0.0:
+            return L - st["max"], rate, 1.0
+        return None
+
+    def _stop_potential(self, d):
+        n = self.stops["exponent"]
+        return self.stops["stiffness"] * jpow(d, n + 1.0) * (1.0 / (n + 1.0))
+
+    def contact(self, L, rate):
+        """(axial force, dissipated power) of the end stops at L, L̇ (floats)."""
+        hit = self._penetration(L, rate) if self.stops is not None else None
+        if hit is None:
+            return 0.0, 0.0
+        d, ddot, sign = hit
+        elastic = self._slope(self._stop_potential, d)                               # dV/dδ
+        n, c = self.stops["exponent"], self.stops["damping"]
+
+        def rayleigh(x):
+            return 0.5 * c * d ** n * (x * x)
+        damping = self._slope(rayleigh, ddot)                                         # ∂R/∂δ̇
+        N = elastic + damping
+        if not N > 0.0:                    # a contact only pushes: released, its energy V is lost
+            return 0.0, -elastic * ddot
+        return sign * N, 2.0 * rayleigh(ddot)                                         # R quadratic in δ̇
+
+    def potential(self, L):
+        """The end stops' elastic energy at the terminal distance L (a float)."""
+        hit = self._penetration(L, 0.0) if self.stops is not None else None
+        return 0.0 if hit is None else self._stop_potential(Jet(hit[0], 0.0, 0.0, np.zeros(0))).v
+
+    def add_force(self, L, Q, dofs):
+        """Q −= ∂D/∂q̇ (D on the Jet of L̇ with gradient ∇L) and the contact's −F∇L."""
+        rate = Jet(L.d1, 0.0, 0.0, L.g)
+        D = self.dissipation(rate)
+        if isinstance(D, Jet):
+            Q[dofs] -= D.g
+        F, _ = self.contact(L.v, L.d1)
+        Q[dofs] -= F * L.g
+
+    def force(self, L, rate):
+        """The device's axial force ∂D/∂L̇ + the contact's (floats)."""
+        return self._slope(self.dissipation, rate) + self.contact(L, rate)[0]
+
+    def outputs(self, L, rate):
+        """The device's outputs, in the order its scene element names them."""
+        friction = self._slope(lambda x: self._parts(x)[0], rate)
+        channel = self._slope(lambda x: self._parts(x)[1], rate)
+        stop, stop_loss = self.contact(L, rate)
+        values = {"w_flywheel": self.ratio * rate if self.flywheel is not None else 0.0,
+                  "f_friction": friction, "f_fluid": channel, "f_stop": stop,
+                  "p_loss": (friction + channel) * rate + stop_loss}
+        return tuple(values[suffix] for suffix, _, _ in self.spec.outputs())
+
+
 class OracleElement:
-    """Spring, damper or inerter through L(q) and its derivatives. As the mechanism's element
-    factory it builds the planar rotational elements too (:attr:`rotational`)."""
+    """Spring, damper or inerter (with its device, :class:`OracleDevice`) through L(q) and its
+    derivatives. As the mechanism's element factory it builds the planar rotational elements too
+    (:attr:`rotational`)."""
 
     #: The factory of planar rotational elements, ``rotational(spec, index_a, index_b, free_angle)``.
     rotational = OracleRotational
@@ -294,7 +438,9 @@ class OracleElement:
     def __init__(self, spec, pair, centripetal, free_length, labels, mech):
         self.name = spec.name
         self.kind = spec.type
-        self.coefficient = float(spec.coefficient)
+        self.device = OracleDevice(spec.device) if getattr(spec, "device", None) is not None else None
+        from_device = self.device.inertance() if self.device is not None else None
+        self.coefficient = float(spec.coefficient) if from_device is None else from_device
         self.coefficient_name = {"spring": "k", "damper": "c", "inerter": "b"}[spec.type]
         self.centripetal = bool(centripetal)
         self.free_length = free_length
@@ -334,13 +480,18 @@ class OracleElement:
         L, rdot = geo or self.probe.evaluate(q, v)
         _, rest = self._force_parts(L, rdot)
         Q[self.probe.dofs] -= rest * L.g                        # Q = −F ∇L
+        if self.device is not None:
+            self.device.add_force(L, Q, self.probe.dofs)
 
     def outputs(self, q, v, a):
         L, rdot = self.probe.evaluate(q, v)
         mass, rest = self._force_parts(L, rdot)
         F = rest + mass * float(L.g @ a[self.probe.dofs])
         distance = L.v if self.fixed_direction is None else self.probe.distance(q)
-        return distance, L.d1, F
+        if self.device is None:
+            return distance, L.d1, F
+        F += self.device.force(L.v, L.d1)
+        return (distance, L.d1, F) + self.device.outputs(L.v, L.d1)
 
     def length(self, q):
         return self.probe.evaluate(q, np.zeros_like(q))[0].v
@@ -351,6 +502,8 @@ class OracleElement:
         return 0.5 * self.coefficient * self.probe.evaluate(q, v)[0].d1 ** 2
 
     def potential(self, q):
+        if self.device is not None:
+            return self.device.potential(self.length(q))
         if self.kind != "spring":
             return 0.0
         return 0.5 * self.coefficient * (self.length(q) - self.free_length) ** 2

@@ -20,6 +20,8 @@ from typing import Any, Mapping
 from inerter import elements
 from inerter.common.errors import SceneError
 from inerter.common.rotations import EULER_SEQUENCES
+from inerter.elements.device import EFFECT as DEVICE_EFFECT
+from inerter.elements.device import Device
 from inerter.scene.expressions import evaluate, evaluate_parameters, parameter_meta
 
 GROUND = "ground"
@@ -106,6 +108,7 @@ class Element:
     coefficient: float = 0.0   # k, c or b
     free_length: float | None = None  # spring: L0 (None: the initial distance); rotational: free angle
     axis: tuple[float, ...] | None = None   # 3D rotational elements: axis in body a's frame
+    device: Any = None         # an inerter's declared device (inerter.elements.device.Device), or None
 
 
 @dataclass(frozen=True)
@@ -759,11 +762,21 @@ def _read_elements(r: _Reader, raw, points, bodies, dimension):
         etype = r.string(spec, "type", fld, ELEMENT_TYPES)
         kind = elements.KINDS[etype]
         rotational = kind.family == elements.ROTATIONAL
-        allowed = {"type": True, "bodies" if rotational else "between": True, kind.coefficient.key: True}
+        device = _read_device(r, spec["device"], f"{fld}.device", kind) if kind.device and "device" in spec else None
+        inertance = device.inertance() if device is not None else None
+        if inertance is not None and kind.coefficient.key in spec:
+            source = next(n for n, _ in device.effects if DEVICE_EFFECT[n].inertance is not None)
+            raise r.error(f"{fld}.{kind.coefficient.key}", spec[kind.coefficient.key],
+                          f"no {kind.coefficient.key} where device.{source} gives the inertance "
+                          f"({inertance:g} {kind.coefficient.unit})", "given twice")
+        allowed = {"type": True, "bodies" if rotational else "between": True,
+                   kind.coefficient.key: inertance is None}
         if kind.free is not None:
             allowed[kind.free.key] = kind.free.required
         if rotational and dimension == 3:
             allowed["axis"] = True
+        if kind.device:
+            allowed["device"] = False
         r.table(spec, fld, allowed)
         if rotational:
             a, b = r.name_pair(spec, "bodies", fld, body_names, "body")
@@ -772,20 +785,58 @@ def _read_elements(r: _Reader, raw, points, bodies, dimension):
             if points[a].body == points[b].body:
                 raise r.error(f"{fld}.between", [a, b], "points on two different bodies",
                               f"both points are on {points[a].body}: the element could never act")
-        coef = _read_parameter(r, spec, fld, kind.coefficient)
+        coef = _read_parameter(r, spec, fld, kind.coefficient) if inertance is None else inertance
         free = _read_parameter(r, spec, fld, kind.free) if kind.free is not None else None
         if rotational:
             axis = r.vector(spec, "axis", fld, 3, unit_length=True) if dimension == 3 else None
             out[ename] = Element(ename, etype, body_a=a, body_b=b, coefficient=coef, free_length=free, axis=axis)
         else:
-            out[ename] = Element(ename, etype, point_a=a, point_b=b, coefficient=coef, free_length=free)
+            out[ename] = Element(ename, etype, point_a=a, point_b=b, coefficient=coef, free_length=free,
+                                 device=device)
     return out
 
 
 def _read_parameter(r: _Reader, spec, fld, p: "elements.Parameter"):
-    """One parameter of an element kind, within the range its kind declares (inerter.elements)."""
+    """One parameter of an element kind or of a device effect, within the range it declares
+    (inerter.elements); an optional one left out takes its default (None: absent)."""
+    if p.key not in spec and not p.required:
+        return p.default
     minimum = p.minimum if p.minimum != -math.inf else None
-    return r.number(spec, p.key, fld, minimum=minimum, required=p.required)
+    value = r.number(spec, p.key, fld, minimum=minimum, exclusive=p.strict, required=p.required)
+    if value > p.maximum:
+        raise r.error(f"{fld}.{p.key}", value, p.expected(), "out of range")
+    return value
+
+
+def _read_device(r: _Reader, raw, fld, kind: "elements.ElementKind"):
+    """An element's ``device`` table: one sub-table per effect its kind allows
+    (inerter.elements.device.EFFECTS), each parameter within its range, the effect's own check
+    (one of lead or ratio, min < max, ...) and at most one source of the inertance."""
+    if not isinstance(raw, dict):
+        raise r.error(fld, raw, "a table of device effects: " + ", ".join(e.name for e in kind.device), "not a table")
+    names = [e.name for e in kind.device]
+    for key in raw:
+        if key not in names:
+            raise r.error(f"{fld}.{key}", raw[key], "one of: " + ", ".join(names), "unknown device effect")
+    if not raw:
+        raise r.error(fld, raw, "at least one effect: " + ", ".join(names), "empty device")
+    effects = []
+    for effect in kind.device:
+        if effect.name not in raw:
+            continue
+        efld = f"{fld}.{effect.name}"
+        table = r.table(raw[effect.name], efld, {p.key: p.required for p in effect.parameters})
+        values = {p.key: _read_parameter(r, table, efld, p) for p in effect.parameters}
+        problem = effect.check(values) if effect.check is not None else None
+        if problem is not None:
+            key, value, expected, what = problem
+            raise r.error(f"{efld}.{key}", value, expected, what)
+        effects.append((effect.name, tuple(values.items())))
+    sources = [name for name, _ in effects if DEVICE_EFFECT[name].inertance is not None]
+    if len(sources) > 1:
+        raise r.error(f"{fld}.{sources[1]}", raw[sources[1]], f"one source of the inertance (device.{sources[0]} "
+                      "gives it already)", "two sources of inertance")
+    return Device(tuple(effects))
 
 
 def _read_forces(r: _Reader, raw, points, dimension):
@@ -866,7 +917,7 @@ def _signal_names(points, element_specs, dimension):
         for i in range(1, dimension + 1):
             names.update({f"{p}.r[{i}]", f"{p}.v[{i}]"})
     for e, el in element_specs.items():
-        names.update(f"{e}.{suffix}" for suffix, _, _ in elements.KINDS[el.type].outputs)
+        names.update(f"{e}.{suffix}" for suffix, _, _ in elements.outputs(el))
     names.update({"energy", "constraint_residual"})
     return names
 

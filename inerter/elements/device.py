@@ -1,0 +1,370 @@
+"""An inerter's device: the effects of a real inerter that are laws of its terminal distance.
+
+An ideal inerter's force is b d²L/dt² (paper Eq. 9). A real device adds forces of its own; those
+written here depend on the terminal distance L and its rate L̇ only, so each is one more scalar
+term of the inerter's law (:mod:`inerter.elements.inerter`), the same in 2D and 3D, and enters the
+equations as the ideal law's rest does: Q −= F g with g = Hᵀ r̂ (Eqs. 29, 31). A scene declares them
+per element (``[elements.NAME.device.EFFECT]``, :data:`EFFECTS`); an element without a device has
+``row[DEVICE] == 0`` and its law never enters the branch that evaluates them.
+
+Sign convention: the axial force F is tension positive, like every translational element's; a
+dissipative force opposes the stroke rate, F·L̇ ≥ 0.
+
+**Flywheel** (``device.flywheel``; Smith 2002, IEEE Trans. Autom. Control 47(10) 1648-1662,
+Sec. III; Wang & Su 2008, Veh. Syst. Dyn. 46(7) 575-595): a flywheel of axial moment of inertia J
+spun by a ball screw of lead p (stroke per revolution) turns at ω = (2π/p) L̇, so its kinetic
+energy ½ J ω² = ½ J (2π/p)² L̇² is that of an inerter of inertance
+
+    b = J (2π/p)²,
+
+or b = J n² for a rack and pinion or gear train that turns the flywheel by n radians per metre of
+stroke. Only this axial part is a law of L̇: the flywheel's transverse inertia, its gyroscopic
+moments when the device's axis turns, and the masses of the housing and rod add terms to the mass
+matrix beyond b g gᵀ and are not modelled here.
+
+**Friction** (``device.friction``): Coulomb friction F_c and viscous friction c_f on the stroke
+rate, with the sign function regularised by a hyperbolic tangent of velocity scale v_s,
+
+    F_f = F_c tanh(L̇ / v_s) + c_f L̇
+
+(the "tanh" model of Pennestrì, Rossi, Salvini & Valentini 2016, Nonlinear Dyn. 83 1785-1801,
+Sec. 2; friction in ball-screw inerters: Wang & Su 2008). |F_f − F_c sgn L̇ − c_f L̇| ≤ 2 F_c
+e^{−2|L̇|/v_s}: the law approaches Coulomb's as v_s → 0, and near L̇ = 0 it is a viscous damper of
+coefficient F_c/v_s, so a sticking phase is stiff (eigenvalue ≈ −F_c/(m v_s) for an effective
+mass m): integrate small v_s with an implicit method (Radau, BDF). Its dissipation function is
+D_f = F_c v_s ln cosh(L̇/v_s) + ½ c_f L̇², F_f = ∂D_f/∂L̇.
+
+A screw *efficiency* (the part of the transmitted inertial force b L̈ that is lost, η_f when the
+terminals drive the flywheel, η_b when it drives them; Wen et al. 2017, J. Vibroeng. 19(6), for
+force-dependent friction in ball-screw inerters) is not a law of (L, L̇, a_n·r̂, |ṙ⊥|²): it
+multiplies b by 1/η_f or η_b according to the sign of L̇·L̈, and L̈ = gᵀq̈ + a_n·r̂ + |ṙ⊥|²/L
+holds the unknown accelerations, so the mass matrix of Eq. (33) would depend on its own solution.
+It is not built (see docs/scene_format.md).
+
+**End stops** (``device.end_stops``): stroke limits L_min and L_max. Past one, by the penetration
+δ = L_min − L (or L − L_max) > 0 at the rate δ̇, a Hunt-Crossley contact force pushes back:
+
+    N = max(0, k_s δⁿ + c_s δⁿ δ̇),
+
+(Hunt & Crossley 1975, J. Appl. Mech. 42(2) 440-445; the clip at zero, so that the contact never
+pulls, as in Marhefka & Orin 1999, IEEE Trans. Syst. Man Cybern. A 29(6) 566-572). The damping
+acts only in contact and vanishes with δ, so the force is continuous at first touch. F = −N at the
+lower stop (compression), +N at the upper one. The elastic part stores k_s δⁿ⁺¹/(n+1) (in the
+element's energy); the rest, (N − k_s δⁿ) δ̇ ≥ 0, is dissipated. For a target coefficient of
+restitution e at impact speed v⁻, Lankarani & Nikravesh 1990 (J. Mech. Des. 112 369-376) give
+c_s ≈ 3 k_s (1 − e²)/(4 v⁻).
+
+**Fluid inerter** (``device.fluid``; Swift, Smith, Glover, Papageorgiou, Gartner & Houghton 2013,
+Int. J. Control 86(11) 2035-2051): a piston of area A_p drives fluid of density ρ through a helical
+channel of length ℓ and area A_c at the speed u = (A_p/A_c) L̇; the channel fluid's kinetic energy
+½ ρ ℓ A_c u² = ½ (ρ ℓ A_p²/A_c) L̇² is that of an inerter of inertance
+
+    b = ρ ℓ A_p² / A_c,
+
+and the channel's losses, linear and quadratic in the flow rate A_p L̇, give
+
+    F_d = c₁ L̇ + c₂ L̇ |L̇|.
+
+Under a harmonic stroke X sin ωt the quadratic term dissipates (8/3) c₂ ω² X³ per cycle, the
+energy π c_eq ω X² of the equivalent viscous damping c_eq = 8/(3π) c₂ ω X.
+
+The device's outputs (``E.w_flywheel``, ``E.f_friction``, ``E.f_fluid``, ``E.f_stop``, ``E.p_loss``)
+are written by :func:`outputs` in the order :meth:`Device.outputs` names them. The dissipated
+energy is the time integral of ``E.p_loss``; as an output of its own it would need a state of the
+integrator, which the engine does not have.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+from numba import njit
+
+from inerter.elements.base import Parameter, law
+from inerter.elements.layout import (COULOMB, DEVICE, FLUID, FLUID_LINEAR, FLUID_QUADRATIC, FLYWHEEL_RATIO,
+                                     FRICTION, STOP_DAMPING, STOP_EXPONENT, STOP_MAX, STOP_MIN, STOP_STIFFNESS,
+                                     STOPS, VELOCITY_SCALE, VISCOUS)
+
+
+# ------------------------------------------------------------------------------------------------
+# The laws (scalar arithmetic on the element's row). The effects' laws are inlined into the three
+# entry points below, and those are called, not inlined, from the inerter's law: an ideal inerter's
+# kernels then hold only the test of row[DEVICE] and a call never made, not the device's code.
+# ------------------------------------------------------------------------------------------------
+def entry(fn):
+    """Compile a device law that the inerter's law calls without inlining it (cached on disk)."""
+    return njit(cache=True)(fn)
+
+
+@law
+def friction(row, Ldot):
+    """F_f = F_c tanh(L̇/v_s) + c_f L̇ (N, tension positive)."""
+    return row[COULOMB] * math.tanh(Ldot / row[VELOCITY_SCALE]) + row[VISCOUS] * Ldot
+
+
+@law
+def fluid_damping(row, Ldot):
+    """F_d = c₁ L̇ + c₂ L̇|L̇| (N, tension positive): the helical channel's losses."""
+    return row[FLUID_LINEAR] * Ldot + row[FLUID_QUADRATIC] * Ldot * abs(Ldot)
+
+
+@law
+def end_stop(row, L, Ldot):
+    """(F, p): the end stops' axial force (N, tension positive: −N at the lower stop, +N at the
+    upper) and the power dissipated in the contact (W), N = max(0, k_s δⁿ + c_s δⁿ δ̇)."""
+    d = row[STOP_MIN] - L
+    rate = -Ldot
+    sign = -1.0
+    if not d > 0.0:
+        d = L - row[STOP_MAX]
+        rate = Ldot
+        sign = 1.0
+        if not d > 0.0:
+            return 0.0, 0.0
+    dn = d ** row[STOP_EXPONENT]
+    elastic = row[STOP_STIFFNESS] * dn
+    damping = row[STOP_DAMPING] * dn * rate
+    N = elastic + damping
+    if N < 0.0:                       # the contact would pull: it lets go, and its stored energy is lost
+        return 0.0, -elastic * rate
+    return sign * N, damping * rate
+
+
+@law
+def stop_energy(row, L):
+    """The end stops' elastic energy k_s δⁿ⁺¹/(n+1) (J)."""
+    d = max(row[STOP_MIN] - L, L - row[STOP_MAX])
+    if not d > 0.0:
+        return 0.0
+    n = row[STOP_EXPONENT]
+    return row[STOP_STIFFNESS] * d ** (n + 1.0) / (n + 1.0)
+
+
+@entry
+def force(row, L, Ldot):
+    """The device's axial force (N, tension positive): friction, channel damping and end stops,
+    each where declared."""
+    F = 0.0
+    if row[FRICTION] != 0.0:
+        F += friction(row, Ldot)
+    if row[FLUID] != 0.0:
+        F += fluid_damping(row, Ldot)
+    if row[STOPS] != 0.0:
+        F += end_stop(row, L, Ldot)[0]
+    return F
+
+
+@entry
+def energy(row, L):
+    """The energy the device stores beyond ½ b L̇²: the end stops' elastic energy (J)."""
+    if row[STOPS] != 0.0:
+        return stop_energy(row, L)
+    return 0.0
+
+
+@entry
+def outputs(row, L, Ldot, out, k):
+    """Write the device's outputs at out[k], out[k + 1], ... in the order of
+    :meth:`Device.outputs` (flywheel speed; friction, channel and end-stop forces; dissipated
+    power) and return the index after them."""
+    if row[FLYWHEEL_RATIO] != 0.0:
+        out[k] = row[FLYWHEEL_RATIO] * Ldot
+        k += 1
+    dissipative = False
+    loss = 0.0
+    if row[FRICTION] != 0.0:
+        F = friction(row, Ldot)
+        out[k] = F
+        k += 1
+        loss += F * Ldot
+        dissipative = True
+    if row[FLUID] != 0.0:
+        F = fluid_damping(row, Ldot)
+        out[k] = F
+        k += 1
+        loss += F * Ldot
+        dissipative = True
+    if row[STOPS] != 0.0:
+        F, p = end_stop(row, L, Ldot)
+        out[k] = F
+        k += 1
+        loss += p
+        dissipative = True
+    if dissipative:
+        out[k] = loss
+        k += 1
+    return k
+
+
+# ------------------------------------------------------------------------------------------------
+# The effects a scene may declare, and a declared device
+# ------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Effect:
+    """One device effect as a scene declares it (``elements.NAME.device.<name>``): its parameters
+    with units and physical ranges, the literature it follows, a check of how its parameters go
+    together (``check(values)`` → None or (key, value, expected, problem)) and, for an effect that
+    sets the inertance, ``inertance(values)``."""
+    name: str
+    description: str
+    citation: str
+    parameters: tuple[Parameter, ...]
+    check: Callable | None = None
+    inertance: Callable | None = None
+
+
+def _one_of(values, keys, what):
+    given = [k for k in keys if values.get(k) is not None]
+    if len(given) != 1:
+        return (keys[0] if not given else given[1], [values.get(k) for k in keys],
+                f"exactly one of {' or '.join(keys)} ({what})", "none given" if not given else "both given")
+    return None
+
+
+def _flywheel_ratio(values) -> float:
+    """The flywheel's angle per unit of stroke (rad/m): 2π/p for a ball screw of lead p."""
+    return 2.0 * math.pi / values["lead"] if values.get("lead") is not None else values["ratio"]
+
+
+def _check_friction(values):
+    if values.get("coulomb") is None and values.get("viscous") is None:
+        return ("coulomb", None, "coulomb (N) and its velocity_scale (m/s), or viscous (N.s/m)", "no friction given")
+    if values.get("coulomb") is not None and values.get("velocity_scale") is None:
+        return ("velocity_scale", None, "the regularisation's velocity scale v_s > 0 (m/s) with coulomb",
+                "missing field")
+    return None
+
+
+def _check_stops(values):
+    low, high = values.get("min"), values.get("max")
+    if low is None and high is None:
+        return ("min", None, "min (m) or max (m), or both", "no stroke limit given")
+    if low is not None and high is not None and not low < high:
+        return ("max", high, f"a longest terminal distance > min = {low:g} m", "out of range")
+    return None
+
+
+FLYWHEEL = Effect(
+    "flywheel", "ball-screw (or geared) flywheel: b = J (2π/p)² or J n²",
+    "Smith 2002, IEEE TAC 47(10), Sec. III; Wang & Su 2008, Veh. Syst. Dyn. 46(7)",
+    (Parameter("inertia", "kg.m2", "the flywheel's moment of inertia J about its spin axis", minimum=0.0),
+     Parameter("lead", "m", "ball-screw lead p: stroke per flywheel revolution", minimum=0.0, strict=True,
+               required=False),
+     Parameter("ratio", "rad/m", "flywheel angle per unit of stroke n (rack and pinion, gears)", minimum=0.0,
+               strict=True, required=False)),
+    check=lambda v: _one_of(v, ("lead", "ratio"), "ball screw or gear train"),
+    inertance=lambda v: v["inertia"] * _flywheel_ratio(v) ** 2)
+
+FRICTION_EFFECT = Effect(
+    "friction", "Coulomb and viscous friction on dL/dt, F_c tanh(v/v_s) + c_f v",
+    "Pennestrì et al. 2016, Nonlinear Dyn. 83, Sec. 2 (tanh regularisation); Wang & Su 2008",
+    (Parameter("coulomb", "N", "Coulomb friction force F_c", minimum=0.0, required=False),
+     Parameter("viscous", "N.s/m", "viscous friction coefficient c_f", minimum=0.0, required=False, default=0.0),
+     Parameter("velocity_scale", "m/s", "velocity scale v_s of the tanh regularisation", minimum=0.0,
+               strict=True, required=False)),
+    check=_check_friction)
+
+END_STOPS = Effect(
+    "end_stops", "stroke limits with a Hunt-Crossley contact, max(0, k_s δⁿ + c_s δⁿ dδ/dt)",
+    "Hunt & Crossley 1975, J. Appl. Mech. 42(2); Marhefka & Orin 1999, IEEE Trans. SMC A 29(6)",
+    (Parameter("min", "m", "shortest terminal distance L_min (lower stop)", minimum=0.0, required=False),
+     Parameter("max", "m", "longest terminal distance L_max (upper stop)", minimum=0.0, strict=True,
+               required=False),
+     Parameter("stiffness", "N/m^n", "contact stiffness k_s", minimum=0.0),
+     Parameter("damping", "N.s/m^(n+1)", "Hunt-Crossley contact damping c_s", minimum=0.0, required=False,
+               default=0.0),
+     Parameter("exponent", "1", "contact force exponent n (1: linear, 1.5: Hertz)", minimum=1.0, maximum=3.0,
+               required=False, default=1.0)),
+    check=_check_stops)
+
+FLUID_EFFECT = Effect(
+    "fluid", "helical-channel fluid inerter: b = ρ ℓ A_p²/A_c, damping c1 v + c2 v|v|",
+    "Swift et al. 2013, Int. J. Control 86(11)",
+    (Parameter("density", "kg/m3", "fluid density ρ", minimum=0.0, strict=True),
+     Parameter("channel_length", "m", "helical channel length ℓ", minimum=0.0, strict=True),
+     Parameter("channel_area", "m2", "channel cross-section A_c", minimum=0.0, strict=True),
+     Parameter("piston_area", "m2", "effective piston area A_p", minimum=0.0, strict=True),
+     Parameter("linear_damping", "N.s/m", "channel damping linear in the flow, c_1", minimum=0.0,
+               required=False, default=0.0),
+     Parameter("quadratic_damping", "N.s2/m2", "channel damping quadratic in the flow, c_2", minimum=0.0,
+               required=False, default=0.0)),
+    inertance=lambda v: v["density"] * v["channel_length"] * v["piston_area"] ** 2 / v["channel_area"])
+
+#: The effects an inerter may declare, in the order they are listed and their outputs written.
+EFFECTS = (FLYWHEEL, FRICTION_EFFECT, END_STOPS, FLUID_EFFECT)
+EFFECT = {e.name: e for e in EFFECTS}
+
+
+@dataclass(frozen=True)
+class Device:
+    """An element's declared device: ((effect name, ((parameter key, value or None), ...)), ...),
+    in the order of :data:`EFFECTS`, every parameter present (None: optional and absent)."""
+    effects: tuple
+
+    def has(self, name: str) -> bool:
+        return any(n == name for n, _ in self.effects)
+
+    def values(self, name: str) -> dict:
+        for n, values in self.effects:
+            if n == name:
+                return dict(values)
+        return {}
+
+    def inertance(self) -> float | None:
+        """The inertance its flywheel or fluid channel gives (kg); None where the scene gives b."""
+        for name, values in self.effects:
+            fn = EFFECT[name].inertance
+            if fn is not None:
+                return float(fn(dict(values)))
+        return None
+
+    def columns(self) -> dict[int, float]:
+        """Its columns of the element table (:mod:`inerter.elements.layout`)."""
+        cols = {DEVICE: 1.0}
+        if self.has("flywheel"):
+            cols[FLYWHEEL_RATIO] = float(_flywheel_ratio(self.values("flywheel")))
+        if self.has("friction"):
+            v = self.values("friction")
+            cols.update({FRICTION: 1.0, COULOMB: v["coulomb"] or 0.0, VISCOUS: v["viscous"] or 0.0,
+                         VELOCITY_SCALE: v["velocity_scale"] or 1.0})
+        if self.has("end_stops"):
+            v = self.values("end_stops")
+            cols.update({STOPS: 1.0, STOP_MIN: v["min"] if v["min"] is not None else 0.0,
+                         STOP_MAX: v["max"] if v["max"] is not None else math.inf,
+                         STOP_STIFFNESS: v["stiffness"], STOP_DAMPING: v["damping"],
+                         STOP_EXPONENT: v["exponent"]})
+        if self.has("fluid"):
+            v = self.values("fluid")
+            cols.update({FLUID: 1.0, FLUID_LINEAR: v["linear_damping"], FLUID_QUADRATIC: v["quadratic_damping"]})
+        return cols
+
+    def dissipative(self) -> bool:
+        return any(self.has(n) for n in ("friction", "end_stops", "fluid"))
+
+    def outputs(self) -> tuple[tuple[str, str, str], ...]:
+        """(suffix, unit, description) of its outputs, in the order :func:`outputs` writes them."""
+        out = []
+        if self.has("flywheel"):
+            out.append(("w_flywheel", "rad/s", "flywheel speed, n dL/dt"))
+        if self.has("friction"):
+            out.append(("f_friction", "N", "device friction F_c tanh(v/v_s) + c_f v, tension positive (part of f)"))
+        if self.has("fluid"):
+            out.append(("f_fluid", "N", "channel damping c1 v + c2 v|v|, tension positive (part of f)"))
+        if self.has("end_stops"):
+            out.append(("f_stop", "N", "end-stop contact force, tension positive (part of f)"))
+        if self.dissipative():
+            out.append(("p_loss", "W", "power dissipated in the device (friction, channel, contact damping)"))
+        return tuple(out)
+
+    def describe(self) -> str:
+        """One line: each effect with its parameters."""
+        parts = []
+        for name, values in self.effects:
+            effect = EFFECT[name]
+            units = {p.key: p.unit for p in effect.parameters}
+            given = ", ".join(f"{k} = {v:g}" + (f" {units[k]}" if units[k] != "1" else "")
+                              for k, v in values if v is not None)
+            parts.append(f"{name} ({given})")
+        b = self.inertance()
+        return "; ".join(parts) + (f"; inertance from the device b = {b:g} kg" if b is not None else "")

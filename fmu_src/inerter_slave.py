@@ -233,7 +233,9 @@ class InerterSlave(Fmi2Slave):
                                         getter=self._setting_getter(p["name"]),
                                         setter=self._setting_setter(p["name"], float)))
         for e in model.effect_info():
-            self.register_variable(Boolean(e["name"], description=e["description"], **fixed,
+            kind = tunable if e["name"] in self.tunable else fixed
+            note = " (tunable: may change between steps)" if e["name"] in self.tunable else ""
+            self.register_variable(Boolean(e["name"], description=e["description"] + note, **kind,
                                            getter=self._setting_getter(e["name"]),
                                            setter=self._setting_setter(e["name"], bool)))
         # An Integer here; the build declares it an Enumeration of the methods (pythonfmu 0.7.0

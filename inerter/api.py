@@ -80,20 +80,23 @@ class Model:
         return info
 
     def tunable_parameters(self) -> list[str]:
-        """The parameters a running stepper takes between steps (``Stepper.retune``): each one that
-        changes the model, and only in element coefficients or point-force values, amplitudes,
-        frequencies or gains, found by reading the scene with it changed. The others need a new
+        """The parameters and effect switches a running stepper takes between steps
+        (``Stepper.retune``): each one that changes the model, and only in element coefficients,
+        point-force values, amplitudes, frequencies or gains, or the centripetal switch, found by
+        reading the scene with it changed. The others need a new
         model (geometry, masses, free lengths...), or change nothing in it (the experiment's)."""
         from inerter.engine.tables import untunable_changes
         from inerter.scene.changes import differences
         out = []
-        for p in self.scene.parameters.values():
+        trials = [(p.name, 1.5 * p.value + 1.0) for p in self.scene.parameters.values()]
+        trials += [(e["name"], not e["value"]) for e in self.effect_info()]
+        for name, value in trials:
             try:
-                changed = load_scene(self.path, {**self.overrides, p.name: 1.5 * p.value + 1.0})
+                changed = load_scene(self.path, {**self.overrides, name: value})
             except SceneError:
                 continue                     # a changed value the scene refuses: keep it fixed
             if differences(self.scene, changed) and not untunable_changes(self.scene, changed):
-                out.append(p.name)
+                out.append(name)
         return out
 
     def input_info(self):

@@ -265,15 +265,18 @@ def tables(model) -> dict:
 
 
 def table_tunable(scene: Path) -> set[str]:
-    """The parameters whose change (× 1.5 + 1) moves only the numbers the kernels read at each
-    evaluation: element coefficients (column COEFFICIENT), a point force's value, amplitude,
-    frequency, a PD actuator's gains; the initial state and every other table entry stay."""
+    """The parameters whose change (× 1.5 + 1) and the effect switches whose flip move only the
+    numbers the kernels read at each evaluation: element coefficients (column COEFFICIENT), the
+    centripetal column and an inerter device's columns, a point force's value, amplitude, frequency, a PD actuator's gains; the
+    initial state and every other table entry stay."""
     base = inerter.load(scene)
     flat0 = tables(base)
     out = set()
-    for p in base.parameter_info():
+    trials = [(p["name"], 1.5 * p["value"] + 1.0) for p in base.parameter_info()]
+    trials += [(e["name"], not e["value"]) for e in base.effect_info()]
+    for name, trial in trials:
         try:
-            other = inerter.load(scene, **{p["name"]: 1.5 * p["value"] + 1.0})
+            other = inerter.load(scene, **{name: trial})
         except SceneError:
             continue
         flat1 = tables(other)
@@ -281,7 +284,9 @@ def table_tunable(scene: Path) -> set[str]:
                 and np.array_equal(base.mechanism.v0, other.mechanism.v0)) or not flat0:
             continue
         dim = flat0["dim"]
-        tunable_columns = {"el_real": [layout.COEFFICIENT], "rot_real": [layout.COEFFICIENT],
+        device = list(range(layout.DEVICE, layout.FLUID_QUADRATIC + 1))
+        tunable_columns = {"el_real": [layout.COEFFICIENT, layout.CENTRIPETAL] + device,
+                           "rot_real": [layout.COEFFICIENT],
                            "fa_real": [dim + layout.F_VALUE, dim + layout.F_AMPLITUDE, dim + layout.F_FREQUENCY],
                            "pd_real": [dim + layout.PD_KP, dim + layout.PD_KD]}
         moved = tuned = False
@@ -299,18 +304,19 @@ def table_tunable(scene: Path) -> set[str]:
                 differs[:, tunable_columns[key]] = False
             moved |= bool(differs.any())
         if tuned and not moved:
-            out.add(p["name"])
+            out.add(name)
     return out
 
 
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
 def test_the_tunable_parameters_are_those_the_kernels_tables_take(fmus, scene):
     md = read_model_description(str(fmus[scene]))
-    parameters = {p["name"] for p in inerter.load(scene).parameter_info()}
+    model = inerter.load(scene)
+    parameters = {p["name"] for p in model.parameter_info()} | {e["name"] for e in model.effect_info()}
     tunable = {v.name for v in md.modelVariables if v.variability == "tunable"}
     assert tunable <= parameters
     assert tunable == table_tunable(scene)
-    said = re.search(r"Tunable between steps: ([^;.]*)", md.description)
+    said = re.search(r"Tunable between steps: (.*?)(?:; |\. |\.$)", md.description)   # names may hold dots
     assert (set(said.group(1).split(", ")) if said else set()) == tunable, md.description
 
 
@@ -340,7 +346,7 @@ def _case(scene: str, name: str, factor: float, compiled: bool = True):
 @pytest.mark.parametrize("scene, name, factor, compiled", [
     _case("two_bar_2d", "b", 2.0), _case("two_bar_2d", "Fa", 0.25), _case("two_bar_2d", "f", 1.5),
     _case("two_bar_2d", "b", 2.0, compiled=False), _case("two_bar_2d_pd", "kp", 3.0),
-    _case("double_pendulum_3d", "c", 4.0)])
+    _case("double_pendulum_3d", "c", 4.0), _case("two_bar_2d_device", "Fc", 4.0)])
 def test_a_tunable_parameter_changed_mid_run_equals_the_solver_changing_it(fmus, instance, scene, name,
                                                                           factor, compiled):
     """Through fmpy's FMU2Slave on the FMU's compiled and numpy paths; the reference is the
@@ -378,6 +384,34 @@ def test_a_tunable_parameter_changed_mid_run_equals_the_solver_changing_it(fmus,
     lengths = [j for j, o in enumerate(names) if ".r[" in o]
     assert max(np.max(np.abs(unchanged[:, j] - ref[:, j])) for j in lengths) > 1e-5
     assert f"{name} = {value!r} from t = 1.0 s on" in inst.logged()
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "numpy"])
+def test_the_centripetal_switch_flipped_mid_run_equals_the_solver_flipping_it(fmus, instance, compiled):
+    """effects.centripetal set false at t = 1 s through fmpy's FMU2Slave; the reference is the
+    solver's stepper going on from the same state with a model loaded without the term."""
+    scene, name, rtol, h, t_change, stop = TWO_BAR, "effects.centripetal", 1e-10, 0.01, 1.0, 1.5
+    inst = instance(fmus[scene])
+    assert inst.variables[name].variability == "tunable"
+    inst.initialise(reals={"rtol": rtol}, booleans={"compiled": compiled})
+    rows = [inst.get(inst.outputs)]
+    t = 0.0
+    for k in range(1, round(stop / h) + 1):
+        if k - 1 == round(t_change / h):
+            inst.fmu.setBoolean([inst.vr[name]], [False])
+        inst.fmu.doStep(t, h)
+        t = k * h
+        rows.append(inst.get(inst.outputs))
+    fmu = np.array(rows)
+    ref, names = solver_with_a_change(scene, t_change, stop, h, name, False, rtol)
+    kept, _ = solver_with_a_change(scene, t_change, stop, h, name, True, rtol)
+    atol = inerter.load(scene, **{"experiment.rtol": rtol}).settings().atol
+    units = inerter.load(scene).signals.units
+    for j, output in enumerate(names):
+        scale = max(float(np.max(np.abs(ref[:, i]))) for i, u in enumerate(units) if u == units[j])
+        assert np.max(np.abs(fmu[:, j] - ref[:, j])) <= TOLERANCE_FACTOR * (rtol * scale + atol), output
+    lengths = [j for j, o in enumerate(names) if ".r[" in o]
+    assert max(np.max(np.abs(kept[:, j] - ref[:, j])) for j in lengths) > 1e-5     # the flip mattered
 
 
 def test_a_tunable_value_the_scene_refuses_is_an_error_and_changes_nothing(fmus, instance, needs_shim):

@@ -144,11 +144,19 @@ _FORCE_COLUMN = {"value": layout.F_VALUE, "amplitude": layout.F_AMPLITUDE, "freq
 _PD_COLUMN = {"kp": layout.PD_KP, "kd": layout.PD_KD}
 
 
+#: Effect switches the running engine takes between steps: a column of every element's row.
+TUNABLE_EFFECTS = ("effects.centripetal",)
+
+
 def tunable_field(scene, path: str) -> bool:
     """Whether the scene field `path` (``elements.inerter.b``, ``forces.Fa.amplitude``) is a number
     the running engine can change between steps: an element's coefficient, a point force's value,
-    amplitude, frequency or gains."""
+    amplitude, frequency or gains, the centripetal switch."""
+    if path in TUNABLE_EFFECTS:
+        return True
     parts = path.split(".")
+    if len(parts) == 3 and parts[0] == "elements" and parts[2] == "device" and parts[1] in scene.elements:
+        return True                          # an inerter device's numbers: columns DEVICE ... FLUID_QUADRATIC
     if len(parts) != 3:
         return False
     section, name, key = parts
@@ -170,8 +178,8 @@ def check_retune(old, new) -> None:
     fixed = untunable_changes(old, new)
     if fixed:
         raise ValueError(f"it would change {', '.join(fixed)}, which the running model cannot take "
-                         f"between steps (only element coefficients and point-force values, amplitudes, "
-                         f"frequencies and gains can change)")
+                         f"between steps (only element coefficients, point-force values, amplitudes, "
+                         f"frequencies and gains, and the centripetal switch can change)")
 
 
 def coupled_elements(flat) -> list[bool]:
@@ -193,6 +201,12 @@ def retune_rows(flat, scene, coupled) -> list[str]:
         return lacking
     for i, name in enumerate(flat["el_names"]):
         flat["el_real"][i, layout.COEFFICIENT] = scene.elements[name].coefficient
+        if flat["el_real"][i, layout.FIXED_DIRECTION] == 0.0:       # the small-displacement law has none
+            flat["el_real"][i, layout.CENTRIPETAL] = 1.0 if scene.centripetal else 0.0
+        device = getattr(scene.elements[name], "device", None)
+        if device is not None:
+            for column, value in device.columns().items():          # DEVICE ... FLUID_QUADRATIC
+                flat["el_real"][i, column] = float(value)
     for i, name in enumerate(flat["rot_names"]):
         flat["rot_real"][i, layout.COEFFICIENT] = scene.elements[name].coefficient
     dim = flat["dim"]

@@ -37,7 +37,7 @@ pytest.importorskip("pythonfmu")
 from fmpy import read_model_description  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
-from test_fmu import (FMI_ERROR, SCENE_PARAMS, SCENES, Instance, _Built, needs_shim,  # noqa: E402,F401
+from test_fmu import (FMI_ERROR, SCENE_PARAMS, SCENES, Instance, _Built, instance, needs_shim,  # noqa: E402,F401
                       raises_status, shim_expected, unzipped)
 
 import inerter  # noqa: E402
@@ -55,18 +55,6 @@ TOLERANCE_FACTOR = 1000.0
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
     return _Built(tmp_path_factory.mktemp("fmu_structure"))
-
-
-@pytest.fixture
-def instance(unzipped):
-    made = []
-
-    def make(fmu: Path, name: str = "instance") -> Instance:
-        made.append(Instance(unzipped(fmu), name))
-        return made[-1]
-    yield make
-    for inst in reversed(made):
-        inst.close()
 
 
 def model_description(fmu: Path) -> ET.Element:

@@ -1657,17 +1657,14 @@ def _rk_start(hdr, y, f, t_bound, order, rtol, atol, inputs, alpha, P, work, bef
     return OK
 
 
-@njit(cache=True)
-def _rk_trial(n_stages, hdr, t, h, y, f, inputs, alpha, P, A, B, C, work, before):
-    """The stages K[0..n_stages] of one trial step of length h from (t, y) with derivative f, its
-    solution y_new and the derivative f_new there (K[n_stages] = f_new). Returns the status of the
-    first right-hand side that failed (OK: none)."""
-    AB, rhs, gen, acc, K, y_new, f_new, ys = work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7]
-    ny = y.shape[0]
-    for i in range(ny):
-        K[0, i] = f[i]
-    for s in range(1, n_stages):
-        for i in range(ny):
+@njit(cache=True, inline="always")
+def _rk_stages(first, last, hdr, t, h, y, inputs, alpha, P, A, C, work, before):
+    """Stages K[s] for first ≤ s < last of a step of length h from (t, y): the derivative at
+    y + h Σ_j A[s, j] K[j] and t + C[s] h (clipped `before` a discontinuity). Returns the status of
+    the first right-hand side that failed (OK: none)."""
+    AB, rhs, gen, acc, K, ys = work[0], work[1], work[2], work[3], work[4], work[7]
+    for s in range(first, last):
+        for i in range(y.shape[0]):
             acc_s = 0.0
             for j in range(s):
                 acc_s += K[j, i] * A[s, j]
@@ -1676,6 +1673,21 @@ def _rk_trial(n_stages, hdr, t, h, y, f, inputs, alpha, P, A, B, C, work, before
         hdr[RK_EVALS] += 1
         if st != OK:
             return st
+    return OK
+
+
+@njit(cache=True)
+def _rk_trial(n_stages, hdr, t, h, y, f, inputs, alpha, P, A, B, C, work, before):
+    """The stages K[0..n_stages] of one trial step of length h from (t, y) with derivative f, its
+    solution y_new and the derivative f_new there (K[n_stages] = f_new). Returns the status of the
+    first right-hand side that failed (OK: none)."""
+    AB, rhs, gen, acc, K, y_new, f_new = work[0], work[1], work[2], work[3], work[4], work[5], work[6]
+    ny = y.shape[0]
+    for i in range(ny):
+        K[0, i] = f[i]
+    st = _rk_stages(1, n_stages, hdr, t, h, y, inputs, alpha, P, A, C, work, before)
+    if st != OK:
+        return st
     for i in range(ny):
         acc_s = 0.0
         for j in range(n_stages):
@@ -1810,7 +1822,7 @@ def _rk_dense(method, hdr, t, h, y, inputs, alpha, P, A, C, Dm, Pm, work, before
     """The dense-output coefficients of the accepted step from (t, y) of length h into `dense`, as
     scipy's ``_dense_output_impl`` (DOP853's three extra stages are evaluated here). Returns the
     status of the right-hand side."""
-    AB, rhs, gen, acc, K, y_new, f_new, ys = work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7]
+    K, y_new, f_new = work[4], work[5], work[6]
     n_stages, _ = _rk_shape(method)
     ny = y.shape[0]
     if method != 0:
@@ -1821,16 +1833,9 @@ def _rk_dense(method, hdr, t, h, y, inputs, alpha, P, A, C, Dm, Pm, work, before
                     qr += K[j, i] * Pm[j, r]
                 dense[r, i] = qr
         return OK
-    for s in range(n_stages + 1, A.shape[0]):
-        for i in range(ny):
-            acc_s = 0.0
-            for j in range(s):
-                acc_s += K[j, i] * A[s, j]
-            ys[i] = y[i] + acc_s * h
-        st = _rhs(min(t + C[s] * h, before), ys, inputs, alpha, P, AB, rhs, gen, acc, K[s])
-        hdr[RK_EVALS] += 1
-        if st != OK:
-            return st
+    st = _rk_stages(n_stages + 1, A.shape[0], hdr, t, h, y, inputs, alpha, P, A, C, work, before)
+    if st != OK:
+        return st
     for i in range(ny):
         dlt = y_new[i] - y[i]
         dense[0, i] = dlt

@@ -134,7 +134,7 @@ def _animation(args, result=None, path: Path | None = None):
     print(f"inerter: drawing the animation {path.name}...", file=sys.stderr, flush=True)
     frames = animate(result, path, fps=DEFAULT_FPS if args.fps is None else args.fps, duration=args.duration,
                      magnify=1.0 if args.magnify is None else args.magnify)
-    print(f"wrote {path}: {frames.describe()}")
+    print(f"wrote {path}: {frames.describe()}" + "".join(f"; {note}" for note in frames.notes))
 # ----------------------------------------------------------------------------------------------------
 
 

@@ -264,4 +264,6 @@ def test_bad_animation_arguments_name_the_argument(results, tmp_path):
         animate(result, tmp_path / "x.gif", fps="fast")
     with pytest.raises(AnimationError, match=r"animation duration: out of range \(got -1"):
         animate(result, tmp_path / "x.gif", duration=-1)
+    with pytest.raises(AnimationError, match=r"animation view: not a view \(got \(30, nan\); expected \(elevation"):
+        animate(result, tmp_path / "x.html", view=(30, float("nan")))
     assert not list(tmp_path.iterdir())

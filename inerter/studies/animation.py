@@ -153,6 +153,8 @@ def outline(local: list[tuple[float, ...]]) -> list[int]:
 
 
 def element_kind(kind: str) -> str:
+    """How an element kind is drawn: any kind whose name holds "inerter" (an inerter device too) is
+    coloured by its force; springs and dampers have their own styles; other kinds a thin line."""
     if "inerter" in kind:
         return "inerter"
     return kind if kind in ("spring", "damper") else "other"
@@ -333,6 +335,14 @@ def animate(result, path, fps: float = DEFAULT_FPS, duration: float | None = Non
     path = Path(path)
     if path.suffix.lower() not in FORMATS:
         raise AnimationError("animation path", str(path), "a file name ending in " + " or ".join(FORMATS), "unknown format")
+    given = view
+    try:
+        view = (float(view[0]), float(view[1]))
+        if len(given) != 2 or not all(map(math.isfinite, view)):
+            raise ValueError
+    except (TypeError, ValueError, IndexError):
+        raise AnimationError("animation view", given, "(elevation, azimuth) in degrees, two finite numbers",
+                             "not a view") from None
     fr = frames(result, fps, duration, max_frames, magnify)
     if path.suffix.lower() == ".gif":
         write_gif(fr, path, view)

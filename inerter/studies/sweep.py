@@ -2,7 +2,7 @@
 
     inerter sweep SCENE --vary NAME=START:STOP:NUM [--vary NAME=V1,V2,...] --out DIR
                   [--model solver|fmu] [--workers N] [--scheduler ADDRESS]
-                  [--set NAME=VALUE ...] [--stop-time T] [--step H]
+                  [--set NAME=VALUE ...] [--stop-time T] [--step H] [--dashboard [ADDRESS]]
     inerter sweep-plot DIR/results.csv --x NAME --y METRIC [--hue NAME] --out FILE.png
 
 A sweep runs every combination of the varied values (the names that ``--set`` takes: parameters,
@@ -28,6 +28,10 @@ its message and never stops the sweep; ``--retry-failed`` runs the failed keys a
 
 With ``--model fmu`` each worker extracts and instantiates the scene's FMU once, and resets it
 between runs (:class:`FmuSlot`).
+
+Workers. Each run is sent as :func:`inerter.studies.sweep_task.run`, by value: a worker that cannot
+import inerter, or has another version, answers at once and the sweep stops with a message naming
+it. ``--dashboard`` serves dask's dashboard (bokeh) and prints its link.
 """
 from __future__ import annotations
 

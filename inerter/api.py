@@ -327,6 +327,7 @@ class Result:
             "metrics": self.metrics,
             "metric_units": {k: u for k, u in metric_units(self.model).items() if k in self.metrics},
             "metric_errors": self.metric_errors,
+            "output_units": output_units(self),
             "warnings": self.model.scene.warnings,
             "settings": {"stop_time": s.stop_time, "output_interval": s.output_interval, "method": s.method,
                          "rtol": s.rtol, "atol": s.atol, "constraint": s.constraint, "baumgarte": s.baumgarte,
@@ -340,11 +341,48 @@ class Result:
                            "energy_end": float(self["energy"][-1]) if len(self.time) else None},
         })
 
+    def units(self) -> dict[str, str]:
+        """The unit of each output, by name (``time`` in s): the CSV header's and the summary's."""
+        return output_units(self)
+
     def write_csv(self, path):
+        """Time and every output, one row per sample; the header names each column with its unit in
+        parentheses (``time (s),C.r[1] (m),...``), one header row, so that spreadsheets and
+        ``pandas.read_csv`` read it as it is."""
         values = self._all_values()
-        header = ",".join(["time"] + self.names)
-        np.savetxt(path, np.column_stack((self.time, values)), delimiter=",", header=header,
+        np.savetxt(path, np.column_stack((self.time, values)), delimiter=",", header=csv_header(self),
                    comments="", fmt="%.12g")
+
+    def to_dataframe(self):
+        """The time history as a pandas DataFrame (pandas is optional: ``pip install pandas``)."""
+        return to_dataframe(self)
+
+
+def output_units(result) -> dict[str, str]:
+    """``{"time": "s", name: unit, ...}`` for the outputs a result holds (a solver's or an FMU's)."""
+    signals = result.model.signals
+    unit = dict(zip(signals.names, signals.units))
+    return {"time": "s", **{name: unit[name] for name in result.names}}
+
+
+def csv_header(result) -> str:
+    """``time (s),C.r[1] (m),...``: a name never holds a space, so ``name (unit)`` splits back at its
+    last " (" (a dimensionless output reads ``(1)``)."""
+    units = output_units(result)
+    return ",".join(f"{name} ({units[name]})" for name in ["time"] + list(result.names))
+
+
+def to_dataframe(result):
+    """Time as the index (named ``time``), one column per output, units in ``df.attrs["units"]``."""
+    try:
+        import pandas as pd
+    except ImportError:
+        raise ModuleNotFoundError("to_dataframe() needs pandas, which is not installed: pip install pandas "
+                                  "(or pip install 'inerter[pandas]')", name="pandas") from None
+    columns = {name: np.asarray(result[name], dtype=float) for name in result.names}
+    frame = pd.DataFrame(columns, index=pd.Index(np.asarray(result.time, dtype=float), name="time"))
+    frame.attrs["units"] = output_units(result)
+    return frame
 
 
 def _plain(value):

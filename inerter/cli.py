@@ -79,6 +79,7 @@ def simulate(scene, overrides, model_kind, args):
 
 
 def cmd_run(args):
+    _animation(args)
     overrides = parse_set(args.set)
     out = _out_dir(args.out)
     t0 = time.perf_counter()
@@ -100,7 +101,41 @@ def cmd_run(args):
         print(f"  {k}: not computed: {v}")
     print(f"  max constraint drift = {summary['statistics']['max_constraint_drift']:.3g}")
     print(f"wrote {out / (stem + '.csv')}, {out / 'summary.json'}, {out / (stem + '.png')}")
+    _animation(args, result, out / f"{stem}.{args.animate}")
     return 0 if result.status == "ok" else 3
+
+
+# -- run --animate --------------------------------------------------------------------------------
+def _animation_options(sp):
+    sp.add_argument("--animate", nargs="?", const="gif", choices=("gif", "html"), default=None,
+                    help="also write an animation of the run beside its CSV: <scene>.gif (the default) or "
+                         "<scene>.html, a self-contained page")
+    sp.add_argument("--fps", type=float, default=None, help="the animation's frames per second (default 25)")
+    sp.add_argument("--duration", type=float, default=None,
+                    help="the animation's length in seconds (default: the run's own; at most 300 frames, "
+                         "played faster if more are asked for)")
+    sp.add_argument("--magnify", type=float, default=None,
+                    help="draw displacements from the initial pose this many times (default 1)")
+
+
+def _animation(args, result=None, path: Path | None = None):
+    """With --animate: the animation of `result` at `path` (inerter.studies.animation); without a
+    result, the options checked before the run."""
+    from inerter.studies.animation import DEFAULT_FPS, animate, check_options
+    if args.animate is None:
+        for option in ("fps", "duration", "magnify"):
+            if getattr(args, option) is not None:
+                raise OptionError(f"--{option}", getattr(args, option), "--animate beside it", "no animation asked for")
+        return
+    if result is None:
+        return check_options(DEFAULT_FPS if args.fps is None else args.fps, args.duration,
+                             1.0 if args.magnify is None else args.magnify,
+                             {"fps": "--fps", "duration": "--duration", "magnify": "--magnify"})
+    print(f"inerter: drawing the animation {path.name}...", file=sys.stderr, flush=True)
+    frames = animate(result, path, fps=DEFAULT_FPS if args.fps is None else args.fps, duration=args.duration,
+                     magnify=1.0 if args.magnify is None else args.magnify)
+    print(f"wrote {path}: {frames.describe()}" + "".join(f"; {note}" for note in frames.notes))
+# ----------------------------------------------------------------------------------------------------
 
 
 def _with_unit(value, unit) -> str:
@@ -262,6 +297,7 @@ def build_parser():
     r = sub.add_parser("run", help="simulate a scene: CSV, summary.json and a PNG")
     r.add_argument("scene")
     common(r)
+    _animation_options(r)
     r.set_defaults(func=cmd_run)
     c = sub.add_parser("compare", help="with and without the centripetal correction, and the oracle")
     c.add_argument("scene")

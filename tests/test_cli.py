@@ -22,8 +22,8 @@ def test_run_writes_csv_summary_and_plot(tmp_path, capsys):
     assert set(summary["metrics"]) >= {"natural_frequency", "fundamental_frequency", "fundamental_amplitude",
                                        "mean_offset", "inerter_force_mean", "inerter_force_amplitude"}
     data = np.genfromtxt(out / "lumped_mass_2d.csv", delimiter=",", names=True)
-    assert data["time"][-1] == 5.0
-    assert abs(data["Pr2"][0] - 1.2) < 1e-12          # genfromtxt strips '.[]' from "P.r[2]"
+    assert data["time_s"][-1] == 5.0                   # genfromtxt reads "time (s)" as time_s
+    assert abs(data["Pr2_m"][0] - 1.2) < 1e-12        # and "P.r[2] (m)" as Pr2_m
     assert (out / "lumped_mass_2d.png").stat().st_size > 10_000
     # every metric carries its unit: frequencies in Hz, P.r[2]'s in m, the inerter force's in N
     assert summary["metric_units"] == {
@@ -55,7 +55,7 @@ def test_run_on_the_compiled_path_gives_the_numpy_paths_figures(tmp_path):
         summary = json.loads((out / "summary.json").read_text())
         assert summary["statistics"]["path"] == path
         runs[path] = np.genfromtxt(out / "two_bar_2d.csv", delimiter=",", names=True)
-    assert np.max(np.abs(runs["compiled"]["Cr2"] - runs["numpy"]["Cr2"])) <= 1e-9
+    assert np.max(np.abs(runs["compiled"]["Cr2_m"] - runs["numpy"]["Cr2_m"])) <= 1e-9
 
 
 def test_parse_set_reads_toml_values():

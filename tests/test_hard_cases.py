@@ -224,8 +224,8 @@ def test_a_run_failing_midway_writes_what_it_computed_and_says_why(tmp_path, cap
     text = capsys.readouterr().out
     assert "failed" in text and "'inerter'" in text and "t = 1.11" in text
     data = np.genfromtxt(out / "terminals_meet_2d.csv", delimiter=",", names=True)
-    assert data["time"][-1] == pytest.approx(1.11) and len(data) == 112
-    assert np.all(np.isfinite(data["Pr1"]))
+    assert data["time_s"][-1] == pytest.approx(1.11) and len(data) == 112     # "time (s)", "P.r[1] (m)"
+    assert np.all(np.isfinite(data["Pr1_m"]))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and "meet" in summary["message"]
 

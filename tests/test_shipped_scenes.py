@@ -154,7 +154,8 @@ def test_inerter_run_writes_the_csv_the_summary_and_the_plot(scene, tmp_path):
     with open(out / f"{name}.csv") as f:
         header = f.readline().strip().split(",")
     data = np.loadtxt(out / f"{name}.csv", delimiter=",", skiprows=1, ndmin=2)
-    assert header == ["time"] + output_names(scene)
+    units = {o["name"]: o["unit"] for o in model(scene).output_info()}
+    assert header == ["time (s)"] + [f"{n} ({units[n]})" for n in output_names(scene)]   # each with its unit
     assert data.shape[1] == len(header) and np.all(np.isfinite(data))
     time = data[:, 0]
     assert time[0] == 0.0 and np.allclose(np.diff(time), dt, rtol=0, atol=1e-9)

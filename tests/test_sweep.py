@@ -12,6 +12,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -358,3 +359,86 @@ def test_a_failed_handshake_with_a_running_scheduler_is_tried_again(address, mon
     with pytest.raises(SweepError, match=f"--scheduler {address}: the connection handshake failed"):
         DaskClient(scheduler=address).__enter__()
     assert len(calls) == CONNECT_ATTEMPTS
+
+
+# ----------------------------------------------------------------------------------------------
+# Workers that cannot run inerter; the dashboard
+# ----------------------------------------------------------------------------------------------
+WITHOUT_INERTER = Path(__file__).with_name("workers") / "without_inerter.py"
+
+
+@pytest.mark.parametrize("joins", ["before", "after"])
+def test_a_worker_that_cannot_import_inerter_stops_the_sweep_at_once(tmp_path, capsys, joins):
+    """A worker process started with ``python -I`` (no PYTHONPATH, no current folder) whose import of
+    inerter fails: the sweep stops within seconds with a message naming the worker and the fix,
+    whether the worker is there when the sweep starts or joins it later (before: it died unpickling
+    its first run and the sweep waited NO_WORKER_TIMEOUT, 120 s, in silence)."""
+    from distributed import Client, LocalCluster
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    options = ["--nworkers", "1", "--nthreads", "1", "--no-dashboard", "--preload", str(WITHOUT_INERTER)]
+    args = [str(LUMPED), "--vary", "y0=1.2,1.3", *FAST, "--out", str(tmp_path), "--no-progress"]
+    with LocalCluster(n_workers=0, processes=True, dashboard_address=None, host="127.0.0.1",
+                      silence_logs=logging.ERROR) as cluster:
+        worker = None
+        try:
+            command = [sys.executable, "-I", "-m", "distributed.cli.dask_worker", cluster.scheduler_address, *options]
+            start = lambda: subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            if joins == "before":
+                worker = start()
+                with Client(cluster) as client:
+                    client.wait_for_workers(1, timeout=60)
+            else:
+                threading.Timer(1.0, lambda: setattr(sys.modules[__name__], "_late", start())).start()
+            t0 = time.monotonic()
+            code = main_sweep(args + ["--scheduler", cluster.scheduler_address])
+            seconds = time.monotonic() - t0
+        finally:
+            worker = worker or _wait_for_late()
+            worker.terminate()
+            worker.wait(timeout=30)
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "inerter: error: dask worker tcp://127.0.0.1:" in err
+    assert "cannot import inerter (ModuleNotFoundError: No module named 'inerter')" in err
+    assert f"install inerter {inerter.__version__} in every worker's environment" in err
+    assert len(err.strip().splitlines()) == 1
+    assert seconds < (5 if joins == "before" else 15), seconds         # not NO_WORKER_TIMEOUT (120 s)
+    assert rows_of(tmp_path / "results.csv") == []                     # no run is blamed for it
+
+
+def _wait_for_late():
+    """The worker process a timer started (test above), once it exists."""
+    for _ in range(600):
+        if getattr(sys.modules[__name__], "_late", None) is not None:
+            return sys.modules[__name__].__dict__.pop("_late")
+        time.sleep(0.05)
+    raise AssertionError("the late worker was never started")
+
+
+def test_the_dashboard_is_served_when_asked_for_and_its_link_printed(capsys):
+    pytest.importorskip("bokeh")
+    import urllib.error
+    import urllib.request
+    with sw.DaskClient(workers=1, dashboard="127.0.0.1:0") as client:
+        line = capsys.readouterr().out.strip()
+        assert line.startswith("dask dashboard: http://127.0.0.1:") and line.endswith("/status")
+        link = line.split(": ", 1)[1]
+        with urllib.request.urlopen(link, timeout=30) as page:
+            assert page.status == 200 and b"Dask" in page.read()
+        assert client.submit(sum, [1, 2]).result() == 3
+    with sw.DaskClient(workers=1) as client:                   # not asked for: none, and nothing printed
+        port = client.scheduler_info(n_workers=0)["services"]["dashboard"]     # dask's HTTP routes only
+        assert port != 8787
+        with pytest.raises(urllib.error.HTTPError, match="404"):
+            urllib.request.urlopen(f"http://127.0.0.1:{port}/status", timeout=30)
+    assert capsys.readouterr().out == ""
+
+
+def test_the_dashboard_without_bokeh_is_a_one_line_error(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "bokeh", None)             # as where bokeh is not installed
+    code = main_sweep([str(LUMPED), "--vary", "y0=1.2,1.3", *FAST, "--workers", "1", "--dashboard",
+                       "--out", str(tmp_path), "--no-progress"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("inerter: error: --dashboard: dask's dashboard needs bokeh") and "pip install" in err
+    assert len(err.strip().splitlines()) == 1

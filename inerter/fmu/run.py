@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from inerter.common.errors import SimulationError
-from inerter.api import Model, compute_metrics, sample_spline
+from inerter.api import Model, compute_metrics, csv_header, output_units, sample_spline, to_dataframe
 
 
 @dataclass
@@ -82,10 +82,16 @@ class FmuResult:
         out["settings"]["communication_step"] = self.communication_step
         return out
 
+    def units(self) -> dict[str, str]:
+        return output_units(self)
+
     def write_csv(self, path):
-        header = ",".join(["time"] + self.names)
+        """As the solver's (``Result.write_csv``): units in the header, ``time (s),C.r[1] (m),...``."""
         data = np.column_stack([self.time] + [self[n] for n in self.names])
-        np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.12g")
+        np.savetxt(path, data, delimiter=",", header=csv_header(self), comments="", fmt="%.12g")
+
+    def to_dataframe(self):
+        return to_dataframe(self)
 
 
 def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None, metrics=True):

@@ -189,7 +189,8 @@ def main(argv=None) -> int:
     sweep = make_sweep(study, args.scenarios, args.points, span, parse_set(args.set), args.model,
                        args.stop_time, args.step, args.path)
     report = run_sweep(sweep, out, workers=args.workers, scheduler=args.scheduler,
-                       progress=not args.no_progress, max_runs=args.max_runs, retry_failed=args.retry_failed)
+                       progress=not args.no_progress, max_runs=args.max_runs, retry_failed=args.retry_failed,
+                       dashboard=args.dashboard)
     print_report(report, sweep)
     table = study_table(study, sweep, out / "results.csv")
     print_table(study, table)

@@ -2,7 +2,7 @@
 
     inerter sweep SCENE --vary NAME=START:STOP:NUM [--vary NAME=V1,V2,...] --out DIR
                   [--model solver|fmu] [--workers N] [--scheduler ADDRESS]
-                  [--set NAME=VALUE ...] [--stop-time T] [--step H]
+                  [--set NAME=VALUE ...] [--stop-time T] [--step H] [--dashboard [ADDRESS]]
     inerter sweep-plot DIR/results.csv --x NAME --y METRIC [--hue NAME] --out FILE.png
 
 A sweep runs every combination of the varied values (the names that ``--set`` takes: parameters,
@@ -28,6 +28,10 @@ its message and never stops the sweep; ``--retry-failed`` runs the failed keys a
 
 With ``--model fmu`` each worker extracts and instantiates the scene's FMU once, and resets it
 between runs (:class:`FmuSlot`).
+
+Workers. Each run is sent as :func:`inerter.studies.sweep_task.run`, by value: a worker that cannot
+import inerter, or has another version, answers at once and the sweep stops with a message naming
+it. ``--dashboard`` serves dask's dashboard (bokeh) and prints its link.
 """
 from __future__ import annotations
 
@@ -607,14 +611,30 @@ LOCAL_WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
 CONNECT_ATTEMPTS = 3
 
 
+def _check_dashboard_available():
+    """dask serves its dashboard with bokeh, an optional dependency: say so before a cluster starts."""
+    try:
+        import bokeh  # noqa: F401
+    except ImportError:
+        raise SweepError("--dashboard: dask's dashboard needs bokeh, which is not installed here (pip install "
+                         "'bokeh>=3.1', or pip install 'inerter[dashboard]')") from None
+
+
 class DaskClient:
     """``with DaskClient(workers=2) as client``: a dask Client on a LocalCluster of `workers` processes
-    with one thread each (default: one per core), or on the running scheduler at `scheduler`."""
+    with one thread each (default: one per core), or on the running scheduler at `scheduler`.
 
-    def __init__(self, workers: int | None = None, scheduler: str | None = None):
+    `dashboard`: the address of dask's dashboard (``":8787"``, ``"127.0.0.1:0"`` for any free port) on
+    the local cluster, whose link is printed; with `scheduler`, the link of that scheduler's own
+    dashboard is printed (a scheduler started where bokeh is installed serves one). None (the
+    default): no dashboard is started."""
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None, dashboard: str | None = None):
         if workers is not None and workers < 1:
             raise SweepError(f"--workers {workers}: expected at least 1")
-        self.workers, self.scheduler = workers, scheduler
+        if dashboard is not None and not scheduler:
+            _check_dashboard_available()
+        self.workers, self.scheduler, self.dashboard = workers, scheduler, dashboard
         self.cluster = self.client = None
 
     def __enter__(self):
@@ -639,10 +659,16 @@ class DaskClient:
             import dask
             n = self.workers or os.cpu_count() or 1
             with dask.config.set(LOCAL_WORKER_CONFIG):
-                self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                            dashboard_address=":0", host="127.0.0.1",   # any free port
-                                            silence_logs=logging.ERROR)
+                # Without a dashboard the scheduler still serves its HTTP routes (health, metrics), on
+                # any free port rather than on the dashboard's 8787.
+                http = {"dashboard": True, "dashboard_address": self.dashboard} if self.dashboard else \
+                    {"dashboard": False, "dashboard_address": "127.0.0.1:0"}
+                self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                            scheduler_kwargs=http, silence_logs=logging.ERROR)
             self.client = Client(self.cluster)
+        if self.dashboard is not None:
+            where = f" (the dashboard of the scheduler at {self.scheduler}, if it serves one)" if self.scheduler else ""
+            print(f"dask dashboard: {self.client.dashboard_link}{where}", flush=True)
         return self.client
 
     def __exit__(self, *exc):
@@ -654,10 +680,11 @@ class DaskClient:
 
 def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | None = None, client=None,
               progress: bool = True, max_runs: int | None = None, retry_failed: bool = False,
-              fmu_dir=None) -> SweepReport:
+              fmu_dir=None, dashboard: str | None = None) -> SweepReport:
     """Run the runs of `sweep` not yet in ``out/results.csv`` and append their rows.
 
-    `client`: a dask Client to use (else one is made from `workers` / `scheduler`).
+    `client`: a dask Client to use (else one is made from `workers` / `scheduler` / `dashboard`, as
+    :class:`DaskClient` takes them).
     `max_runs`: stop after this many new runs (the rest are left for a later start).
     `fmu_dir`: where the FMU is built with ``--model fmu`` (default: build/fmu, as ``inerter run``).
     """
@@ -683,7 +710,8 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
             if sweep.model == "fmu":
                 from inerter.fmu.build import DEFAULT_OUT_DIR, build
                 fmu_path = str(Path(build(sweep.scene, fmu_dir or DEFAULT_OUT_DIR)).resolve())
-            tasks = [dict(key=r.key, name=sweep.name, model=sweep.model, overrides=r.overrides,
+            from inerter import __version__
+            tasks = [dict(key=r.key, name=sweep.name, model=sweep.model, overrides=r.overrides, version=__version__,
                           stop_time=sweep.stop_time, step=sweep.step, fmu_path=fmu_path, path=sweep.path,
                           scene_path=str(sweep.scene), scene_digest=sweep.digest, scene_content=sweep.content)
                      for r in todo]
@@ -694,7 +722,7 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
                 if client is not None:
                     _run_tasks(client, tasks, results, sweep, report, bar)
                 else:
-                    with DaskClient(workers, scheduler) as own:
+                    with DaskClient(workers, scheduler, dashboard) as own:
                         _run_tasks(own, tasks, results, sweep, report, bar)
             finally:
                 bar.close()
@@ -713,7 +741,10 @@ WORKER_CHECK_INTERVAL = 5.0
 def _run_tasks(client, tasks, results: ResultsFile, sweep: Sweep, report: SweepReport, bar):
     from distributed import as_completed
 
-    futures = client.map(run_one, tasks, key=[f"inerter-run-{t['key']}" for t in tasks], pure=False)
+    from inerter.studies import sweep_task
+
+    run = sweep_task.sendable()          # by value: each run reaches any worker (see sweep_task)
+    futures = client.map(run, tasks, key=[f"inerter-run-{t['key']}" for t in tasks], pure=False)
     by_future = dict(zip(futures, tasks))
     finished = as_completed(futures)
     seen_workers = checked = time.monotonic()
@@ -746,6 +777,8 @@ def _record(future, task, results: ResultsFile, sweep: Sweep, report: SweepRepor
                "status": "failed", "error": f"{type(exc).__name__}: {exc} (run again with --retry-failed)",
                "finished_at": datetime.now(timezone.utc).isoformat(timespec="microseconds")}
     future.release()
+    if "environment_error" in row:            # a worker that cannot run inerter: no run is to blame
+        raise SweepError(row["environment_error"])
     results.append(row, parameters=sweep.parameter_columns)
     report.rows.append(row)
     if row["status"] == "ok":
@@ -848,6 +881,9 @@ def add_run_arguments(p: argparse.ArgumentParser):
                    help="stop after this many new runs; run the same command again to go on")
     p.add_argument("--retry-failed", action="store_true", help="run the failed runs of results.csv again")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--dashboard", nargs="?", const=":8787", default=None, metavar="ADDRESS",
+                   help="serve dask's dashboard (needs bokeh) at ADDRESS (default :8787; 127.0.0.1:0: any free "
+                        "port) and print its link; with --scheduler, print that scheduler's link")
 
 
 def _guarded(fn, argv):
@@ -896,7 +932,8 @@ def _sweep(argv) -> int:
     sweep = Sweep(args.scene, [parse_vary(v) for v in args.vary], parse_set(args.set), args.model,
                   args.stop_time, args.step, args.path)
     report = run_sweep(sweep, args.out, workers=args.workers, scheduler=args.scheduler,
-                       progress=not args.no_progress, max_runs=args.max_runs, retry_failed=args.retry_failed)
+                       progress=not args.no_progress, max_runs=args.max_runs, retry_failed=args.retry_failed,
+                       dashboard=args.dashboard)
     print_report(report, sweep)
     return status_code(report)
 

@@ -87,18 +87,19 @@ def test_a_ground_motion_scene_writes_plain_json(tmp_path, capsys):
     assert runs["oracle"]["settings"]["effects"]["ground_acceleration"] == motion
 
 
-@pytest.mark.parametrize("option, value, expected", [
-    ("--stop-time", "-1", "a finite number > 0"),
-    ("--stop-time", "nan", "a finite number > 0"),
-    ("--rtol", "0", "a relative tolerance in [1e-14, 0.1]"),
-    ("--method", "Euler", "one of: DOP853"),
-    ("--step", "0", "a finite number > 0"),
+@pytest.mark.parametrize("option, value, field, expected", [
+    ("--stop-time", "-1", "experiment.stop_time", "a number > 0"),
+    ("--stop-time", "nan", "experiment.stop_time", "a finite number"),
+    ("--rtol", "0", "experiment.rtol", "a number ≥ 1e-14"),
+    ("--method", "Euler", "experiment.method", "one of: DOP853"),
+    ("--step", "0", "experiment.communication_step", "a number > 0"),
 ])
-def test_a_bad_option_is_a_one_line_error_before_anything_runs(tmp_path, capsys, option, value, expected):
+def test_a_bad_option_is_a_one_line_error_before_anything_runs(tmp_path, capsys, option, value, field, expected):
+    """The option names the experiment field it overrides; the scene reader checks it."""
     out = tmp_path / "out"
     assert main(["run", str(TWO_BAR), option, value, "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
-    assert "\n" not in err and err.startswith(f"inerter: error: {option}: "), err
+    assert "\n" not in err and err.startswith(f"inerter: error: {option}: {TWO_BAR}: {field}: "), err
     assert value in err and expected in err, err
     assert not out.exists()
 

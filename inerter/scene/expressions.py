@@ -24,7 +24,8 @@ following constructs are accepted:
 Every problem (bad syntax, forbidden construct, unknown name, division by zero,
 overflow, an argument outside a function's domain, ...) is reported as a
 :class:`~inerter.common.errors.SceneError` naming the source, the field path, the offending
-text and what was expected.  Results are always finite Python floats.
+text and what was expected.  Results are always finite Python floats of magnitude at
+most :data:`MAX_MAGNITUDE`.
 """
 from __future__ import annotations
 
@@ -100,6 +101,12 @@ _EXPECTED_NAME = (
     "not a Python keyword and not one of " + ", ".join(sorted(RESERVED_NAMES))
 )
 _TABLE_KEYS = ("value", "unit", "description")
+
+#: The largest magnitude a value may have (in SI units). Finite values far beyond any mechanism
+#: (a position of 1e300 m) overflow the arithmetic of the first step (squares, products with a
+#: stiffness); 1e15 leaves every product a step forms finite.
+MAX_MAGNITUDE = 1e15
+_EXPECTED_MAGNITUDE = f"a number of magnitude at most {MAX_MAGNITUDE:g} (in SI units)"
 
 # Expressions in scene files are short; refusing very long texts bounds the work
 # done by the parser and the tree walk.
@@ -359,6 +366,13 @@ def _number(value, source: str, field: str) -> float:
         raise SceneError(source, field, value, _EXPECTED_VALUE, "is not a usable number") from None
     if not math.isfinite(result):
         raise SceneError(source, field, value, "a finite number", "is not finite")
+    return _bounded(result, value, source, field)
+
+
+def _bounded(result: float, value, source: str, field: str) -> float:
+    """`result`, if its magnitude is at most :data:`MAX_MAGNITUDE`."""
+    if abs(result) > MAX_MAGNITUDE:
+        raise SceneError(source, field, value, _EXPECTED_MAGNITUDE, "too large")
     return result
 
 
@@ -377,11 +391,12 @@ def evaluate(expr, names: Mapping[str, float], source: str, field: str) -> float
         return _number(expr, source, field)
     try:
         tree, _ = _compile(expr)
-        return _value(tree, names)
+        result = _value(tree, names)
     except _Problem as problem:
         raise SceneError(source, field, expr, problem.expected, problem.problem) from None
     except RecursionError:
         raise SceneError(source, field, expr, _EXPECTED_EXPRESSION, "is too deeply nested") from None
+    return _bounded(result, expr, source, field)
 
 
 def free_names(expr, source: str, field: str) -> set[str]:
@@ -445,8 +460,9 @@ def evaluate_parameters(
     `raw` maps each parameter name to a number, an expression string or a table
     ``{value = ..., unit = "...", description = "..."}``.  Parameters may refer to each
     other in any order; they are evaluated in dependency order and a circular
-    definition is an error.  `fixed` gives values (numbers) that replace those of
-    existing parameters, e.g. overrides from the command line or an FMU; the
+    definition is an error.  `fixed` gives entries that replace those of existing
+    parameters (overrides from the command line or an FMU), read as entries of `raw`
+    are: a number, an expression over the other parameters or a table; the
     expressions they replace are still checked but not evaluated.
 
     Returns ``{name: value}`` in the order of `raw`.  Errors name the field
@@ -461,33 +477,35 @@ def evaluate_parameters(
         _check_parameter_name(name, source, prefix)
         bindings[name] = _parameter_binding(name, spec, source, prefix)
 
-    values: dict[str, float] = {}
+    # Every expression of the scene is checked, those an override replaces included: they are
+    # still part of the scene. An override is then read as the entry it replaces would be.
+    for name, (expr, field) in bindings.items():
+        _check_names(expr, field, bindings, source)
     for name, value in fixed.items():
-        field = f"{prefix}.{name}"
         if name not in bindings:
             known = ", ".join(sorted(bindings)) or "(none)"
             raise SceneError(
-                source, field, value, f"one of the parameters {known}", f"no parameter '{name}' to override"
+                source, f"{prefix}.{name}", value, f"one of the parameters {known}", f"no parameter '{name}' to override"
             )
-        values[name] = _number(value, source, field)
+        bindings[name] = _parameter_binding(name, value, source, prefix)
+        _check_names(bindings[name][0], bindings[name][1], bindings, source)
 
-    # Dependencies among the parameters still to evaluate.  Every expression is
-    # checked, including those replaced by `fixed`: they are still part of the scene.
     order_of = {name: index for index, name in enumerate(bindings)}
-    depends: dict[str, list[str]] = {}
-    for name, (expr, field) in bindings.items():
-        used = free_names(expr, source, field)
-        unknown = sorted(used.difference(bindings))
-        if unknown:
-            problem = _unknown_name(unknown[0], bindings)
-            raise SceneError(source, field, expr, problem.expected, problem.problem)
-        depends[name] = [] if name in values else sorted(used, key=order_of.__getitem__)
-
+    depends = {name: sorted(free_names(expr, source, field), key=order_of.__getitem__)
+               for name, (expr, field) in bindings.items()}
+    values: dict[str, float] = {}
     for name in _dependency_order(depends, bindings, source):
-        if name not in values:
-            expr, field = bindings[name]
-            values[name] = evaluate(expr, values, source, field)
+        expr, field = bindings[name]
+        values[name] = evaluate(expr, values, source, field)
     return {name: values[name] for name in bindings}
+
+
+def _check_names(expr, field: str, bindings, source: str) -> None:
+    """`expr` parses and uses only parameters of `bindings`."""
+    unknown = sorted(free_names(expr, source, field).difference(bindings))
+    if unknown:
+        problem = _unknown_name(unknown[0], bindings)
+        raise SceneError(source, field, expr, problem.expected, problem.problem)
 
 
 def _dependency_order(

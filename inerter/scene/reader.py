@@ -18,6 +18,7 @@ from typing import Any, Mapping
 from inerter import elements
 from inerter.common.errors import SceneError
 from inerter.scene.expressions import evaluate, evaluate_parameters, parameter_meta
+from inerter.scene.files import MAX_RECORD_BYTES, MAX_RECORD_SAMPLES, MAX_SCENE_BYTES, read_capped
 
 GROUND = "ground"
 
@@ -39,6 +40,11 @@ FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
 METRIC_KINDS = ("natural_frequency", "free_oscillation", "harmonics", "steady_state", "peak")
 METHODS = ("DOP853", "RK45", "Radau", "BDF", "LSODA", "RK4")
 CONSTRAINT_TREATMENTS = ("baumgarte", "projection")
+#: The longest scene name: it names output files (``<name>_uncorrected.summary.json``), the FMU and
+#: its binary (``<name>.pythonfmu.so``), which must stay within the 255 bytes a file name may have.
+MAX_SCENE_NAME = 100
+#: The most output samples (stop_time / output_interval, or / communication_step) a run may have.
+MAX_OUTPUT_SAMPLES = 1_000_000
 
 
 # ----------------------------------------------------------------------------------------------
@@ -154,16 +160,19 @@ class Scene:
     experiment: Experiment
     metrics: tuple[Metric, ...]
     raw: dict = field(repr=False, default_factory=dict)
+    experiment_overrides: dict = field(repr=False, default_factory=dict)   # experiment.NAME given at load
 
     @property
     def centripetal(self) -> bool:
         return bool(self.effects.get("centripetal", True))
 
-    def experiment_with(self, overrides: Mapping[str, Any]) -> Experiment:
-        """The experiment with `overrides` (``{"rtol": 1e-6}``), read and checked as a load with
-        ``experiment.NAME`` overrides would (same defaults, same errors), without rebuilding the scene."""
-        r = _Reader(self.source, {n: p.value for n, p in self.parameters.items()})
-        return _read_experiment(r, self.raw.get("experiment", {}), overrides)
+    def experiment_with(self, overrides: Mapping[str, Any], source: str | None = None) -> Experiment:
+        """The experiment with `overrides` (``{"rtol": 1e-6}``) on top of those the scene was
+        loaded with, read and checked as a load with ``experiment.NAME`` overrides would (the same
+        function: same defaults, same errors), without rebuilding the scene. `source` names where
+        the overrides come from in errors (default: the scene file)."""
+        r = _Reader(source or self.source, {n: p.value for n, p in self.parameters.items()})
+        return _read_experiment(r, self.raw.get("experiment", {}), dict(self.experiment_overrides, **overrides))
 
     @property
     def data_files(self) -> list[str]:
@@ -280,20 +289,15 @@ TOP_LEVEL = {"scene": False, "parameters": False, "effects": False, "ground": Fa
 
 
 def read_toml(path) -> tuple[str, dict]:
-    path = Path(path)
+    """The scene file's TOML, read with a cap on its size (:mod:`.files`)."""
     source = str(path)
-    try:
-        text = path.read_bytes()
-    except FileNotFoundError:
-        raise SceneError(source, "(file)", source, "an existing scene file (TOML)", "file not found")
-    except OSError as exc:
-        raise SceneError(source, "(file)", source, "a readable scene file", f"cannot read: {exc.strerror}")
+    text = read_capped(path, MAX_SCENE_BYTES, source, "(file)", "scene file (TOML)")
     try:
         data = tomllib.loads(text.decode("utf-8"))
     except UnicodeDecodeError:
-        raise SceneError(source, "(file)", "binary data", "a UTF-8 TOML text", "not UTF-8 text")
+        raise SceneError(source, "(file)", "binary data", "a UTF-8 TOML text", "not UTF-8 text") from None
     except tomllib.TOMLDecodeError as exc:
-        raise SceneError(source, "(file)", str(exc), "valid TOML", "does not parse")
+        raise SceneError(source, "(file)", str(exc), "valid TOML", "does not parse") from None
     return source, data
 
 
@@ -318,11 +322,7 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
         elif key.startswith("experiment."):
             experiment[key[len("experiment."):]] = value
         elif key in parameter_names:
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise SceneError(what, key, value, "a number", "wrong type")
-            if not math.isfinite(float(value)):
-                raise SceneError(what, key, value, "a finite number", "not finite")
-            params[key] = float(value)
+            params[key] = value          # read as the scene's entry is (evaluate_parameters)
         else:
             raise SceneError(what, key, value,
                              "a parameter of " + source + ": " + _listing(parameter_names)
@@ -338,6 +338,10 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
                                                        "orientation": False})
     name = head.get("name", Path(source).stem)
     _check_name(base, name, "scene.name")
+    if len(name) > MAX_SCENE_NAME:
+        raise base.error("scene.name" if "name" in head else "scene.name (the file's stem)", name,
+                         f"a name of at most {MAX_SCENE_NAME} characters (it names the output files and the FMU)",
+                         f"too long ({len(name)} characters)")
     dimension = head.get("dimension", 2)
     if dimension not in (2, 3) or isinstance(dimension, bool):
         raise base.error("scene.dimension", dimension, "2 or 3", "unsupported dimension")
@@ -376,7 +380,7 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     outputs = _signal_names(points, element_specs, dimension)
     metrics = _read_metrics(r, data.get("metrics", []), outputs)
     return Scene(source, name, description, dimension, orientation, parameters, effects, bodies, points, joints,
-                 element_specs, forces, experiment, metrics, raw=data)
+                 element_specs, forces, experiment, metrics, raw=data, experiment_overrides=x_over)
 
 
 def _read_effects(r: _Reader, raw, overrides, dimension, folder):
@@ -419,13 +423,21 @@ def _read_ground_motion(r: _Reader, spec, fld, dimension, folder):
     if not isinstance(name, str):
         raise r.error(f"{fld}.file", name, "a CSV file name, relative to the scene file", "wrong type")
     path = (folder / name)
+    import io
+
+    import numpy as np
+    data = read_capped(path, MAX_RECORD_BYTES, r.source, f"{fld}.file", "CSV record (time, a_1 ... a_dim)")
     try:
-        import numpy as np
-        table = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
-    except OSError:
-        raise r.error(f"{fld}.file", str(path), "an existing CSV file (time, a_1 ... a_dim)", "file not found")
+        table = np.loadtxt(io.StringIO(data.decode("utf-8")), delimiter=",", comments="#", ndmin=2)
+    except UnicodeDecodeError:
+        raise r.error(f"{fld}.file", str(path), "a CSV text (time, a_1 ... a_dim)", "not UTF-8 text") from None
     except ValueError as exc:
-        raise r.error(f"{fld}.file", str(path), "numeric CSV columns: time, a_1 ... a_dim", f"unreadable ({exc})")
+        brief = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
+        raise r.error(f"{fld}.file", str(path), "numeric CSV columns: time, a_1 ... a_dim",
+                      f"unreadable ({brief})") from None
+    if table.shape[0] > MAX_RECORD_SAMPLES:
+        raise r.error(f"{fld}.file", str(path), f"at most {MAX_RECORD_SAMPLES:,} samples (every sample ends an "
+                      "integrator step; resample the record)", f"too many samples ({table.shape[0]:,})")
     if table.shape[1] != dimension + 1 or table.shape[0] < 2 or not np.all(np.isfinite(table)) \
             or np.any(np.diff(table[:, 0]) <= 0):
         raise r.error(f"{fld}.file", str(path), f"≥ 2 rows of {dimension + 1} finite columns (time increasing, "
@@ -667,24 +679,47 @@ def _read_experiment(r: _Reader, raw, overrides):
         merged[key] = value
     fld = "experiment"
     stop = r.number(merged, "stop_time", fld, default=10.0, minimum=0.0, exclusive=True)
-    interval = r.number(merged, "output_interval", fld, default=0.01, minimum=0.0, exclusive=True)
-    if interval > stop:
-        raise r.error("experiment.output_interval", interval, f"at most stop_time = {stop:g} s", "out of range")
+
+    def sampling(key, value):
+        """An interval between samples: at most the stop time, and not so short that the run's
+        samples (and the arrays holding them) pass MAX_OUTPUT_SAMPLES."""
+        if value > stop:
+            raise r.error(f"experiment.{key}", value, f"at most stop_time = {stop:g} s", "longer than the run")
+        if stop / value > MAX_OUTPUT_SAMPLES:
+            raise r.error(f"experiment.{key}", value, f"at least stop_time / {MAX_OUTPUT_SAMPLES:,} = "
+                          f"{stop / MAX_OUTPUT_SAMPLES:g} s (at most {MAX_OUTPUT_SAMPLES:,} samples a run)",
+                          "too many samples")
+        return value
+
+    interval = sampling("output_interval", r.number(merged, "output_interval", fld, default=0.01, minimum=0.0,
+                                                    exclusive=True))
     rtol = r.number(merged, "rtol", fld, default=1e-8, minimum=1e-14)
     if rtol > 0.1:
         raise r.error("experiment.rtol", rtol, "a relative tolerance in [1e-14, 0.1]", "out of range")
+    method = r.string(merged, "method", fld, METHODS, default="DOP853")
+    step = r.number(merged, "step", fld, default=1e-3, minimum=0.0, exclusive=True)
+    if method == "RK4" and step > stop:
+        raise r.error("experiment.step", step, f"RK4's step at most stop_time = {stop:g} s", "longer than the run")
     return Experiment(
         stop_time=stop, output_interval=interval,
-        method=r.string(merged, "method", fld, METHODS, default="DOP853"),
+        method=method,
         rtol=rtol,
         atol=r.number(merged, "atol", fld, default=rtol * 1e-2, minimum=0.0, exclusive=True),
         constraint=r.string(merged, "constraint", fld, CONSTRAINT_TREATMENTS, default="baumgarte"),
         baumgarte=r.number(merged, "baumgarte", fld, default=10.0, minimum=0.0),
-        communication_step=r.number(merged, "communication_step", fld, default=interval, minimum=0.0,
-                                    exclusive=True),
-        step=r.number(merged, "step", fld, default=1e-3, minimum=0.0, exclusive=True),
-        max_steps=int(r.number(merged, "max_steps", fld, default=2_000_000, minimum=1.0)),
+        communication_step=sampling("communication_step", r.number(
+            merged, "communication_step", fld, default=interval, minimum=0.0, exclusive=True)),
+        step=step,
+        max_steps=_whole(r, merged, "max_steps", default=2_000_000),
     )
+
+
+def _whole(r: _Reader, data, key, default):
+    """A whole number ≥ 1 (a count)."""
+    value = r.number(data, key, "experiment", default=default, minimum=1.0)
+    if value != int(value):
+        raise r.error(f"experiment.{key}", value, "a whole number ≥ 1", "not a whole number")
+    return int(value)
 
 
 def _signal_names(points, element_specs, dimension):

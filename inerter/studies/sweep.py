@@ -417,9 +417,13 @@ class FmuSlot:
         from inerter.fmu.run import FmuResult, FmuRunInfo, start_values
         from inerter.api import Model, compute_metrics
 
+        from inerter.engine.simulation import Settings
+
         model = Model(scene, overrides)                # the solver's messages for bad overrides
-        settings = model.settings(stop_time=stop_time)
-        comm = step or model.scene.experiment.communication_step
+        given = {k: v for k, v in (("stop_time", stop_time), ("communication_step", step)) if v is not None}
+        experiment = model.scene.experiment_with(given) if given else model.scene.experiment
+        settings = Settings.from_experiment(experiment)
+        comm = experiment.communication_step
         start = start_values(model, overrides)
         if not self.fresh:
             self.fmu.reset()

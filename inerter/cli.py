@@ -194,7 +194,8 @@ def cmd_describe(args):
 def cmd_build_fmu(args):
     from inerter.fmu import build
     out = _out_dir(args.out)
-    return build.run(argparse.Namespace(scenes=args.scenes, out_dir=str(out), force=args.force))
+    failed = build.run(argparse.Namespace(scenes=args.scenes, out_dir=str(out), force=args.force))
+    return 2 if failed else 0          # a scene that cannot be built: its error is on stderr
 
 
 def cmd_paper(args):

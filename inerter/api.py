@@ -67,7 +67,9 @@ class Model:
         return self.mechanism.terms()
 
     def parameter_info(self):
-        return [dict(name=p.name, value=p.value, unit=p.unit, description=p.description)
+        """Each parameter's value in SI with its SI unit (as the FMU declares it), its description,
+        and ``given``: the value as the scene wrote it where its unit is not SI ("1500 mm")."""
+        return [dict(name=p.name, value=p.value, unit=p.unit, description=p.description, given=p.given)
                 for p in self.scene.parameters.values()]
 
     def effect_info(self):

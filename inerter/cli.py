@@ -185,7 +185,8 @@ def cmd_describe(args):
         print("  " + line)
     print("parameters:")
     for p in model.parameter_info():
-        print(f"  {p['name']} = {p['value']:g} {p['unit']}  {p['description']}")
+        given = f" (given as {p['given']})" if p.get("given") else ""
+        print(f"  {p['name']} = {p['value']:g} {p['unit']}{given}  {p['description']}")
     print("inputs: " + (", ".join(i["name"] for i in model.input_info()) or "none"))
     print("outputs: " + ", ".join(o["name"] for o in model.output_info()))
     return 0

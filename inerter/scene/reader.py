@@ -9,6 +9,7 @@ Errors name the file, the field path (``elements.inerter.b``), the value and wha
 """
 from __future__ import annotations
 
+import itertools
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -17,7 +18,7 @@ from typing import Any, Mapping
 
 from inerter import elements
 from inerter.common.errors import SceneError
-from inerter.scene.expressions import evaluate, evaluate_parameters, parameter_meta
+from inerter.scene.expressions import UnitError, ambiguous_units, evaluate, parameter_meta, read_parameters
 from inerter.scene.files import MAX_RECORD_BYTES, MAX_RECORD_SAMPLES, MAX_SCENE_BYTES, read_capped
 
 GROUND = "ground"
@@ -37,6 +38,9 @@ JOINT_TYPES = ("revolute", "prismatic")
 JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed")
 ORIENTATIONS = ("quaternion", "euler_zxz")
 FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
+#: The SI unit of each field of a point force.
+FORCE_UNITS = {"value": "N", "amplitude": "N", "frequency": "Hz", "phase": "rad", "offset": "N", "time": "s",
+               "initial": "N", "kp": "N/m", "kd": "N.s/m", "reference": "m"}
 METRIC_KINDS = ("natural_frequency", "free_oscillation", "harmonics", "steady_state", "peak")
 METHODS = ("DOP853", "RK45", "Radau", "BDF", "LSODA", "RK4")
 CONSTRAINT_TREATMENTS = ("baumgarte", "projection")
@@ -53,9 +57,11 @@ MAX_OUTPUT_SAMPLES = 1_000_000
 @dataclass(frozen=True)
 class Parameter:
     name: str
-    value: float
-    unit: str
+    value: float                    # SI
+    unit: str                       # the SI unit of `value` ("m" for a parameter given in mm)
     description: str
+    given: str = ""                 # the value as the scene gave it, where its unit is not SI: "1500 mm"
+    read: Any = field(default=None, repr=False, compare=False)   # its ParameterValue (unit, dimension)
 
 
 @dataclass(frozen=True)
@@ -171,7 +177,8 @@ class Scene:
         loaded with, read and checked as a load with ``experiment.NAME`` overrides would (the same
         function: same defaults, same errors), without rebuilding the scene. `source` names where
         the overrides come from in errors (default: the scene file)."""
-        r = _Reader(source or self.source, {n: p.value for n, p in self.parameters.items()})
+        r = _Reader(source or self.source, {n: p.value for n, p in self.parameters.items()},
+                    {n: p.read for n, p in self.parameters.items()})
         return _read_experiment(r, self.raw.get("experiment", {}), dict(self.experiment_overrides, **overrides))
 
     @property
@@ -185,9 +192,16 @@ class Scene:
 # Reading helpers: each checks one field and names it in its error
 # ----------------------------------------------------------------------------------------------
 class _Reader:
-    def __init__(self, source: str, names: Mapping[str, float]):
+    """Reads fields of one scene: `names` are the parameters' SI values, `dims` their units (the
+    dimension an expression over them has is checked against each field's unit)."""
+
+    def __init__(self, source: str, names: Mapping[str, float], dims: Mapping | None = None):
         self.source = source
         self.names = names
+        self.dims = dims or {}
+
+    def evaluate(self, expr, path, unit=None):
+        return evaluate(expr, self.names, self.source, path, unit, self.dims)
 
     def error(self, fld, value, expected, problem=None):
         return SceneError(self.source, fld, value, expected, problem)
@@ -206,20 +220,23 @@ class _Reader:
                                  f"a value for required field '{key}'", "missing field")
         return data
 
-    def number(self, data, key, fld, default=None, minimum=None, exclusive=False, required=True):
+    def number(self, data, key, fld, default=None, minimum=None, exclusive=False, required=True, unit=None):
+        """A number field in SI; `unit`: its SI unit, which the dimension of an expression over
+        parameters with units must fit (None: any)."""
         path = f"{fld}.{key}"
         if key not in data:
             if default is not None or not required:
                 return default
-            raise self.error(path, None, "a number or expression", "missing field")
-        value = evaluate(data[key], self.names, self.source, path)
+            raise self.error(path, None, "a number or expression" + (f" ({unit})" if unit else ""), "missing field")
+        value = self.evaluate(data[key], path, unit)
         if minimum is not None:
             if (exclusive and not value > minimum) or (not exclusive and not value >= minimum):
                 op = ">" if exclusive else "≥"
-                raise self.error(path, value, f"a number {op} {minimum:g}", "out of range")
+                shown = f" {unit}" if unit and unit != "1" else ""
+                raise self.error(path, value, f"a number {op} {minimum:g}{shown}", "out of range")
         return value
 
-    def vector(self, data, key, fld, dim, default=None, unit_length=False):
+    def vector(self, data, key, fld, dim, default=None, unit_length=False, unit=None):
         path = f"{fld}.{key}"
         if key not in data:
             if default is not None:
@@ -228,8 +245,7 @@ class _Reader:
         raw = data[key]
         if not isinstance(raw, list) or len(raw) != dim:
             raise self.error(path, raw, f"a list of {dim} numbers or expressions", "wrong shape")
-        values = tuple(evaluate(v, self.names, self.source, f"{path}[{i + 1}]")
-                       for i, v in enumerate(raw))
+        values = tuple(self.evaluate(v, f"{path}[{i + 1}]", unit) for i, v in enumerate(raw))
         if unit_length:
             norm = math.sqrt(sum(v * v for v in values))
             if norm == 0.0:
@@ -331,6 +347,25 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
 
 
 def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
+    """The scene of the TOML `data`. A parameter in a unit with two readings (``"g"``: the gram
+    or standard gravity) is read as the one whose dimension fits every field it reaches: the
+    scene is built with each choice in turn until one fits (the first choice's error otherwise)."""
+    raw_params = data.get("parameters", {}) if isinstance(data, dict) else {}
+    p_names = set(raw_params) if isinstance(raw_params, dict) else set()
+    fixed = {k: v for k, v in overrides.items() if k in p_names}
+    choices = ambiguous_units(raw_params, fixed) if isinstance(raw_params, dict) else []
+    first = None
+    for combination in itertools.product((0, 1), repeat=min(len(choices), 8)):
+        try:
+            return _build_scene(source, data, overrides, dict(zip(choices, combination)))
+        except UnitError as exc:
+            if not choices:
+                raise
+            first = first or exc
+    raise first
+
+
+def _build_scene(source: str, data: dict, overrides: Mapping[str, Any], reading: Mapping[str, int]) -> Scene:
     base = _Reader(source, {})
     base.table(data, "", TOP_LEVEL)
 
@@ -366,10 +401,10 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
         raise base.error("parameters", raw_params, "a table of named values", "not a table")
     p_over, e_over, x_over = split_overrides(source, overrides, set(raw_params))
     x_over.pop("__orientation__", None)
-    values = evaluate_parameters(raw_params, source, fixed=p_over)
+    read = read_parameters(raw_params, source, fixed=p_over, reading=reading)
     meta = parameter_meta(raw_params)
-    parameters = {n: Parameter(n, values[n], meta[n]["unit"], meta[n]["description"]) for n in values}
-    r = _Reader(source, values)
+    parameters = {n: Parameter(n, v.value, v.si_unit, meta[n]["description"], v.given, v) for n, v in read.items()}
+    r = _Reader(source, {n: v.value for n, v in read.items()}, read)
 
     effects = _read_effects(r, data.get("effects", {}), e_over, dimension, Path(source).parent)
     bodies, points = _read_bodies(r, data, dimension)
@@ -398,7 +433,7 @@ def _read_effects(r: _Reader, raw, overrides, dimension, folder):
                 raise r.error(fld, value, "true or false", "wrong type")
             effects[name] = value
         elif name == "gravity":
-            effects[name] = r.vector(merged, name, "effects", dimension)
+            effects[name] = r.vector(merged, name, "effects", dimension, unit="m/s2")
         elif name == "ground_acceleration":
             effects[name] = _read_ground_motion(r, value, fld, dimension, folder)
     return effects
@@ -407,7 +442,7 @@ def _read_effects(r: _Reader, raw, overrides, dimension, folder):
 def _read_ground_motion(r: _Reader, spec, fld, dimension, folder):
     from inerter.scene.ground_motion import GroundMotion
     r.table(spec, fld, {"file": False, "amplitude": False, "frequency": False, "scale": False, "input": False})
-    scale = r.number(spec, "scale", fld, default=1.0)
+    scale = r.number(spec, "scale", fld, default=1.0, unit="1")
     kinds = [k for k in ("file", "amplitude", "input") if k in spec]
     if len(kinds) != 1:
         raise r.error(fld, spec, "exactly one of: file (a CSV record), amplitude + frequency (a sine), "
@@ -417,8 +452,9 @@ def _read_ground_motion(r: _Reader, spec, fld, dimension, folder):
             raise r.error(f"{fld}.input", spec["input"], "true", "wrong value")
         return GroundMotion(dimension, scale=scale, input=True)
     if "amplitude" in spec:
-        return GroundMotion(dimension, amplitude=r.vector(spec, "amplitude", fld, dimension),
-                            frequency=r.number(spec, "frequency", fld, minimum=0.0, exclusive=True), scale=scale)
+        return GroundMotion(dimension, amplitude=r.vector(spec, "amplitude", fld, dimension, unit="m/s2"),
+                            frequency=r.number(spec, "frequency", fld, minimum=0.0, exclusive=True, unit="Hz"),
+                            scale=scale)
     name = spec["file"]
     if not isinstance(name, str):
         raise r.error(f"{fld}.file", name, "a CSV file name, relative to the scene file", "wrong type")
@@ -460,7 +496,7 @@ def _read_bodies(r: _Reader, data, dimension):
             if pname in points:
                 raise r.error(f"{fld}.{pname}", pname, "a point name used once in the scene",
                               f"duplicate point name (also on {points[pname].body})")
-            points[pname] = Point(pname, owner, r.vector(raw, pname, fld, dimension))
+            points[pname] = Point(pname, owner, r.vector(raw, pname, fld, dimension, unit="m"))
 
     ground = r.table(data.get("ground", {}), "ground", {"points": False})
     add_points(GROUND, ground.get("points", {}), "ground.points")
@@ -477,11 +513,11 @@ def _read_bodies(r: _Reader, data, dimension):
             bodies[bname] = Body(
                 bname,
                 mass=_read_mass(r, raw, fld, massless),
-                inertia=r.number(raw, "inertia", fld, minimum=0.0, default=0.0 if massless else None),
-                position=r.vector(raw, "position", fld, dimension),
-                angle=r.number(raw, "angle", fld, default=0.0),
-                velocity=r.vector(raw, "velocity", fld, dimension, default=zero),
-                angular_velocity=r.number(raw, "angular_velocity", fld, default=0.0),
+                inertia=r.number(raw, "inertia", fld, minimum=0.0, default=0.0 if massless else None, unit="kg.m2"),
+                position=r.vector(raw, "position", fld, dimension, unit="m"),
+                angle=r.number(raw, "angle", fld, default=0.0, unit="rad"),
+                velocity=r.vector(raw, "velocity", fld, dimension, default=zero, unit="m/s"),
+                angular_velocity=r.number(raw, "angular_velocity", fld, default=0.0, unit="rad/s"),
                 massless=massless,
             )
         else:
@@ -493,10 +529,10 @@ def _read_bodies(r: _Reader, data, dimension):
                 bname,
                 mass=_read_mass(r, raw, fld, massless),
                 inertia=_read_inertia(r, raw, fld) if "inertia" in raw else ((0.0,) * 3,) * 3,
-                position=r.vector(raw, "position", fld, 3),
+                position=r.vector(raw, "position", fld, 3, unit="m"),
                 angle=0.0,
-                velocity=r.vector(raw, "velocity", fld, 3, default=zero),
-                angular_velocity=r.vector(raw, "angular_velocity", fld, 3, default=zero),
+                velocity=r.vector(raw, "velocity", fld, 3, default=zero, unit="m/s"),
+                angular_velocity=r.vector(raw, "angular_velocity", fld, 3, default=zero, unit="rad/s"),
                 rotation=_read_rotation(r, raw, fld),
                 massless=massless,
             )
@@ -519,8 +555,8 @@ def _read_mass(r: _Reader, raw, fld, massless: bool) -> float:
     """A body's mass: > 0, or ≥ 0 (default 0) on a body declared ``massless = true``, whose
     coordinates then get their mass from inerters (checked when the mechanism is compiled)."""
     if massless:
-        return r.number(raw, "mass", fld, default=0.0, minimum=0.0)
-    mass = r.number(raw, "mass", fld)
+        return r.number(raw, "mass", fld, default=0.0, minimum=0.0, unit="kg")
+    mass = r.number(raw, "mass", fld, unit="kg")
     if not mass > 0.0:
         raise r.error(f"{fld}.mass", mass, "a number > 0 (kg); a body carried only by inerters may have "
                       "mass = 0 if it says so with massless = true", "out of range")
@@ -534,9 +570,9 @@ def _read_inertia(r: _Reader, raw, fld):
     path = f"{fld}.inertia"
     expected = "3 principal moments [Jx, Jy, Jz] ≥ 0 or a symmetric 3×3 matrix, kg.m2"
     if isinstance(value, list) and len(value) == 3 and all(not isinstance(v, list) for v in value):
-        J = np.diag(r.vector(raw, "inertia", fld, 3))
+        J = np.diag(r.vector(raw, "inertia", fld, 3, unit="kg.m2"))
     elif isinstance(value, list) and len(value) == 3 and all(isinstance(v, list) and len(v) == 3 for v in value):
-        J = np.array([[evaluate(x, r.names, r.source, f"{path}[{i + 1}][{j + 1}]") for j, x in enumerate(row)]
+        J = np.array([[r.evaluate(x, f"{path}[{i + 1}][{j + 1}]", "kg.m2") for j, x in enumerate(row)]
                       for i, row in enumerate(value)])
     else:
         raise r.error(path, value, expected, "wrong shape")
@@ -552,10 +588,10 @@ def _read_rotation(r: _Reader, raw, fld):
     if "euler" in raw:
         if "axis" in raw or "angle" in raw:
             raise r.error(f"{fld}.euler", raw["euler"], "either euler = [φ, θ, ψ] or axis and angle", "both given")
-        A = euler_matrix(r.vector(raw, "euler", fld, 3))
+        A = euler_matrix(r.vector(raw, "euler", fld, 3, unit="rad"))
     else:
         axis = r.vector(raw, "axis", fld, 3, default=(0.0, 0.0, 1.0), unit_length=True)
-        A = axis_angle_matrix(axis, r.number(raw, "angle", fld, default=0.0))
+        A = axis_angle_matrix(axis, r.number(raw, "angle", fld, default=0.0, unit="rad"))
     return tuple(tuple(float(x) for x in row) for row in A)
 
 
@@ -625,7 +661,7 @@ def _read_elements(r: _Reader, raw, points, bodies, dimension):
 def _read_parameter(r: _Reader, spec, fld, p: "elements.Parameter"):
     """One parameter of an element kind, within the range its kind declares (inerter.elements)."""
     minimum = p.minimum if p.minimum != -math.inf else None
-    return r.number(spec, p.key, fld, minimum=minimum, required=p.required)
+    return r.number(spec, p.key, fld, minimum=minimum, required=p.required, unit=p.unit)
 
 
 def _read_forces(r: _Reader, raw, points, dimension):
@@ -657,7 +693,7 @@ def _read_forces(r: _Reader, raw, points, dimension):
             input_points.add(point)
             forces[fname] = Force(fname, point, function, None)
             continue
-        kwargs = {k: r.number(spec, k, fld, default=0.0) for k in fields[function]}
+        kwargs = {k: r.number(spec, k, fld, default=0.0, unit=FORCE_UNITS[k]) for k in fields[function]}
         for gain in ("kp", "kd"):
             if gain in kwargs and kwargs[gain] < 0:
                 raise r.error(f"{fld}.{gain}", kwargs[gain], "a gain ≥ 0", "out of range")
@@ -678,7 +714,7 @@ def _read_experiment(r: _Reader, raw, overrides):
             raise r.error(f"experiment.{key}", value, "one of: " + ", ".join(EXPERIMENT_FIELDS), "unknown field")
         merged[key] = value
     fld = "experiment"
-    stop = r.number(merged, "stop_time", fld, default=10.0, minimum=0.0, exclusive=True)
+    stop = r.number(merged, "stop_time", fld, default=10.0, minimum=0.0, exclusive=True, unit="s")
 
     def sampling(key, value):
         """An interval between samples: at most the stop time, and not so short that the run's
@@ -692,12 +728,12 @@ def _read_experiment(r: _Reader, raw, overrides):
         return value
 
     interval = sampling("output_interval", r.number(merged, "output_interval", fld, default=0.01, minimum=0.0,
-                                                    exclusive=True))
-    rtol = r.number(merged, "rtol", fld, default=1e-8, minimum=1e-14)
+                                                    exclusive=True, unit="s"))
+    rtol = r.number(merged, "rtol", fld, default=1e-8, minimum=1e-14, unit="1")
     if rtol > 0.1:
         raise r.error("experiment.rtol", rtol, "a relative tolerance in [1e-14, 0.1]", "out of range")
     method = r.string(merged, "method", fld, METHODS, default="DOP853")
-    step = r.number(merged, "step", fld, default=1e-3, minimum=0.0, exclusive=True)
+    step = r.number(merged, "step", fld, default=1e-3, minimum=0.0, exclusive=True, unit="s")
     if method == "RK4" and step > stop:
         raise r.error("experiment.step", step, f"RK4's step at most stop_time = {stop:g} s", "longer than the run")
     return Experiment(
@@ -706,9 +742,9 @@ def _read_experiment(r: _Reader, raw, overrides):
         rtol=rtol,
         atol=r.number(merged, "atol", fld, default=rtol * 1e-2, minimum=0.0, exclusive=True),
         constraint=r.string(merged, "constraint", fld, CONSTRAINT_TREATMENTS, default="baumgarte"),
-        baumgarte=r.number(merged, "baumgarte", fld, default=10.0, minimum=0.0),
+        baumgarte=r.number(merged, "baumgarte", fld, default=10.0, minimum=0.0, unit="1/s"),
         communication_step=sampling("communication_step", r.number(
-            merged, "communication_step", fld, default=interval, minimum=0.0, exclusive=True)),
+            merged, "communication_step", fld, default=interval, minimum=0.0, exclusive=True, unit="s")),
         step=step,
         max_steps=_whole(r, merged, "max_steps", default=2_000_000),
     )
@@ -716,20 +752,21 @@ def _read_experiment(r: _Reader, raw, overrides):
 
 def _whole(r: _Reader, data, key, default):
     """A whole number ≥ 1 (a count)."""
-    value = r.number(data, key, "experiment", default=default, minimum=1.0)
+    value = r.number(data, key, "experiment", default=default, minimum=1.0, unit="1")
     if value != int(value):
         raise r.error(f"experiment.{key}", value, "a whole number ≥ 1", "not a whole number")
     return int(value)
 
 
-def _signal_names(points, element_specs, dimension):
-    names = set()
+def _signal_names(points, element_specs, dimension) -> dict[str, str | None]:
+    """Every output's name and SI unit (None: mixed units)."""
+    names = {}
     for p in points:
         for i in range(1, dimension + 1):
-            names.update({f"{p}.r[{i}]", f"{p}.v[{i}]"})
+            names.update({f"{p}.r[{i}]": "m", f"{p}.v[{i}]": "m/s"})
     for e, el in element_specs.items():
-        names.update(f"{e}.{suffix}" for suffix, _, _ in elements.KINDS[el.type].outputs)
-    names.update({"energy", "constraint_residual"})
+        names.update({f"{e}.{suffix}": unit for suffix, unit, _ in elements.KINDS[el.type].outputs})
+    names.update({"energy": "J", "constraint_residual": None})
     return names
 
 
@@ -767,7 +804,7 @@ def _read_metrics(r: _Reader, raw, signals):
             raise r.error(f"{fld}.periods", periods, "a whole number ≥ 1", "out of range")
         metrics.append(Metric(
             kind=kind, prefix=prefix, signal=signal,
-            reference=r.number(spec, "reference", fld, required=False),
-            period=r.number(spec, "period", fld, minimum=0.0, exclusive=True, required=False),
+            reference=r.number(spec, "reference", fld, required=False, unit=signals.get(signal)),
+            period=r.number(spec, "period", fld, minimum=0.0, exclusive=True, required=False, unit="s"),
             periods=periods, period_of=period_of))
     return tuple(metrics)

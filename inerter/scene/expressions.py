@@ -466,7 +466,23 @@ def _bounded(result: float, value, source: str, field: str) -> float:
 
 
 class UnitError(SceneError):
-    """A value whose unit does not fit the field it is used in (a SceneError)."""
+    """A value whose unit does not fit the field it is used in (a SceneError). `parameters`: the
+    parameters with units whose dimensions met there."""
+
+    def __init__(self, source, field, value, expected, problem=None, parameters=()):
+        super().__init__(source, field, value, expected, problem)
+        self.parameters = tuple(parameters)
+
+
+def _with_units(expr, dims) -> list[str]:
+    """The parameters of `expr` that have a unit."""
+    if not isinstance(expr, str):
+        return []
+    try:
+        used = _compile(expr)[1]
+    except _Problem:
+        return []
+    return sorted(n for n in used if getattr(dims.get(n), "dimension", None) is not None)
 
 
 def quantity(expr, names: Mapping[str, float], source: str, field: str, dims: Mapping | None = None):
@@ -478,9 +494,11 @@ def quantity(expr, names: Mapping[str, float], source: str, field: str, dims: Ma
     try:
         tree, _ = _compile(expr)
         return _value(tree, names, dims or {})
+    except _UnitProblem as problem:
+        raise UnitError(source, field, expr, problem.expected, problem.problem,
+                        _with_units(expr, dims or {})) from None
     except _Problem as problem:
-        raise (UnitError if isinstance(problem, _UnitProblem) else SceneError)(
-            source, field, expr, problem.expected, problem.problem) from None
+        raise SceneError(source, field, expr, problem.expected, problem.problem) from None
     except RecursionError:
         raise SceneError(source, field, expr, _EXPECTED_EXPRESSION, "is too deeply nested") from None
 
@@ -500,7 +518,7 @@ def evaluate(expr, names: Mapping[str, float], source: str, field: str, unit: st
     value, dim = quantity(expr, names, source, field, dims)
     if unit is not None and not fits(dim, units.dimension_of(unit)):
         raise UnitError(source, field, expr, f"a value in {unit} ({units.describe_dimension(units.dimension_of(unit))})",
-                        "the unit does not fit: " + _culprits(expr, dims, dim.dimension))
+                        "the unit does not fit: " + _culprits(expr, dims, dim.dimension), _with_units(expr, dims))
     return _bounded(value, expr, source, field)
 
 
@@ -511,7 +529,7 @@ def fits(dim: Dim, dimension) -> bool:
 
 def _culprits(expr, dims, dim) -> str:
     """What gave `expr` its dimension: its parameters with a unit."""
-    used = sorted(n for n in free_names(expr, "", "") if getattr(dims.get(n), "dimension", None) is not None)
+    used = _with_units(expr, dims)
     said = ", ".join(f"parameter {n} is in {dims[n].describe()}" for n in used)
     if isinstance(expr, str) and expr.strip() in used:
         return said
@@ -550,6 +568,7 @@ def _check_parameter_name(name, source: str, prefix: str) -> None:
 class _Binding:
     """One parameter's entry: its value (a number or an expression), the field that names it,
     its unit (None: none given) and whether it is an override (a plain override is SI)."""
+    name: str
     expr: object
     field: str
     unit: object = None
@@ -561,7 +580,7 @@ def _parameter_binding(name: str, spec, source: str, prefix: str, override: bool
     """The value (number or expression), field path and unit string of a parameter entry."""
     field = f"{prefix}.{name}"
     if not isinstance(spec, Mapping):
-        return _Binding(spec, field, override=override)
+        return _Binding(name, spec, field, override=override)
     for key in spec:
         if key not in _TABLE_KEYS:
             raise SceneError(
@@ -576,7 +595,7 @@ def _parameter_binding(name: str, spec, source: str, prefix: str, override: bool
     for key in ("unit", "description"):
         if key in spec and not isinstance(spec[key], str):
             raise SceneError(source, f"{field}.{key}", spec[key], "a string", f"'{key}' must be a string")
-    return _Binding(spec["value"], f"{field}.value", spec.get("unit"), f"{field}.unit", override)
+    return _Binding(name, spec["value"], f"{field}.value", spec.get("unit"), f"{field}.unit", override)
 
 
 @dataclass(frozen=True)
@@ -686,7 +705,7 @@ def _read_one(b: _Binding, declared, unit, values, read, source) -> ParameterVal
     dim = computed.dimension
     if declared is not None and unit is not None and unit.dimension != declared.dimension:
         raise UnitError(source, b.unit_field, b.unit, f"a unit of the dimension the scene declares: "
-                        f"{declared.describe()}", f"the unit does not fit: {unit.describe()}")
+                        f"{declared.describe()}", f"the unit does not fit: {unit.describe()}", (b.name,))
     target = unit or (declared if b.override else None)
     if target is None:                       # no unit: a plain number, or what its expression computes
         if dim is None or computed.loose:
@@ -696,7 +715,7 @@ def _read_one(b: _Binding, declared, unit, values, read, source) -> ParameterVal
                               units.Unit(si, dim, 1.0, si, "from its expression"), si)
     if not fits(computed, target.dimension):
         raise UnitError(source, b.field, b.expr, f"a value in {target.describe()}",
-                        "the unit does not fit: " + _culprits(b.expr, read, dim))
+                        "the unit does not fit: " + _culprits(b.expr, read, dim), (b.name, *_with_units(b.expr, read)))
     # a number in its table's unit (a quantity of the unit's dimension is SI already)
     plain_in_unit = unit is not None and dim != target.dimension
     si = value * target.factor if plain_in_unit else value

@@ -9,7 +9,6 @@ Errors name the file, the field path (``elements.inerter.b``), the value and wha
 """
 from __future__ import annotations
 
-import itertools
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -348,21 +347,24 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
 
 def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     """The scene of the TOML `data`. A parameter in a unit with two readings (``"g"``: the gram
-    or standard gravity) is read as the one whose dimension fits every field it reaches: the
-    scene is built with each choice in turn until one fits (the first choice's error otherwise)."""
+    or standard gravity) is read as the one whose dimension fits every field it reaches: first
+    as the first reading; a parameter a unit error names is read the other way and the scene
+    read again (each at most once, so at most one read more than there are such parameters)."""
     raw_params = data.get("parameters", {}) if isinstance(data, dict) else {}
     p_names = set(raw_params) if isinstance(raw_params, dict) else set()
     fixed = {k: v for k, v in overrides.items() if k in p_names}
-    choices = ambiguous_units(raw_params, fixed) if isinstance(raw_params, dict) else []
-    first = None
-    for combination in itertools.product((0, 1), repeat=min(len(choices), 8)):
+    choices = set(ambiguous_units(raw_params, fixed)) if isinstance(raw_params, dict) else set()
+    reading: dict[str, int] = {}
+    first: dict[str, UnitError] = {}          # the error that made a parameter be read the other way
+    while True:
         try:
-            return _build_scene(source, data, overrides, dict(zip(choices, combination)))
+            return _build_scene(source, data, overrides, reading)
         except UnitError as exc:
-            if not choices:
-                raise
-            first = first or exc
-    raise first
+            flip = [n for n in exc.parameters if n in choices and n not in reading]
+            if not flip:       # fits neither reading: the error its first reading gave
+                raise next((first[n] for n in exc.parameters if n in first), exc) from None
+            reading.update({n: 1 for n in flip})
+            first.update({n: exc for n in flip})
 
 
 def _build_scene(source: str, data: dict, overrides: Mapping[str, Any], reading: Mapping[str, int]) -> Scene:

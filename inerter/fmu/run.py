@@ -103,7 +103,9 @@ def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None
 
     overrides = dict(overrides or {})
     model = Model(scene, overrides)                  # validates the overrides with the solver's messages
-    given = {k: v for k, v in (("stop_time", stop_time), ("communication_step", step)) if v is not None}
+    # the importer samples the FMU at its communication points: a step given is the output interval too
+    given = {k: v for k, v in (("stop_time", stop_time), ("communication_step", step), ("output_interval", step))
+             if v is not None}
     experiment = (model.scene.experiment_with(given, source=f"{model.source}: simulate_fmu()") if given
                   else model.scene.experiment)
     settings = Settings.from_experiment(experiment)

@@ -420,7 +420,9 @@ class FmuSlot:
         from inerter.engine.simulation import Settings
 
         model = Model(scene, overrides)                # the solver's messages for bad overrides
-        given = {k: v for k, v in (("stop_time", stop_time), ("communication_step", step)) if v is not None}
+        # the importer samples the FMU at its communication points: a step given is the output interval too
+        given = {k: v for k, v in (("stop_time", stop_time), ("communication_step", step), ("output_interval", step))
+                 if v is not None}
         experiment = model.scene.experiment_with(given) if given else model.scene.experiment
         settings = Settings.from_experiment(experiment)
         comm = experiment.communication_step

@@ -86,6 +86,12 @@ def test_an_output_grid_too_fine_to_hold(tmp_path, capsys):
     one_line_error(capsys, str(LUMPED), "experiment.output_interval", "1e-09", "at most 1,000,000 samples")
 
 
+@pytest.mark.parametrize("item, problem", [("b", "missing '='"), ("=3", "missing name")])
+def test_a_set_without_a_name_or_value(capsys, item, problem):
+    assert main(["describe", str(LUMPED), "--set", item]) == 2
+    one_line_error(capsys, "--set", repr(item), problem, "NAME=VALUE")
+
+
 def test_a_usage_error_is_one_line(capsys):
     with pytest.raises(SystemExit) as info:
         main(["run", str(LUMPED), "--model", "simulink"])

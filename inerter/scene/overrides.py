@@ -26,5 +26,8 @@ def parse_set(items) -> dict:
             raise SceneError("--set", item, item, "NAME=VALUE, e.g. b=20 or effects.centripetal=false",
                              "missing '='")
         name, text = item.split("=", 1)
+        if not name.strip():
+            raise SceneError("--set", item, item, "NAME=VALUE, e.g. b=20 or effects.centripetal=false",
+                             "missing name")
         out[name.strip()] = read_value(text)
     return out

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from inerter.common.errors import InerterError, SceneError
+from inerter.common.errors import InerterError, SceneError, shown
 from inerter.scene.overrides import parse_set, read_value
 from inerter.scene.reader import METHODS
 
@@ -30,7 +30,7 @@ class OptionError(InerterError):
     ``<option>: <problem> (got <value>; expected <expected>)``, like a scene error's."""
 
     def __init__(self, option: str, value, expected: str, problem: str = "out of range"):
-        super().__init__(f"{option}: {problem} (got {value!r}; expected {expected})")
+        super().__init__(f"{option}: {problem} (got {shown(value)}; expected {expected})")
 
 
 def overrides_of(args) -> dict:

@@ -26,6 +26,11 @@ overflow, an argument outside a function's domain, ...) is reported as a
 :class:`~inerter.common.errors.SceneError` naming the source, the field path, the offending
 text and what was expected.  Results are always finite Python floats of magnitude at
 most :data:`MAX_MAGNITUDE`.
+
+Dimensions travel with the values (:class:`Dim`): a parameter with a unit
+(:mod:`.units`) has one, and sums, products, powers and functions combine them, so a
+field can refuse an expression whose parameters' units do not fit it
+(:class:`UnitError`); numbers and parameters without a unit are plain numbers.
 """
 from __future__ import annotations
 

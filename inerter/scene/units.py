@@ -8,7 +8,7 @@ sees SI values with SI units.
 Syntax: factors joined by ``*``, ``.``, ``·`` or a space, each a symbol with an optional integer
 exponent (``m^2``, ``m**2`` or Modelica's ``m2``, ``s-2``), and ``/`` before one factor or a
 parenthesised product: ``N*s/m``, ``N.s/m``, ``kg*m^2``, ``kg.m2``, ``m/s^2``, ``N.m/rad``,
-``J/(kg.K)`` is refused for its K, ``1/s``; ``"1"`` is dimensionless.
+``N/(m.s)``, ``1/s``; ``"1"`` is dimensionless. Only the mechanical units of :data:`SYMBOLS`.
 
 Angles are dimensionless, as in SI: ``rad`` is 1 and ``deg`` is π/180, so an angle field takes
 either and a plain number; ``Hz`` is 1/s (cycles per second: an angular velocity in ``Hz`` would

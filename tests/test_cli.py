@@ -162,8 +162,8 @@ def test_version(capsys):
 
 def test_set_takes_the_expressions_a_scene_takes(tmp_path):
     """b=2*pi is 2π, as `b = "2*pi"` in the scene file would be; an expression over other
-    parameters too (b=2*m is twice the mass)."""
-    for text, expected in (("b=2*pi", 2 * np.pi), ("b=2*m", 10.0), ("b=sqrt(La^2 + Lb^2)", np.sqrt(2.0))):
+    parameters too (b=2*m is twice the mass, 5 kg; m·sqrt(La² + Lb²)/La is a mass, 5√2 kg)."""
+    for text, expected in (("b=2*pi", 2 * np.pi), ("b=2*m", 10.0), ("b=m*sqrt(La^2 + Lb^2)/La", 5.0 * np.sqrt(2.0))):
         out = tmp_path / text.replace("*", "x").replace("^", "p").replace("(", "").replace(")", "").replace(" ", "")
         assert main(["run", str(LUMPED), "--set", text, "--stop-time", "0.5", "--out", str(out)]) == 0
         summary = json.loads((out / "summary.json").read_text())

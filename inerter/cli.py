@@ -274,8 +274,8 @@ def build_parser():
 
     def set_option(sp):
         sp.add_argument("--set", action="append", metavar="NAME=VALUE",
-                        help="override a parameter (b=20, b=2*pi, b={value=20, unit=\"kg\"}), "
-                             "effects.NAME or experiment.NAME; VALUE as in the scene file (repeatable)")
+                        help="override a parameter (b=20, in SI; b=2*pi; b={value=20, unit=\"kg\"}), "
+                             "effects.NAME or experiment.NAME, VALUE written as in the scene file (repeatable)")
 
     def common(sp, out_default="out"):
         set_option(sp)

@@ -161,15 +161,17 @@ def test_a_record_that_is_dev_zero(tmp_path, capsys):
 
 
 def test_a_ten_million_row_record_is_refused_at_once(tmp_path, capsys):
-    """10 000 000 rows (80 MB): refused by its size before it is parsed (documented limit)."""
+    """10 000 000 rows (80 MB): refused by its size before it is parsed (the documented limit)."""
     record = tmp_path / "long.csv"
     with open(record, "w") as fh:
-        row = "0.0,0.0,0.0,0.0\n"
         for _ in range(100):
-            fh.write(row * 100_000)
+            fh.write("0,0,0,0\n" * 100_000)
     path = _record_scene(tmp_path, record)
-    assert main(["describe", str(path)]) == 2
-    one_line_error(capsys, str(path), "effects.ground_acceleration.file", str(record), "at most 64 MiB")
+    try:
+        assert main(["describe", str(path)]) == 2
+        one_line_error(capsys, str(path), "effects.ground_acceleration.file", str(record), "at most 64 MiB")
+    finally:
+        record.unlink()
 
 
 def test_a_record_with_more_samples_than_the_limit(tmp_path, capsys):
@@ -179,8 +181,11 @@ def test_a_record_with_more_samples_than_the_limit(tmp_path, capsys):
     with open(record, "w") as fh:
         fh.writelines(f"{i * 1e-4:.4f},0,0,0\n" for i in range(n))
     path = _record_scene(tmp_path, record)
-    assert main(["describe", str(path)]) == 2
-    one_line_error(capsys, str(path), "effects.ground_acceleration.file", "1,000,001", "at most 1,000,000 samples")
+    try:
+        assert main(["describe", str(path)]) == 2
+        one_line_error(capsys, str(path), "effects.ground_acceleration.file", "1,000,001", "at most 1,000,000 samples")
+    finally:
+        record.unlink()
 
 
 def test_an_unreadable_record(tmp_path, capsys):

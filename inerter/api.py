@@ -67,7 +67,9 @@ class Model:
         return self.mechanism.terms()
 
     def parameter_info(self):
-        return [dict(name=p.name, value=p.value, unit=p.unit, description=p.description)
+        """Each parameter's value in SI with its SI unit (as the FMU declares it), its description,
+        and ``given``: the value as the scene wrote it where its unit is not SI ("1500 mm")."""
+        return [dict(name=p.name, value=p.value, unit=p.unit, description=p.description, given=p.given)
                 for p in self.scene.parameters.values()]
 
     def effect_info(self):
@@ -142,7 +144,11 @@ class Model:
 
     # -- simulation --------------------------------------------------------------------------
     def settings(self, **overrides) -> Settings:
-        return Settings.from_experiment(self.scene.experiment, **overrides)
+        """The scene's experiment with `overrides` (None: the scene's value), read and checked by
+        the scene reader's function for ``[experiment]`` (errors name ``simulate()`` and the field)."""
+        given = {k: v for k, v in overrides.items() if v is not None}
+        x = self.scene.experiment_with(given, source=f"{self.source}: simulate()") if given else self.scene.experiment
+        return Settings.from_experiment(x)
 
     def simulate(self, stop_time=None, output_interval=None, method=None, rtol=None, atol=None,
                  constraint=None, step=None, metrics=True, path="compiled") -> "Result":
@@ -156,7 +162,13 @@ class Model:
                           atol=atol, constraint=constraint, step=step)
         if path == "compiled" and not self.is_oracle:
             from inerter.engine import compiled
-            run = compiled.integrate_compiled(self.mechanism, s, dense=bool(metrics) and self._metrics_need_dense())
+            try:
+                run = compiled.integrate_compiled(self.mechanism, s, dense=bool(metrics) and self._metrics_need_dense())
+            except (ZeroDivisionError, FloatingPointError, OverflowError) as exc:
+                # The compiled loop raises where the state overflows (its error norm turns 0 or NaN);
+                # the numpy path stops where the state stops being finite and says so.
+                run = integrate(self.mechanism, s)
+                run.extra["path"] = f"numpy (the compiled loop stopped on {type(exc).__name__}: the state overflowed)"
         elif path in ("numpy", "compiled"):
             run = integrate(self.mechanism, s)
         else:
@@ -433,13 +445,27 @@ def metric_units(model: Model) -> dict[str, str]:
     return units
 
 
+#: The fewest samples a metric of a time history is computed from: fewer (an output interval or
+#: FMU communication step close to the stop time) leave it out, with the reason.
+MIN_METRIC_SAMPLES = 5
+
+
 def compute_metrics(model: Model, result) -> dict:
     """The scene's [[metrics]] from a time history (module `metrics`). A metric that cannot be
-    computed from this history (too short, no oscillation, ...) is left out and its reason is
-    recorded in ``result.metric_errors``."""
+    computed from this history (too short, too few samples, no oscillation, ...) is left out and
+    its reason is recorded in ``result.metric_errors``."""
     out: dict[str, Any] = {}
     windows: dict = {}
+    samples = len(result.time)
     for i, m in enumerate(model.scene.metrics):
+        if m.kind != "natural_frequency" and samples < MIN_METRIC_SAMPLES:
+            label = f"metrics[{i + 1}] ({m.kind}{' ' + m.signal if m.signal else ''})"
+            step = getattr(result, "communication_step", None)
+            result.metric_errors[label] = (
+                f"{samples} sample(s) to t = {result.time[-1] if samples else 0:g} s, at least "
+                f"{MIN_METRIC_SAMPLES} needed: lower " + ("the communication step (--step)" if step else
+                                                           "experiment.output_interval"))
+            continue
         try:
             _compute_metric(model, result, m, out, windows)
         except (ValueError, SimulationError) as exc:

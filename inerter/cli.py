@@ -1,4 +1,5 @@
-"""Command line: ``inerter run | compare | describe | build-fmu | build-system | paper | compile``."""
+"""The ``inerter`` command: one function per command (``cmd_run`` ...), the parser, and ``main``,
+which turns every error a user can cause into one line on stderr and exit status 2."""
 from __future__ import annotations
 
 import argparse
@@ -10,10 +11,18 @@ from pathlib import Path
 
 import numpy as np
 
-from inerter.common.errors import InerterError
-from inerter.scene.overrides import parse_set  # noqa: F401  (the CLI's --set)
+from inerter.common.errors import InerterError, SceneError, shown
+from inerter.scene.overrides import parse_set, read_value
+from inerter.scene.reader import METHODS
 
 PAPER_SCENES = ("lumped_mass_2d", "two_bar_2d")
+
+#: The solver options of ``run`` and ``compare``: each is the experiment field it overrides, read
+#: and checked by the scene reader like the scene's own value (one function for both).
+OPTIONS = {"stop_time": ("--stop-time", "experiment.stop_time"),
+           "method": ("--method", "experiment.method"),
+           "rtol": ("--rtol", "experiment.rtol"),
+           "step": ("--step", "experiment.communication_step")}
 
 
 class OptionError(InerterError):
@@ -21,28 +30,40 @@ class OptionError(InerterError):
     ``<option>: <problem> (got <value>; expected <expected>)``, like a scene error's."""
 
     def __init__(self, option: str, value, expected: str, problem: str = "out of range"):
-        super().__init__(f"{option}: {problem} (got {value!r}; expected {expected})")
+        super().__init__(f"{option}: {problem} (got {shown(value)}; expected {expected})")
 
 
-def _check_options(args):
-    """The solver options, checked before anything runs (the scene's own fields are checked by
-    its reader, with the same ranges)."""
-    from inerter.scene.reader import METHODS
-    for option, name, unit in (("--stop-time", "stop_time", "s"), ("--step", "step", "s")):
-        value = getattr(args, name, None)
-        if value is not None and not (math.isfinite(value) and value > 0):
-            raise OptionError(option, value, f"a finite number > 0 ({unit})")
-    rtol = getattr(args, "rtol", None)
-    if rtol is not None and not (math.isfinite(rtol) and 1e-14 <= rtol <= 0.1):
-        raise OptionError("--rtol", rtol, "a relative tolerance in [1e-14, 0.1]")
-    method = getattr(args, "method", None)
-    if method is not None and method not in METHODS:
-        raise OptionError("--method", method, "one of: " + ", ".join(METHODS), "unknown value")
+def overrides_of(args) -> dict:
+    """``--set`` and the solver options as the overrides of one load: ``--stop-time 5`` is
+    ``experiment.stop_time = 5``, its text read as a ``--set`` value is (a number or an expression)."""
+    overrides = parse_set(getattr(args, "set", None))
+    for attr, (_, key) in OPTIONS.items():
+        text = getattr(args, attr, None)
+        if text is not None:
+            overrides[key] = read_value(text)
+    return overrides
+
+
+def _option_for(args, field: str) -> str | None:
+    """The option that gave the field `field` its value, if one did: ``--stop-time`` for
+    ``experiment.stop_time``, ``--set b`` for ``parameters.b`` (and ``parameters.b.unit``)."""
+    for attr, (option, key) in OPTIONS.items():
+        if key == field and getattr(args, attr, None) is not None:
+            return option
+    for item in getattr(args, "set", None) or []:
+        key = item.split("=", 1)[0].strip()
+        for path in (key, f"parameters.{key}"):
+            if field == path or field.startswith((path + ".", path + "[")):
+                return f"--set {key}"
+    return None
 
 
 def _out_dir(path) -> Path:
     """The output folder, made before anything is computed."""
     out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise OptionError("--out", str(path), "a folder (or a path where one can be made)",
+                          "names an existing file")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -61,47 +82,56 @@ def _write(result, out: Path, stem: str, label: str | None = None):
     return summary
 
 
-def simulate(scene, overrides, model_kind, args):
-    """Run one scene through the solver, the oracle or its FMU; returns a Result."""
+def simulate(scene, overrides, model_kind, path="compiled", model=None):
+    """Run one scene through the solver, the oracle or its FMU; returns a Result. `model`: the
+    scene already loaded with `overrides` (solver and oracle)."""
     from inerter.api import ORACLE_ATOL, ORACLE_RTOL, load
-    kw = dict(stop_time=args.stop_time, method=args.method, rtol=args.rtol)
     if model_kind == "fmu":
         from inerter.fmu.run import simulate_fmu
-        solver = {f"experiment.{k}": getattr(args, k) for k in ("method", "rtol") if getattr(args, k, None)}
-        return simulate_fmu(scene, dict(overrides, **solver), stop_time=args.stop_time, step=args.step)
-    model = load(scene, **overrides)
+        return simulate_fmu(scene, overrides)
+    model = model or load(scene, **overrides)
     if model_kind == "oracle":
-        model = model.oracle()
-        kw.update(rtol=args.rtol or ORACLE_RTOL, atol=ORACLE_ATOL, method="DOP853")
-    else:
-        kw["path"] = getattr(args, "path", "numpy")
-    return model.simulate(**kw)
+        rtol = None if "experiment.rtol" in overrides else ORACLE_RTOL
+        return model.oracle().simulate(rtol=rtol, atol=ORACLE_ATOL, method="DOP853")
+    return model.simulate(path=path)
+
+
+def _span(result) -> str:
+    """How far a run got, for the one-line report."""
+    if len(result.time) == 0:
+        return "no samples"
+    return f"{len(result.time)} samples to t = {result.time[-1]:.6g} s"
 
 
 def cmd_run(args):
-    _animation(args)
-    overrides = parse_set(args.set)
+    from inerter.api import load
+    _animation(args)                                  # its options checked before the run
+    overrides = overrides_of(args)
+    model = load(args.scene, **overrides)            # every value checked before --out is made
     out = _out_dir(args.out)
     t0 = time.perf_counter()
-    result = simulate(args.scene, overrides, args.model, args)
+    result = simulate(args.scene, overrides, args.model, args.path, model)
     wall = time.perf_counter() - t0
     for warning in result.model.scene.warnings:
         print(f"inerter: warning: {warning}", file=sys.stderr)
     stem = result.model.name
     summary = _write(result, out, stem)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
-    from inerter.studies.plotting import plot_runs
-    plot_runs([(args.model, result, {})], out / f"{stem}.png", f"{stem} ({args.model})")
-    print(f"{stem}: {result.status} ({result.message}); {len(result.time)} samples to t = "
-          f"{result.time[-1]:.6g} s in {wall:.2f} s wall; path: {summary['statistics']['path']}")
+    print(f"{stem}: {result.status} ({result.message}); {_span(result)} in {wall:.2f} s wall; "
+          f"path: {summary['statistics']['path']}")
     units = summary.get("metric_units", {})
     for k, v in summary["metrics"].items():
         print(f"  {k} = {_with_unit(v, units.get(k))}")
     for k, v in summary.get("metric_errors", {}).items():
         print(f"  {k}: not computed: {v}")
     print(f"  max constraint drift = {summary['statistics']['max_constraint_drift']:.3g}")
-    print(f"wrote {out / (stem + '.csv')}, {out / 'summary.json'}, {out / (stem + '.png')}")
-    _animation(args, result, out / f"{stem}.{args.animate}")
+    written = [out / (stem + ".csv"), out / "summary.json"]
+    if len(result.time):              # the plot after the result is on the terminal (matplotlib loads slowly)
+        from inerter.studies.plotting import plot_runs
+        written.append(plot_runs([(args.model, result, {})], out / f"{stem}.png", f"{stem} ({args.model})"))
+    print("wrote " + ", ".join(str(w) for w in written))
+    if len(result.time):
+        _animation(args, result, out / f"{stem}.{args.animate}")
     return 0 if result.status == "ok" else 3
 
 
@@ -121,12 +151,12 @@ def _animation_options(sp):
 def _animation(args, result=None, path: Path | None = None):
     """With --animate: the animation of `result` at `path` (inerter.studies.animation); without a
     result, the options checked before the run."""
-    from inerter.studies.animation import DEFAULT_FPS, animate, check_options
     if args.animate is None:
         for option in ("fps", "duration", "magnify"):
             if getattr(args, option) is not None:
                 raise OptionError(f"--{option}", getattr(args, option), "--animate beside it", "no animation asked for")
         return
+    from inerter.studies.animation import DEFAULT_FPS, animate, check_options
     if result is None:
         return check_options(DEFAULT_FPS if args.fps is None else args.fps, args.duration,
                              1.0 if args.magnify is None else args.magnify,
@@ -145,16 +175,18 @@ def _with_unit(value, unit) -> str:
 
 def cmd_compare(args):
     """With and without the centripetal correction (and the oracle, and the FMU with --model fmu)."""
-    overrides = parse_set(args.set)
+    from inerter.api import load
+    overrides = overrides_of(args)
+    load(args.scene, **overrides)                    # every value checked before --out is made
     out = _out_dir(args.out)
     runs, summaries = [], {}
     variants = [("corrected", True), ("uncorrected", False)]
     for label, cen in variants:
         ov = dict(overrides, **{"effects.centripetal": cen})
-        res = simulate(args.scene, ov, args.model, args)
+        res = simulate(args.scene, ov, args.model, args.path)
         runs.append((f"{label} ({args.model})", res, {"lw": 1.2}))
         summaries[label] = _write(res, out, f"{res.model.name}_{label}", label)
-    oracle = simulate(args.scene, dict(overrides, **{"effects.centripetal": True}), "oracle", args)
+    oracle = simulate(args.scene, dict(overrides, **{"effects.centripetal": True}), "oracle")
     summaries["oracle"] = _write(oracle, out, f"{oracle.model.name}_oracle", "oracle")
     runs.append(("oracle (corrected)", oracle, {"lw": 0.8, "ls": "--", "color": "k"}))
     name = runs[0][1].model.name
@@ -163,7 +195,8 @@ def cmd_compare(args):
     summaries["max_difference_to_oracle_m"] = diff if math.isfinite(diff) else None   # JSON has no NaN
     (out / "summary.json").write_text(json.dumps({"scene": name, "runs": summaries}, indent=2))
     from inerter.studies.plotting import plot_runs
-    png = plot_runs(runs, out / f"{name}_compare.png", f"{name}: with and without the centripetal term")
+    png = (plot_runs(runs, out / f"{name}_compare.png", f"{name}: with and without the centripetal term")
+           if all(len(r.time) for _, r, _ in runs) else "no plot (a run has no samples)")
     print(f"{name}:")
     keys = sorted(set(summaries["corrected"]["metrics"]) | set(summaries["uncorrected"]["metrics"]))
     units = {**summaries["uncorrected"].get("metric_units", {}), **summaries["corrected"].get("metric_units", {})}
@@ -198,15 +231,18 @@ def cmd_describe(args):
         print("  " + line)
     print("parameters:")
     for p in model.parameter_info():
-        print(f"  {p['name']} = {p['value']:g} {p['unit']}  {p['description']}")
+        given = f" (given as {p['given']})" if p.get("given") else ""
+        print(f"  {p['name']} = {p['value']:g} {p['unit']}{given}  {p['description']}")
     print("inputs: " + (", ".join(i["name"] for i in model.input_info()) or "none"))
     print("outputs: " + ", ".join(o["name"] for o in model.output_info()))
     return 0
 
 
 def cmd_build_fmu(args):
-    from inerter.fmu.build import main as build_main
-    return build_main(args.scenes + (["--force"] if args.force else []))
+    from inerter.fmu import build
+    out = _out_dir(args.out)
+    failed = build.run(argparse.Namespace(scenes=args.scenes, out_dir=str(out), force=args.force))
+    return 2 if failed else 0          # a scene that cannot be built: its error is on stderr
 
 
 def cmd_build_system(args):
@@ -236,7 +272,8 @@ def cmd_paper(args):
     status = 0
     for scene in paper_scenes(args.scenarios):
         ns = argparse.Namespace(scene=str(scene), set=[], out=str(Path(args.out) / scene.stem),
-                                model=args.model, stop_time=None, method=None, rtol=None, step=None)
+                                model=args.model, stop_time=None, method=None, rtol=None, step=None,
+                                path="compiled")
         status |= cmd_compare(ns)
     return status
 
@@ -276,40 +313,72 @@ DELEGATED = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, with a usage error on one line (the command's -h gives the rest)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} -h)\n")
+
+
+DESCRIPTION = """\
+Simulate planar and spatial mechanisms with springs, dampers and inerters from TOML scene files,
+with and without the inerter's centripetal term; build FMI 2.0 co-simulation FMUs from the same
+files. Exit status: 0 ok, 2 a bad scene, option or file (one line on stderr), 3 a run that
+stopped before its stop time."""
+
+EPILOG = "inerter COMMAND -h lists a command's options. Scene format: docs/scene_format.md."
+
+
 def build_parser():
-    p = argparse.ArgumentParser(prog="inerter", description=__doc__)
-    sub = p.add_subparsers(dest="command", required=True)
+    from inerter import __version__
+    p = _Parser(prog="inerter", description=DESCRIPTION, epilog=EPILOG,
+                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--version", action="version", version=f"inerter {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
+
+    def scene_argument(sp):
+        sp.add_argument("scene", help="the scene file (TOML)")
+
+    def set_option(sp):
+        sp.add_argument("--set", action="append", metavar="NAME=VALUE",
+                        help="override a parameter (b=20, in SI; b=2*pi; b={value=20, unit=\"kg\"}), "
+                             "effects.NAME or experiment.NAME, VALUE written as in the scene file (repeatable)")
 
     def common(sp, out_default="out"):
-        sp.add_argument("--set", action="append", metavar="NAME=VALUE",
-                        help="override a parameter, effects.NAME or experiment.NAME (repeatable)")
-        sp.add_argument("--out", default=out_default, help="output folder")
-        sp.add_argument("--model", choices=("solver", "oracle", "fmu"), default="solver")
-        sp.add_argument("--stop-time", type=float, default=None)
-        sp.add_argument("--method", default=None)
-        sp.add_argument("--rtol", type=float, default=None)
-        sp.add_argument("--step", type=float, default=None, help="FMU communication step (s)")
+        set_option(sp)
+        sp.add_argument("--out", default=out_default, metavar="DIR", help="output folder (default: %(default)s)")
+        sp.add_argument("--model", choices=("solver", "oracle", "fmu"), default="solver",
+                        help="the stand-alone solver (default), the oracle (DOP853 at rtol 1e-12) or the "
+                             "scene's FMU through fmpy")
+        sp.add_argument("--stop-time", metavar="SECONDS", help="experiment.stop_time (s)")
+        sp.add_argument("--method", metavar="METHOD",
+                        help="experiment.method: one of " + ", ".join(METHODS))
+        sp.add_argument("--rtol", metavar="RTOL", help="experiment.rtol, in [1e-14, 0.1]")
+        sp.add_argument("--step", metavar="SECONDS",
+                        help="experiment.communication_step: the FMU's communication step (s), at most "
+                             "the stop time; with --model fmu")
         sp.add_argument("--path", choices=("numpy", "compiled"), default="compiled",
                         help="the solver's path: compiled (the default: numba kernels and integrator loops, 2D "
                              "and 3D; falls back to numpy where it cannot take the scene, Z-X-Z Euler angles) or "
                              "numpy (the readable reference)")
 
     r = sub.add_parser("run", help="simulate a scene: CSV, summary.json and a PNG")
-    r.add_argument("scene")
+    scene_argument(r)
     common(r)
     _animation_options(r)
     r.set_defaults(func=cmd_run)
     c = sub.add_parser("compare", help="with and without the centripetal correction, and the oracle")
-    c.add_argument("scene")
+    scene_argument(c)
     common(c)
     c.set_defaults(func=cmd_compare)
     d = sub.add_parser("describe", help="what a scene compiles to: terms, parameters, inputs, outputs")
-    d.add_argument("scene")
-    d.add_argument("--set", action="append", metavar="NAME=VALUE")
+    scene_argument(d)
+    set_option(d)
     d.set_defaults(func=cmd_describe)
     b = sub.add_parser("build-fmu", help="build FMI 2.0 co-simulation FMUs (only when stale)")
-    b.add_argument("scenes", nargs="+")
-    b.add_argument("--force", action="store_true")
+    b.add_argument("scenes", nargs="+", metavar="SCENE", help="scene files (TOML)")
+    b.add_argument("--out", default="build/fmu", metavar="DIR", help="where the FMUs go (default: %(default)s)")
+    b.add_argument("--force", action="store_true", help="rebuild even when an FMU is current")
     b.set_defaults(func=cmd_build_fmu)
     y = sub.add_parser("build-system", help="the two-bar FMU and the PD-controller FMU coupled, as an OSP "
                                            "system structure and an SSP SystemStructure.ssd (libcosim reads both)")
@@ -317,13 +386,14 @@ def build_parser():
     y.add_argument("--step", type=float, default=None, help="communication step (s; default 0.01)")
     y.set_defaults(func=cmd_build_system)
     for name, (module, func, text) in DELEGATED.items():
-        sub.add_parser(name, help=text + f" (inerter {name} -h)")
-    pp = sub.add_parser("paper", help="both paper scenes end to end (the main job)")
-    pp.add_argument("--out", default="out/paper")
-    pp.add_argument("--scenarios", default=None,
-                    help="folder holding lumped_mass_2d.toml and two_bar_2d.toml (default: the scenes "
-                         "shipped with inerter)")
-    pp.add_argument("--model", choices=("solver", "fmu"), default="solver")
+        sub.add_parser(name, help=text + f" (inerter {name} -h)", add_help=False)
+    pp = sub.add_parser("paper", help="both paper scenes end to end (the main job: make demo)")
+    pp.add_argument("--out", default="out/paper", metavar="DIR", help="output folder (default: %(default)s)")
+    pp.add_argument("--scenarios", default=None, metavar="DIR",
+                    help="folder of lumped_mass_2d.toml and two_bar_2d.toml (default: the scenes shipped "
+                         "with inerter)")
+    pp.add_argument("--model", choices=("solver", "fmu"), default="solver",
+                    help="run the stand-alone solver (default) or each scene's FMU")
     pp.set_defaults(func=cmd_paper)
     k = sub.add_parser("compile", help="compile the engine's kernels ahead of time (the set-up does it once)")
     k.add_argument("--planar", action="store_true", help="only the 2D kernels")
@@ -339,8 +409,11 @@ def main(argv=None):
         return getattr(importlib.import_module(f"inerter.{module}"), func)(argv[1:])
     args = build_parser().parse_args(argv)
     try:
-        _check_options(args)
         return args.func(args)
+    except SceneError as exc:
+        option = _option_for(args, exc.field)
+        print(f"inerter: error: {option + ': ' if option else ''}{exc}", file=sys.stderr)
+        return 2
     except InerterError as exc:
         print(f"inerter: error: {exc}", file=sys.stderr)
         return 2

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -94,18 +95,19 @@ def test_a_ground_motion_scene_writes_plain_json(tmp_path, capsys):
     assert runs["oracle"]["settings"]["effects"]["ground_acceleration"] == motion
 
 
-@pytest.mark.parametrize("option, value, expected", [
-    ("--stop-time", "-1", "a finite number > 0"),
-    ("--stop-time", "nan", "a finite number > 0"),
-    ("--rtol", "0", "a relative tolerance in [1e-14, 0.1]"),
-    ("--method", "Euler", "one of: DOP853"),
-    ("--step", "0", "a finite number > 0"),
+@pytest.mark.parametrize("option, value, field, expected", [
+    ("--stop-time", "-1", "experiment.stop_time", "a number > 0"),
+    ("--stop-time", "nan", "experiment.stop_time", "a finite number"),
+    ("--rtol", "0", "experiment.rtol", "a number ≥ 1e-14"),
+    ("--method", "Euler", "experiment.method", "one of: DOP853"),
+    ("--step", "0", "experiment.communication_step", "a number > 0"),
 ])
-def test_a_bad_option_is_a_one_line_error_before_anything_runs(tmp_path, capsys, option, value, expected):
+def test_a_bad_option_is_a_one_line_error_before_anything_runs(tmp_path, capsys, option, value, field, expected):
+    """The option names the experiment field it overrides; the scene reader checks it."""
     out = tmp_path / "out"
     assert main(["run", str(TWO_BAR), option, value, "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
-    assert "\n" not in err and err.startswith(f"inerter: error: {option}: "), err
+    assert "\n" not in err and err.startswith(f"inerter: error: {option}: {TWO_BAR}: {field}: "), err
     assert value in err and expected in err, err
     assert not out.exists()
 
@@ -116,3 +118,111 @@ def test_an_output_folder_that_cannot_be_made_is_a_one_line_error(tmp_path, caps
     assert main(["run", str(TWO_BAR), "--stop-time", "0.1", "--out", str(blocker / "out")]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "--out" in err and str(blocker / "out") in err, err
+
+
+# -- the command line as a whole (issue 23, item 6) ----------------------------------------------
+def _parsers():
+    """Every command's parser: the built-in ones and those of the delegated commands."""
+    from inerter.cli import DELEGATED, build_parser
+    from inerter.studies.bench import bench_parser
+    from inerter.studies.builtin import study_parser
+    from inerter.studies.sweep import sweep_parser, sweep_plot_parser
+    top = build_parser()
+    commands = dict(next(a for a in top._actions if a.dest == "command").choices)
+    delegated = {"bench": bench_parser(), "sweep": sweep_parser(), "study": study_parser(),
+                 "sweep-plot": sweep_plot_parser()}
+    assert set(delegated) == set(DELEGATED)
+    commands.update(delegated)
+    return top, commands
+
+
+def test_help_lists_every_command_in_plain_text(capsys):
+    top, commands = _parsers()
+    with pytest.raises(SystemExit) as info:
+        main(["--help"])
+    assert info.value.code == 0
+    text = capsys.readouterr().out
+    assert "``" not in text and ":mod:" not in text
+    for name in commands:
+        assert re.search(rf"^\s+{re.escape(name)}\s+\S", text, flags=re.M), (name, text)
+    assert len(commands) == 10
+
+
+def test_every_option_of_every_command_has_a_help_line():
+    top, commands = _parsers()
+    for name, parser in [("inerter", top), *commands.items()]:
+        for action in parser._actions:
+            if action.dest in ("help", "command"):
+                continue
+            assert action.help, f"inerter {name}: {action.option_strings or action.dest} has no help line"
+    from inerter.scene.reader import METHODS
+    method = next(a for a in commands["run"]._actions if "--method" in a.option_strings)
+    assert all(m in method.help for m in METHODS)
+
+
+def test_version(capsys):
+    import inerter
+    with pytest.raises(SystemExit) as info:
+        main(["--version"])
+    assert info.value.code == 0 and capsys.readouterr().out.strip() == f"inerter {inerter.__version__}"
+
+
+def test_set_takes_the_expressions_a_scene_takes(tmp_path):
+    """b=2*pi is 2π, as `b = "2*pi"` in the scene file would be; an expression over other
+    parameters too (b=2*m is twice the mass, 5 kg; m·sqrt(La² + Lb²)/La is a mass, 5√2 kg)."""
+    for text, expected in (("b=2*pi", 2 * np.pi), ("b=2*m", 10.0), ("b=m*sqrt(La^2 + Lb^2)/La", 5.0 * np.sqrt(2.0))):
+        out = tmp_path / text.replace("*", "x").replace("^", "p").replace("(", "").replace(")", "").replace(" ", "")
+        assert main(["run", str(LUMPED), "--set", text, "--stop-time", "0.5", "--out", str(out)]) == 0
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["settings"]["parameters"]["b"] == pytest.approx(expected, rel=1e-15)
+
+
+def test_fmu_runs_take_the_output_interval_and_expressions(tmp_path):
+    """--model fmu: experiment.output_interval is the communication step; b=2*pi reaches the FMU as
+    the number 2π: its outputs equal the solver's with b = 6.283185307179586 written out."""
+    fmu_out, solver_out = tmp_path / "fmu", tmp_path / "solver"
+    assert main(["run", str(LUMPED), "--model", "fmu", "--set", "experiment.output_interval=0.25",
+                 "--set", "b=2*pi", "--stop-time", "2", "--out", str(fmu_out)]) == 0
+    fmu = np.genfromtxt(fmu_out / "lumped_mass_2d.csv", delimiter=",", names=True)
+    np.testing.assert_allclose(fmu["time"], np.arange(9) * 0.25, rtol=0, atol=1e-12)
+    summary = json.loads((fmu_out / "summary.json").read_text())
+    assert summary["settings"]["communication_step"] == 0.25
+    assert main(["run", str(LUMPED), "--set", "experiment.output_interval=0.25", "--set", f"b={2 * np.pi!r}",
+                 "--stop-time", "2", "--out", str(solver_out)]) == 0
+    solver = np.genfromtxt(solver_out / "lumped_mass_2d.csv", delimiter=",", names=True)
+    scale = np.max(np.abs(solver["Pr2"]))
+    assert np.max(np.abs(fmu["Pr2"] - solver["Pr2"])) <= 1e-6 * scale
+
+
+def test_a_setting_the_fmu_cannot_take_is_a_one_line_error(tmp_path, capsys):
+    assert main(["run", str(LUMPED), "--model", "fmu", "--set", "experiment.constraint=projection",
+                 "--stop-time", "0.5", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "experiment.constraint" in err and "not settable on the FMU" in err, err
+
+
+def test_build_fmu_writes_into_out(tmp_path, capsys):
+    out = tmp_path / "fmus"
+    assert main(["build-fmu", str(LUMPED), "--out", str(out)]) == 0
+    assert (out / "lumped_mass_2d.fmu").is_file()
+    assert f"built: {out / 'lumped_mass_2d.fmu'}" in capsys.readouterr().out
+
+
+def test_metrics_from_too_few_samples_are_left_out_with_the_reason(tmp_path, capsys):
+    out = tmp_path / "coarse"
+    assert main(["run", str(LUMPED), "--set", "experiment.output_interval=10", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary["metrics"]) == {"natural_frequency", "natural_frequencies"}
+    reasons = summary["metric_errors"]
+    assert len(reasons) == 2 and all("3 sample(s)" in r and "at least 5" in r for r in reasons.values()), reasons
+    assert "not computed: 3 sample(s)" in capsys.readouterr().out
+
+
+def test_sweep_plot_writes_beside_its_results_without_out(tmp_path, capsys):
+    results = tmp_path / "results.csv"
+    rows = [(1.1, "true", 1.51), (1.2, "true", 1.50), (1.1, "false", 1.52), (1.2, "false", 1.53)]
+    results.write_text("key,scene,model,y0,effects.centripetal,status,error,fundamental_frequency,run_time_s\n" + "".join(
+        f"k{i},lumped_mass_2d,solver,{y0},{cen},ok,,{f},0.1\n" for i, (y0, cen, f) in enumerate(rows)))
+    assert main(["sweep-plot", str(results), "--x", "y0", "--y", "fundamental_frequency",
+                 "--hue", "effects.centripetal"]) == 0
+    assert (tmp_path / "fundamental_frequency_vs_y0.png").stat().st_size > 5000

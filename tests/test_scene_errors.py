@@ -87,7 +87,8 @@ def test_missing_file(tmp_path):
 
 @pytest.mark.parametrize("overrides, fragment", [
     ({"bb": 3.0}, "unknown name"),
-    ({"b": "ten"}, "a number"),
+    ({"b": "ten"}, "unknown name 'ten'"),
+    ({"b": True}, "a boolean is not a number"),
     ({"b": -1.0}, "≥ 0"),
     ({"effects.coriolis": True}, "unknown effect"),
     ({"effects.centripetal": "yes"}, "true or false"),
@@ -120,10 +121,13 @@ def test_every_shipped_scene_is_valid():
 @pytest.mark.parametrize("kwargs, field", [
     (dict(method="Foo"), "method"), (dict(constraint="x"), "constraint"), (dict(stop_time=-1.0), "stop_time"),
     (dict(stop_time=float("nan")), "stop_time"), (dict(rtol=0.0), "rtol"), (dict(output_interval=0.0), "output_interval"),
+    (dict(output_interval=30.0), "output_interval"),
 ])
 def test_a_bad_simulate_argument_names_itself(kwargs, field):
-    """From Python as from the command line: the argument, its value and what was expected."""
+    """From Python as from the command line and the scene file: the same check (the scene reader's)
+    names the file, simulate(), the field, its value and what was expected."""
     model = inerter.load(LUMPED)
     with pytest.raises(inerter.SceneError) as info:
         model.simulate(**kwargs)
-    assert info.value.field == field and f"simulate(): {field}:" in str(info.value)
+    assert info.value.field == f"experiment.{field}"
+    assert str(info.value).startswith(f"{LUMPED}: simulate(): experiment.{field}: ")

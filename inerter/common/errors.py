@@ -23,8 +23,18 @@ class SceneError(InerterError, ValueError):
         self.expected = expected
         self.problem = problem or "invalid value"
         super().__init__(
-            f"{self.source}: {field}: {self.problem} (got {value!r}; expected {expected})"
+            f"{self.source}: {field}: {self.problem} (got {shown(value)}; expected {expected})"
         )
+
+
+#: The longest a value is quoted in a message (a whole table given where a number was expected).
+MAX_SHOWN = 200
+
+
+def shown(value) -> str:
+    """`value` as a message quotes it: its repr on one line, cut to :data:`MAX_SHOWN` characters."""
+    text = repr(value)
+    return text if len(text) <= MAX_SHOWN else text[:MAX_SHOWN - 3] + "..."
 
 
 class SimulationError(InerterError, RuntimeError):

@@ -10,7 +10,6 @@ from __future__ import annotations
 import bisect
 import copy
 import functools
-import math
 import pickle
 import time as _time
 import types
@@ -18,8 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from inerter.common.errors import SceneError, SimulationError, TerminalsMeet
-from inerter.scene.reader import CONSTRAINT_TREATMENTS, METHODS
+from inerter.common.errors import SimulationError, TerminalsMeet
 
 
 def make_solver(*args, **kwargs):
@@ -43,34 +41,16 @@ class Settings:
     max_steps: int
 
     @classmethod
-    def from_experiment(cls, x, **overrides):
-        values = dict(stop_time=x.stop_time, output_interval=x.output_interval, method=x.method, rtol=x.rtol,
-                      atol=x.atol, constraint=x.constraint, baumgarte=x.baumgarte, step=x.step,
-                      max_steps=x.max_steps)
-        values.update({k: v for k, v in overrides.items() if v is not None})
-        _check_settings(values, overrides)
-        return cls(**values)
+    def from_experiment(cls, x):
+        """The settings of an experiment the scene reader has checked (``Scene.experiment_with``
+        reads overrides through the same function as the scene's own fields)."""
+        return cls(stop_time=x.stop_time, output_interval=x.output_interval, method=x.method, rtol=x.rtol,
+                   atol=x.atol, constraint=x.constraint, baumgarte=x.baumgarte, step=x.step,
+                   max_steps=x.max_steps)
 
     @property
     def alpha(self):
         return self.baumgarte if self.constraint == "baumgarte" else 0.0
-
-
-def _check_settings(values, given):
-    """An argument of ``simulate``/``stepper`` that the integrators cannot take is named with what
-    was expected (a scene's own values are checked by the scene reader)."""
-    def bad(name, expected, problem):
-        raise SceneError("simulate()", name, values[name], expected, problem)
-
-    if values["method"] not in METHODS:
-        bad("method", "one of " + ", ".join(METHODS), "unknown method")
-    if values["constraint"] not in CONSTRAINT_TREATMENTS:
-        bad("constraint", "one of " + ", ".join(CONSTRAINT_TREATMENTS), "unknown constraint treatment")
-    for name in ("stop_time", "output_interval", "rtol", "atol", "step"):
-        value = values[name]
-        if name in given and given[name] is not None and not (
-                isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            bad(name, "a finite number > 0", "out of range")
 
 
 def derivative(mech, inputs, alpha, jump=None):

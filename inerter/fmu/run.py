@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from inerter.common.errors import SimulationError
+from inerter.common.errors import SceneError
+from inerter.engine.simulation import Settings
 from inerter.api import Model, compute_metrics, csv_header, output_units, sample_spline, to_dataframe
 
 
@@ -33,20 +34,34 @@ def solver_item(method: str) -> int:
     return list(Model.methods).index(method) + 1
 
 
+#: ``experiment.NAME`` overrides that an FMU run takes from the loaded scene rather than as start
+#: values: the importer's stop time and communication step (by default the output interval).
+RUN_SETTINGS = ("experiment.stop_time", "experiment.output_interval", "experiment.communication_step")
+#: ``experiment.NAME`` overrides that are parameters of the FMU, by the FMU's name.
+FMU_SETTINGS = {"experiment.method": "solver", "experiment.rtol": "rtol", "experiment.atol": "atol"}
+
+
 def start_values(model: Model, overrides: dict) -> dict:
-    """FMU start values for the overrides that ``inerter.load`` would take."""
-    names = {p["name"] for p in model.parameter_info()}
+    """FMU start values for the overrides that ``inerter.load`` took: each the value the scene
+    reader made of it, in the FMU's SI units (``b=2*pi`` or ``{value = 2, unit = "kN/m"}`` arrive
+    as numbers); the run settings (RUN_SETTINGS) are the caller's, not start values."""
+    scene = model.scene
+    experiment = {"solver": scene.experiment.method, "rtol": scene.experiment.rtol, "atol": scene.experiment.atol}
     out = {}
-    for key, value in overrides.items():
-        if key in names or key.startswith("effects."):
-            out[key] = value
+    for key in overrides:
+        if key in scene.parameters:
+            out[key] = scene.parameters[key].value
+        elif key.startswith("effects.") and key[len("effects."):] in ("centripetal", "small_displacement"):
+            out[key] = bool(getattr(scene, key[len("effects."):]))
         elif key == "experiment.method":             # the solver Enumeration's item (1, 2, ...)
-            out["solver"] = solver_item(value)
-        elif key in ("experiment.rtol", "experiment.atol"):
-            out[key.split(".")[1]] = value
-        else:
-            raise SimulationError(f"--set {key}: not settable on the FMU (its parameters are the scene's "
-                                  "parameters, effects.*, solver, rtol and atol)")
+            out["solver"] = solver_item(experiment["solver"])
+        elif key in FMU_SETTINGS:
+            out[FMU_SETTINGS[key]] = experiment[FMU_SETTINGS[key]]
+        elif key not in RUN_SETTINGS:
+            raise SceneError(f"{scene.source} (FMU)", key, overrides[key],
+                             "a parameter of the scene, effects.centripetal, effects.small_displacement, "
+                             + ", ".join(FMU_SETTINGS) + " (FMU parameters) or " + ", ".join(RUN_SETTINGS)
+                             + " (the run's)", "not settable on the FMU")
     return out
 
 
@@ -101,8 +116,13 @@ def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None
 
     overrides = dict(overrides or {})
     model = Model(scene, overrides)                  # validates the overrides with the solver's messages
-    settings = model.settings(stop_time=stop_time)
-    comm = step or model.scene.experiment.communication_step
+    # the importer samples the FMU at its communication points: a step given is the output interval too
+    given = {k: v for k, v in (("stop_time", stop_time), ("communication_step", step), ("output_interval", step))
+             if v is not None}
+    experiment = (model.scene.experiment_with(given, source=f"{model.source}: simulate_fmu()") if given
+                  else model.scene.experiment)
+    settings = Settings.from_experiment(experiment)
+    comm = experiment.communication_step
     path = fmu_path or build(scene)
     messages = []
 

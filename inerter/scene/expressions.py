@@ -24,7 +24,13 @@ following constructs are accepted:
 Every problem (bad syntax, forbidden construct, unknown name, division by zero,
 overflow, an argument outside a function's domain, ...) is reported as a
 :class:`~inerter.common.errors.SceneError` naming the source, the field path, the offending
-text and what was expected.  Results are always finite Python floats.
+text and what was expected.  Results are always finite Python floats of magnitude at
+most :data:`MAX_MAGNITUDE`.
+
+Dimensions travel with the values (:class:`Dim`): a parameter with a unit
+(:mod:`.units`) has one, and sums, products, powers and functions combine them, so a
+field can refuse an expression whose parameters' units do not fit it
+(:class:`UnitError`); numbers and parameters without a unit are plain numbers.
 """
 from __future__ import annotations
 
@@ -35,8 +41,12 @@ import keyword
 import math
 import numbers
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import NamedTuple
+from fractions import Fraction
 
 from inerter.common.errors import SceneError
+from inerter.scene import units
 
 __all__ = [
     "CONSTANTS",
@@ -46,6 +56,8 @@ __all__ = [
     "evaluate_parameters",
     "free_names",
     "parameter_meta",
+    "quantity",
+    "read_parameters",
 ]
 
 
@@ -101,6 +113,12 @@ _EXPECTED_NAME = (
 )
 _TABLE_KEYS = ("value", "unit", "description")
 
+#: The largest magnitude a value may have (in SI units). Finite values far beyond any mechanism
+#: (a position of 1e300 m) overflow the arithmetic of the first step (squares, products with a
+#: stiffness); 1e15 leaves every product a step forms finite.
+MAX_MAGNITUDE = 1e15
+_EXPECTED_MAGNITUDE = f"a number of magnitude at most {MAX_MAGNITUDE:g} (in SI units)"
+
 # Expressions in scene files are short; refusing very long texts bounds the work
 # done by the parser and the tree walk.
 _MAX_LENGTH = 10_000
@@ -150,6 +168,10 @@ class _Problem(Exception):
         super().__init__(problem)
         self.problem = problem
         self.expected = expected
+
+
+class _UnitProblem(_Problem):
+    """Internal: terms whose dimensions do not combine."""
 
 
 # --------------------------------------------------------------------------- parsing
@@ -297,36 +319,78 @@ def _unknown_name(name: str, known) -> _Problem:
     return _Problem(problem, _known_names(known))
 
 
-def _value(node: ast.expr, names: Mapping[str, float]) -> float:
-    """Evaluate a checked expression tree; every intermediate result is finite."""
+#: Functions whose argument must be dimensionless (or an angle) and whose result is a plain number.
+_DIMENSIONLESS_ARGUMENTS = ("sin", "cos", "tan", "asin", "acos", "atan", "exp", "log", "log10", "deg2rad", "rad")
+
+
+class Dim(NamedTuple):
+    """The dimension an expression computes, from its parameters' units. `dimension` None: a
+    plain number (literals, constants, parameters without a unit), dimensionless in a product
+    and of its partner's dimension in a sum. `loose`: a plain number multiplies a quantity in
+    it, and may carry a unit the scene does not state (``0.5*w`` where 0.5 is a length), so a
+    dimension that does not fit is let pass; the dimension of a quantity written with
+    parameters alone is checked."""
+    dimension: object = None
+    loose: bool = False
+
+
+PLAIN = Dim()
+
+
+def _combine(a: Dim, b: Dim, what: str) -> Dim:
+    """Terms that must share one dimension (a sum, min, max, hypot, atan2)."""
+    if a.dimension is None or b.dimension is None or a.dimension == b.dimension:
+        return Dim(a.dimension if a.dimension is not None else b.dimension, a.loose or b.loose)
+    if a.loose or b.loose:
+        return Dim(b.dimension if a.loose and not b.loose else a.dimension, True)
+    raise _UnitProblem(f"{what} {units.describe_dimension(a.dimension)} and {units.describe_dimension(b.dimension)}",
+                       "terms of one dimension")
+
+
+def _product(a: Dim, b: Dim, sign: int) -> Dim:
+    """The dimension of a * b (sign 1) or a / b (sign -1)."""
+    if a.dimension is None and b.dimension is None:
+        return PLAIN
+    if b.dimension is None:
+        return Dim(a.dimension, True)
+    base = a.dimension if a.dimension is not None else units.DIMENSIONLESS
+    return Dim(tuple(x + sign * y for x, y in zip(base, b.dimension)), a.loose or b.loose or a.dimension is None)
+
+
+def _value(node: ast.expr, names: Mapping[str, float], dims: Mapping) -> tuple[float, Dim]:
+    """Evaluate a checked expression tree: (value, its Dim). Every intermediate result is finite."""
     if isinstance(node, ast.Constant):
         try:
             result = float(node.value)
         except OverflowError:
             raise _Problem(f"the number {node.value} is too large", _EXPECTED_FINITE) from None
+        dim = PLAIN
     elif isinstance(node, ast.Name):
         # The constants take precedence (parameters may not be named like them).
         if node.id in CONSTANTS:
-            return CONSTANTS[node.id]
+            return CONSTANTS[node.id], PLAIN
         if node.id not in names:
             raise _unknown_name(node.id, names)
         result = float(names[node.id])
+        dim = Dim(getattr(dims.get(node.id), "dimension", None))
     elif isinstance(node, ast.UnaryOp):
-        operand = _value(node.operand, names)
+        operand, dim = _value(node.operand, names, dims)
         result = -operand if isinstance(node.op, ast.USub) else operand
     elif isinstance(node, ast.BinOp):
-        left = _value(node.left, names)
-        right = _value(node.right, names)
+        left, ldim = _value(node.left, names, dims)
+        right, rdim = _value(node.right, names, dims)
         try:
             result = _BINARY_OPERATORS[type(node.op)](left, right)
         except ZeroDivisionError:
             raise _Problem(f"division by zero in {ast.unparse(node)}", _EXPECTED_FINITE) from None
         except OverflowError:
             raise _Problem(f"overflow in {ast.unparse(node)}", _EXPECTED_FINITE) from None
+        dim = _binary_dimension(node, ldim, rdim, right)
     elif isinstance(node, ast.Call):
         name = node.func.id  # type: ignore[attr-defined]  # checked by `_check`
         function = FUNCTIONS[name][0]
-        arguments = [_value(argument, names) for argument in node.args]
+        evaluated = [_value(argument, names, dims) for argument in node.args]
+        arguments = [a for a, _ in evaluated]
         try:
             result = float(function(*arguments))
         except ZeroDivisionError:
@@ -338,11 +402,45 @@ def _value(node: ast.expr, names: Mapping[str, float]) -> float:
             raise _Problem(
                 f"argument out of the domain of {name}: {name}({shown})", _EXPECTED_FINITE
             ) from None
+        dim = _call_dimension(name, [d for _, d in evaluated])
     else:  # pragma: no cover - `_check` lets nothing else through
         raise _Problem(f"the construct '{type(node).__name__}' is not allowed")
     if not math.isfinite(result):
         raise _Problem(f"evaluates to {result} (in {ast.unparse(node)})", _EXPECTED_FINITE)
-    return result
+    return result, dim
+
+
+def _binary_dimension(node: ast.BinOp, ldim: Dim, rdim: Dim, right: float) -> Dim:
+    if isinstance(node.op, (ast.Add, ast.Sub)):
+        return _combine(ldim, rdim, f"{ast.unparse(node)} adds")
+    if isinstance(node.op, (ast.Mult, ast.Div)):
+        return _product(ldim, rdim, 1 if isinstance(node.op, ast.Mult) else -1)
+    # a power: the exponent a plain or dimensionless number, the base's dimension times it
+    if rdim.dimension not in (None, units.DIMENSIONLESS) and not rdim.loose:
+        raise _UnitProblem(f"the exponent of {ast.unparse(node)} is {units.describe_dimension(rdim.dimension)}",
+                           "a dimensionless exponent")
+    if ldim.dimension is None or ldim.dimension == units.DIMENSIONLESS:
+        return ldim
+    power = Fraction(right).limit_denominator(1000)
+    if abs(float(power) - right) > 1e-12 * max(1.0, abs(right)):
+        return Dim(None, True)                  # no dimension has an irrational power: let it pass
+    return Dim(tuple(e * power for e in ldim.dimension), ldim.loose)
+
+
+def _call_dimension(name: str, dims: list[Dim]) -> Dim:
+    if name in _DIMENSIONLESS_ARGUMENTS:
+        for d in dims:
+            if d.dimension not in (None, units.DIMENSIONLESS) and not d.loose:
+                raise _UnitProblem(f"{name}() of {units.describe_dimension(d.dimension)}",
+                                   "a dimensionless argument (or an angle)")
+        return PLAIN
+    if name == "sqrt":
+        d = dims[0]
+        return d if d.dimension is None else Dim(tuple(e / 2 for e in d.dimension), d.loose)
+    common = dims[0]
+    for d in dims[1:]:
+        common = _combine(common, d, f"{name}() mixes")
+    return PLAIN if name == "atan2" else common
 
 
 def _number(value, source: str, field: str) -> float:
@@ -362,26 +460,85 @@ def _number(value, source: str, field: str) -> float:
     return result
 
 
+def _bounded(result: float, value, source: str, field: str) -> float:
+    """`result`, if its magnitude is at most :data:`MAX_MAGNITUDE`."""
+    if abs(result) > MAX_MAGNITUDE:
+        raise SceneError(source, field, value, _EXPECTED_MAGNITUDE, "too large")
+    return result
+
+
 # ------------------------------------------------------------------------ public API
 
 
-def evaluate(expr, names: Mapping[str, float], source: str, field: str) -> float:
-    """The value of a numeric field: a number, or an expression over `names`.
+class UnitError(SceneError):
+    """A value whose unit does not fit the field it is used in (a SceneError). `parameters`: the
+    parameters with units whose dimensions met there."""
 
-    `expr` is an int or float (booleans are refused) or an expression string.  `names`
-    maps parameter names to their values.  `source` and `field` (e.g. the scene file
-    and ``bodies.arm.mass``) are used in error messages.  Returns a finite float;
-    raises :class:`SceneError` for anything else.
-    """
+    def __init__(self, source, field, value, expected, problem=None, parameters=()):
+        super().__init__(source, field, value, expected, problem)
+        self.parameters = tuple(parameters)
+
+
+def _with_units(expr, dims) -> list[str]:
+    """The parameters of `expr` that have a unit."""
     if not isinstance(expr, str):
-        return _number(expr, source, field)
+        return []
+    try:
+        used = _compile(expr)[1]
+    except _Problem:
+        return []
+    return sorted(n for n in used if getattr(dims.get(n), "dimension", None) is not None)
+
+
+def quantity(expr, names: Mapping[str, float], source: str, field: str, dims: Mapping | None = None):
+    """(value, Dim) of a number or an expression over `names`. `dims` maps a parameter name to
+    its unit (an object with ``.dimension`` and ``.describe()``); a number, and a parameter it
+    does not list, is a plain number."""
+    if not isinstance(expr, str):
+        return _number(expr, source, field), PLAIN
     try:
         tree, _ = _compile(expr)
-        return _value(tree, names)
+        return _value(tree, names, dims or {})
+    except _UnitProblem as problem:
+        raise UnitError(source, field, expr, problem.expected, problem.problem,
+                        _with_units(expr, dims or {})) from None
     except _Problem as problem:
         raise SceneError(source, field, expr, problem.expected, problem.problem) from None
     except RecursionError:
         raise SceneError(source, field, expr, _EXPECTED_EXPRESSION, "is too deeply nested") from None
+
+
+def evaluate(expr, names: Mapping[str, float], source: str, field: str, unit: str | None = None,
+             dims: Mapping | None = None) -> float:
+    """The value of a numeric field: a number, or an expression over `names`.
+
+    `expr` is an int or float (booleans are refused) or an expression string.  `names`
+    maps parameter names to their values (SI).  `source` and `field` (e.g. the scene file
+    and ``bodies.arm.mass``) are used in error messages.  `unit`: the field's SI unit
+    (``"kg"``); an expression whose parameters (`dims`, their units) give it another
+    dimension is a :class:`UnitError`, while a plain number is taken as SI.  Returns a
+    finite float of magnitude at most MAX_MAGNITUDE; raises :class:`SceneError` for
+    anything else.
+    """
+    value, dim = quantity(expr, names, source, field, dims)
+    if unit is not None and not fits(dim, units.dimension_of(unit)):
+        raise UnitError(source, field, expr, f"a value in {unit} ({units.describe_dimension(units.dimension_of(unit))})",
+                        "the unit does not fit: " + _culprits(expr, dims, dim.dimension), _with_units(expr, dims))
+    return _bounded(value, expr, source, field)
+
+
+def fits(dim: Dim, dimension) -> bool:
+    """Whether an expression of Dim `dim` may stand where `dimension` is expected."""
+    return dim.dimension is None or dim.loose or dim.dimension == dimension
+
+
+def _culprits(expr, dims, dim) -> str:
+    """What gave `expr` its dimension: its parameters with a unit."""
+    used = _with_units(expr, dims)
+    said = ", ".join(f"parameter {n} is in {dims[n].describe()}" for n in used)
+    if isinstance(expr, str) and expr.strip() in used:
+        return said
+    return f"{units.describe_dimension(dim)}" + (f" ({said})" if said else "")
 
 
 def free_names(expr, source: str, field: str) -> set[str]:
@@ -412,11 +569,23 @@ def _check_parameter_name(name, source: str, prefix: str) -> None:
         )
 
 
-def _parameter_binding(name: str, spec, source: str, prefix: str) -> tuple[object, str]:
-    """The value (number or expression) of a parameter entry and its field path."""
+@dataclass(frozen=True)
+class _Binding:
+    """One parameter's entry: its value (a number or an expression), the field that names it,
+    its unit (None: none given) and whether it is an override (a plain override is SI)."""
+    name: str
+    expr: object
+    field: str
+    unit: object = None
+    unit_field: str = ""
+    override: bool = False
+
+
+def _parameter_binding(name: str, spec, source: str, prefix: str, override: bool = False) -> _Binding:
+    """The value (number or expression), field path and unit string of a parameter entry."""
     field = f"{prefix}.{name}"
     if not isinstance(spec, Mapping):
-        return spec, field
+        return _Binding(name, spec, field, override=override)
     for key in spec:
         if key not in _TABLE_KEYS:
             raise SceneError(
@@ -431,68 +600,153 @@ def _parameter_binding(name: str, spec, source: str, prefix: str) -> tuple[objec
     for key in ("unit", "description"):
         if key in spec and not isinstance(spec[key], str):
             raise SceneError(source, f"{field}.{key}", spec[key], "a string", f"'{key}' must be a string")
-    return spec["value"], f"{field}.value"
+    return _Binding(name, spec["value"], f"{field}.value", spec.get("unit"), f"{field}.unit", override)
+
+
+@dataclass(frozen=True)
+class ParameterValue:
+    """A parameter as read: its value in SI, its unit (the declared one, or one its expression
+    computes: None for a plain number), the SI unit of its value and the value as given."""
+    value: float
+    unit: "units.Unit | None"
+    si_unit: str
+    given: str = ""                  # "1500 mm" where the unit is not SI
+
+    @property
+    def dimension(self):
+        return None if self.unit is None else self.unit.dimension
+
+    def describe(self) -> str:
+        return self.unit.describe() if self.unit is not None else "a plain number"
+
+
+def _unit_of(binding: _Binding, source: str, reading: int):
+    """The Unit of a binding's unit string (`reading`: which, for a string with two)."""
+    if binding.unit is None:
+        return None
+    try:
+        found = units.readings(binding.unit)
+    except units.UnitSyntaxError as exc:
+        raise SceneError(source, binding.unit_field, binding.unit,
+                         'a unit such as "m", "mm", "kN/m", "N*s/m", "kg*m^2", "deg", "g" or "1"',
+                         f"not a unit: {exc}") from None
+    return found[min(reading, len(found) - 1)]
+
+
+def ambiguous_units(raw: Mapping[str, object], fixed: Mapping[str, object] | None = None) -> list[str]:
+    """The parameters (of `raw` and `fixed`) whose unit string has two readings (``"g"``)."""
+    out = []
+    for table in (raw, fixed or {}):
+        for name, spec in table.items():
+            unit = spec.get("unit") if isinstance(spec, Mapping) else None
+            if isinstance(unit, str) and unit.strip() in units.AMBIGUOUS and name not in out:
+                out.append(name)
+    return out
+
+
+def read_parameters(
+    raw: Mapping[str, object],
+    source: str,
+    prefix: str = "parameters",
+    fixed: Mapping[str, object] | None = None,
+    reading: Mapping[str, int] | None = None,
+) -> dict[str, ParameterValue]:
+    """Read a scene's parameter table: values in SI, with their units.
+
+    `raw` maps each parameter name to a number, an expression string or a table
+    ``{value = ..., unit = "...", description = "..."}``.  Parameters may refer to each
+    other in any order; they are evaluated in dependency order and a circular
+    definition is an error.  A table's number (or an expression of plain numbers) is in
+    its unit and converted to SI; an expression over parameters with units is a quantity
+    whose dimension must be the unit's.  `fixed` gives entries that replace those of
+    existing parameters (overrides from the command line or an FMU), read as entries of
+    `raw` are, except that a plain number or expression is in SI (the FMU's units); the
+    expressions they replace are still checked but not evaluated.  `reading` chooses
+    the reading of an ambiguous unit (``"g"``: 0 the gram, 1 standard gravity) by name.
+
+    Errors name the field ``<prefix>.<name>`` (``<prefix>.<name>.value`` or ``.unit``
+    for tables).
+    """
+    if not isinstance(raw, Mapping):
+        raise SceneError(source, prefix, raw, "a table of name = value entries", "is not a table")
+    fixed = dict(fixed or {})
+    reading = dict(reading or {})
+
+    bindings: dict[str, _Binding] = {}
+    for name, spec in raw.items():
+        _check_parameter_name(name, source, prefix)
+        bindings[name] = _parameter_binding(name, spec, source, prefix)
+
+    # Every expression of the scene is checked, those an override replaces included: they are
+    # still part of the scene. An override is then read as the entry it replaces would be.
+    for name, b in bindings.items():
+        _check_names(b.expr, b.field, bindings, source)
+    declared = {name: _unit_of(b, source, reading.get(name, 0)) for name, b in bindings.items()}
+    for name, value in fixed.items():
+        if name not in bindings:
+            known = ", ".join(sorted(bindings)) or "(none)"
+            raise SceneError(
+                source, f"{prefix}.{name}", value, f"one of the parameters {known}", f"no parameter '{name}' to override"
+            )
+        bindings[name] = _parameter_binding(name, value, source, prefix, override=True)
+        _check_names(bindings[name].expr, bindings[name].field, bindings, source)
+
+    order_of = {name: index for index, name in enumerate(bindings)}
+    depends = {name: sorted(free_names(b.expr, source, b.field), key=order_of.__getitem__)
+               for name, b in bindings.items()}
+    values: dict[str, float] = {}
+    read: dict[str, ParameterValue] = {}
+    for name in _dependency_order(depends, bindings, source):
+        b = bindings[name]
+        read[name] = _read_one(b, declared[name], _unit_of(b, source, reading.get(name, 0)), values, read, source)
+        values[name] = read[name].value
+    return {name: read[name] for name in bindings}
+
+
+def _read_one(b: _Binding, declared, unit, values, read, source) -> ParameterValue:
+    """One parameter's value in SI, from its binding `b` with its own `unit` (None: none given)
+    and the `declared` unit of the scene's entry (the same, unless `b` is an override)."""
+    value, computed = quantity(b.expr, values, source, b.field, read)
+    dim = computed.dimension
+    if declared is not None and unit is not None and unit.dimension != declared.dimension:
+        raise UnitError(source, b.unit_field, b.unit, f"a unit of the dimension the scene declares: "
+                        f"{declared.describe()}", f"the unit does not fit: {unit.describe()}", (b.name,))
+    target = unit or (declared if b.override else None)
+    if target is None:                       # no unit: a plain number, or what its expression computes
+        if dim is None or computed.loose:
+            return ParameterValue(_bounded(value, b.expr, source, b.field), None, "1")
+        si = units.si_name(dim)
+        return ParameterValue(_bounded(value, b.expr, source, b.field),
+                              units.Unit(si, dim, 1.0, si, "from its expression"), si)
+    if not fits(computed, target.dimension):
+        raise UnitError(source, b.field, b.expr, f"a value in {target.describe()}",
+                        "the unit does not fit: " + _culprits(b.expr, read, dim), (b.name, *_with_units(b.expr, read)))
+    # a number in its table's unit (a quantity of the unit's dimension is SI already)
+    plain_in_unit = unit is not None and dim != target.dimension
+    si = value * target.factor if plain_in_unit else value
+    given = f"{value:g} {target.text}" if plain_in_unit and target.factor != 1.0 else ""
+    return ParameterValue(_bounded(si, b.expr, source, b.field), target, target.si, given)
 
 
 def evaluate_parameters(
     raw: Mapping[str, object],
     source: str,
     prefix: str = "parameters",
-    fixed: Mapping[str, float] | None = None,
+    fixed: Mapping[str, object] | None = None,
 ) -> dict[str, float]:
-    """Evaluate a scene's parameter table.
-
-    `raw` maps each parameter name to a number, an expression string or a table
-    ``{value = ..., unit = "...", description = "..."}``.  Parameters may refer to each
-    other in any order; they are evaluated in dependency order and a circular
-    definition is an error.  `fixed` gives values (numbers) that replace those of
-    existing parameters, e.g. overrides from the command line or an FMU; the
-    expressions they replace are still checked but not evaluated.
-
-    Returns ``{name: value}`` in the order of `raw`.  Errors name the field
-    ``<prefix>.<name>`` (or ``<prefix>.<name>.value`` for tables).
-    """
-    if not isinstance(raw, Mapping):
-        raise SceneError(source, prefix, raw, "a table of name = value entries", "is not a table")
-    fixed = dict(fixed or {})
-
-    bindings: dict[str, tuple[object, str]] = {}
-    for name, spec in raw.items():
-        _check_parameter_name(name, source, prefix)
-        bindings[name] = _parameter_binding(name, spec, source, prefix)
-
-    values: dict[str, float] = {}
-    for name, value in fixed.items():
-        field = f"{prefix}.{name}"
-        if name not in bindings:
-            known = ", ".join(sorted(bindings)) or "(none)"
-            raise SceneError(
-                source, field, value, f"one of the parameters {known}", f"no parameter '{name}' to override"
-            )
-        values[name] = _number(value, source, field)
-
-    # Dependencies among the parameters still to evaluate.  Every expression is
-    # checked, including those replaced by `fixed`: they are still part of the scene.
-    order_of = {name: index for index, name in enumerate(bindings)}
-    depends: dict[str, list[str]] = {}
-    for name, (expr, field) in bindings.items():
-        used = free_names(expr, source, field)
-        unknown = sorted(used.difference(bindings))
-        if unknown:
-            problem = _unknown_name(unknown[0], bindings)
-            raise SceneError(source, field, expr, problem.expected, problem.problem)
-        depends[name] = [] if name in values else sorted(used, key=order_of.__getitem__)
-
-    for name in _dependency_order(depends, bindings, source):
-        if name not in values:
-            expr, field = bindings[name]
-            values[name] = evaluate(expr, values, source, field)
-    return {name: values[name] for name in bindings}
+    """The parameters' values in SI, ``{name: value}`` in the order of `raw` (see read_parameters)."""
+    return {name: p.value for name, p in read_parameters(raw, source, prefix, fixed).items()}
 
 
-def _dependency_order(
-    depends: Mapping[str, list[str]], bindings: Mapping[str, tuple[object, str]], source: str
-) -> list[str]:
+def _check_names(expr, field: str, bindings, source: str) -> None:
+    """`expr` parses and uses only parameters of `bindings`."""
+    unknown = sorted(free_names(expr, source, field).difference(bindings))
+    if unknown:
+        problem = _unknown_name(unknown[0], bindings)
+        raise SceneError(source, field, expr, problem.expected, problem.problem)
+
+
+def _dependency_order(depends: Mapping[str, list[str]], bindings: Mapping[str, "_Binding"], source: str) -> list[str]:
     """Names ordered so that each comes after those it depends on (depth-first)."""
     done: set[str] = set()
     order: list[str] = []
@@ -506,9 +760,9 @@ def _dependency_order(
             for dependency in stack[-1]:
                 if dependency in on_path:
                     cycle = path[path.index(dependency):] + [dependency]
-                    expr, field = bindings[cycle[0]]
+                    b = bindings[cycle[0]]
                     raise SceneError(
-                        source, field, expr, "parameters that do not depend on themselves",
+                        source, b.field, b.expr, "parameters that do not depend on themselves",
                         "circular definition " + " -> ".join(cycle),
                     )
                 if dependency not in done:

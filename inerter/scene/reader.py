@@ -22,7 +22,8 @@ from inerter.common.errors import SceneError
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements.device import EFFECT as DEVICE_EFFECT
 from inerter.elements.device import Device
-from inerter.scene.expressions import evaluate, evaluate_parameters, parameter_meta
+from inerter.scene.expressions import UnitError, ambiguous_units, evaluate, parameter_meta, read_parameters
+from inerter.scene.files import MAX_RECORD_BYTES, MAX_RECORD_SAMPLES, MAX_SCENE_BYTES, read_capped
 
 GROUND = "ground"
 
@@ -46,11 +47,19 @@ JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed", "cylindrical", 
 _AXIS_JOINTS = {2: ("prismatic",), 3: ("revolute", "prismatic", "cylindrical", "universal", "planar")}
 ORIENTATIONS = ("quaternion", "euler_zxz")
 FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
+#: The SI unit of each field of a point force.
+FORCE_UNITS = {"value": "N", "amplitude": "N", "frequency": "Hz", "phase": "rad", "offset": "N", "time": "s",
+               "initial": "N", "kp": "N/m", "kd": "N.s/m", "reference": "m"}
 METRIC_KINDS = ("natural_frequency", "free_oscillation", "harmonics", "steady_state", "peak")
 METHODS = ("DOP853", "RK45", "Radau", "BDF", "LSODA", "RK4")
 CONSTRAINT_TREATMENTS = ("baumgarte", "projection")
 #: The relative tolerances the integrators take (inclusive).
 RTOL_RANGE = (1e-14, 0.1)
+#: The longest scene name: it names output files (``<name>_uncorrected.summary.json``), the FMU and
+#: its binary (``<name>.pythonfmu.so``), which must stay within the 255 bytes a file name may have.
+MAX_SCENE_NAME = 100
+#: The most output samples (stop_time / output_interval, or / communication_step) a run may have.
+MAX_OUTPUT_SAMPLES = 1_000_000
 
 
 # ----------------------------------------------------------------------------------------------
@@ -59,9 +68,11 @@ RTOL_RANGE = (1e-14, 0.1)
 @dataclass(frozen=True)
 class Parameter:
     name: str
-    value: float
-    unit: str
+    value: float                    # SI
+    unit: str                       # the SI unit of `value` ("m" for a parameter given in mm)
     description: str
+    given: str = ""                 # the value as the scene gave it, where its unit is not SI: "1500 mm"
+    read: Any = field(default=None, repr=False, compare=False)   # its ParameterValue (unit, dimension)
 
 
 @dataclass(frozen=True)
@@ -173,6 +184,7 @@ class Scene:
     euler_sequence: str = "zyx"   # 3D: the intrinsic sequence of the bodies' B.euler[i] outputs (yaw, pitch,
                                   # roll: singular at ±90° pitch, not at the reference pose as Z-X-Z is)
     raw: dict = field(repr=False, default_factory=dict)
+    experiment_overrides: dict = field(repr=False, default_factory=dict)   # experiment.NAME given at load
 
     @property
     def centripetal(self) -> bool:
@@ -190,11 +202,14 @@ class Scene:
             return "small-displacement law (F = b ê0·r̈ along the initial direction ê0)"
         return "with centripetal term (Eq. 9)" if self.centripetal else "without centripetal term (Eq. 8)"
 
-    def experiment_with(self, overrides: Mapping[str, Any]) -> Experiment:
-        """The experiment with `overrides` (``{"rtol": 1e-6}``), read and checked as a load with
-        ``experiment.NAME`` overrides would (same defaults, same errors), without rebuilding the scene."""
-        r = _Reader(self.source, {n: p.value for n, p in self.parameters.items()})
-        return _read_experiment(r, self.raw.get("experiment", {}), overrides)
+    def experiment_with(self, overrides: Mapping[str, Any], source: str | None = None) -> Experiment:
+        """The experiment with `overrides` (``{"rtol": 1e-6}``) on top of those the scene was
+        loaded with, read and checked as a load with ``experiment.NAME`` overrides would (the same
+        function: same defaults, same errors), without rebuilding the scene. `source` names where
+        the overrides come from in errors (default: the scene file)."""
+        r = _Reader(source or self.source, {n: p.value for n, p in self.parameters.items()},
+                    {n: p.read for n, p in self.parameters.items()})
+        return _read_experiment(r, self.raw.get("experiment", {}), dict(self.experiment_overrides, **overrides))
 
     @property
     def data_files(self) -> list[str]:
@@ -213,9 +228,16 @@ class Scene:
 # Reading helpers: each checks one field and names it in its error
 # ----------------------------------------------------------------------------------------------
 class _Reader:
-    def __init__(self, source: str, names: Mapping[str, float]):
+    """Reads fields of one scene: `names` are the parameters' SI values, `dims` their units (the
+    dimension an expression over them has is checked against each field's unit)."""
+
+    def __init__(self, source: str, names: Mapping[str, float], dims: Mapping | None = None):
         self.source = source
         self.names = names
+        self.dims = dims or {}
+
+    def evaluate(self, expr, path, unit=None):
+        return evaluate(expr, self.names, self.source, path, unit, self.dims)
 
     def error(self, fld, value, expected, problem=None):
         return SceneError(self.source, fld, value, expected, problem)
@@ -234,20 +256,23 @@ class _Reader:
                                  f"a value for required field '{key}'", "missing field")
         return data
 
-    def number(self, data, key, fld, default=None, minimum=None, exclusive=False, required=True):
+    def number(self, data, key, fld, default=None, minimum=None, exclusive=False, required=True, unit=None):
+        """A number field in SI; `unit`: its SI unit, which the dimension of an expression over
+        parameters with units must fit (None: any)."""
         path = f"{fld}.{key}"
         if key not in data:
             if default is not None or not required:
                 return default
-            raise self.error(path, None, "a number or expression", "missing field")
-        value = evaluate(data[key], self.names, self.source, path)
+            raise self.error(path, None, "a number or expression" + (f" ({unit})" if unit else ""), "missing field")
+        value = self.evaluate(data[key], path, unit)
         if minimum is not None:
             if (exclusive and not value > minimum) or (not exclusive and not value >= minimum):
                 op = ">" if exclusive else "≥"
-                raise self.error(path, value, f"a number {op} {minimum:g}", "out of range")
+                shown = f" {unit}" if unit and unit != "1" else ""
+                raise self.error(path, value, f"a number {op} {minimum:g}{shown}", "out of range")
         return value
 
-    def vector(self, data, key, fld, dim, default=None, unit_length=False):
+    def vector(self, data, key, fld, dim, default=None, unit_length=False, unit=None):
         path = f"{fld}.{key}"
         if key not in data:
             if default is not None:
@@ -256,8 +281,7 @@ class _Reader:
         raw = data[key]
         if not isinstance(raw, list) or len(raw) != dim:
             raise self.error(path, raw, f"a list of {dim} numbers or expressions", "wrong shape")
-        values = tuple(evaluate(v, self.names, self.source, f"{path}[{i + 1}]")
-                       for i, v in enumerate(raw))
+        values = tuple(self.evaluate(v, f"{path}[{i + 1}]", unit) for i, v in enumerate(raw))
         if unit_length:
             norm = math.sqrt(sum(v * v for v in values))
             if norm == 0.0:
@@ -317,20 +341,15 @@ TOP_LEVEL = {"scene": False, "parameters": False, "effects": False, "ground": Fa
 
 
 def read_toml(path) -> tuple[str, dict]:
-    path = Path(path)
+    """The scene file's TOML, read with a cap on its size (:mod:`.files`)."""
     source = str(path)
-    try:
-        text = path.read_bytes()
-    except FileNotFoundError:
-        raise SceneError(source, "(file)", source, "an existing scene file (TOML)", "file not found")
-    except OSError as exc:
-        raise SceneError(source, "(file)", source, "a readable scene file", f"cannot read: {exc.strerror}")
+    text = read_capped(path, MAX_SCENE_BYTES, source, "(file)", "scene file (TOML)")
     try:
         data = tomllib.loads(text.decode("utf-8"))
     except UnicodeDecodeError:
-        raise SceneError(source, "(file)", "binary data", "a UTF-8 TOML text", "not UTF-8 text")
+        raise SceneError(source, "(file)", "binary data", "a UTF-8 TOML text", "not UTF-8 text") from None
     except tomllib.TOMLDecodeError as exc:
-        raise SceneError(source, "(file)", str(exc), "valid TOML", "does not parse")
+        raise SceneError(source, "(file)", str(exc), "valid TOML", "does not parse") from None
     return source, data
 
 
@@ -355,11 +374,7 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
         elif key.startswith("experiment."):
             experiment[key[len("experiment."):]] = value
         elif key in parameter_names:
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise SceneError(what, key, value, "a number", "wrong type")
-            if not math.isfinite(float(value)):
-                raise SceneError(what, key, value, "a finite number", "not finite")
-            params[key] = float(value)
+            params[key] = value          # read as the scene's entry is (evaluate_parameters)
         else:
             raise SceneError(what, key, value,
                              "a parameter of " + source + ": " + _listing(parameter_names)
@@ -368,6 +383,28 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
 
 
 def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
+    """The scene of the TOML `data`. A parameter in a unit with two readings (``"g"``: the gram
+    or standard gravity) is read as the one whose dimension fits every field it reaches: first
+    as the first reading; a parameter a unit error names is read the other way and the scene
+    read again (each at most once, so at most one read more than there are such parameters)."""
+    raw_params = data.get("parameters", {}) if isinstance(data, dict) else {}
+    p_names = set(raw_params) if isinstance(raw_params, dict) else set()
+    fixed = {k: v for k, v in overrides.items() if k in p_names}
+    choices = set(ambiguous_units(raw_params, fixed)) if isinstance(raw_params, dict) else set()
+    reading: dict[str, int] = {}
+    first: dict[str, UnitError] = {}          # the error that made a parameter be read the other way
+    while True:
+        try:
+            return _build_scene(source, data, overrides, reading)
+        except UnitError as exc:
+            flip = [n for n in exc.parameters if n in choices and n not in reading]
+            if not flip:       # fits neither reading: the error its first reading gave
+                raise next((first[n] for n in exc.parameters if n in first), exc) from None
+            reading.update({n: 1 for n in flip})
+            first.update({n: exc for n in flip})
+
+
+def _build_scene(source: str, data: dict, overrides: Mapping[str, Any], reading: Mapping[str, int]) -> Scene:
     base = _Reader(source, {})
     base.table(data, "", TOP_LEVEL)
 
@@ -375,6 +412,10 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
                                                        "orientation": False, "euler_sequence": False})
     name = head.get("name", Path(source).stem)
     _check_name(base, name, "scene.name")
+    if len(name) > MAX_SCENE_NAME:
+        raise base.error("scene.name" if "name" in head else "scene.name (the file's stem)", name,
+                         f"a name of at most {MAX_SCENE_NAME} characters (it names the output files and the FMU)",
+                         f"too long ({len(name)} characters)")
     dimension = head.get("dimension", 2)
     if dimension not in (2, 3) or isinstance(dimension, bool):
         raise base.error("scene.dimension", dimension, "2 or 3", "unsupported dimension")
@@ -407,10 +448,10 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
         raise base.error("parameters", raw_params, "a table of named values", "not a table")
     p_over, e_over, x_over = split_overrides(source, overrides, set(raw_params))
     x_over.pop("__orientation__", None)
-    values = evaluate_parameters(raw_params, source, fixed=p_over)
+    read = read_parameters(raw_params, source, fixed=p_over, reading=reading)
     meta = parameter_meta(raw_params)
-    parameters = {n: Parameter(n, values[n], meta[n]["unit"], meta[n]["description"]) for n in values}
-    r = _Reader(source, values)
+    parameters = {n: Parameter(n, v.value, v.si_unit, meta[n]["description"], v.given, v) for n, v in read.items()}
+    r = _Reader(source, {n: v.value for n, v in read.items()}, read)
 
     effects = _read_effects(r, data.get("effects", {}), e_over, dimension, Path(source).parent)
     bodies, points = _read_bodies(r, data, dimension)
@@ -419,10 +460,11 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     element_specs.update(_joint_elements(r, joints, points, element_specs, dimension))
     forces = _read_forces(r, data.get("forces", {}), points, dimension)
     experiment = _read_experiment(r, data.get("experiment", {}), x_over)
-    outputs = _signal_names(points, element_specs, dimension)
+    outputs = _signal_names(points, element_specs, dimension, bodies)
     metrics = _read_metrics(r, data.get("metrics", []), outputs)
     return Scene(source, name, description, dimension, orientation, parameters, effects, bodies, points, joints,
-                 element_specs, forces, experiment, metrics, euler_sequence=euler_sequence, raw=data)
+                 element_specs, forces, experiment, metrics, euler_sequence=euler_sequence, raw=data,
+                 experiment_overrides=x_over)
 
 
 def _read_effects(r: _Reader, raw, overrides, dimension, folder):
@@ -440,7 +482,7 @@ def _read_effects(r: _Reader, raw, overrides, dimension, folder):
                 raise r.error(fld, value, "true or false", "wrong type")
             effects[name] = value
         elif name == "gravity":
-            effects[name] = r.vector(merged, name, "effects", dimension)
+            effects[name] = r.vector(merged, name, "effects", dimension, unit="m/s2")
         elif name == "ground_acceleration":
             effects[name] = _read_ground_motion(r, value, fld, dimension, folder)
     return effects
@@ -452,7 +494,7 @@ def _read_ground_motion(r: _Reader, spec, fld, dimension, folder):
     from inerter.scene.ground_motion import GroundMotion, combine_records
     r.table(spec, fld, {"file": False, "axis": False, "unit": False, "records": False, "terms": False,
                         "amplitude": False, "frequency": False, "scale": False, "input": False})
-    scale = r.number(spec, "scale", fld, default=1.0)
+    scale = r.number(spec, "scale", fld, default=1.0, unit="1")
     sources = [k for k in ("file", "records", "terms", "amplitude", "input") if k in spec]
     allowed = ({"file", "terms"}, {"records", "terms"}, {"file"}, {"records"}, {"terms"}, {"amplitude"}, {"input"})
     if set(sources) not in allowed:
@@ -464,8 +506,9 @@ def _read_ground_motion(r: _Reader, spec, fld, dimension, folder):
             raise r.error(f"{fld}.input", spec["input"], "true", "wrong value")
         return GroundMotion(dimension, scale=scale, input=True)
     if "amplitude" in spec:
-        return GroundMotion.sine(dimension, r.vector(spec, "amplitude", fld, dimension),
-                                 r.number(spec, "frequency", fld, minimum=0.0, exclusive=True), scale=scale)
+        return GroundMotion.sine(dimension, r.vector(spec, "amplitude", fld, dimension, unit="m/s2"),
+                                 r.number(spec, "frequency", fld, minimum=0.0, exclusive=True, unit="Hz"),
+                                 scale=scale)
     record, names = None, []
     if "file" in spec:
         record, names = _read_record(r, spec, fld, dimension, folder), [str(spec["file"])]
@@ -502,13 +545,13 @@ def _read_record(r: _Reader, spec, fld, dimension, folder, single_axis=False):
     to_si = STANDARD_GRAVITY if unit == "g" else 1.0
     axis = None
     if at2 or single_axis or "axis" in spec:
-        value = r.number(spec, "axis", fld, default=1.0, minimum=1.0)
+        value = r.number(spec, "axis", fld, default=1.0, minimum=1.0, unit="1")
         axis = int(value) - 1
         if axis >= dimension or axis + 1 != value:
             raise r.error(f"{fld}.axis", value, f"an axis 1..{dimension}", "out of range")
     if at2:
         try:
-            times, values = read_at2(path)
+            times, values = read_at2(path, MAX_RECORD_SAMPLES)
         except FileNotFoundError:
             raise r.error(f"{fld}.file", str(path), "an existing PEER NGA record (.AT2)", "file not found")
         except (OSError, ValueError) as exc:
@@ -517,12 +560,19 @@ def _read_record(r: _Reader, spec, fld, dimension, folder, single_axis=False):
         values = values[None, :]
     else:
         columns = 1 if axis is not None else dimension
+        import io
+        data = read_capped(path, MAX_RECORD_BYTES, r.source, f"{fld}.file", "CSV record (time, a_1 ... a_dim)")
         try:
-            table = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
-        except OSError:
-            raise r.error(f"{fld}.file", str(path), "an existing CSV file (time, a_1 ... a_dim)", "file not found")
+            table = np.loadtxt(io.StringIO(data.decode("utf-8")), delimiter=",", comments="#", ndmin=2)
+        except UnicodeDecodeError:
+            raise r.error(f"{fld}.file", str(path), "a CSV text (time, a_1 ... a_dim)", "not UTF-8 text") from None
         except ValueError as exc:
-            raise r.error(f"{fld}.file", str(path), "numeric CSV columns: time, a_1 ... a_dim", f"unreadable ({exc})")
+            brief = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
+            raise r.error(f"{fld}.file", str(path), "numeric CSV columns: time, a_1 ... a_dim",
+                          f"unreadable ({brief})") from None
+        if table.shape[0] > MAX_RECORD_SAMPLES:
+            raise r.error(f"{fld}.file", str(path), f"at most {MAX_RECORD_SAMPLES:,} samples (every sample ends an "
+                          "integrator step; resample the record)", f"too many samples ({table.shape[0]:,})")
         if table.shape[1] != columns + 1 or table.shape[0] < 2 or not np.all(np.isfinite(table)) \
                 or np.any(np.diff(table[:, 0]) <= 0):
             raise r.error(f"{fld}.file", str(path), f"≥ 2 rows of {columns + 1} finite columns (time increasing, "
@@ -550,16 +600,17 @@ def _read_terms(r: _Reader, raw, fld, dimension):
         f = f"{fld}[{i}]"
         r.table(term, f, {"axis": True, "amplitude": True, "frequency": True, "phase": False, "start": False,
                           "stop": False})
-        value = r.number(term, "axis", f, minimum=1.0)
+        value = r.number(term, "axis", f, minimum=1.0, unit="1")
         axis = int(value)
         if axis > dimension or axis != value:
             raise r.error(f"{f}.axis", term["axis"], f"an axis 1..{dimension}", "out of range")
-        start = r.number(term, "start", f, default=0.0, minimum=0.0)
-        stop = r.number(term, "stop", f, default=_math.inf)
+        start = r.number(term, "start", f, default=0.0, minimum=0.0, unit="s")
+        stop = r.number(term, "stop", f, default=_math.inf, unit="s")
         if not stop > start:
             raise r.error(f"{f}.stop", stop, f"a time after start = {start:g} s", "out of range")
-        rows.append((axis - 1, r.number(term, "amplitude", f), r.number(term, "frequency", f, minimum=0.0),
-                     r.number(term, "phase", f, default=0.0), start, stop))
+        rows.append((axis - 1, r.number(term, "amplitude", f, unit="m/s2"),
+                     r.number(term, "frequency", f, minimum=0.0, unit="Hz"),
+                     r.number(term, "phase", f, default=0.0, unit="rad"), start, stop))
     return rows
 
 
@@ -578,7 +629,7 @@ def _read_bodies(r: _Reader, data, dimension):
             if pname in points:
                 raise r.error(f"{fld}.{pname}", pname, "a point name used once in the scene",
                               f"duplicate point name (also on {points[pname].body})")
-            points[pname] = Point(pname, owner, r.vector(raw, pname, fld, dimension))
+            points[pname] = Point(pname, owner, r.vector(raw, pname, fld, dimension, unit="m"))
 
     ground = r.table(data.get("ground", {}), "ground", {"points": False})
     add_points(GROUND, ground.get("points", {}), "ground.points")
@@ -595,11 +646,11 @@ def _read_bodies(r: _Reader, data, dimension):
             bodies[bname] = Body(
                 bname,
                 mass=_read_mass(r, raw, fld, massless),
-                inertia=r.number(raw, "inertia", fld, minimum=0.0, default=0.0 if massless else None),
-                position=r.vector(raw, "position", fld, dimension),
-                angle=r.number(raw, "angle", fld, default=0.0),
-                velocity=r.vector(raw, "velocity", fld, dimension, default=zero),
-                angular_velocity=r.number(raw, "angular_velocity", fld, default=0.0),
+                inertia=r.number(raw, "inertia", fld, minimum=0.0, default=0.0 if massless else None, unit="kg.m2"),
+                position=r.vector(raw, "position", fld, dimension, unit="m"),
+                angle=r.number(raw, "angle", fld, default=0.0, unit="rad"),
+                velocity=r.vector(raw, "velocity", fld, dimension, default=zero, unit="m/s"),
+                angular_velocity=r.number(raw, "angular_velocity", fld, default=0.0, unit="rad/s"),
                 massless=massless,
             )
         else:
@@ -611,10 +662,10 @@ def _read_bodies(r: _Reader, data, dimension):
                 bname,
                 mass=_read_mass(r, raw, fld, massless),
                 inertia=_read_inertia(r, raw, fld) if "inertia" in raw else ((0.0,) * 3,) * 3,
-                position=r.vector(raw, "position", fld, 3),
+                position=r.vector(raw, "position", fld, 3, unit="m"),
                 angle=0.0,
-                velocity=r.vector(raw, "velocity", fld, 3, default=zero),
-                angular_velocity=r.vector(raw, "angular_velocity", fld, 3, default=zero),
+                velocity=r.vector(raw, "velocity", fld, 3, default=zero, unit="m/s"),
+                angular_velocity=r.vector(raw, "angular_velocity", fld, 3, default=zero, unit="rad/s"),
                 rotation=_read_rotation(r, raw, fld),
                 massless=massless,
             )
@@ -637,8 +688,8 @@ def _read_mass(r: _Reader, raw, fld, massless: bool) -> float:
     """A body's mass: > 0, or ≥ 0 (default 0) on a body declared ``massless = true``, whose
     coordinates then get their mass from inerters (checked when the mechanism is compiled)."""
     if massless:
-        return r.number(raw, "mass", fld, default=0.0, minimum=0.0)
-    mass = r.number(raw, "mass", fld)
+        return r.number(raw, "mass", fld, default=0.0, minimum=0.0, unit="kg")
+    mass = r.number(raw, "mass", fld, unit="kg")
     if not mass > 0.0:
         raise r.error(f"{fld}.mass", mass, "a number > 0 (kg); a body carried only by inerters may have "
                       "mass = 0 if it says so with massless = true", "out of range")
@@ -652,9 +703,9 @@ def _read_inertia(r: _Reader, raw, fld):
     path = f"{fld}.inertia"
     expected = "3 principal moments [Jx, Jy, Jz] ≥ 0 or a symmetric 3×3 matrix, kg.m2"
     if isinstance(value, list) and len(value) == 3 and all(not isinstance(v, list) for v in value):
-        J = np.diag(r.vector(raw, "inertia", fld, 3))
+        J = np.diag(r.vector(raw, "inertia", fld, 3, unit="kg.m2"))
     elif isinstance(value, list) and len(value) == 3 and all(isinstance(v, list) and len(v) == 3 for v in value):
-        J = np.array([[evaluate(x, r.names, r.source, f"{path}[{i + 1}][{j + 1}]") for j, x in enumerate(row)]
+        J = np.array([[r.evaluate(x, f"{path}[{i + 1}][{j + 1}]", "kg.m2") for j, x in enumerate(row)]
                       for i, row in enumerate(value)])
     else:
         raise r.error(path, value, expected, "wrong shape")
@@ -675,17 +726,17 @@ def _read_rotation(r: _Reader, raw, fld):
         raise r.error(f"{fld}.{key}", raw[key], "one of: euler = [φ, θ, ψ], quaternion = [w, x, y, z], "
                       "or axis and angle", "more than one given: " + ", ".join(given))
     if "quaternion" in raw:
-        p = r.vector(raw, "quaternion", fld, 4)
+        p = r.vector(raw, "quaternion", fld, 4, unit="1")
         norm = math.sqrt(sum(x * x for x in p))
         if abs(norm - 1.0) > 1e-9:
             raise r.error(f"{fld}.quaternion", list(p), "a unit quaternion [w, x, y, z] (|p| = 1 to 1e-9)",
                           f"|p| = {norm:.12g}")
         A = quat_matrix(p)
     elif "euler" in raw:
-        A = euler_matrix(r.vector(raw, "euler", fld, 3))
+        A = euler_matrix(r.vector(raw, "euler", fld, 3, unit="rad"))
     else:
         axis = r.vector(raw, "axis", fld, 3, default=(0.0, 0.0, 1.0), unit_length=True)
-        A = axis_angle_matrix(axis, r.number(raw, "angle", fld, default=0.0))
+        A = axis_angle_matrix(axis, r.number(raw, "angle", fld, default=0.0, unit="rad"))
     return tuple(tuple(float(x) for x in row) for row in A)
 
 
@@ -802,7 +853,7 @@ def _read_parameter(r: _Reader, spec, fld, p: "elements.Parameter"):
     if p.key not in spec and not p.required:
         return p.default
     minimum = p.minimum if p.minimum != -math.inf else None
-    value = r.number(spec, p.key, fld, minimum=minimum, exclusive=p.strict, required=p.required)
+    value = r.number(spec, p.key, fld, minimum=minimum, exclusive=p.strict, required=p.required, unit=p.unit)
     if value > p.maximum:
         raise r.error(f"{fld}.{p.key}", value, p.expected(), "out of range")
     return value
@@ -868,7 +919,7 @@ def _read_forces(r: _Reader, raw, points, dimension):
             input_points.add(point)
             forces[fname] = Force(fname, point, function, None)
             continue
-        kwargs = {k: r.number(spec, k, fld, default=0.0) for k in fields[function]}
+        kwargs = {k: r.number(spec, k, fld, default=0.0, unit=FORCE_UNITS[k]) for k in fields[function]}
         for gain in ("kp", "kd"):
             if gain in kwargs and kwargs[gain] < 0:
                 raise r.error(f"{fld}.{gain}", kwargs[gain], "a gain ≥ 0", "out of range")
@@ -889,36 +940,65 @@ def _read_experiment(r: _Reader, raw, overrides):
             raise r.error(f"experiment.{key}", value, "one of: " + ", ".join(EXPERIMENT_FIELDS), "unknown field")
         merged[key] = value
     fld = "experiment"
-    stop = r.number(merged, "stop_time", fld, default=10.0, minimum=0.0, exclusive=True)
-    interval = r.number(merged, "output_interval", fld, default=0.01, minimum=0.0, exclusive=True)
-    if interval > stop:
-        raise r.error("experiment.output_interval", interval, f"at most stop_time = {stop:g} s", "out of range")
-    rtol = r.number(merged, "rtol", fld, default=1e-8, minimum=RTOL_RANGE[0])
+    stop = r.number(merged, "stop_time", fld, default=10.0, minimum=0.0, exclusive=True, unit="s")
+
+    def sampling(key, value):
+        """An interval between samples: at most the stop time, and not so short that the run's
+        samples (and the arrays holding them) pass MAX_OUTPUT_SAMPLES."""
+        if value > stop:
+            raise r.error(f"experiment.{key}", value, f"at most stop_time = {stop:g} s", "longer than the run")
+        if stop / value > MAX_OUTPUT_SAMPLES:
+            raise r.error(f"experiment.{key}", value, f"at least stop_time / {MAX_OUTPUT_SAMPLES:,} = "
+                          f"{stop / MAX_OUTPUT_SAMPLES:g} s (at most {MAX_OUTPUT_SAMPLES:,} samples a run)",
+                          "too many samples")
+        return value
+
+    interval = sampling("output_interval", r.number(merged, "output_interval", fld, default=0.01, minimum=0.0,
+                                                    exclusive=True, unit="s"))
+    rtol = r.number(merged, "rtol", fld, default=1e-8, minimum=RTOL_RANGE[0], unit="1")
     if rtol > RTOL_RANGE[1]:
         raise r.error("experiment.rtol", rtol, f"a relative tolerance in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}]",
                       "out of range")
+    method = r.string(merged, "method", fld, METHODS, default="DOP853")
+    step = r.number(merged, "step", fld, default=1e-3, minimum=0.0, exclusive=True, unit="s")
+    if method == "RK4" and step > stop:
+        raise r.error("experiment.step", step, f"RK4's step at most stop_time = {stop:g} s", "longer than the run")
     return Experiment(
         stop_time=stop, output_interval=interval,
-        method=r.string(merged, "method", fld, METHODS, default="DOP853"),
+        method=method,
         rtol=rtol,
         atol=r.number(merged, "atol", fld, default=rtol * 1e-2, minimum=0.0, exclusive=True),
         constraint=r.string(merged, "constraint", fld, CONSTRAINT_TREATMENTS, default="baumgarte"),
-        baumgarte=r.number(merged, "baumgarte", fld, default=10.0, minimum=0.0),
-        communication_step=r.number(merged, "communication_step", fld, default=interval, minimum=0.0,
-                                    exclusive=True),
-        step=r.number(merged, "step", fld, default=1e-3, minimum=0.0, exclusive=True),
-        max_steps=int(r.number(merged, "max_steps", fld, default=2_000_000, minimum=1.0)),
+        baumgarte=r.number(merged, "baumgarte", fld, default=10.0, minimum=0.0, unit="1/s"),
+        communication_step=sampling("communication_step", r.number(
+            merged, "communication_step", fld, default=interval, minimum=0.0, exclusive=True, unit="s")),
+        step=step,
+        max_steps=_whole(r, merged, "max_steps", default=2_000_000),
     )
 
 
-def _signal_names(points, element_specs, dimension):
-    names = set()
+def _whole(r: _Reader, data, key, default):
+    """A whole number ≥ 1 (a count)."""
+    value = r.number(data, key, "experiment", default=default, minimum=1.0, unit="1")
+    if value != int(value):
+        raise r.error(f"experiment.{key}", value, "a whole number ≥ 1", "not a whole number")
+    return int(value)
+
+
+def _signal_names(points, element_specs, dimension, bodies=()) -> dict[str, str | None]:
+    """Every output's name and SI unit (None: mixed units)."""
+    names = {}
     for p in points:
         for i in range(1, dimension + 1):
-            names.update({f"{p}.r[{i}]", f"{p}.v[{i}]"})
+            names.update({f"{p}.r[{i}]": "m", f"{p}.v[{i}]": "m/s"})
     for e, el in element_specs.items():
-        names.update(f"{e}.{suffix}" for suffix, _, _ in elements.outputs(el))
-    names.update({"energy", "constraint_residual"})
+        names.update({f"{e}.{suffix}": unit for suffix, unit, _ in elements.outputs(el)})
+    if dimension == 3:
+        for bname in bodies:
+            names.update({f"{bname}.q[{i}]": "1" for i in range(1, 5)})
+            names.update({f"{bname}.euler[{i}]": "rad" for i in range(1, 4)})
+            names.update({f"{bname}.w[{i}]": "rad/s" for i in range(1, 4)})
+    names.update({"energy": "J", "constraint_residual": None})
     return names
 
 
@@ -956,7 +1036,7 @@ def _read_metrics(r: _Reader, raw, signals):
             raise r.error(f"{fld}.periods", periods, "a whole number ≥ 1", "out of range")
         metrics.append(Metric(
             kind=kind, prefix=prefix, signal=signal,
-            reference=r.number(spec, "reference", fld, required=False),
-            period=r.number(spec, "period", fld, minimum=0.0, exclusive=True, required=False),
+            reference=r.number(spec, "reference", fld, required=False, unit=signals.get(signal)),
+            period=r.number(spec, "period", fld, minimum=0.0, exclusive=True, required=False, unit="s"),
             periods=periods, period_of=period_of))
     return tuple(metrics)

@@ -18,6 +18,7 @@ import argparse
 import csv
 import gc
 import math
+import sys
 import time
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -343,22 +344,32 @@ def run_study(scene, stop_time=None, signal=None, paths=("numpy", "compiled"), m
     return study, model, reference, extract
 
 
-def main_bench(argv=None) -> int:
+def bench_parser() -> argparse.ArgumentParser:
+    """The options of ``inerter bench``."""
     p = argparse.ArgumentParser(prog="inerter bench", description="Work-precision diagram of a scene: error "
                                 "against the oracle versus CPU time, per method, on the numpy and compiled "
                                 "paths and through the FMU.")
-    p.add_argument("scene")
+    p.add_argument("scene", help="the scene file (TOML)")
     p.add_argument("--out", default=None, help="output directory (default out/bench/<scene>)")
-    p.add_argument("--stop-time", type=float, default=None)
+    p.add_argument("--stop-time", type=float, default=None, help="stop time of every run (s; default: the scene's)")
     p.add_argument("--signal", default=None, help="a point coordinate, e.g. C.r[2] (default: every point)")
     p.add_argument("--paths", default="numpy,compiled,fmu",
                    help="some of numpy, compiled, fmu (the FMU through fmpy at 10 ms and 2 ms communication "
                         "steps, DOP853 and RK45)")
-    p.add_argument("--methods", default=",".join(SWEEPS))
+    p.add_argument("--methods", default=",".join(SWEEPS),
+                   help="comma-separated, some of " + ", ".join(SWEEPS) + " (default: all)")
     p.add_argument("--budget", type=float, default=30.0,
                    help="stop a method's sweep after a run takes longer than this (CPU s)")
     p.add_argument("--quick", action="store_true", help="fewer tolerances per method")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="scene overrides")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="override a parameter, effects.NAME or experiment.NAME, as inerter run --set (repeatable)")
+    return p
+
+
+def main_bench(argv=None) -> int:
+    from inerter.common.errors import InerterError
+    from inerter.scene.overrides import parse_set
+    p = bench_parser()
     a = p.parse_args(argv)
     methods = [m.strip() for m in a.methods.split(",") if m.strip()]
     bad = [m for m in methods if m not in SWEEPS]
@@ -367,17 +378,14 @@ def main_bench(argv=None) -> int:
     paths = [x.strip() for x in a.paths.split(",") if x.strip()]
     if any(x not in ("numpy", "compiled", "fmu") for x in paths):
         p.error("--paths: expected some of numpy, compiled, fmu")
-    overrides = {}
-    for item in a.set:
-        key, eq, value = item.partition("=")
-        if not eq:
-            p.error(f"--set {item!r}: expected NAME=VALUE")
-        overrides[key] = {"true": True, "false": False}.get(value.lower(), value)
-        if isinstance(overrides[key], str):
-            try:
-                overrides[key] = float(value)
-            except ValueError:
-                pass
+    try:
+        return _bench(a, paths, methods, parse_set(a.set))
+    except InerterError as exc:
+        print(f"inerter: error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _bench(a, paths, methods, overrides) -> int:
     study, model, _, _ = run_study(a.scene, a.stop_time, a.signal, paths, methods, QUICK if a.quick else SWEEPS,
                                    a.budget, overrides)
     out = Path(a.out or Path("out") / "bench" / model.name)

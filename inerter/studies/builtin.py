@@ -162,19 +162,24 @@ def print_table(study: Study, table: dict):
         print(f"  {x:8.4g}" + "".join(f" {v:28.6g}" if v is not None else f" {'-':>28s}" for v in cells))
 
 
-def main(argv=None) -> int:
-    from inerter.scene.overrides import parse_set
+def study_parser() -> argparse.ArgumentParser:
+    """The options of ``inerter study``."""
     p = argparse.ArgumentParser(prog="inerter study", description="Built-in studies: a sweep with and "
                                 "without the centripetal correction, then one figure. " + ", ".join(
                                     f"{s.name}: {s.x} of {s.scene}" for s in STUDIES.values()))
-    p.add_argument("study", choices=sorted(STUDIES))
+    p.add_argument("study", choices=sorted(STUDIES), help="the study: " + ", ".join(sorted(STUDIES)))
     p.add_argument("--out", default=None, metavar="DIR",
                    help="folder of results.csv and the figure (default out/study/NAME); resumed if present")
     p.add_argument("--points", type=int, default=None, help="number of values of the varied parameter")
     p.add_argument("--range", default=None, metavar="START:STOP", help="range of the varied parameter")
     p.add_argument("--scenarios", default=None, help="folder of the scene files (default scenarios/)")
     add_run_arguments(p)
-    args = p.parse_args(argv)
+    return p
+
+
+def main(argv=None) -> int:
+    from inerter.scene.overrides import parse_set
+    args = study_parser().parse_args(argv)
     study = STUDIES[args.study]
     span = None
     if args.range:

@@ -421,9 +421,15 @@ class FmuSlot:
         from inerter.fmu.run import FmuResult, FmuRunInfo, start_values
         from inerter.api import Model, compute_metrics
 
+        from inerter.engine.simulation import Settings
+
         model = Model(scene, overrides)                # the solver's messages for bad overrides
-        settings = model.settings(stop_time=stop_time)
-        comm = step or model.scene.experiment.communication_step
+        # the importer samples the FMU at its communication points: a step given is the output interval too
+        given = {k: v for k, v in (("stop_time", stop_time), ("communication_step", step), ("output_interval", step))
+                 if v is not None}
+        experiment = model.scene.experiment_with(given) if given else model.scene.experiment
+        settings = Settings.from_experiment(experiment)
+        comm = experiment.communication_step
         start = start_values(model, overrides)
         if not self.fresh:
             self.fmu.reset()
@@ -918,17 +924,22 @@ def status_code(report: SweepReport) -> int:
     return 3 if report.failed or report.failed_before else 0
 
 
-def _sweep(argv) -> int:
-    from inerter.scene.overrides import parse_set
+def sweep_parser() -> argparse.ArgumentParser:
+    """The options of ``inerter sweep``."""
     p = argparse.ArgumentParser(prog="inerter sweep", description="Run every combination of the varied "
                                 "parameters in parallel on dask; rows go to DIR/results.csv as runs finish.")
-    p.add_argument("scene")
+    p.add_argument("scene", help="the scene file (TOML)")
     p.add_argument("--vary", action="append", required=True, metavar="NAME=START:STOP:NUM",
                    help="a parameter, effects.NAME or experiment.NAME and its values: START:STOP:NUM "
                         "(evenly spaced) or V1,V2,... (repeatable: every combination is run)")
     p.add_argument("--out", required=True, metavar="DIR", help="folder of results.csv (resumed if present)")
     add_run_arguments(p)
-    args = p.parse_args(argv)
+    return p
+
+
+def _sweep(argv) -> int:
+    from inerter.scene.overrides import parse_set
+    args = sweep_parser().parse_args(argv)
     sweep = Sweep(args.scene, [parse_vary(v) for v in args.vary], parse_set(args.set), args.model,
                   args.stop_time, args.step, args.path)
     report = run_sweep(sweep, args.out, workers=args.workers, scheduler=args.scheduler,
@@ -938,19 +949,31 @@ def _sweep(argv) -> int:
     return status_code(report)
 
 
-def _sweep_plot(argv) -> int:
+def sweep_plot_parser() -> argparse.ArgumentParser:
+    """The options of ``inerter sweep-plot``."""
     p = argparse.ArgumentParser(prog="inerter sweep-plot", description="Plot a metric of a sweep against a "
                                 "varied parameter.")
     p.add_argument("results", help="results.csv of a sweep")
     p.add_argument("--x", required=True, help="a parameter column (e.g. y0)")
     p.add_argument("--y", required=True, help="a metric column (e.g. fundamental_frequency)")
     p.add_argument("--hue", default=None, help="one line per value of this parameter (e.g. effects.centripetal)")
-    p.add_argument("--out", required=True, help="the PNG to write")
-    p.add_argument("--title", default=None)
-    args = p.parse_args(argv)
-    out = plot_results(args.results, args.x, args.y, args.out, hue=args.hue, title=args.title)
+    p.add_argument("--out", default=None, metavar="PNG",
+                   help="the PNG to write (default: beside RESULTS, named <y>_vs_<x>.png)")
+    p.add_argument("--title", default=None, help="the plot's title (default: '<y> against <x>')")
+    return p
+
+
+def _sweep_plot(argv) -> int:
+    args = sweep_plot_parser().parse_args(argv)
+    out = args.out or Path(args.results).parent / f"{_file_part(args.y)}_vs_{_file_part(args.x)}.png"
+    out = plot_results(args.results, args.x, args.y, out, hue=args.hue, title=args.title)
     print(f"wrote {out}")
     return 0
+
+
+def _file_part(name: str) -> str:
+    """A column name as part of a file name (``effects.centripetal`` stays, ``C.r[2]`` → ``C.r_2_``)."""
+    return "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
 
 
 def main_sweep(argv=None) -> int:

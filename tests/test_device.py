@@ -246,11 +246,12 @@ def test_describe_and_outputs_list_the_device(tmp_path):
 # ------------------------------------------------------------------------------------------------
 IDEAL_VARIANTS = {
     "b-given": (ZERO_DEVICE, False),
-    # b = ρ ℓ A_p²/A_c = b · 1 · 1²/1, exactly
-    "fluid": (ZERO_DEVICE + '[DEVICE.fluid]\ndensity = "b"\nchannel_length = 1.0\nchannel_area = 1.0\n'
+    # b = ρ ℓ A_p²/A_c = b · 1 · 1²/1, exactly (ρ = 1.0·b: the factor 1 m⁻³ a plain number, which
+    # the units check lets a product carry)
+    "fluid": (ZERO_DEVICE + '[DEVICE.fluid]\ndensity = "1.0*b"\nchannel_length = 1.0\nchannel_area = 1.0\n'
               'piston_area = 1.0\nlinear_damping = 0.0\nquadratic_damping = 0.0\n', True),
-    # b = J (2π/p)² with p = 2π: J, exactly
-    "flywheel": (ZERO_DEVICE + '[DEVICE.flywheel]\ninertia = "b"\nlead = "2*pi"\n', True),
+    # b = J (2π/p)² with p = 2π: J, exactly (J = 1.0·b, the factor 1 m² a plain number)
+    "flywheel": (ZERO_DEVICE + '[DEVICE.flywheel]\ninertia = "1.0*b"\nlead = "2*pi"\n', True),
 }
 
 

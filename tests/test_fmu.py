@@ -308,9 +308,11 @@ def test_variables_are_named_and_united_like_the_model(fmus, scene):
         v = vars_[p["name"]]
         assert (v.causality, v.type) == ("parameter", "Real") and v.variability in ("fixed", "tunable")
         assert v.unit == p["unit"] and float(v.start) == p["value"]
+    tunable = set(model.tunable_parameters())
     for e in model.effect_info():
         v = vars_[e["name"]]
-        assert (v.causality, v.variability, v.type) == ("parameter", "fixed", "Boolean")
+        expected = "tunable" if e["name"] in tunable else "fixed"     # the centripetal switch is tunable
+        assert (v.causality, v.variability, v.type) == ("parameter", expected, "Boolean")
         assert v.start == ("true" if e["value"] else "false")
     solver = vars_["solver"]
     assert solver.type == "Enumeration" and solver.variability == "fixed"

@@ -81,4 +81,4 @@ def test_the_readme_scene_runs(tmp_path, capsys):
     assert main(["run", str(path), "--set", "experiment.stop_time=0.5", "--out", str(out)]) == 0, capsys.readouterr().err
     first = (out / "lumped_mass_2d.csv").read_text().splitlines()[1].split(",")
     header = (out / "lumped_mass_2d.csv").read_text().splitlines()[0].split(",")
-    assert float(first[header.index("P.r[2]")]) == 1.5
+    assert float(first[header.index("P.r[2] (m)")]) == 1.5            # the header carries units

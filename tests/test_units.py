@@ -322,4 +322,4 @@ def test_values_in_si_everywhere_downstream(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["settings"]["parameters"]["y0"] == 1.5
     data = np.genfromtxt(out / "lumped_mass_2d.csv", delimiter=",", names=True)
-    assert data["Pr2"][0] == 1.5
+    assert data["Pr2_m"][0] == 1.5

@@ -110,9 +110,9 @@ def test_the_installed_package_builds_and_runs_an_fmu(installed, tmp_path):
     model = inerter.load(ROOT / "scenarios" / "two_bar_2d.toml")
     ref = model.simulate(stop_time=0.5, output_interval=model.scene.experiment.communication_step,
                          metrics=False)
-    assert np.allclose(data[:, header.index("time")], ref.time, rtol=0, atol=1e-12)
+    assert np.allclose(data[:, header.index("time (s)")], ref.time, rtol=0, atol=1e-12)
     # The CSV holds 12 significant digits.
-    assert np.allclose(data[:, header.index("C.r[2]")], ref["C.r[2]"], rtol=1e-11, atol=0)
+    assert np.allclose(data[:, header.index("C.r[2] (m)")], ref["C.r[2]"], rtol=1e-11, atol=0)
 
 
 def test_the_installed_paper_command_finds_its_scenes(installed):

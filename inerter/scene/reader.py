@@ -853,10 +853,22 @@ def _read_parameter(r: _Reader, spec, fld, p: "elements.Parameter"):
     if p.key not in spec and not p.required:
         return p.default
     minimum = p.minimum if p.minimum != -math.inf else None
-    value = r.number(spec, p.key, fld, minimum=minimum, exclusive=p.strict, required=p.required, unit=p.unit)
+    value = r.number(spec, p.key, fld, minimum=minimum, exclusive=p.strict, required=p.required,
+                     unit=_fixed_unit(p.unit))
     if value > p.maximum:
         raise r.error(f"{fld}.{p.key}", value, p.expected(), "out of range")
     return value
+
+
+def _fixed_unit(unit: str) -> str | None:
+    """`unit` where it has one dimension; None where it depends on another parameter (an end
+    stop's N/m^n): such a field's dimension is not checked."""
+    from inerter.scene import units
+    try:
+        units.dimension_of(unit)
+    except units.UnitSyntaxError:
+        return None
+    return unit
 
 
 def _read_device(r: _Reader, raw, fld, kind: "elements.ElementKind"):

@@ -13,7 +13,12 @@ with it.
 def run(task: dict) -> dict:
     """``run_one(task)``, or ``{"key", "environment_error"}`` where this worker cannot run inerter."""
     import importlib
+    import os
     import sys
+    # A parent process that ran an FMU in itself hands its workers a sys.path whose front holds that
+    # FMU's resources/ (pythonfmu puts it there), with the FMU's trimmed copy of this package: not
+    # the package to run with.
+    sys.path[:] = [p for p in sys.path if not os.path.isfile(os.path.join(p or ".", "slavemodule.txt"))]
     try:
         sweep = importlib.import_module("inerter.studies.sweep")
         version = getattr(sys.modules["inerter"], "__version__", None)

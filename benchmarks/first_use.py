@@ -48,9 +48,11 @@ print(result.status, len(result.time))
 
 
 def snapshot(folder: Path) -> Path:
-    """A copy of the package (and a link to the scenes warm_up reads) in `folder`."""
+    """A copy of the package (and links to the scenes warm_up reads and to pyproject.toml, which
+    marks the folder as a checkout for inerter.common.locations) in `folder`."""
     shutil.copytree(ROOT / "inerter", folder / "inerter", ignore=shutil.ignore_patterns("__pycache__"))
     (folder / "scenarios").symlink_to(ROOT / "scenarios")
+    (folder / "pyproject.toml").symlink_to(ROOT / "pyproject.toml")
     return folder
 
 

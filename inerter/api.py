@@ -17,7 +17,7 @@ from inerter.model.mechanism import Mechanism
 from inerter.oracle import OracleElement
 from inerter.engine.outputs import Signals
 from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
-from inerter.common.errors import SceneError, SimulationError
+from inerter.common.errors import InerterError, SceneError, SimulationError
 from inerter.engine.simulation import Settings, Stepper, integrate
 
 #: Tolerances at which the oracle is solved (DOP853).
@@ -521,8 +521,9 @@ def warm_up(spatial: bool = False):
     from inerter.common.locations import scenarios
     folder = scenarios()
     for name in ("two_bar_2d.toml", "two_bar_2d_as_3d.toml")[:2 if spatial else 1]:
-        if not (folder / name).exists():
-            continue
+        if not (folder / name).exists():         # nothing compiled would pass unnoticed: say so
+            raise InerterError(f"{folder / name}: the shipped scene the kernels are compiled on is missing "
+                               "(reinstall inerter)")
         model = load(folder / name)
         for method in compiled.COMPILED_METHODS:
             compiled.integrate_compiled(model.mechanism, model.settings(method=method, stop_time=0.05, step=1e-2))

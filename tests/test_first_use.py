@@ -127,3 +127,13 @@ def test_compile_command(monkeypatch, capsys):
     assert "compiling the engine's 2D and 3D kernels" in captured.err
     assert "(all were in the cache)" in captured.err and "loaded in 0.5 s" in captured.out
     assert compiled.NOTICE.enabled
+
+
+def test_compile_says_so_when_its_scenes_are_missing(monkeypatch, tmp_path, capsys):
+    """warm_up compiles on the shipped two-bar scene; where it cannot find it, `inerter compile`
+    fails with one line instead of reporting success having compiled nothing."""
+    import inerter.common.locations as locations
+    monkeypatch.setattr(locations, "scenarios", lambda: tmp_path)
+    assert cli.main(["compile", "--planar"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) >= 1 and "two_bar_2d.toml" in err[-1] and "missing" in err[-1]

@@ -125,10 +125,10 @@ def _import_kernels():
 # ------------------------------------------------------------------------------------------------
 #: Seconds a run's first compilation of the kernels takes on a 2-core machine, by dimension (its
 #: integrator loop and outputs, docs/benchmarks/first_use.md), for the notice.
-COMPILE_SECONDS = {2: 40, 3: 70}
+COMPILE_SECONDS = {2: 45, 3: 95}
 #: Seconds ``inerter compile`` takes on a 2-core machine with an empty cache, by dimension (every kernel:
 #: the three integrator loops, outputs, co-simulation steps and the FMU's native step).
-AOT_SECONDS = {2: 70, 3: 100}
+AOT_SECONDS = {2: 90, 3: 120}
 #: The kernels entered from Python, in the notice's words (others by their own name).
 _WHAT = {"integrate_rk": "the DOP853/RK45 loop", "integrate_rk4": "the RK4 loop",
          "signal_history": "the outputs", "signal_column": "the outputs", "dense_signal": "the outputs",

@@ -91,7 +91,8 @@ class GroundMotion:
             amplitude, frequency, phase, start, stop = row[TERM_AMPLITUDE:]
             for at in (start, stop):
                 if 0.0 < at < math.inf:
-                    value = amplitude * math.sin(2.0 * math.pi * frequency * (at - start) + phase)
+                    # the term's value at `at` from inside its interval (its stop lifted)
+                    value = burst.py_func(at, amplitude, frequency, phase, start, math.inf)
                     (jumps if self.scale != 0.0 and abs(value) > 1e-12 * abs(amplitude) else kinks).add(float(at))
         return sorted(kinks - jumps), sorted(jumps)
 

@@ -153,9 +153,10 @@ class Model:
     def simulate(self, stop_time=None, output_interval=None, method=None, rtol=None, atol=None,
                  constraint=None, step=None, metrics=True, path="compiled") -> "Result":
         """Integrate from the initial state. `path`: "compiled" (the default: numba kernels and
-        integrator loops, :mod:`inerter.engine.compiled`, 2D and 3D; it falls back to the numpy path
-        where it cannot take the scene, Z-X-Z Euler angles, and ``result.run.extra["path"]`` says
-        why) or "numpy" (the readable reference). The oracle always runs its own numpy evaluation.
+        integrator loops, :mod:`inerter.engine.compiled`, 2D and 3D; the implicit methods, Radau, BDF
+        and LSODA, and the projection treatment run scipy's integrators on the compiled right-hand
+        side, and ``result.run.extra["path"]`` says so) or "numpy" (the readable reference). The
+        oracle always runs its own numpy evaluation.
         With `metrics`, the scene's [[metrics]] are computed from the integrator's dense output (the
         compiled loop keeps it only then)."""
         s = self.settings(stop_time=stop_time, output_interval=output_interval, method=method, rtol=rtol,

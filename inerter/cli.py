@@ -359,8 +359,9 @@ def build_parser():
                              "the stop time; with --model fmu")
         sp.add_argument("--path", choices=("numpy", "compiled"), default="compiled",
                         help="the solver's path: compiled (the default: numba kernels and integrator loops, 2D "
-                             "and 3D; falls back to numpy where it cannot take the scene, Z-X-Z Euler angles) or "
-                             "numpy (the readable reference)")
+                             "and 3D; the implicit methods, Radau, BDF and LSODA, and the projection treatment "
+                             "run scipy's integrators on the compiled right-hand side) or numpy (the readable "
+                             "reference)")
 
     r = sub.add_parser("run", help="simulate a scene: CSV, summary.json and a PNG")
     scene_argument(r)

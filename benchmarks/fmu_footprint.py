@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import io
 import json
 import os
 import platform
@@ -80,6 +81,9 @@ def build_both(scene: Path, out: Path) -> dict[str, Path]:
 def sizes(fmu: Path) -> dict:
     with zipfile.ZipFile(fmu) as z:
         package = [i for i in z.infolist() if i.filename.startswith("resources/inerter/")]
+        if not package and f"resources/{fmu_build.PAYLOAD_FILE}" in z.namelist():
+            # Built since the package's modules travel in one archive: count what it holds.
+            package = zipfile.ZipFile(io.BytesIO(z.read(f"resources/{fmu_build.PAYLOAD_FILE}"))).infolist()
         return {"archive": fmu.stat().st_size, "entries": len(z.infolist()),
                 "package_files": len(package), "package_bytes": sum(i.file_size for i in package)}
 

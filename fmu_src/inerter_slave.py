@@ -53,17 +53,86 @@ from __future__ import annotations
 import base64
 import contextlib
 import hashlib
+import io
 import json
 import math
 import operator
+import os
+import shutil
+import sys
+import tempfile
 import threading
 import traceback
+import zipfile
 from pathlib import Path
 
 from pythonfmu import Boolean, DefaultExperiment, Fmi2Slave, Integer, Real, String
 from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability, Fmi2Initial
 
-import inerter
+#: The archive of the package's modules beside this file (inerter.fmu.build.write_payload).
+PAYLOAD_FILE = "inerter_payload.zip"
+
+
+def _cache_root() -> Path:
+    """The package's cache folder, as inerter.engine.compiled finds it for the kernels (written
+    again here: the package is not importable before its payload is unpacked)."""
+    if os.environ.get("INERTER_CACHE_DIR"):
+        return Path(os.environ["INERTER_CACHE_DIR"])
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "inerter"
+
+
+def _unpacked(archive: Path, roots) -> Path | None:
+    """The folder holding `archive` unpacked, under the first of `roots` that can take it: named
+    by the archive's hash, unpacked into a temporary folder renamed into place, so that
+    concurrent instances see a whole folder or none, and later ones find it."""
+    data = archive.read_bytes()
+    digest = hashlib.sha256(data).hexdigest()[:16]
+    for root in roots:
+        folder = root / digest
+        if (folder / "inerter" / "__init__.py").is_file():
+            return folder
+        try:
+            root.mkdir(parents=True, exist_ok=True)
+            work = Path(tempfile.mkdtemp(dir=root, prefix=f".{digest}-"))
+            with zipfile.ZipFile(io.BytesIO(data)) as z:
+                z.extractall(work)
+            try:
+                os.rename(work, folder)
+            except OSError:                      # another instance was first
+                shutil.rmtree(work, ignore_errors=True)
+        except OSError:
+            continue
+        if (folder / "inerter" / "__init__.py").is_file():
+            return folder
+    return None
+
+
+def unpack_payload(resources: Path) -> Path | None:
+    """Make the package this FMU carries importable, before anything imports it.
+
+    The package's modules come in one archive (an importer extracts the whole FMU at every
+    instantiation, and sixty files cost it more than one). It is unpacked once per machine, into
+    the package's cache folder (or, where that cannot be written, into resources/), and that
+    folder goes on sys.path where resources/ stands, so the shipped package takes the place it
+    took as a folder of resources/. Where ``inerter`` is imported already, nothing changes: the
+    slave runs with it and says so (:meth:`InerterSlave._warn_if_foreign_package`). Returns the
+    folder the shipped package is in, None where there is none."""
+    archive = resources / PAYLOAD_FILE
+    if not archive.is_file():
+        return None
+    folder = _unpacked(archive, (_cache_root() / "fmu-payload", resources / "_payload"))
+    if folder is None or "inerter" in sys.modules:
+        return folder
+    entries = [str(Path(p).resolve()) if p else p for p in sys.path]
+    where = entries.index(str(resources.resolve())) if str(resources.resolve()) in entries else 0
+    if str(folder) not in sys.path:
+        sys.path.insert(where, str(folder))
+    return folder
+
+
+SHIPPED_PACKAGE = unpack_payload(Path(__file__).resolve().parent)
+
+import inerter  # noqa: E402  (after its payload is unpacked)
 from inerter.fmu import native as fmu_native
 from inerter.common.errors import InerterError, SimulationError
 
@@ -842,9 +911,11 @@ class InerterSlave(Fmi2Slave):
 
     # ------------------------------------------------------------------------------------------
     def _warn_if_foreign_package(self):
-        shipped = (Path(self.resources or ".") / "inerter").resolve()
+        if SHIPPED_PACKAGE is None:
+            return
+        shipped = (SHIPPED_PACKAGE / "inerter").resolve()
         used = Path(inerter.__file__).resolve().parent
-        if self.resources and shipped.is_dir() and used != shipped:
+        if used != shipped:
             self.log(f"this process had already imported the inerter package from {used}; the "
                      f"FMU runs with it, not with the copy shipped in {shipped}",
                      Fmi2Status.warning)

@@ -4,6 +4,7 @@ shows (a build followed by a run in one process would take a missing module from
 """
 from __future__ import annotations
 
+import io
 import json
 import os
 import subprocess
@@ -60,9 +61,16 @@ def imported_by_the_slave() -> set[str]:
     return found
 
 
-def test_the_fmu_carries_the_modules_the_slave_imports_and_no_other(fmu):
+def payload(fmu: Path) -> zipfile.ZipFile:
+    """The archive of the package's modules inside the FMU (inerter.fmu.build.write_payload)."""
     with zipfile.ZipFile(fmu) as z:
-        names = [n[len("resources/"):] for n in z.namelist() if n.startswith("resources/inerter/")]
+        assert not [n for n in z.namelist() if n.startswith("resources/inerter/")], \
+            "the package's modules are shipped one by one, not in the payload archive"
+        return zipfile.ZipFile(io.BytesIO(z.read(f"resources/{fmu_build.PAYLOAD_FILE}")))
+
+
+def test_the_fmu_carries_the_modules_the_slave_imports_and_no_other(fmu):
+    names = payload(fmu).namelist()
     assert all(n.endswith(".py") for n in names), names
     shipped = {_module(n) for n in names}
     # The kernels' sources, loaded from a copy of their file and listed by inerter.elements,
@@ -107,22 +115,28 @@ def test_the_fmu_runs_on_what_it_carries_in_a_process_without_the_repository(fmu
     outputs = [o["name"] for o in model.output_info()]
     job = dict(fmu=str(fmu), stop_time=RUN_TIME, output_interval=dt, rtol=RTOL, outputs=outputs)
     repository = str(Path(inerter.__file__).resolve().parents[1])
+    cache = tmp_path / "cache"
     proc = subprocess.run([sys.executable, "-I", "-c", RUN_SCRIPT, json.dumps(job),
                            str(tmp_path / "unzipped"), repository],
-                          cwd=tmp_path, env={"PATH": os.environ.get("PATH", "")},
+                          cwd=tmp_path, env={"PATH": os.environ.get("PATH", ""),
+                                             "INERTER_CACHE_DIR": str(cache)},
                           capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-3000:]
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     resources = Path(out["folder"]).resolve() / "resources"
+    # The payload is unpacked once, into the cache, in a folder named by the archive's hash.
+    unpacked = [p for p in (cache / "fmu-payload").iterdir()]
+    assert len(unpacked) == 1 and not unpacked[0].name.startswith("."), unpacked
     # The compiled engine imports its kernels from a copy of kernels.py in the kernel cache.
     kernels = [m for m in out["files"] if m.startswith("inerter_kernels_")]
     assert len(kernels) == 1 and "inerter.engine.compiled" in out["files"], sorted(out["files"])
-    with zipfile.ZipFile(fmu) as z:
-        assert Path(out["files"].pop(kernels[0])).read_bytes() == \
-            z.read("resources/inerter/engine/kernels.py")
+    assert Path(out["files"].pop(kernels[0])).read_bytes() == payload(fmu).read("inerter/engine/kernels.py")
+    shipped = {resources, unpacked[0].resolve()}
     outside = {m: f for m, f in out["files"].items()
-               if resources not in Path(f).resolve().parents}
+               if not shipped & set(Path(f).resolve().parents)}
     assert not outside, f"imported from outside the FMU: {outside}"
+    modules = {m for m, f in out["files"].items() if unpacked[0].resolve() in Path(f).resolve().parents}
+    assert "inerter.engine.compiled" in modules, sorted(out["files"])
     for compiled, result in out["results"].items():
         path = "compiled" if compiled == "True" else "numpy"
         ref = model.simulate(stop_time=RUN_TIME, output_interval=dt, rtol=RTOL, metrics=False,

@@ -22,7 +22,9 @@ from inerter.common.errors import SceneError
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements.device import EFFECT as DEVICE_EFFECT
 from inerter.elements.device import Device
-from inerter.scene.expressions import UnitError, ambiguous_units, evaluate, parameter_meta, read_parameters
+from inerter.scene import units
+from inerter.scene.expressions import (RESERVED_NAMES, UnitError, ambiguous_units, evaluate, output_expression,
+                                       parameter_meta, read_parameters)
 from inerter.scene.files import MAX_RECORD_BYTES, MAX_RECORD_SAMPLES, MAX_SCENE_BYTES, read_capped
 
 GROUND = "ground"
@@ -152,6 +154,16 @@ class Metric:
 
 
 @dataclass(frozen=True)
+class Derived:
+    """A derived output (``[outputs.derived]``): an expression over other outputs, evaluated at
+    every sample, in CSV, summary, Result and FMU like any output."""
+    name: str
+    expression: Any                  # its OutputExpression (inerter.scene.expressions)
+    unit: str                        # SI: inferred from the outputs it reads, or declared
+    description: str
+
+
+@dataclass(frozen=True)
 class Experiment:
     stop_time: float
     output_interval: float
@@ -181,6 +193,7 @@ class Scene:
     forces: dict[str, Force]
     experiment: Experiment
     metrics: tuple[Metric, ...]
+    derived: tuple[Derived, ...] = ()   # [outputs.derived], in their order (one may read those before it)
     euler_sequence: str = "zyx"   # 3D: the intrinsic sequence of the bodies' B.euler[i] outputs (yaw, pitch,
                                   # roll: singular at ±90° pitch, not at the reference pose as Z-X-Z is)
     raw: dict = field(repr=False, default_factory=dict)
@@ -337,7 +350,8 @@ def _check_name(reader: _Reader, name: str, fld: str):
 EXPERIMENT_FIELDS = ("stop_time", "output_interval", "method", "rtol", "atol", "constraint", "baumgarte",
                      "communication_step", "step", "max_steps")
 TOP_LEVEL = {"scene": False, "parameters": False, "effects": False, "ground": False, "bodies": False,
-             "joints": False, "elements": False, "forces": False, "experiment": False, "metrics": False}
+             "joints": False, "elements": False, "forces": False, "experiment": False, "metrics": False,
+             "outputs": False}
 
 
 def read_toml(path) -> tuple[str, dict]:
@@ -461,10 +475,12 @@ def _build_scene(source: str, data: dict, overrides: Mapping[str, Any], reading:
     forces = _read_forces(r, data.get("forces", {}), points, dimension)
     experiment = _read_experiment(r, data.get("experiment", {}), x_over)
     outputs = _signal_names(points, element_specs, dimension, bodies)
+    derived = _read_derived(r, data.get("outputs", {}), outputs)
+    outputs.update({d.name: d.unit for d in derived})
     metrics = _read_metrics(r, data.get("metrics", []), outputs)
     return Scene(source, name, description, dimension, orientation, parameters, effects, bodies, points, joints,
-                 element_specs, forces, experiment, metrics, euler_sequence=euler_sequence, raw=data,
-                 experiment_overrides=x_over)
+                 element_specs, forces, experiment, metrics, derived=derived, euler_sequence=euler_sequence,
+                 raw=data, experiment_overrides=x_over)
 
 
 def _read_effects(r: _Reader, raw, overrides, dimension, folder):
@@ -1012,6 +1028,58 @@ def _signal_names(points, element_specs, dimension, bodies=()) -> dict[str, str 
             names.update({f"{bname}.w[{i}]": "rad/s" for i in range(1, 4)})
     names.update({"energy": "J", "constraint_residual": None})
     return names
+
+
+def _read_derived(r: _Reader, raw, outputs) -> tuple[Derived, ...]:
+    """``[outputs.derived]``: ``NAME = "expression"`` or ``NAME = { expression, unit, description }``,
+    an expression over the outputs (those before it included) and parameters; its unit is the one
+    its outputs' units give it, or the declared one (SI), which must fit."""
+    r.table(raw, "outputs", {"derived": False})
+    table = raw.get("derived", {})
+    if not isinstance(table, dict):
+        raise r.error("outputs.derived", table, 'a table of NAME = "expression" entries', "not a table")
+    known, derived = dict(outputs), []
+    for name, spec in table.items():
+        fld = f"outputs.derived.{name}"
+        _check_name(r, name, fld)
+        if name in known or name in r.names or name in RESERVED_NAMES:
+            raise r.error(fld, name, "a name that is not already an output, a parameter, a function or a constant",
+                          "name clash")
+        text, declared, description = spec, None, None
+        if isinstance(spec, dict):
+            r.table(spec, fld, {"expression": True, "unit": False, "description": False})
+            text, declared = spec["expression"], spec.get("unit")
+            description = r.string(spec, "description", fld, default="") or None
+            fld_expr = f"{fld}.expression"
+        else:
+            fld_expr = fld
+        expression = output_expression(text, known, r.names, r.source, fld_expr, r.dims)
+        unit = _derived_unit(r, fld, declared, expression)
+        derived.append(Derived(name, expression, unit, description or f"derived output: {text}"))
+        known[name] = unit
+    return tuple(derived)
+
+
+def _derived_unit(r: _Reader, fld, declared, expression) -> str:
+    """A derived output's SI unit: the declared one (checked against the expression's dimension,
+    where that is known), or the one the dimension names."""
+    inferred = units.si_name(expression.dimension) if expression.dimension is not None else ""
+    if declared is None:
+        if not inferred:
+            raise r.error(fld, expression.text, "a table { expression = ..., unit = \"...\" } declaring its SI unit",
+                          "its unit cannot be inferred from the outputs it reads")
+        return inferred
+    try:
+        unit = units.parse(declared) if isinstance(declared, str) else None
+    except units.UnitSyntaxError:
+        unit = None
+    if unit is None or unit.factor != 1.0:
+        raise r.error(f"{fld}.unit", declared, "an SI unit (the outputs are in SI): m, N, N.m, m/s2, 1, ...",
+                      "not an SI unit")
+    if expression.dimension is not None and unit.dimension != expression.dimension:
+        raise r.error(f"{fld}.unit", declared, f"a unit of {units.describe_dimension(expression.dimension)}"
+                      f" ({inferred or 'the expression'}), as the outputs it reads give it", "the unit does not fit")
+    return declared
 
 
 def _read_metrics(r: _Reader, raw, signals):

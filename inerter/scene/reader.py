@@ -106,8 +106,8 @@ class Joint:
     axis: tuple[float, ...] | None = None   # the joint's axis in the frame of point_a's body (_AXIS_JOINTS)
     axis2: tuple[float, ...] | None = None  # universal: the second axis, fixed in point_b's body, given in
                                             # point_a's frame at the initial pose (perpendicular to axis)
-    stiffness: float = 0.0    # revolute: a rotational spring about the joint (N.m/rad) ...
-    damping: float = 0.0      # ... and damper (N.m.s/rad), as the elements JOINT_spring, JOINT_damper
+    stiffness: float = 0.0    # revolute: a rotational spring about the joint (N.m/rad), prismatic: a spring
+    damping: float = 0.0      # along its axis (N/m) ...; and damper (N.m.s/rad, N.s/m): JOINT_spring, JOINT_damper
 
 
 @dataclass(frozen=True)
@@ -122,6 +122,8 @@ class Element:
     free_length: float | None = None  # spring: L0 (None: the initial distance); rotational: free angle
     axis: tuple[float, ...] | None = None   # 3D rotational elements: axis in body a's frame
     device: Any = None         # an inerter's declared device (inerter.elements.device.Device), or None
+    slider_axis: tuple[float, ...] | None = None   # a prismatic joint's spring or damper: it acts along the
+                                                   # joint's axis (point_a's body frame), L the signed slide
 
 
 @dataclass(frozen=True)
@@ -772,7 +774,7 @@ def _read_joints(r: _Reader, raw, points, dimension):
             allowed["axis"] = True
         if jtype == "universal":
             allowed["axis2"] = True
-        if jtype == "revolute":
+        if jtype in _JOINT_SPRINGS:
             allowed.update(stiffness=False, damping=False)
         r.table(spec, fld, allowed)
         a, b = r.name_pair(spec, "between", fld, points, "point")
@@ -786,30 +788,45 @@ def _read_joints(r: _Reader, raw, points, dimension):
             if abs(sum(x * y for x, y in zip(axis, axis2))) > 1e-9:
                 raise r.error(f"{fld}.axis2", list(axis2), f"a unit vector perpendicular to axis = {list(axis)}",
                               "not perpendicular (a universal joint's two axes cross at a right angle)")
-        stiffness = r.number(spec, "stiffness", fld, default=0.0, minimum=0.0) if jtype == "revolute" else 0.0
-        damping = r.number(spec, "damping", fld, default=0.0, minimum=0.0) if jtype == "revolute" else 0.0
+        stiffness, damping = 0.0, 0.0
+        if jtype in _JOINT_SPRINGS:
+            (_, k_unit), (_, d_unit) = _JOINT_SPRINGS[jtype]
+            stiffness = r.number(spec, "stiffness", fld, default=0.0, minimum=0.0, unit=k_unit)
+            damping = r.number(spec, "damping", fld, default=0.0, minimum=0.0, unit=d_unit)
         joints[jname] = Joint(jname, jtype, a, b, axis, axis2, stiffness, damping)
     return joints
 
 
+#: Joints that may carry `stiffness` and `damping`: the elements they become, with the fields' units.
+_JOINT_SPRINGS = {"revolute": (("rotational_spring", "N.m/rad"), ("rotational_damper", "N.m.s/rad")),
+                  "prismatic": (("spring", "N/m"), ("damper", "N.s/m"))}
+
+
 def _joint_elements(r: _Reader, joints, points, elements_read, dimension):
-    """The rotational spring and damper a revolute joint declares with `stiffness` and `damping`
-    (a column base's spring without a separate element): elements named JOINT_spring and
-    JOINT_damper between the joint's two bodies, about its axis in 3D, the spring's free angle the
-    initial one."""
+    """The spring and damper a revolute or prismatic joint declares with `stiffness` and `damping`
+    (a column base's spring without a separate element), named JOINT_spring and JOINT_damper:
+    revolute, a rotational spring and damper between the joint's two bodies, about its axis in 3D;
+    prismatic, a spring and damper between its two points along its axis (fixed in the first
+    point's body), on the signed slide. The spring's free angle or slide is the initial one."""
     out = {}
     for j in joints.values():
-        for key, etype, coefficient in (("stiffness", "rotational_spring", j.stiffness),
-                                        ("damping", "rotational_damper", j.damping)):
+        if j.type not in _JOINT_SPRINGS:
+            continue
+        for key, (etype, _), coefficient in zip(("stiffness", "damping"), _JOINT_SPRINGS[j.type],
+                                                (j.stiffness, j.damping)):
             if not coefficient:
                 continue
-            ename = f"{j.name}_{etype.split('_')[1]}"
+            ename = f"{j.name}_{etype.split('_')[-1]}"
             if ename in elements_read or ename in points:
                 raise r.error(f"joints.{j.name}.{key}", coefficient,
                               f"no element or point named {ename!r} (the joint's {etype.replace('_', ' ')})",
                               "name clash")
-            out[ename] = Element(ename, etype, body_a=points[j.point_a].body, body_b=points[j.point_b].body,
-                                 coefficient=coefficient, axis=j.axis if dimension == 3 else None)
+            if j.type == "prismatic":
+                out[ename] = Element(ename, etype, point_a=j.point_a, point_b=j.point_b, coefficient=coefficient,
+                                     slider_axis=tuple(j.axis))
+            else:
+                out[ename] = Element(ename, etype, body_a=points[j.point_a].body, body_b=points[j.point_b].body,
+                                     coefficient=coefficient, axis=j.axis if dimension == 3 else None)
     return out
 
 

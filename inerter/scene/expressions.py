@@ -917,7 +917,9 @@ def _known_outputs(outputs) -> str:
 
 def _output_dimension(text, code, reads, outputs, names, dims, source, field):
     """The dimension of a derived output's value, from the units of the outputs and parameters it
-    reads (None where none is known, or no trial values give the expression a value)."""
+    reads: dimensionless where the expression makes a plain number of them (atan2, sin, a ratio);
+    None where it reads an output of no one unit and has no dimension from the others, or no trial
+    values give the expression a value."""
     with_units = dict(dims)
     for k, name in enumerate(reads):
         unit = outputs[name]
@@ -927,11 +929,14 @@ def _output_dimension(text, code, reads, outputs, names, dims, source, field):
         values = dict(names)
         values.update({_PLACEHOLDER.format(k): trial(k) for k in range(len(reads))})
         try:
-            return _value(tree, values, with_units)[1].dimension
+            dimension = _value(tree, values, with_units)[1].dimension
         except _UnitProblem as problem:
             raise UnitError(source, field, text, problem.expected, _named(problem.problem, reads)) from None
         except _Problem:          # no value at these trial values: try others
             continue
+        if dimension is None and all(outputs[name] for name in reads):
+            return units.DIMENSIONLESS       # a plain number of quantities of known units (an angle from atan2)
+        return dimension
     return None
 
 

@@ -190,3 +190,26 @@ def test_a_metric_may_name_a_derived_output_and_an_unknown_one_is_refused(tmp_pa
     path.write_text(SCENE.replace('signal = "radius"', 'signal = "radious"'))
     with pytest.raises(SceneError, match=r"metrics\[1\]\.signal: unknown signal .*radius"):
         inerter.load(path)
+
+
+@pytest.mark.parametrize("entry, unit", [
+    ('d = "inerter.f * inerter.v_rel"', "W"),                       # N · m/s
+    ('d = "atan2(P.r[2], P.r[1])"', "1"),                           # a plain number of lengths
+    ('d = "radius_sq / h"\nradius_sq = "P.r[1]^2"', None),         # (declared after: refused below)
+    ('d = "P.r[1]^2 / h"', "m"),
+    ('d = "2 * P.r[1]"', "m"),
+    ('d = { expression = "0.5 * 50 * spring.s_rel^2", unit = "J" }', "J"),   # 50 may be in N/m: declared
+    ('d = { expression = "P.r[1] * spring.f", unit = "N.m" }', "N.m"),
+])
+def test_the_unit_of_a_derived_output(tmp_path, entry, unit):
+    """Inferred from the units of what it reads (docs/scene_format.md), or declared where a plain
+    number may carry a unit the scene does not state."""
+    head, _ = SCENE.split("[outputs.derived]")
+    path = tmp_path / "units.toml"
+    path.write_text(head + "[outputs.derived]\n" + entry + "\n")
+    if unit is None:
+        with pytest.raises(SceneError, match="unknown name 'radius_sq'"):
+            inerter.load(path)
+        return
+    info = {o["name"]: o["unit"] for o in inerter.load(path).output_info()}
+    assert info["d"] == unit

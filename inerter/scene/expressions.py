@@ -853,12 +853,14 @@ _EXPECTED_OUTPUT_EXPRESSION = ('an expression over the scene\'s outputs and para
 class OutputExpression:
     """A derived output's expression, checked: `code` is `text` with the k-th output it reads,
     ``reads[k]``, written ``__output{k}``; `constants` the parameters it uses (name, SI value);
-    `dimension` the dimension of its value (None where it cannot be worked out)."""
+    `dimension` the dimension of its value (None where it cannot be worked out); `loose` where a
+    plain number multiplies a quantity in it (the number may carry a unit: :class:`Dim`)."""
     text: str
     code: str
     reads: tuple[str, ...]
     constants: tuple[tuple[str, float], ...]
     dimension: tuple | None
+    loose: bool = False
 
     def evaluate(self, values) -> np.ndarray:
         """The expression at each sample: `values[k]` the samples of ``reads[k]`` (arrays of one
@@ -905,8 +907,8 @@ def output_expression(text, outputs: Mapping[str, str | None], names: Mapping[st
     if not reads:
         raise SceneError(source, field, text, _EXPECTED_OUTPUT_EXPRESSION, "reads no output")
     constants = tuple((n, float(names[n])) for n in sorted(used) if n in names)
-    return OutputExpression(text, code, tuple(reads), constants,
-                            _output_dimension(text, code, reads, outputs, names, dims or {}, source, field))
+    dim = _output_dimension(text, code, reads, outputs, names, dims or {}, source, field)
+    return OutputExpression(text, code, tuple(reads), constants, dim.dimension, dim.loose)
 
 
 def _known_outputs(outputs) -> str:
@@ -916,9 +918,9 @@ def _known_outputs(outputs) -> str:
 
 
 def _output_dimension(text, code, reads, outputs, names, dims, source, field):
-    """The dimension of a derived output's value, from the units of the outputs and parameters it
-    reads: dimensionless where the expression makes a plain number of them (atan2, sin, a ratio);
-    None where it reads an output of no one unit and has no dimension from the others, or no trial
+    """The Dim of a derived output's value, from the units of the outputs and parameters it reads:
+    dimensionless where the expression makes a plain number of them (atan2, sin, a ratio); None
+    where it reads an output of no one unit and has no dimension from the others, or no trial
     values give the expression a value."""
     with_units = dict(dims)
     for k, name in enumerate(reads):
@@ -929,15 +931,15 @@ def _output_dimension(text, code, reads, outputs, names, dims, source, field):
         values = dict(names)
         values.update({_PLACEHOLDER.format(k): trial(k) for k in range(len(reads))})
         try:
-            dimension = _value(tree, values, with_units)[1].dimension
+            dim = _value(tree, values, with_units)[1]
         except _UnitProblem as problem:
             raise UnitError(source, field, text, problem.expected, _named(problem.problem, reads)) from None
         except _Problem:          # no value at these trial values: try others
             continue
-        if dimension is None and all(outputs[name] for name in reads):
-            return units.DIMENSIONLESS       # a plain number of quantities of known units (an angle from atan2)
-        return dimension
-    return None
+        if dim.dimension is None and all(outputs[name] for name in reads):
+            return Dim(units.DIMENSIONLESS, dim.loose)   # a plain number of quantities of known units (atan2)
+        return dim
+    return PLAIN
 
 
 def _named(problem: str, reads) -> str:

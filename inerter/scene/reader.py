@@ -1071,16 +1071,22 @@ def _read_derived(r: _Reader, raw, outputs) -> tuple[Derived, ...]:
         else:
             fld_expr = fld
         expression = output_expression(text, known, r.names, r.source, fld_expr, r.dims)
-        unit = _derived_unit(r, fld, declared, expression)
+        unit = _derived_unit(r, fld, declared, expression, known)
         derived.append(Derived(name, expression, unit, description or f"derived output: {text}"))
         known[name] = unit
     return tuple(derived)
 
 
-def _derived_unit(r: _Reader, fld, declared, expression) -> str:
+def _derived_unit(r: _Reader, fld, declared, expression, outputs) -> str:
     """A derived output's SI unit: the declared one (checked against the expression's dimension,
-    where that is known), or the one the dimension names."""
-    inferred = units.si_name(expression.dimension) if expression.dimension is not None else ""
+    where that is known and no plain number multiplies a quantity in it: ``0.5*50*x^2`` may be an
+    energy), or the unit of an output it reads of that dimension (rad for a difference of angles),
+    or the one the dimension names."""
+    inferred = ""
+    if expression.dimension is not None:
+        inferred = next((outputs[x] for x in expression.reads
+                         if outputs[x] and units.dimension_of(outputs[x]) == expression.dimension),
+                        units.si_name(expression.dimension))
     if declared is None:
         if not inferred:
             raise r.error(fld, expression.text, "a table { expression = ..., unit = \"...\" } declaring its SI unit",
@@ -1093,7 +1099,7 @@ def _derived_unit(r: _Reader, fld, declared, expression) -> str:
     if unit is None or unit.factor != 1.0:
         raise r.error(f"{fld}.unit", declared, "an SI unit (the outputs are in SI): m, N, N.m, m/s2, 1, ...",
                       "not an SI unit")
-    if expression.dimension is not None and unit.dimension != expression.dimension:
+    if expression.dimension is not None and not expression.loose and unit.dimension != expression.dimension:
         raise r.error(f"{fld}.unit", declared, f"a unit of {units.describe_dimension(expression.dimension)}"
                       f" ({inferred or 'the expression'}), as the outputs it reads give it", "the unit does not fit")
     return declared

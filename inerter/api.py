@@ -24,7 +24,7 @@ from inerter.engine.simulation import Settings, Stepper, integrate
 ORACLE_RTOL = 1e-12
 ORACLE_ATOL = 1e-14
 #: Kinds of [[metrics]] that read their signal between the samples (through ``Result.dense``).
-DENSE_METRICS = ("free_oscillation", "harmonics", "steady_state")
+DENSE_METRICS = ("free_oscillation", "harmonics", "steady_state", "peak")
 
 
 def load(path, **overrides) -> "Model":
@@ -254,6 +254,8 @@ class Result:
     def _column(self, name) -> np.ndarray:
         """One output at every sample: in the kernels on a compiled run, up to a sample where it
         cannot be evaluated, from which the numpy path's signals give the values or the message."""
+        if self.model.signals.is_derived(name):
+            return self._derived_column(name)
         kernel = self._kernel
         index = kernel.signal_index(name) if kernel is not None else None
         if index is None:
@@ -271,6 +273,16 @@ class Result:
                     self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
                     break
             values = np.array(values, dtype=float)
+        self._columns[name] = values
+        return values
+
+    def _derived_column(self, name) -> np.ndarray:
+        """A derived output at every sample, from the columns of the outputs it reads (the values the
+        CSV's row-wise evaluation gives: the same expression on the same numbers)."""
+        signals = self.model.signals
+        reads = {x: self[x] for x in signals.derived_reads(name)}
+        k = len(self.time)                # reading one may have ended the result before a sample
+        values = np.array(signals.derive(name, {x: column[:k] for x, column in reads.items()}), dtype=float)
         self._columns[name] = values
         return values
 
@@ -303,6 +315,11 @@ class Result:
         output and the numpy signals. Where the run kept none (RK4, whose fixed steps give no
         polynomial, or a run without metrics): a cubic spline through the samples."""
         self._check_name(name)
+        signals = self.model.signals
+        if signals.is_derived(name):
+            # the expression on the dense values of the outputs it reads, not a spline through its samples
+            reads = {x: self.dense(x) for x in signals.derived_reads(name)}
+            return lambda t: np.array(signals.derive(name, {x: f(t) for x, f in reads.items()}), dtype=float)
         sol = self.run.dense
         if sol is None:
             return sample_spline(self.time, self[name])

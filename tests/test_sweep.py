@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 
 import inerter
+from inerter.common.errors import SceneError
 from conftest import LUMPED, ROOT
 from inerter.studies import sweep as sw
 from inerter.studies.builtin import STUDIES, make_sweep, study_table
@@ -99,6 +100,33 @@ def test_bad_arguments_are_errors_of_the_whole_sweep(tmp_path, capsys):
     assert not Path(out).exists()
 
 
+@pytest.mark.parametrize("vary, field", [("y0=1.2,abc", "parameters.y0"), ("b=-1,10", "elements.inerter.b"),
+                                         ("experiment.stop_time=-1:1:3", "experiment.stop_time"),
+                                         ("effects.centripetal=true,maybe", "effects.centripetal")])
+def test_a_value_the_scene_refuses_stops_the_sweep_before_any_worker(tmp_path, monkeypatch, capsys, vary, field):
+    """Each varied value goes through the scene's validator first: the sweep stops with the error
+    that validator gives for it (after the option that gave it), one line, exit 2, before any
+    worker (or dask client) starts and before the output folder is made."""
+    monkeypatch.setattr(sw, "run_sweep", lambda *a, **k: pytest.fail("the sweep started"))
+    out = tmp_path / "never"
+    assert main_sweep([str(LUMPED), "--vary", vary, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    name, values = parse_vary(vary)
+    bad = next(v for v in values if _refused(name, v))
+    with pytest.raises(SceneError) as scene_error:
+        inerter.load(LUMPED.resolve(), **{name: bad})
+    assert err == f"inerter: error: --vary {name}: {scene_error.value}\n"
+    assert f": {field}:" in err and not out.exists()
+
+
+def _refused(name, value) -> bool:
+    try:
+        inerter.load(LUMPED.resolve(), **{name: value})
+    except SceneError:
+        return True
+    return False
+
+
 def test_results_file_appends_repairs_and_extends(tmp_path):
     path = tmp_path / "results.csv"
     f = ResultsFile(path).open(["b"], ["m1"])
@@ -164,29 +192,31 @@ def test_a_sweep_on_the_compiled_path_equals_the_compiled_runs_one_by_one(tmp_pa
 
 
 def test_a_failing_run_is_recorded_and_the_others_complete(tmp_path, address, capsys):
+    """y0 = 0 with La = 0 puts the mass on O: the scene file reads (so the sweep starts), the model
+    refuses it on the worker (coincident terminals at t = 0); with y0 = 1.5 the mass slides along
+    the spring's line: a linear oscillator about its free length Lb, so no mean offset."""
     out = tmp_path / "fail"
-    code = main_sweep([str(LUMPED), "--vary", "b=-1,10", "--vary", "experiment.max_steps=20,1000000", *FAST,
-                       "--scheduler", address, "--out", str(out), "--no-progress"])
+    argv = [str(LUMPED), "--vary", "y0=0,1.5", "--vary", "experiment.max_steps=20,1000000", "--set", "La=0",
+            *FAST, "--scheduler", address, "--out", str(out), "--no-progress"]
+    code = main_sweep(argv)
     assert code == 3                                              # as `inerter run` for a failed run
-    rows = {(r["b"], r["experiment.max_steps"]): r for r in rows_of(out / "results.csv")}
+    rows = {(r["y0"], r["experiment.max_steps"]): r for r in rows_of(out / "results.csv")}
     assert len(rows) == 4
     for steps in ("20", "1000000"):                               # a SceneError for that combination
-        bad = rows[("-1", steps)]
+        bad = rows[("0", steps)]
         assert bad["status"] == "failed" and bad["fundamental_frequency"] == ""
-        assert "elements.inerter.b" in bad["error"] and "got -1" in bad["error"]
-    partway = rows[("10", "20")]                                  # status "failed" from the solver
+        assert "elements.spring.between" in bad["error"] and "coincident terminals" in bad["error"]
+    partway = rows[("1.5", "20")]                                 # status "failed" from the solver
     assert partway["status"] == "failed" and "max_steps = 20" in partway["error"]
-    assert rows[("10", "1000000")]["status"] == "ok" and float(rows[("10", "1000000")]["mean_offset"]) < 0
+    assert rows[("1.5", "1000000")]["status"] == "ok" and abs(float(rows[("1.5", "1000000")]["mean_offset"])) < 1e-6
     printed = capsys.readouterr().out
-    assert "4 run now (3 failed)" in printed and "failed: b = -1" in printed
+    assert "4 run now (3 failed)" in printed and "failed: y0 = 0" in printed
     # started again: nothing to run, the failures are kept (and the exit code says so)
-    assert main_sweep([str(LUMPED), "--vary", "b=-1,10", "--vary", "experiment.max_steps=20,1000000", *FAST,
-                       "--scheduler", address, "--out", str(out), "--no-progress"]) == 3
+    assert main_sweep(argv) == 3
     assert "0 run now" in capsys.readouterr().out and len(rows_of(out / "results.csv")) == 4
     # --retry-failed runs the failed keys again and keeps one row per key
-    ok_row = rows[("10", "1000000")]
-    assert main_sweep([str(LUMPED), "--vary", "b=-1,10", "--vary", "experiment.max_steps=20,1000000", *FAST,
-                       "--scheduler", address, "--out", str(out), "--no-progress", "--retry-failed"]) == 3
+    ok_row = rows[("1.5", "1000000")]
+    assert main_sweep(argv + ["--retry-failed"]) == 3
     assert "3 run now (3 failed), 1 already in" in capsys.readouterr().out
     again = rows_of(out / "results.csv")
     assert len(again) == 4 and again[0] == ok_row and len({r["key"] for r in again}) == 4

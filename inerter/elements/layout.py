@@ -34,8 +34,11 @@ FLUID_LINEAR = 17        # its linear damping c_1 (N.s/m)
 FLUID_QUADRATIC = 18     # its quadratic damping c_2 (N.s²/m²)
 FIXED_DIRECTION = 19     # 1.0: the element acts along DIRECTION, its initial one (the small-displacement
                          # law of structural codes), not along the current r̂
-DIRECTION = 20           # that direction, a unit vector in the global frame (3 columns; z = 0 in 2D)
-ELEMENT_REAL_COLUMNS = 23
+DIRECTION = 20           # that direction, a unit vector in the global frame (3 columns; z = 0 in 2D); under
+                         # SLIDER, the joint's axis in the frame of terminal a's body
+SLIDER = 23              # 1.0: a prismatic joint's spring or damper: it acts along the joint's axis, fixed in
+                         # terminal a's body (DIRECTION), and L is the signed slide ê·(r_b − r_a)
+ELEMENT_REAL_COLUMNS = 24
 
 # -- rot_int: a rotational element's integers
 ROT_KIND = 0             # its code: its place in inerter.elements.KINDS

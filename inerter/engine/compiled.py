@@ -609,12 +609,13 @@ class Kernel:
         return out[:k], int(k)
 
     def signal_order(self, signals):
-        """Indices taking the kernel's signal layout to the order of `signals.names` (None when the
-        two do not hold the same signals)."""
+        """Indices taking the kernel's signal layout to the order of `signals.names` before the
+        derived outputs (None when the two do not hold the same signals)."""
         layout = {name: i for i, name in enumerate(signal_layout(self.flat))}
-        if sorted(layout) != sorted(signals.names):
+        base = signals.names[:signals.base_count]          # the derived outputs come from these
+        if sorted(layout) != sorted(base):
             return None
-        return np.array([layout[name] for name in signals.names], dtype=np.int64)
+        return np.array([layout[name] for name in base], dtype=np.int64)
 
     def signal_values(self, signals, order, t, q, v, inputs=None, alpha=0.0) -> np.ndarray:
         """Every signal of `signals` at one state (as ``Signals.evaluate``), in compiled code."""
@@ -629,7 +630,7 @@ class Kernel:
                 return signals.evaluate(t, q, v, inputs, alpha)     # raises the numpy path's message
         if _k.signal_values(q, v, acc, self.params, raw):
             return signals.evaluate(t, q, v, inputs, alpha)
-        return raw[order]
+        return signals.complete(raw[order])
 
     def signal_history(self, signals, order, times, states, inputs=None, alpha=0.0):
         """(values, k): every signal at each sample of a history, up to the first sample k where one
@@ -638,7 +639,7 @@ class Kernel:
         raw = np.empty((len(states), len(order)))
         st, k = _k.signal_history(np.ascontiguousarray(times, dtype=float), states, self._inputs(inputs),
                                   float(alpha), bool(signals.needs_accelerations), self.params, raw)
-        return raw[:k][:, order], int(k)
+        return signals.complete(raw[:k][:, order]), int(k)
 
     def point_positions(self, states) -> dict:
         """Global positions (time × dimension) of every named point along a state history (rows
@@ -1016,7 +1017,7 @@ class CompiledStepper(Stepper):
         self.time = t_end
         self.h = float(hdr[_k.RK_H])
         self.steps += int(hdr[_k.RK_TOTAL] - total_before)
-        self._values = None if signal_status or self._order is None else values.tolist()
+        self._values = None if signal_status or self._order is None else self.signals.complete(values).tolist()
 
     def _step_rk4(self, t_end):
         """RK4 from the communication point, its last step shortened to land on t_end; a jump
@@ -1060,8 +1061,8 @@ class CompiledStepper(Stepper):
         equal); None where the next step must be taken here: no running integration (DOP853, RK45:
         before the first step, after a failed one), an input changed, outputs the kernels do not
         evaluate. Valid until the next call of :meth:`step` or :meth:`set_state`."""
-        if self._order is None or self._input_moved:
-            return None
+        if self._order is None or self._input_moved or self.signals.derived:
+            return None                       # (the derived outputs are evaluated here, not in the kernels)
         if self.settings.method == "RK4":
             native = self._native
             if native is None:

@@ -27,7 +27,7 @@ from inerter.elements.base import axial_scalars
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, F_AMPLITUDE, F_FREQUENCY, F_INITIAL, F_OFFSET,
                                      F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, KIND, MEET_LIMIT,
                                      PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B, REL0, ROT_KIND, FIXED_DIRECTION,
-                                     DIRECTION)
+                                     DIRECTION, SLIDER)
 
 # Joint kinds.
 REVOLUTE, PRISMATIC = 0, 1
@@ -124,11 +124,20 @@ def _element(q, v, e, el_int, el_real, pbody, ploc):
     direction it acts along (:func:`_direction`), whether the terminals meet); L is held at
     MIN_LENGTH where they do."""
     ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, v, el_int, e, pbody, ploc)
+    row = el_real[e]
+    if row[SLIDER] != 0.0:
+        # along a prismatic joint's axis ê = A_a n̄ (fixed in a's body); L = ê·r, the signed slide
+        ex, ey = row[DIRECTION], row[DIRECTION + 1]
+        if ba >= 0:
+            c = math.cos(q[3 * ba + 2])
+            s = math.sin(q[3 * ba + 2])
+            ex, ey = c * ex - s * ey, s * ex + c * ey
+        return el_int[e, KIND], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, ex * rx + ey * ry, ex, ey, False
     L = math.hypot(rx, ry)
     meets = not L > MIN_LENGTH
     if meets:
         L = MIN_LENGTH
-    ex, ey, _ = _direction(el_real[e], rx / L, ry / L, 0.0)
+    ex, ey, _ = _direction(row, rx / L, ry / L, 0.0)
     return el_int[e, KIND], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets
 
 
@@ -928,11 +937,18 @@ def _element3(q, v, e, el_int, el_real, pbody, ploc, ga, gb):
     pa = el_int[e, POINT_A]
     pb = el_int[e, POINT_B]
     ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
-    L = math.sqrt(rx * rx + ry * ry + rz * rz)
-    meets = not L > MIN_LENGTH
-    if meets:
-        L = MIN_LENGTH
-    ex, ey, ez = _direction(el_real[e], rx / L, ry / L, rz / L)
+    row = el_real[e]
+    if row[SLIDER] != 0.0:
+        # along a prismatic joint's axis ê = A_a n̄ (fixed in a's body); L = ê·r, the signed slide
+        ex, ey, ez = _mul(Aa, row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2])
+        L = ex * rx + ey * ry + ez * rz
+        meets = False
+    else:
+        L = math.sqrt(rx * rx + ry * ry + rz * rz)
+        meets = not L > MIN_LENGTH
+        if meets:
+            L = MIN_LENGTH
+        ex, ey, ez = _direction(row, rx / L, ry / L, rz / L)
     # g = Hᵀ r̂ = [−r̂, −ū_a × (A_aᵀ r̂), r̂, ū_b × (A_bᵀ r̂)] (H = [−H_a, H_b], Eq. 18)
     wx, wy, wz = _wcol(Aa, ploc[pa, 0], ploc[pa, 1], ploc[pa, 2], ex, ey, ez)
     ga[0] = -ex

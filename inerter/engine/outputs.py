@@ -7,7 +7,8 @@ device adds ``E.w_flywheel`` (rad/s), ``E.f_friction``, ``E.f_fluid``, ``E.f_sto
 elements: ``E.phi_rel`` (rad), ``E.w_rel`` (rad/s), ``E.tau`` (N.m). 3D bodies: ``B.q[i]`` (unit
 quaternion w, x, y, z), ``B.euler[i]`` (rad, the scene's ``euler_sequence``), ``B.w[i]`` (rad/s,
 angular velocity in the global frame). Mechanism: ``energy`` (J), ``constraint_residual`` (largest
-|C_i| of the joint constraints, m or rad).
+|C_i| of the joint constraints, m or rad). Derived outputs (the scene's ``[outputs.derived]``):
+expressions over the others, evaluated from their values (:meth:`Signals.complete`), after them.
 """
 from __future__ import annotations
 
@@ -50,8 +51,18 @@ class Signals:
                     lambda t, q, v, a: (mech.energy(q, v),))
         self._group([("constraint_residual", "m", "largest |C_i(q)| of the joint constraints (m or rad)")], False,
                     lambda t, q, v, a: (mech.constraint_residual(q),))
-        self.index = {n: i for i, n in enumerate(self.names)}
         self.needs_accelerations = any(needs_a for needs_a, _ in self._groups)
+        #: the signals before the derived outputs: those the groups (and the kernels) evaluate
+        self.base_count = len(self.names)
+        self.derived = tuple(mech.scene.derived)
+        self._derived = {d.name: d for d in self.derived}
+        for d in self.derived:
+            # it reads q̈ (and then depends on the inputs at the same instant) where an output it reads does
+            self._reads[d.name] = any(self._reads[x] for x in d.expression.reads)
+            self.names.append(d.name)
+            self.units.append(d.unit)
+            self.descriptions.append(d.description)
+        self.index = {n: i for i, n in enumerate(self.names)}
 
     def _body(self, mech, bname):
         """A 3D body's orientation (unit quaternion, Euler angles) and global angular velocity."""
@@ -107,10 +118,42 @@ class Signals:
         out = []
         for _, fn in self._groups:
             out.extend(fn(t, q, v, a))
-        return np.array(out, dtype=float)
+        return self.complete(np.array(out, dtype=float))
+
+    def is_derived(self, name) -> bool:
+        return name in self._derived
+
+    def derived_reads(self, name) -> tuple[str, ...]:
+        """The outputs derived output `name` reads."""
+        return self._derived[name].expression.reads
+
+    def complete(self, base) -> np.ndarray:
+        """Every signal from the values of the first `base_count` (the last axis of `base`: one
+        state, or a history's samples × signals): the derived outputs appended, each evaluated
+        element by element from the values of the outputs it reads (:meth:`derive`)."""
+        base = np.asarray(base, dtype=float)
+        if not self.derived:
+            return base
+        columns = {n: base[..., i] for i, n in enumerate(self.names[:self.base_count])}
+        for d in self.derived:
+            columns[d.name] = self.derive(d.name, columns)
+        return np.concatenate((base, np.stack([columns[d.name] for d in self.derived], axis=-1)), axis=-1)
+
+    def derive(self, name, columns) -> np.ndarray:
+        """Derived output `name` from `columns`, the values of the outputs it reads by name (arrays
+        of one shape, or floats)."""
+        expression = self._derived[name].expression
+        values = [np.asarray(columns[x], dtype=float) for x in expression.reads]
+        return np.broadcast_to(expression.evaluate(values), np.broadcast_shapes(*(v.shape for v in values)))
 
     def function(self, name):
         """f(t, q, v, inputs) → value of one signal."""
+        if name in self._derived:
+            reads = {x: self.function(x) for x in self._derived[name].expression.reads}
+
+            def derived(t, q, v, inputs=None, alpha=0.0):
+                return float(self.derive(name, {x: f(t, q, v, inputs, alpha) for x, f in reads.items()}))
+            return derived
         g, k = self._where[name]
         needs_a, fn = self._groups[g]
         mech = self.mech

@@ -47,6 +47,9 @@ def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
     if getattr(e, "device", None) is not None:
         for column, value in e.device.columns().items():          # DEVICE ... FLUID_QUADRATIC
             row_real[column] = float(value)
+    if e.slider_axis is not None:                                 # a prismatic joint's spring or damper
+        row_real[layout.SLIDER] = 1.0
+        row_real[layout.DIRECTION:layout.DIRECTION + len(e.slider_axis)] = [float(x) for x in e.slider_axis]
     return tuple(row_int), tuple(row_real)
 
 
@@ -77,6 +80,9 @@ def meet_limits(mech, specs) -> dict[str, float]:
     seen, limits = set(), {}
     for e in specs:
         if not elements.translational(e.type):
+            continue
+        if e.slider_axis is not None:           # along a joint's axis: its L is the slide, it has no direction to lose
+            limits[e.name] = 0.0
             continue
         pair = frozenset((e.point_a, e.point_b))
         limits[e.name] = 0.0 if pair in seen else float(mech.meet_limit[e.name])

@@ -25,12 +25,24 @@ from inerter.model.planar import PointPair
 axial_scalars = _compiled_axial_scalars.py_func     # the kernels' definition, run uncompiled
 
 
+def slider_direction(point, axis, q) -> np.ndarray:
+    """A prismatic joint's axis in the global frame, ê = A n̄, n̄ fixed in the body of `point` (the
+    joint's first point; the ground's axis is global): 2D A(θ), 3D the body's rotation matrix."""
+    if point.body < 0:
+        return axis
+    if len(axis) == 2:
+        c, s = math.cos(q[point.qi + 2]), math.sin(q[point.qi + 2])
+        return np.array((c * axis[0] - s * axis[1], s * axis[0] + c * axis[1]))
+    o = point.orientation
+    return point.cache.matrix(o, q[point.qi + 3:point.qi + 3 + o.size]) @ axis
+
+
 class TranslationalElement:
     """A two-terminal uniaxial element between points a and b, of any translational kind."""
 
     def __init__(self, name: str, kind: str, pair: PointPair, coefficient: float, labels: tuple[str, str],
                  free_length: float | None = None, centripetal: bool = True, device=None,
-                 fixed_direction=None):
+                 fixed_direction=None, slider_axis=None):
         self.name = name
         self.kind = kind
         self.pair = pair
@@ -55,6 +67,11 @@ class TranslationalElement:
             row[layout.CENTRIPETAL] = 0.0
             row[layout.FIXED_DIRECTION] = 1.0
             row[layout.DIRECTION:layout.DIRECTION + len(self.fixed_direction)] = self.fixed_direction
+        #: A prismatic joint's spring or damper: along the joint's axis, fixed in a's body; L the signed slide.
+        self.slider_axis = None if slider_axis is None else np.asarray(slider_axis, dtype=float)
+        if self.slider_axis is not None:
+            row[layout.SLIDER] = 1.0
+            row[layout.DIRECTION:layout.DIRECTION + len(self.slider_axis)] = self.slider_axis
         self.row = row
         self.inertance = self._inertance(row)
         # the kind's outputs beyond s_rel, v_rel, f (a device's), by its law extra_outputs
@@ -64,6 +81,9 @@ class TranslationalElement:
 
     def geometry(self, q, v):
         r, rdot, a_n, H = self.pair.evaluate(q, v)
+        if self.slider_axis is not None:
+            axis = slider_direction(self.pair.a, self.slider_axis, q)
+            return r, rdot, a_n, H, float(r @ axis), axis
         length = math.sqrt(float(r @ r))
         if not length > MIN_LENGTH:
             raise TerminalsMeet(

@@ -109,7 +109,10 @@ class Mechanism:
         groups = {}
         for spec, e in zip(scene.elements.values(), self.elements):
             fixed = getattr(e, "fixed_direction", None) is not None
-            key = (spec.point_a, spec.point_b, fixed) if spec.point_a else ("rotational", spec.name)
+            if spec.slider_axis is not None:        # along a joint's axis: geometry of its own, no meeting
+                key = (None, spec.name)
+            else:
+                key = (spec.point_a, spec.point_b, fixed) if spec.point_a else ("rotational", spec.name)
             groups.setdefault(key, []).append(e)
         self.groups = list(groups.values())
         self._forces(scene)
@@ -197,7 +200,7 @@ class Mechanism:
         self.meet_limit = {}
         checked = {}
         for spec, group in zip(groups, self.groups):
-            if not elements.translational(group[0].kind):
+            if not elements.translational(group[0].kind) or spec[0] is None:
                 continue
             terminals = spec[:2]
             if terminals in checked:              # the same terminals, in a group of its own
@@ -247,7 +250,11 @@ class Mechanism:
             return el.RotationalElement(e.name, e.type, ia, ib, e.coefficient, phi0)
         pair = self.pair(e.point_a, e.point_b)
         labels = (e.point_a, e.point_b)
-        L_initial = self._initial_length(e, pair, q0)
+        if e.slider_axis is not None:       # a prismatic joint's: L is the slide, its free value the initial one
+            r0 = pair.evaluate(q0, np.zeros(self.n))[0]
+            L_initial = float(r0 @ el.slider_direction(pair.a, np.asarray(e.slider_axis, dtype=float), q0))
+        else:
+            L_initial = self._initial_length(e, pair, q0)
         free = (e.free_length if e.free_length is not None else L_initial) if has_free else None
         if self.element_factory is not None:
             return self.element_factory(e, pair, self.scene.centripetal, free, labels, self)
@@ -256,7 +263,7 @@ class Mechanism:
             r0 = pair.evaluate(q0, np.zeros(self.n))[0]
             fixed = r0 / L_initial
         return el.TranslationalElement(e.name, e.type, pair, e.coefficient, labels, free, self.scene.centripetal,
-                                       device=e.device, fixed_direction=fixed)
+                                       device=e.device, fixed_direction=fixed, slider_axis=e.slider_axis)
 
     def _initial_length(self, e, pair, q0):
         r, _, _, _ = pair.evaluate(q0, np.zeros(self.n))

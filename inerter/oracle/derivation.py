@@ -181,12 +181,23 @@ def _seed(q, v, qi, vi, dim, n, k):
     return jets
 
 
+class _BodyPoint:
+    """A point of a body given by its body-frame coordinates (what :func:`point_position` reads)."""
+
+    def __init__(self, body, qi, local):
+        self.body, self.qi, self.local = body, qi, local
+
+
 class DistanceProbe:
     """L(q) between two points, with ∇L, L̇, q̇ᵀ∇²Lq̇ and the terminal velocity ṙ, by Jets."""
 
-    def __init__(self, pair, labels, name, mech, direction=None):
+    def __init__(self, pair, labels, name, mech, direction=None, slider_axis=None):
         self.pair = pair
         self.direction = direction          # ê0: evaluate s = ê0·r instead of L (small-displacement law)
+        # a prismatic joint's spring or damper: s = ê(q)·r with ê = A_a n̄, the joint's axis in a's body,
+        # written as the difference of two points of a's body (n̄ apart), so that it is differentiated too
+        self.axis_end = None if slider_axis is None else _BodyPoint(
+            pair.a.body, pair.a.qi, np.asarray(pair.a.local, dtype=float) + np.asarray(slider_axis, dtype=float))
         self.dofs = pair.dofs
         self.labels = labels
         self.name = name
@@ -209,6 +220,13 @@ class DistanceProbe:
         rb = point_position(self.pair.b, coords.get(self.pair.b.body))
         r = [b - a for a, b in zip(ra, rb)]
         r = [c if isinstance(c, Jet) else Jet.constant(c, n) for c in r]
+        rdot = np.array([c.d1 for c in r])                      # ṙ = J_r q̇
+        if self.axis_end is not None:
+            tip = point_position(self.axis_end, coords.get(self.pair.a.body))
+            s = Jet.constant(0.0, n)
+            for c, a, t in zip(r, ra, tip):
+                s = s + c * (t - a)
+            return s, rdot
         L2 = r[0] * r[0]
         for c in r[1:]:
             L2 = L2 + c * c
@@ -216,7 +234,6 @@ class DistanceProbe:
             raise TerminalsMeet(
                 f"element '{self.name}': its terminals {self.labels[0]} and {self.labels[1]} meet "
                 f"(distance {math.sqrt(L2.v):.3g} m < {MIN_LENGTH:g} m), so its direction is undefined")
-        rdot = np.array([c.d1 for c in r])                      # ṙ = J_r q̇
         if self.direction is not None:
             s = r[0] * float(self.direction[0])
             for c, e in zip(r[1:], self.direction[1:]):
@@ -451,7 +468,7 @@ class OracleElement:
             direction = r0 / np.linalg.norm(r0)
             self.centripetal = True                     # F = b s̈ as it is: no |ṙ⊥|²/L to remove
         self.fixed_direction = direction
-        self.probe = DistanceProbe(pair, labels, spec.name, mech, direction)
+        self.probe = DistanceProbe(pair, labels, spec.name, mech, direction, getattr(spec, "slider_axis", None))
         self.pair = pair
 
     def _force_parts(self, L, rdot):
@@ -486,7 +503,7 @@ class OracleElement:
     def outputs(self, q, v, a):
         L, rdot = self.probe.evaluate(q, v)
         mass, rest = self._force_parts(L, rdot)
-        F = rest + mass * float(L.g @ a[self.probe.dofs])
+        F = rest + (mass * float(L.g @ a[self.probe.dofs]) if mass else 0.0)   # (no q̈ where no inerter)
         distance = L.v if self.fixed_direction is None else self.probe.distance(q)
         if self.device is None:
             return distance, L.d1, F

@@ -40,10 +40,13 @@ import functools
 import keyword
 import math
 import numbers
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
 from fractions import Fraction
+
+import numpy as np
 
 from inerter.common.errors import SceneError
 from inerter.scene import units
@@ -299,6 +302,35 @@ _BINARY_OPERATORS: dict[type, Callable[[float, float], float]] = {
 }
 
 
+def _reduce(fn):
+    return lambda *args: functools.reduce(fn, args)
+
+
+class _Ops(NamedTuple):
+    """The arithmetic an expression tree is evaluated with (:func:`_value`): a name's value as a
+    number, the binary operators, the functions, and which results are accepted."""
+    number: Callable
+    binary: Mapping
+    functions: Mapping
+    finite: Callable
+
+
+#: Floats: every problem (a division by zero, a value out of a function's domain) is an error.
+_SCALAR = _Ops(float, _BINARY_OPERATORS, {name: f for name, (f, _, _) in FUNCTIONS.items()}, math.isfinite)
+#: Arrays of samples (a derived output over the time history), numpy's element-wise functions
+#: standing for the math module's: a sample where the expression has no value is NaN (or ±inf),
+#: not an error, so that the other samples keep theirs.
+_ARRAYS = _Ops(
+    lambda x: np.asarray(x, dtype=float),
+    {ast.Add: np.add, ast.Sub: np.subtract, ast.Mult: np.multiply, ast.Div: np.divide, ast.Pow: np.power,
+     ast.BitXor: np.power},
+    {"sqrt": np.sqrt, "sin": np.sin, "cos": np.cos, "tan": np.tan, "asin": np.arcsin, "acos": np.arccos,
+     "atan": np.arctan, "atan2": np.arctan2, "exp": np.exp, "log": np.log, "log10": np.log10, "abs": np.abs,
+     "min": _reduce(np.minimum), "max": _reduce(np.maximum), "hypot": _reduce(np.hypot),
+     "deg2rad": np.radians, "rad": np.radians},
+    lambda x: True)
+
+
 def _known_names(names) -> str:
     """The "expected" text of an unknown-name message."""
     known = sorted(names)
@@ -357,8 +389,11 @@ def _product(a: Dim, b: Dim, sign: int) -> Dim:
     return Dim(tuple(x + sign * y for x, y in zip(base, b.dimension)), a.loose or b.loose or a.dimension is None)
 
 
-def _value(node: ast.expr, names: Mapping[str, float], dims: Mapping) -> tuple[float, Dim]:
-    """Evaluate a checked expression tree: (value, its Dim). Every intermediate result is finite."""
+def _value(node: ast.expr, names: Mapping[str, float], dims: Mapping, ops: "_Ops | None" = None) -> tuple[float, Dim]:
+    """Evaluate a checked expression tree: (value, its Dim). Every intermediate result is finite.
+    `ops`: the arithmetic (default :data:`_SCALAR`, on floats; :data:`_ARRAYS` evaluates the same
+    tree element by element on arrays of samples, a derived output's)."""
+    ops = ops or _SCALAR
     if isinstance(node, ast.Constant):
         try:
             result = float(node.value)
@@ -371,16 +406,16 @@ def _value(node: ast.expr, names: Mapping[str, float], dims: Mapping) -> tuple[f
             return CONSTANTS[node.id], PLAIN
         if node.id not in names:
             raise _unknown_name(node.id, names)
-        result = float(names[node.id])
+        result = ops.number(names[node.id])
         dim = Dim(getattr(dims.get(node.id), "dimension", None))
     elif isinstance(node, ast.UnaryOp):
-        operand, dim = _value(node.operand, names, dims)
+        operand, dim = _value(node.operand, names, dims, ops)
         result = -operand if isinstance(node.op, ast.USub) else operand
     elif isinstance(node, ast.BinOp):
-        left, ldim = _value(node.left, names, dims)
-        right, rdim = _value(node.right, names, dims)
+        left, ldim = _value(node.left, names, dims, ops)
+        right, rdim = _value(node.right, names, dims, ops)
         try:
-            result = _BINARY_OPERATORS[type(node.op)](left, right)
+            result = ops.binary[type(node.op)](left, right)
         except ZeroDivisionError:
             raise _Problem(f"division by zero in {ast.unparse(node)}", _EXPECTED_FINITE) from None
         except OverflowError:
@@ -388,11 +423,11 @@ def _value(node: ast.expr, names: Mapping[str, float], dims: Mapping) -> tuple[f
         dim = _binary_dimension(node, ldim, rdim, right)
     elif isinstance(node, ast.Call):
         name = node.func.id  # type: ignore[attr-defined]  # checked by `_check`
-        function = FUNCTIONS[name][0]
-        evaluated = [_value(argument, names, dims) for argument in node.args]
+        function = ops.functions[name]
+        evaluated = [_value(argument, names, dims, ops) for argument in node.args]
         arguments = [a for a, _ in evaluated]
         try:
-            result = float(function(*arguments))
+            result = ops.number(function(*arguments))
         except ZeroDivisionError:
             raise _Problem(f"division by zero in {ast.unparse(node)}", _EXPECTED_FINITE) from None
         except OverflowError:
@@ -405,7 +440,7 @@ def _value(node: ast.expr, names: Mapping[str, float], dims: Mapping) -> tuple[f
         dim = _call_dimension(name, [d for _, d in evaluated])
     else:  # pragma: no cover - `_check` lets nothing else through
         raise _Problem(f"the construct '{type(node).__name__}' is not allowed")
-    if not math.isfinite(result):
+    if not ops.finite(result):
         raise _Problem(f"evaluates to {result} (in {ast.unparse(node)})", _EXPECTED_FINITE)
     return result, dim
 
@@ -795,3 +830,120 @@ def parameter_meta(raw) -> dict[str, dict]:
             description = str(spec.get("description", ""))
         meta[name] = {"unit": unit, "description": description}
     return meta
+
+
+# ------------------------------------------------------------------- derived outputs
+
+
+#: A reference to an output in a derived output's expression: a name, a name with a field
+#: (``brace.f``), either with an index (``S1.r[1]``); not after a digit, a dot or a bracket (the
+#: exponent of ``1e-3``).
+_OUTPUT_REFERENCE = re.compile(r"(?<![\w.\]])[A-Za-z_]\w*(?:\.[A-Za-z_]\w*)?(?:\[\d+\])?")
+#: The name the k-th output an expression reads takes in its parsed form (``S1.r[1]`` is not a name
+#: the expression syntax has: attribute access and subscripts are refused).
+_PLACEHOLDER = "__output{}"
+#: Trial values of the outputs when the dimension of an expression is worked out: the first set at
+#: which the expression has a value gives it (a dimension does not depend on values).
+_TRIALS = (lambda k: 1.0 + 0.37 * k, lambda k: 0.25 + 0.0173 * k, lambda k: -0.5 - 0.113 * k)
+_EXPECTED_OUTPUT_EXPRESSION = ('an expression over the scene\'s outputs and parameters, e.g. '
+                               '"hypot(S1.r[1] - S0.r[1], S1.r[2] - S0.r[2])"')
+
+
+@dataclass(frozen=True)
+class OutputExpression:
+    """A derived output's expression, checked: `code` is `text` with the k-th output it reads,
+    ``reads[k]``, written ``__output{k}``; `constants` the parameters it uses (name, SI value);
+    `dimension` the dimension of its value (None where it cannot be worked out); `loose` where a
+    plain number multiplies a quantity in it (the number may carry a unit: :class:`Dim`)."""
+    text: str
+    code: str
+    reads: tuple[str, ...]
+    constants: tuple[tuple[str, float], ...]
+    dimension: tuple | None
+    loose: bool = False
+
+    def evaluate(self, values) -> np.ndarray:
+        """The expression at each sample: `values[k]` the samples of ``reads[k]`` (arrays of one
+        shape, or floats), element by element; NaN where it has no value (a square root of a
+        negative number, 0/0)."""
+        names = dict(self.constants)
+        names.update({_PLACEHOLDER.format(k): v for k, v in enumerate(values)})
+        with np.errstate(all="ignore"):
+            return _value(_compile(self.code)[0], names, {}, _ARRAYS)[0]
+
+
+def output_expression(text, outputs: Mapping[str, str | None], names: Mapping[str, float], source: str,
+                      field: str, dims: Mapping | None = None) -> OutputExpression:
+    """Check a derived output's expression: `outputs` maps the outputs it may read to their SI
+    units (None: of no one dimension), `names` the parameters to their SI values (`dims`: their
+    units). Raises a one-line :class:`SceneError` naming `field` for bad syntax, an unknown output
+    or name, an expression that reads no output, and a :class:`UnitError` for terms whose
+    dimensions do not combine."""
+    if not isinstance(text, str):
+        raise SceneError(source, field, text, _EXPECTED_OUTPUT_EXPRESSION, "not a string")
+    reads: list[str] = []
+
+    def placeholder(match):
+        token = match.group(0)
+        if token in outputs:
+            if token not in reads:
+                reads.append(token)
+            return _PLACEHOLDER.format(reads.index(token))
+        if "." in token or "[" in token:
+            problem = f"unknown output '{token}'"
+            close = difflib.get_close_matches(token, list(outputs), n=1)
+            raise SceneError(source, field, text, "an output of the scene: " + _known_outputs(outputs),
+                             problem + (f" (did you mean '{close[0]}'?)" if close else ""))
+        return token
+    code = _OUTPUT_REFERENCE.sub(placeholder, text) if len(text) <= _MAX_LENGTH else text
+    try:
+        used = _compile(code)[1]
+    except _Problem as problem:
+        raise SceneError(source, field, text, problem.expected, _named(problem.problem, reads)) from None
+    for name in sorted(used):
+        if not name.startswith("__output") and name not in names:
+            raise SceneError(source, field, text, "an output of the scene (" + _known_outputs(outputs)
+                             + ") or a parameter", _unknown_name(name, names).problem)
+    if not reads:
+        raise SceneError(source, field, text, _EXPECTED_OUTPUT_EXPRESSION, "reads no output")
+    constants = tuple((n, float(names[n])) for n in sorted(used) if n in names)
+    dim = _output_dimension(text, code, reads, outputs, names, dims or {}, source, field)
+    return OutputExpression(text, code, tuple(reads), constants, dim.dimension, dim.loose)
+
+
+def _known_outputs(outputs) -> str:
+    known = list(outputs)
+    listed = ", ".join(known[:_MAX_LISTED_NAMES])
+    return listed + (f", ... ({len(known) - _MAX_LISTED_NAMES} more)" if len(known) > _MAX_LISTED_NAMES else "")
+
+
+def _output_dimension(text, code, reads, outputs, names, dims, source, field):
+    """The Dim of a derived output's value, from the units of the outputs and parameters it reads:
+    dimensionless where the expression makes a plain number of them (atan2, sin, a ratio); None
+    where it reads an output of no one unit and has no dimension from the others, or no trial
+    values give the expression a value."""
+    with_units = dict(dims)
+    for k, name in enumerate(reads):
+        unit = outputs[name]
+        with_units[_PLACEHOLDER.format(k)] = Dim(units.dimension_of(unit) if unit else None)
+    tree = _compile(code)[0]
+    for trial in _TRIALS:
+        values = dict(names)
+        values.update({_PLACEHOLDER.format(k): trial(k) for k in range(len(reads))})
+        try:
+            dim = _value(tree, values, with_units)[1]
+        except _UnitProblem as problem:
+            raise UnitError(source, field, text, problem.expected, _named(problem.problem, reads)) from None
+        except _Problem:          # no value at these trial values: try others
+            continue
+        if dim.dimension is None and all(outputs[name] for name in reads):
+            return Dim(units.DIMENSIONLESS, dim.loose)   # a plain number of quantities of known units (atan2)
+        return dim
+    return PLAIN
+
+
+def _named(problem: str, reads) -> str:
+    """A problem's text with the outputs' names for their placeholders."""
+    for k in reversed(range(len(reads))):
+        problem = problem.replace(_PLACEHOLDER.format(k), reads[k])
+    return problem

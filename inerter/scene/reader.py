@@ -22,7 +22,9 @@ from inerter.common.errors import SceneError
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements.device import EFFECT as DEVICE_EFFECT
 from inerter.elements.device import Device
-from inerter.scene.expressions import UnitError, ambiguous_units, evaluate, parameter_meta, read_parameters
+from inerter.scene import units
+from inerter.scene.expressions import (RESERVED_NAMES, UnitError, ambiguous_units, evaluate, output_expression,
+                                       parameter_meta, read_parameters)
 from inerter.scene.files import MAX_RECORD_BYTES, MAX_RECORD_SAMPLES, MAX_SCENE_BYTES, read_capped
 
 GROUND = "ground"
@@ -104,8 +106,8 @@ class Joint:
     axis: tuple[float, ...] | None = None   # the joint's axis in the frame of point_a's body (_AXIS_JOINTS)
     axis2: tuple[float, ...] | None = None  # universal: the second axis, fixed in point_b's body, given in
                                             # point_a's frame at the initial pose (perpendicular to axis)
-    stiffness: float = 0.0    # revolute: a rotational spring about the joint (N.m/rad) ...
-    damping: float = 0.0      # ... and damper (N.m.s/rad), as the elements JOINT_spring, JOINT_damper
+    stiffness: float = 0.0    # revolute: a rotational spring about the joint (N.m/rad), prismatic: a spring
+    damping: float = 0.0      # along its axis (N/m) ...; and damper (N.m.s/rad, N.s/m): JOINT_spring, JOINT_damper
 
 
 @dataclass(frozen=True)
@@ -120,6 +122,8 @@ class Element:
     free_length: float | None = None  # spring: L0 (None: the initial distance); rotational: free angle
     axis: tuple[float, ...] | None = None   # 3D rotational elements: axis in body a's frame
     device: Any = None         # an inerter's declared device (inerter.elements.device.Device), or None
+    slider_axis: tuple[float, ...] | None = None   # a prismatic joint's spring or damper: it acts along the
+                                                   # joint's axis (point_a's body frame), L the signed slide
 
 
 @dataclass(frozen=True)
@@ -152,6 +156,16 @@ class Metric:
 
 
 @dataclass(frozen=True)
+class Derived:
+    """A derived output (``[outputs.derived]``): an expression over other outputs, evaluated at
+    every sample, in CSV, summary, Result and FMU like any output."""
+    name: str
+    expression: Any                  # its OutputExpression (inerter.scene.expressions)
+    unit: str                        # SI: inferred from the outputs it reads, or declared
+    description: str
+
+
+@dataclass(frozen=True)
 class Experiment:
     stop_time: float
     output_interval: float
@@ -181,6 +195,7 @@ class Scene:
     forces: dict[str, Force]
     experiment: Experiment
     metrics: tuple[Metric, ...]
+    derived: tuple[Derived, ...] = ()   # [outputs.derived], in their order (one may read those before it)
     euler_sequence: str = "zyx"   # 3D: the intrinsic sequence of the bodies' B.euler[i] outputs (yaw, pitch,
                                   # roll: singular at ±90° pitch, not at the reference pose as Z-X-Z is)
     raw: dict = field(repr=False, default_factory=dict)
@@ -337,7 +352,8 @@ def _check_name(reader: _Reader, name: str, fld: str):
 EXPERIMENT_FIELDS = ("stop_time", "output_interval", "method", "rtol", "atol", "constraint", "baumgarte",
                      "communication_step", "step", "max_steps")
 TOP_LEVEL = {"scene": False, "parameters": False, "effects": False, "ground": False, "bodies": False,
-             "joints": False, "elements": False, "forces": False, "experiment": False, "metrics": False}
+             "joints": False, "elements": False, "forces": False, "experiment": False, "metrics": False,
+             "outputs": False}
 
 
 def read_toml(path) -> tuple[str, dict]:
@@ -461,10 +477,12 @@ def _build_scene(source: str, data: dict, overrides: Mapping[str, Any], reading:
     forces = _read_forces(r, data.get("forces", {}), points, dimension)
     experiment = _read_experiment(r, data.get("experiment", {}), x_over)
     outputs = _signal_names(points, element_specs, dimension, bodies)
+    derived = _read_derived(r, data.get("outputs", {}), outputs)
+    outputs.update({d.name: d.unit for d in derived})
     metrics = _read_metrics(r, data.get("metrics", []), outputs)
     return Scene(source, name, description, dimension, orientation, parameters, effects, bodies, points, joints,
-                 element_specs, forces, experiment, metrics, euler_sequence=euler_sequence, raw=data,
-                 experiment_overrides=x_over)
+                 element_specs, forces, experiment, metrics, derived=derived, euler_sequence=euler_sequence,
+                 raw=data, experiment_overrides=x_over)
 
 
 def _read_effects(r: _Reader, raw, overrides, dimension, folder):
@@ -756,7 +774,7 @@ def _read_joints(r: _Reader, raw, points, dimension):
             allowed["axis"] = True
         if jtype == "universal":
             allowed["axis2"] = True
-        if jtype == "revolute":
+        if jtype in _JOINT_SPRINGS:
             allowed.update(stiffness=False, damping=False)
         r.table(spec, fld, allowed)
         a, b = r.name_pair(spec, "between", fld, points, "point")
@@ -770,30 +788,45 @@ def _read_joints(r: _Reader, raw, points, dimension):
             if abs(sum(x * y for x, y in zip(axis, axis2))) > 1e-9:
                 raise r.error(f"{fld}.axis2", list(axis2), f"a unit vector perpendicular to axis = {list(axis)}",
                               "not perpendicular (a universal joint's two axes cross at a right angle)")
-        stiffness = r.number(spec, "stiffness", fld, default=0.0, minimum=0.0) if jtype == "revolute" else 0.0
-        damping = r.number(spec, "damping", fld, default=0.0, minimum=0.0) if jtype == "revolute" else 0.0
+        stiffness, damping = 0.0, 0.0
+        if jtype in _JOINT_SPRINGS:
+            (_, k_unit), (_, d_unit) = _JOINT_SPRINGS[jtype]
+            stiffness = r.number(spec, "stiffness", fld, default=0.0, minimum=0.0, unit=k_unit)
+            damping = r.number(spec, "damping", fld, default=0.0, minimum=0.0, unit=d_unit)
         joints[jname] = Joint(jname, jtype, a, b, axis, axis2, stiffness, damping)
     return joints
 
 
+#: Joints that may carry `stiffness` and `damping`: the elements they become, with the fields' units.
+_JOINT_SPRINGS = {"revolute": (("rotational_spring", "N.m/rad"), ("rotational_damper", "N.m.s/rad")),
+                  "prismatic": (("spring", "N/m"), ("damper", "N.s/m"))}
+
+
 def _joint_elements(r: _Reader, joints, points, elements_read, dimension):
-    """The rotational spring and damper a revolute joint declares with `stiffness` and `damping`
-    (a column base's spring without a separate element): elements named JOINT_spring and
-    JOINT_damper between the joint's two bodies, about its axis in 3D, the spring's free angle the
-    initial one."""
+    """The spring and damper a revolute or prismatic joint declares with `stiffness` and `damping`
+    (a column base's spring without a separate element), named JOINT_spring and JOINT_damper:
+    revolute, a rotational spring and damper between the joint's two bodies, about its axis in 3D;
+    prismatic, a spring and damper between its two points along its axis (fixed in the first
+    point's body), on the signed slide. The spring's free angle or slide is the initial one."""
     out = {}
     for j in joints.values():
-        for key, etype, coefficient in (("stiffness", "rotational_spring", j.stiffness),
-                                        ("damping", "rotational_damper", j.damping)):
+        if j.type not in _JOINT_SPRINGS:
+            continue
+        for key, (etype, _), coefficient in zip(("stiffness", "damping"), _JOINT_SPRINGS[j.type],
+                                                (j.stiffness, j.damping)):
             if not coefficient:
                 continue
-            ename = f"{j.name}_{etype.split('_')[1]}"
+            ename = f"{j.name}_{etype.split('_')[-1]}"
             if ename in elements_read or ename in points:
                 raise r.error(f"joints.{j.name}.{key}", coefficient,
                               f"no element or point named {ename!r} (the joint's {etype.replace('_', ' ')})",
                               "name clash")
-            out[ename] = Element(ename, etype, body_a=points[j.point_a].body, body_b=points[j.point_b].body,
-                                 coefficient=coefficient, axis=j.axis if dimension == 3 else None)
+            if j.type == "prismatic":
+                out[ename] = Element(ename, etype, point_a=j.point_a, point_b=j.point_b, coefficient=coefficient,
+                                     slider_axis=tuple(j.axis))
+            else:
+                out[ename] = Element(ename, etype, body_a=points[j.point_a].body, body_b=points[j.point_b].body,
+                                     coefficient=coefficient, axis=j.axis if dimension == 3 else None)
     return out
 
 
@@ -1012,6 +1045,64 @@ def _signal_names(points, element_specs, dimension, bodies=()) -> dict[str, str 
             names.update({f"{bname}.w[{i}]": "rad/s" for i in range(1, 4)})
     names.update({"energy": "J", "constraint_residual": None})
     return names
+
+
+def _read_derived(r: _Reader, raw, outputs) -> tuple[Derived, ...]:
+    """``[outputs.derived]``: ``NAME = "expression"`` or ``NAME = { expression, unit, description }``,
+    an expression over the outputs (those before it included) and parameters; its unit is the one
+    its outputs' units give it, or the declared one (SI), which must fit."""
+    r.table(raw, "outputs", {"derived": False})
+    table = raw.get("derived", {})
+    if not isinstance(table, dict):
+        raise r.error("outputs.derived", table, 'a table of NAME = "expression" entries', "not a table")
+    known, derived = dict(outputs), []
+    for name, spec in table.items():
+        fld = f"outputs.derived.{name}"
+        _check_name(r, name, fld)
+        if name in known or name in r.names or name in RESERVED_NAMES:
+            raise r.error(fld, name, "a name that is not already an output, a parameter, a function or a constant",
+                          "name clash")
+        text, declared, description = spec, None, None
+        if isinstance(spec, dict):
+            r.table(spec, fld, {"expression": True, "unit": False, "description": False})
+            text, declared = spec["expression"], spec.get("unit")
+            description = r.string(spec, "description", fld, default="") or None
+            fld_expr = f"{fld}.expression"
+        else:
+            fld_expr = fld
+        expression = output_expression(text, known, r.names, r.source, fld_expr, r.dims)
+        unit = _derived_unit(r, fld, declared, expression, known)
+        derived.append(Derived(name, expression, unit, description or f"derived output: {text}"))
+        known[name] = unit
+    return tuple(derived)
+
+
+def _derived_unit(r: _Reader, fld, declared, expression, outputs) -> str:
+    """A derived output's SI unit: the declared one (checked against the expression's dimension,
+    where that is known and no plain number multiplies a quantity in it: ``0.5*50*x^2`` may be an
+    energy), or the unit of an output it reads of that dimension (rad for a difference of angles),
+    or the one the dimension names."""
+    inferred = ""
+    if expression.dimension is not None:
+        inferred = next((outputs[x] for x in expression.reads
+                         if outputs[x] and units.dimension_of(outputs[x]) == expression.dimension),
+                        units.si_name(expression.dimension))
+    if declared is None:
+        if not inferred:
+            raise r.error(fld, expression.text, "a table { expression = ..., unit = \"...\" } declaring its SI unit",
+                          "its unit cannot be inferred from the outputs it reads")
+        return inferred
+    try:
+        unit = units.parse(declared) if isinstance(declared, str) else None
+    except units.UnitSyntaxError:
+        unit = None
+    if unit is None or unit.factor != 1.0:
+        raise r.error(f"{fld}.unit", declared, "an SI unit (the outputs are in SI): m, N, N.m, m/s2, 1, ...",
+                      "not an SI unit")
+    if expression.dimension is not None and not expression.loose and unit.dimension != expression.dimension:
+        raise r.error(f"{fld}.unit", declared, f"a unit of {units.describe_dimension(expression.dimension)}"
+                      f" ({inferred or 'the expression'}), as the outputs it reads give it", "the unit does not fit")
+    return declared
 
 
 def _read_metrics(r: _Reader, raw, signals):

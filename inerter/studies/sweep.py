@@ -194,6 +194,7 @@ class Sweep:
             if not known:
                 raise SceneError("--vary", name, name, "a parameter of " + str(self.scene) + ": "
                                  + ", ".join(params) + ", or effects.NAME, or experiment.NAME", "unknown name")
+        self._check_values()
         self.metric_columns = []
         for m in base.scene.metrics:
             for k in METRIC_KEYS.get(m.kind, ()):
@@ -205,6 +206,23 @@ class Sweep:
         if clash:
             raise SweepError(f"{', '.join(sorted(clash))}: a name of both a parameter and a column of "
                              "results.csv; rename the parameter in the scene")
+
+    def _check_values(self):
+        """Every varied value read by the scene's validator (:func:`inerter.scene.reader.build_scene`,
+        with the --set values), before any worker starts: a value the scene refuses is the error the
+        scene gives, after the option that gave it (``--vary y0: scene.toml: parameters.y0: ...``)."""
+        from inerter.scene.reader import build_scene, read_toml
+        source, data = read_toml(self.scene)
+        for name, values in self.axes:
+            seen = set()
+            for value in values:
+                if repr(value) in seen:
+                    continue
+                seen.add(repr(value))
+                try:
+                    build_scene(source, data, {**self.fixed, name: value})
+                except SceneError as exc:
+                    raise SweepError(f"--vary {name}: {exc}") from None
 
     @property
     def settings(self) -> dict:

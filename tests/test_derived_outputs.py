@@ -96,6 +96,7 @@ def test_derived_outputs_equal_the_expression_by_hand(result):
     for name, values in expected.items():
         assert np.array_equal(result[name], values), name
         assert np.array_equal(everything[:, result.names.index(name)], values), name
+    assert "derived output power (W) = inerter.f * inerter.v_rel" in result.model.terms()     # inerter describe
     frame = result.to_dataframe()
     assert np.array_equal(frame["power"].to_numpy(), expected["power"])
     assert frame.attrs["units"]["radius"] == "m" and frame.attrs["units"]["power"] == "W"

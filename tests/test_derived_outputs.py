@@ -214,3 +214,21 @@ def test_the_unit_of_a_derived_output(tmp_path, entry, unit):
         return
     info = {o["name"]: o["unit"] for o in inerter.load(path).output_info()}
     assert info["d"] == unit
+
+
+def test_the_evaluator_on_arrays_computes_what_it_does_on_floats():
+    """A derived output runs the scene's one expression evaluator on arrays (numpy's functions for
+    the math module's): every function the scene format has, at sample values, against the
+    evaluator on floats (to rounding: numpy and math may differ in the last bit)."""
+    from inerter.scene import expressions as ex
+    assert set(ex._ARRAYS.functions) == set(ex.FUNCTIONS)
+    x = np.array([0.1, 0.37, 0.9])
+    for name, (_, least, _) in ex.FUNCTIONS.items():
+        count = max(least, 2 if name in ("min", "max", "hypot") else 1)
+        text = f"{name}(" + ", ".join(["Q"] + ["Q/2"] * (count - 1)) + ")"
+        out = ex.output_expression(text.replace("Q", "P.r[1]"), {"P.r[1]": "1"}, {}, "t", "f")
+        arrays = out.evaluate([x])
+        floats = [ex.evaluate(text, {"Q": v}, "t", "f") for v in x]
+        assert np.allclose(arrays, floats, rtol=1e-15, atol=0), name
+    ratio = ex.output_expression("P.r[1]^2 / (P.r[1] - 0.37)", {"P.r[1]": "m"}, {}, "t", "f").evaluate([x])
+    assert np.isinf(ratio[1]) and np.isfinite(ratio[[0, 2]]).all()        # no value at one sample: not an error

@@ -131,12 +131,12 @@ def test_peak_of_a_derived_output_comes_from_the_dense_output(result):
     assert result.metrics["radius_peak"] >= np.max(result["radius"])
 
 
-def _structure(fmu: Path) -> dict[str, set[str]]:
+def _structure(fmu: Path, tag: str = "Outputs") -> dict[str, set[str]]:
     with zipfile.ZipFile(fmu) as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
     names = [v.get("name") for v in root.find("ModelVariables")]
     return {names[int(u.get("index")) - 1]: {names[int(i) - 1] for i in (u.get("dependencies") or "").split()}
-            for u in root.find("ModelStructure").find("Outputs")}
+            for u in root.find("ModelStructure").find(tag)}
 
 
 def test_fmu_derived_outputs_equal_the_solvers(scene, result, tmp_path):
@@ -149,6 +149,9 @@ def test_fmu_derived_outputs_equal_the_solvers(scene, result, tmp_path):
     assert deps["radius"] == set() and deps["ratio"] == set()
     # the union of the dependencies of what it reads: the inerter's force follows the inputs at once
     assert deps["power"] == deps["inerter.f"] | deps["inerter.v_rel"] == {"P.f[1]", "P.f[2]"}
+    initial = _structure(fmu, "InitialUnknowns")
+    for name, reads in (("radius", ("P.r[1]", "A0.r[1]", "P.r[2]", "A0.r[2]")), ("power", ("inerter.f", "inerter.v_rel"))):
+        assert initial[name] == set().union(*(initial[x] for x in reads)), name
     fmu_result = simulate_fmu(scene, fmu_path=fmu)
     assert fmu_result.status == "ok"
     assert np.allclose(fmu_result.time, result.time, rtol=0, atol=1e-12)

@@ -235,3 +235,41 @@ def test_the_evaluator_on_arrays_computes_what_it_does_on_floats():
         assert np.allclose(arrays, floats, rtol=1e-15, atol=0), name
     ratio = ex.output_expression("P.r[1]^2 / (P.r[1] - 0.37)", {"P.r[1]": "m"}, {}, "t", "f").evaluate([x])
     assert np.isinf(ratio[1]) and np.isfinite(ratio[[0, 2]]).all()        # no value at one sample: not an error
+
+
+def test_native_steps_with_derived_outputs_give_what_the_slave_gives(scene, tmp_path):
+    """The FMU's binary steps natively (tests/test_fmu_native.py) with the kernels' outputs; a
+    getter that asks for a derived output goes to the slave, which takes the native steps over and
+    evaluates it: the same call sequence as test_fmu_native's, bit for bit against an instance whose
+    native steps are off, with most steps native."""
+    pytest.importorskip("fmpy")
+    pytest.importorskip("pythonfmu")
+    import test_fmu_native as tn
+    from test_fmu import Instance, shim_expected
+    from inerter.engine import compiled
+    from inerter.fmu.build import build
+    if not compiled.AVAILABLE or not shim_expected():
+        pytest.skip("no native steps here")
+    folder = _unzip(build(scene, out_dir=tmp_path), tmp_path / "unzipped")
+    made = []
+    try:
+        for switch in ("1", "0"):
+            with pytest.MonkeyPatch.context() as mp:
+                mp.setenv(tn.fmu_native.SWITCH, switch)
+                made.append(Instance(str(folder), f"native-{switch}"))
+        native, slave = made
+        assert "power" in native.outputs
+        a = tn.replay(native, False, stop_time=0.3)
+        b = tn.replay(slave, False, stop_time=0.3)
+        assert a.entries == b.entries
+        assert a.messages() == b.messages()
+        assert tn.native_steps(native) >= 30
+    finally:
+        for inst in reversed(made):
+            inst.close()
+
+
+def _unzip(fmu: Path, folder: Path) -> Path:
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    return folder

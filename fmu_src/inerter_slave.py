@@ -278,12 +278,13 @@ class InerterSlave(Fmi2Slave):
 
         self._register(model)
         # The native doStep (inerter/fmu/native.py): the FMU's binary steps in compiled code
-        # whenever this slave arms it.
+        # whenever this slave arms it. The derived outputs are not in its values (the kernels do not
+        # evaluate them): a getter that asks for one comes here, after the slave took the steps over.
         kinds = ((Real, fmu_native.REAL), (Integer, fmu_native.INTEGER),
                  (Boolean, fmu_native.BOOLEAN), (String, fmu_native.STRING))
         self._native = fmu_native.NativeLink(
             {vr: self._output_index[var.name] for vr, var in self.vars.items()
-             if var.causality == Fmi2Causality.output},
+             if var.causality == Fmi2Causality.output and not model.signals.is_derived(var.name)},
             {vr: (next(kind for cls, kind in kinds if isinstance(var, cls)), var.getter)
              for vr, var in self.vars.items() if var.causality != Fmi2Causality.output})
         self._warn_if_foreign_package()

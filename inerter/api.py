@@ -313,7 +313,8 @@ class Result:
         integrator's dense output: on a compiled run, the states from the kept steps' polynomials
         and the signal from the kernels, in one compiled call; on the numpy path, scipy's dense
         output and the numpy signals. Where the run kept none (RK4, whose fixed steps give no
-        polynomial, or a run without metrics): a cubic spline through the samples."""
+        polynomial, or a run without metrics): a cubic spline through the samples. A derived output:
+        its expression on the dense values of the outputs it reads."""
         self._check_name(name)
         signals = self.model.signals
         if signals.is_derived(name):

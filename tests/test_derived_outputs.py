@@ -96,6 +96,7 @@ def test_derived_outputs_equal_the_expression_by_hand(result):
     for name, values in expected.items():
         assert np.array_equal(result[name], values), name
         assert np.array_equal(everything[:, result.names.index(name)], values), name
+    assert "derived output power (W) = inerter.f * inerter.v_rel" in result.model.terms()     # inerter describe
     frame = result.to_dataframe()
     assert np.array_equal(frame["power"].to_numpy(), expected["power"])
     assert frame.attrs["units"]["radius"] == "m" and frame.attrs["units"]["power"] == "W"
@@ -130,12 +131,12 @@ def test_peak_of_a_derived_output_comes_from_the_dense_output(result):
     assert result.metrics["radius_peak"] >= np.max(result["radius"])
 
 
-def _structure(fmu: Path) -> dict[str, set[str]]:
+def _structure(fmu: Path, tag: str = "Outputs") -> dict[str, set[str]]:
     with zipfile.ZipFile(fmu) as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
     names = [v.get("name") for v in root.find("ModelVariables")]
     return {names[int(u.get("index")) - 1]: {names[int(i) - 1] for i in (u.get("dependencies") or "").split()}
-            for u in root.find("ModelStructure").find("Outputs")}
+            for u in root.find("ModelStructure").find(tag)}
 
 
 def test_fmu_derived_outputs_equal_the_solvers(scene, result, tmp_path):
@@ -148,6 +149,9 @@ def test_fmu_derived_outputs_equal_the_solvers(scene, result, tmp_path):
     assert deps["radius"] == set() and deps["ratio"] == set()
     # the union of the dependencies of what it reads: the inerter's force follows the inputs at once
     assert deps["power"] == deps["inerter.f"] | deps["inerter.v_rel"] == {"P.f[1]", "P.f[2]"}
+    initial = _structure(fmu, "InitialUnknowns")
+    for name, reads in (("radius", ("P.r[1]", "A0.r[1]", "P.r[2]", "A0.r[2]")), ("power", ("inerter.f", "inerter.v_rel"))):
+        assert initial[name] == set().union(*(initial[x] for x in reads)), name
     fmu_result = simulate_fmu(scene, fmu_path=fmu)
     assert fmu_result.status == "ok"
     assert np.allclose(fmu_result.time, result.time, rtol=0, atol=1e-12)
@@ -213,3 +217,59 @@ def test_the_unit_of_a_derived_output(tmp_path, entry, unit):
         return
     info = {o["name"]: o["unit"] for o in inerter.load(path).output_info()}
     assert info["d"] == unit
+
+
+def test_the_evaluator_on_arrays_computes_what_it_does_on_floats():
+    """A derived output runs the scene's one expression evaluator on arrays (numpy's functions for
+    the math module's): every function the scene format has, at sample values, against the
+    evaluator on floats (to rounding: numpy and math may differ in the last bit)."""
+    from inerter.scene import expressions as ex
+    assert set(ex._ARRAYS.functions) == set(ex.FUNCTIONS)
+    x = np.array([0.1, 0.37, 0.9])
+    for name, (_, least, _) in ex.FUNCTIONS.items():
+        count = max(least, 2 if name in ("min", "max", "hypot") else 1)
+        text = f"{name}(" + ", ".join(["Q"] + ["Q/2"] * (count - 1)) + ")"
+        out = ex.output_expression(text.replace("Q", "P.r[1]"), {"P.r[1]": "1"}, {}, "t", "f")
+        arrays = out.evaluate([x])
+        floats = [ex.evaluate(text, {"Q": v}, "t", "f") for v in x]
+        assert np.allclose(arrays, floats, rtol=1e-15, atol=0), name
+    ratio = ex.output_expression("P.r[1]^2 / (P.r[1] - 0.37)", {"P.r[1]": "m"}, {}, "t", "f").evaluate([x])
+    assert np.isinf(ratio[1]) and np.isfinite(ratio[[0, 2]]).all()        # no value at one sample: not an error
+
+
+def test_native_steps_with_derived_outputs_give_what_the_slave_gives(scene, tmp_path):
+    """The FMU's binary steps natively (tests/test_fmu_native.py) with the kernels' outputs; a
+    getter that asks for a derived output goes to the slave, which takes the native steps over and
+    evaluates it: the same call sequence as test_fmu_native's, bit for bit against an instance whose
+    native steps are off, with most steps native."""
+    pytest.importorskip("fmpy")
+    pytest.importorskip("pythonfmu")
+    import test_fmu_native as tn
+    from test_fmu import Instance, shim_expected
+    from inerter.engine import compiled
+    from inerter.fmu.build import build
+    if not compiled.AVAILABLE or not shim_expected():
+        pytest.skip("no native steps here")
+    folder = _unzip(build(scene, out_dir=tmp_path), tmp_path / "unzipped")
+    made = []
+    try:
+        for switch in ("1", "0"):
+            with pytest.MonkeyPatch.context() as mp:
+                mp.setenv(tn.fmu_native.SWITCH, switch)
+                made.append(Instance(str(folder), f"native-{switch}"))
+        native, slave = made
+        assert "power" in native.outputs
+        a = tn.replay(native, False, stop_time=0.3)
+        b = tn.replay(slave, False, stop_time=0.3)
+        assert a.entries == b.entries
+        assert a.messages() == b.messages()
+        assert tn.native_steps(native) >= 30
+    finally:
+        for inst in reversed(made):
+            inst.close()
+
+
+def _unzip(fmu: Path, folder: Path) -> Path:
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    return folder

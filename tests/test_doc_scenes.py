@@ -185,3 +185,21 @@ def test_doc_scene_fmu_equals_the_solver(runs, fmu_runs, block):
         # (the CSVs hold 12 significant digits: a bound below that rounding is raised to it)
         bound = max(bound, 2e-12 * np.max(np.abs(values)))
         assert np.max(np.abs(fmu[name] - values)) <= bound, f"{block.where}: {name}"
+
+
+def test_a_broken_block_names_its_file_and_line(tmp_path):
+    broken = Block(ROOT / "README.md", 73, "[scene\nname = 1", None)
+    with pytest.raises(pytest.fail.Exception, match=r"README\.md:73: the TOML block does not parse"):
+        scene_of(broken, tmp_path)
+
+
+def test_a_fragment_replaces_the_entries_it_names_and_adds_the_rest():
+    base = {"elements": {"inerter": {"type": "inerter", "b": 1.0}, "spring": {"k": 2.0}},
+            "experiment": {"stop_time": 1.0, "rtol": 1e-8}, "metrics": [{"kind": "peak"}]}
+    fragment = {"elements": {"inerter": {"type": "inerter", "device": {}}}, "experiment": {"rtol": 1e-9},
+                "outputs": {"derived": {"d": "x"}}, "metrics": [{"kind": "natural_frequency"}]}
+    merged = merge(base, fragment)
+    assert merged["elements"] == {"inerter": {"type": "inerter", "device": {}}, "spring": {"k": 2.0}}
+    assert merged["experiment"] == {"stop_time": 1.0, "rtol": 1e-9}
+    assert merged["outputs"] == {"derived": {"d": "x"}}
+    assert merged["metrics"] == [{"kind": "peak"}, {"kind": "natural_frequency"}]

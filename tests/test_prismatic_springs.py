@@ -62,6 +62,8 @@ def _oscillator(tmp_path, dim):
 @pytest.mark.parametrize("path", ["compiled", "numpy"])
 def test_prismatic_stiffness_and_damping_make_the_damped_oscillator(tmp_path, dim, path):
     model, axis = _oscillator(tmp_path, dim)
+    assert any(t.startswith("element slide_spring: spring, k = 80 along the prismatic joint's axis")
+               for t in model.terms())                                         # inerter describe
     r = model.simulate(metrics=False, path=path)
     assert r.status == "ok", r.message
     wn, zeta = math.sqrt(K / MASS), C / (2.0 * math.sqrt(K * MASS))

@@ -108,8 +108,12 @@ def chains(draw):
         data["forces"] = {"push": {"point": f"T{n}", "direction": [1.0, 0.0], "function": "sine",
                                    "amplitude": draw(st.floats(0.0, 20.0)), "frequency": draw(st.floats(0.1, 5.0))}}
     data["experiment"] = {"stop_time": 1.0, "output_interval": 0.05, "rtol": 1e-6}
+    derived = draw(st.booleans())
+    if derived:                               # the tip's distance from O, and the chain's energy share
+        data["outputs"] = {"derived": {"reach": f"hypot(T{n}.r[1] - O.r[1], T{n}.r[2] - O.r[2])",
+                                       "share": {"expression": "energy / (1 + abs(energy))", "unit": "1"}}}
     if draw(st.booleans()):
-        data["metrics"] = [{"kind": "peak", "signal": f"T{n}.r[2]"}]
+        data["metrics"] = [{"kind": "peak", "signal": "reach" if derived else f"T{n}.r[2]"}]
     return data
 
 
@@ -135,6 +139,8 @@ def _targets(scene):
         key = next(k for k in spec if k in ("k", "c", "b", "d"))
         out += [(("elements", e, key), "coefficient"), (("elements", e, "type"), "name"),
                 (("elements", e, "points" if "between" in spec else "bodies_ref"), "ref")]
+    for name in scene.get("outputs", {}).get("derived", {}):
+        out.append((("outputs", "derived", name), "expression"))
     return out
 
 
@@ -148,6 +154,10 @@ def corruptions(draw):
     if key in ("points", "bodies_ref"):
         key = "between" if key == "points" else "bodies"
         how = draw(st.sampled_from(["delete", "unknown_ref", "wrong_type"]))
+    if kind == "expression":                  # a derived output (deleting one leaves a valid scene)
+        table[key] = draw(st.sampled_from([True, [1.0], {"x": 1.0}, math.nan, -1.0, "no_such_name + energy",
+                                           "T9.r[1] + 1", "hypot(O.r[1],", "energy + O.r[1]", "2 * pi"]))
+        return scene
     if how == "delete":
         del table[key]
     elif how == "unknown_field":

@@ -1061,8 +1061,8 @@ class CompiledStepper(Stepper):
         equal); None where the next step must be taken here: no running integration (DOP853, RK45:
         before the first step, after a failed one), an input changed, outputs the kernels do not
         evaluate. Valid until the next call of :meth:`step` or :meth:`set_state`."""
-        if self._order is None or self._input_moved or self.signals.derived:
-            return None                       # (the derived outputs are evaluated here, not in the kernels)
+        if self._order is None or self._input_moved:
+            return None
         if self.settings.method == "RK4":
             native = self._native
             if native is None:
@@ -1127,8 +1127,9 @@ class CompiledStepper(Stepper):
         return _k.native_step_cfunc(self.kernel.spatial)
 
     def native_values(self) -> np.ndarray:
-        """The array native steps write the outputs to (in the order of ``signals.names``), for the
-        table :meth:`native_table` returned last."""
+        """The array native steps write the outputs to (in the order of ``signals.names``, the
+        derived outputs left out: :meth:`native_sync` evaluates them), for the table
+        :meth:`native_table` returned last."""
         return self._native["values"]
 
     def native_sync(self) -> int:
@@ -1157,7 +1158,7 @@ class CompiledStepper(Stepper):
             self.h = float(hdr[_k.RK_H])
         self.steps += int(hdr[_k.RK_TOTAL] - native["steps"])
         native["steps"] = hdr[_k.RK_TOTAL]
-        self._values = native["values"].tolist()
+        self._values = self.signals.complete(native["values"]).tolist()
         clock[_k.CLOCK_TAKEN] = 0.0
         return taken
 

@@ -553,6 +553,9 @@ class Mechanism:
             extra = ""
             if e.kind == "inerter":
                 extra = f" {s.inerter_law}"
+            slider = getattr(s.elements.get(e.name), "slider_axis", None)
+            if slider is not None:
+                extra = f" along the prismatic joint's axis {list(slider)} (in the first point's body frame)"
             lines.append(f"element {e.name}: {e.kind}, {getattr(e, 'coefficient_name', 'k')} = {e.coefficient:g}{extra}")
             device = getattr(s.elements.get(e.name), "device", None)
             if device is not None:
@@ -571,4 +574,6 @@ class Mechanism:
             lines.append(f"ground motion: {self.ground_motion.describe()} (coordinates relative to the ground)")
         if not self.inerters:
             lines.append("inerters: none, no inerter term computed")
+        for d in s.derived:
+            lines.append(f"derived output {d.name} ({d.unit}) = {d.expression.text}")
         return lines

@@ -106,8 +106,8 @@ class Joint:
     axis: tuple[float, ...] | None = None   # the joint's axis in the frame of point_a's body (_AXIS_JOINTS)
     axis2: tuple[float, ...] | None = None  # universal: the second axis, fixed in point_b's body, given in
                                             # point_a's frame at the initial pose (perpendicular to axis)
-    stiffness: float = 0.0    # revolute: a rotational spring about the joint (N.m/rad), prismatic: a spring
-    damping: float = 0.0      # along its axis (N/m) ...; and damper (N.m.s/rad, N.s/m): JOINT_spring, JOINT_damper
+    stiffness: float = 0.0    # revolute (N.m/rad), prismatic (N/m): a spring about / along the joint, and
+    damping: float = 0.0      # a damper (N.m.s/rad, N.s/m): the elements JOINT_spring and JOINT_damper
 
 
 @dataclass(frozen=True)

@@ -255,6 +255,8 @@ class InerterSlave(Fmi2Slave):
         self._inputs_pending = True               # inputs set since the stepper last took them
         self._output_names = [o["name"] for o in model.output_info()]
         self._output_index = {name: i for i, name in enumerate(self._output_names)}
+        self._derived = [self._output_index[d.name] for d in model.signals.derived]
+        self._undefined_noted: set[int] = set()    # derived outputs logged as NaN already
 
         self._phase = INSTANTIATED
         self._start_time = 0.0
@@ -788,8 +790,17 @@ class InerterSlave(Fmi2Slave):
         self._outputs = stepper.output_values()    # floats, in the order of _output_names
         self._stale = False
         self._slave_steps += 1
+        self._note_undefined_outputs(stepper.time)
         self._arm_native(stepper)
         return True
+
+    def _note_undefined_outputs(self, t):
+        """Log, once per derived output, the first communication point where it has no value."""
+        for i in self._derived:
+            if i not in self._undefined_noted and not math.isfinite(self._outputs[i]):
+                self._undefined_noted.add(i)
+                self.log(f"outputs.derived.{self._output_names[i]}: no value at t = {t!r} s (NaN): its "
+                         f"expression is undefined there", Fmi2Status.warning)
 
     def _arm_native(self, stepper):
         """Let the FMU's binary take the next step natively where it can (inerter/fmu/native.py)."""
@@ -809,6 +820,7 @@ class InerterSlave(Fmi2Slave):
                 self._native_steps += taken
                 self._outputs = self._stepper.output_values()
                 self._stale = False
+                self._note_undefined_outputs(self._stepper.time)
         except Exception as exc:  # a bug: stop stepping rather than end the importer
             self._fail(f"taking over the native steps: unexpected error: {exc!r}\n"
                        f"{traceback.format_exc()}")

@@ -276,6 +276,20 @@ class Result:
         self._columns[name] = values
         return values
 
+    @property
+    def warnings(self) -> list[str]:
+        """The scene's warnings, and one for each derived output that has no value (NaN) at some
+        samples: its expression is undefined there (a square root of a negative number, 0/0)."""
+        notes = list(self.model.scene.warnings)
+        for d in self.model.signals.derived:
+            column = self[d.name]
+            missing = ~np.isfinite(column)
+            if missing.any():
+                notes.append(f"{self.model.source}: outputs.derived.{d.name}: no value at {int(missing.sum())} "
+                             f"of {len(column)} samples, the first at t = {self.time[missing.argmax()]:.6g} s "
+                             f"(written as NaN): the expression is undefined there")
+        return notes
+
     def _derived_column(self, name) -> np.ndarray:
         """A derived output at every sample, from the columns of the outputs it reads (the values the
         CSV's row-wise evaluation gives: the same expression on the same numbers)."""
@@ -359,7 +373,7 @@ class Result:
             "metric_units": {k: u for k, u in metric_units(self.model).items() if k in self.metrics},
             "metric_errors": self.metric_errors,
             "output_units": output_units(self),
-            "warnings": self.model.scene.warnings,
+            "warnings": self.warnings,
             "settings": {"stop_time": s.stop_time, "output_interval": s.output_interval, "method": s.method,
                          "rtol": s.rtol, "atol": s.atol, "constraint": s.constraint, "baumgarte": s.baumgarte,
                          "oracle": self.model.is_oracle,

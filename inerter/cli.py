@@ -112,7 +112,7 @@ def cmd_run(args):
     t0 = time.perf_counter()
     result = simulate(args.scene, overrides, args.model, args.path, model)
     wall = time.perf_counter() - t0
-    for warning in result.model.scene.warnings:
+    for warning in result.warnings:
         print(f"inerter: warning: {warning}", file=sys.stderr)
     stem = result.model.name
     summary = _write(result, out, stem)

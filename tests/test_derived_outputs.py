@@ -273,3 +273,38 @@ def _unzip(fmu: Path, folder: Path) -> Path:
     with zipfile.ZipFile(fmu) as z:
         z.extractall(folder)
     return folder
+
+
+def test_a_derived_output_without_value_at_some_samples_is_a_warning_not_silent(tmp_path):
+    """sqrt(P.r[2]/h - 0.2): the mass starts at y = 0.5 m < 0.2 h, so the expression is undefined at
+    the first samples (NaN there, as numpy gives it), and the result, summary and CLI say so."""
+    path = tmp_path / "derived_demo.toml"
+    path.write_text(SCENE.replace('power = "inerter.f * inerter.v_rel"',
+                                  'power = "inerter.f * inerter.v_rel"\nlift = "sqrt(P.r[2] / h - 0.2)"'))
+    result = inerter.load(path).simulate(stop_time=0.5)
+    missing = ~np.isfinite(result["lift"])
+    assert missing[0] and missing.sum() < len(missing) or missing.all()
+    notes = [w for w in result.warnings if "outputs.derived.lift" in w]
+    assert len(notes) == 1 and f"no value at {int(missing.sum())} of {len(missing)} samples" in notes[0]
+    assert str(path) in notes[0] and "t = 0 s" in notes[0]
+    assert not [w for w in result.warnings if "outputs.derived.radius" in w]
+    out = tmp_path / "out"
+    assert cli_main(["run", str(path), "--out", str(out), "--stop-time", "0.5"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert any("outputs.derived.lift" in w for w in summary["warnings"])
+
+
+def test_the_fmu_logs_a_derived_output_without_value_once(tmp_path):
+    pytest.importorskip("fmpy")
+    import fmpy
+    from inerter.fmu.build import build
+    path = tmp_path / "derived_demo.toml"
+    path.write_text(SCENE.replace('power = "inerter.f * inerter.v_rel"',
+                                  'power = "inerter.f * inerter.v_rel"\nlift = "sqrt(P.r[2] / h - 0.2)"'))
+    fmu = build(path, out_dir=tmp_path / "fmu")
+    said = []
+    result = fmpy.simulate_fmu(str(fmu), stop_time=0.5, output=["lift"], debug_logging=True,
+                               logger=lambda env, name, status, category, message: said.append(message.decode()))
+    assert not np.isfinite(result["lift"][1])
+    notes = [m for m in said if "outputs.derived.lift: no value" in m]
+    assert len(notes) == 1, said

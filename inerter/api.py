@@ -282,7 +282,10 @@ class Result:
         samples: its expression is undefined there (a square root of a negative number, 0/0)."""
         notes = list(self.model.scene.warnings)
         for d in self.model.signals.derived:
-            column = self[d.name]
+            try:
+                column = self[d.name]
+            except KeyError:                      # an FMU run that did not record it
+                continue
             missing = ~np.isfinite(column)
             if missing.any():
                 notes.append(f"{self.model.source}: outputs.derived.{d.name}: no value at {int(missing.sum())} "

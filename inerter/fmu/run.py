@@ -14,7 +14,7 @@ import numpy as np
 
 from inerter.common.errors import SceneError
 from inerter.engine.simulation import Settings
-from inerter.api import Model, compute_metrics, csv_header, output_units, sample_spline, to_dataframe
+from inerter.api import Model, Result, compute_metrics, csv_header, output_units, sample_spline, to_dataframe
 
 
 @dataclass
@@ -86,12 +86,14 @@ class FmuResult:
             raise KeyError(f"{name!r} is not an output of the FMU of {self.model.name}")
         return np.asarray(self._table[name], dtype=float)
 
+    #: The scene's warnings and the derived outputs without value at some samples, as the solver's.
+    warnings = Result.warnings
+
     def dense(self, name):
         """A cubic spline through the communication-point samples."""
         return sample_spline(self.time, self[name])
 
     def summary(self):
-        from inerter.api import Result
         out = Result.summary(self)
         out["settings"]["model"] = "fmu"
         out["settings"]["communication_step"] = self.communication_step

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import hashlib
 import importlib.util
 import io
 import json
@@ -467,9 +468,13 @@ def fresh_run(fmus, tmp_path_factory):
 
 
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
-def test_the_fmu_runs_in_a_fresh_process_like_the_solver(fresh_run, scene):
+def test_the_fmu_runs_in_a_fresh_process_like_the_solver(fmus, fresh_run, scene):
     run = fresh_run(scene)
-    assert "resources" in Path(run["inerter"]).parts, "the FMU did not use its own inerter copy"
+    # Its own copy: the package archive in its resources/, unpacked into a folder named by the
+    # archive's hash (fmu_src/inerter_slave.py, unpack_payload).
+    with zipfile.ZipFile(fmus[scene]) as z:
+        digest = hashlib.sha256(z.read(f"resources/{fmu_build.PAYLOAD_FILE}")).hexdigest()[:16]
+    assert digest in Path(run["inerter"]).parts, f"the FMU did not use its own inerter copy: {run['inerter']}"
     assert_matches_solver(scene, run["results"][0])
 
 

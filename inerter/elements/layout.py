@@ -35,7 +35,20 @@ FLUID_QUADRATIC = 18     # its quadratic damping c_2 (N.s²/m²)
 FIXED_DIRECTION = 19     # 1.0: the element acts along DIRECTION, its initial one (the small-displacement
                          # law of structural codes), not along the current r̂
 DIRECTION = 20           # that direction, a unit vector in the global frame (3 columns; z = 0 in 2D)
-ELEMENT_REAL_COLUMNS = 23
+# An inerter device's masses and inertias (inerter.elements.device_inertia; all 0.0 where not declared):
+INERTIA = 23             # 1.0: the device declares masses, a transverse inertia or a mount (its kinetic block)
+HOUSING_MASS = 24        # housing mass m_h (kg), centre at HOUSING_CENTRE (m) from terminal a along r̂
+HOUSING_CENTRE = 25
+ROD_MASS = 26            # rod mass m_r (kg), centre at ROD_CENTRE (m) from terminal b along −r̂
+ROD_CENTRE = 27
+FLYWHEEL_MASS = 28       # flywheel mass m_f (kg), centre at FLYWHEEL_CENTRE (m) from terminal a along r̂
+FLYWHEEL_CENTRE = 29
+TRANSVERSE = 30          # transverse moment of inertia of housing, rod and flywheel together, about their centres (kg.m2)
+MOUNT = 31               # 1.0: the housing's mount (a Hooke joint at terminal a) is declared: spin and gyroscopic terms
+HOUSING_AXIAL = 32       # axial moment of inertia of housing and rod, which spin together (kg.m2)
+FLYWHEEL_AXIAL = 33      # the flywheel's axial moment of inertia J (kg.m2), for its spin with the housing
+MOUNT_AXIS = 34          # the Hooke joint's first axis a̅₁, a unit vector in terminal a's body frame (3 columns)
+ELEMENT_REAL_COLUMNS = 37
 
 # -- rot_int: a rotational element's integers
 ROT_KIND = 0             # its code: its place in inerter.elements.KINDS

@@ -22,12 +22,13 @@ from inerter.scene.ground_motion import (TERM_AMPLITUDE, TERM_AXIS, TERM_FREQUEN
 from inerter.common.rotations import (EULER_SINGULARITY, euler_angles9, euler_matrix9, euler_rates,
                                        quaternion_matrix9, quaternion_of_matrix9, quaternion_rates)
 
+from inerter.elements import device_inertia
 from inerter.elements import dispatch as law
-from inerter.elements.base import axial_scalars
+from inerter.elements.base import axial_scalars, rarely
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, F_AMPLITUDE, F_FREQUENCY, F_INITIAL, F_OFFSET,
-                                     F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, KIND, MEET_LIMIT,
-                                     PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B, REL0, ROT_KIND, FIXED_DIRECTION,
-                                     DIRECTION)
+                                     F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA, KIND,
+                                     MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B,
+                                     REL0, ROT_KIND, FIXED_DIRECTION, DIRECTION)
 
 # Joint kinds.
 REVOLUTE, PRISMATIC = 0, 1
@@ -235,6 +236,8 @@ def _add_elements2(q, v, P, AB, perm, off, gen):
         gb[2] = tbx * ex + tby * ey
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 3)
+        if rarely(el_real[e, INERTIA] != 0.0):
+            _device_terms(q, v, e, P, AB, perm, off, gen, ba, bb, 3)
     return status
 
 
@@ -610,6 +613,8 @@ def signal_values2(q, v, qdd, P, out):
                 gq += (qdd[kb] + qdd[kb + 2] * tbx) * ex + (qdd[kb + 1] + qdd[kb + 2] * tby) * ey
             F += b * gq
         energy += law.energy(kind, el_real[e], L, along)
+        if rarely(el_real[e, INERTIA] != 0.0):
+            energy += _device_energy(q, v, e, P, 3)
         out[k] = L
         out[k + 1] = along
         out[k + 2] = F
@@ -626,6 +631,105 @@ def signal_values2(q, v, qdd, P, out):
     out[k] = energy
     out[k + 1] = constraint_residual2(q, P) if jt_int.shape[0] else 0.0
     return status
+
+
+# ------------------------------------------------------------------------------------------------
+# An inerter device's kinetic block (inerter.elements.device_inertia): the terminals' kinematics it
+# takes, from the kinematics above (Eqs. 15-19, 22, 25), and its terms scattered into Eq. (33)
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _terminal2(q, v, body, lx, ly, H, col, rv, vv, acc):
+    """A 2D terminal: r, ṙ and its acceleration at v̇ = 0 (−θ̇² A ū, Eq. 17) into rv, vv, acc (z = 0),
+    and ∂ṙ/∂v = [I, A_θ ū] (Eq. 16) into H's columns col … col + 2 (none for the ground)."""
+    rx, ry, vx, vy, ux, uy, w = _point(q, v, body, lx, ly)
+    rv[0], rv[1], rv[2] = rx, ry, 0.0
+    vv[0], vv[1], vv[2] = vx, vy, 0.0
+    acc[0], acc[1], acc[2] = -w * w * ux, -w * w * uy, 0.0
+    if body >= 0:
+        H[0, col] = 1.0
+        H[1, col + 1] = 1.0
+        H[0, col + 2] = -uy
+        H[1, col + 2] = ux
+
+
+@njit(cache=True, inline="always")
+def _terminal3(q, v, body, lx, ly, lz, H, col, rv, vv, acc):
+    """A 3D terminal: r, ṙ, its acceleration at v̇ = 0 (Eq. 25) and ∂ṙ/∂v = [I, −A ũ] (Eq. 22; the
+    ω̄ column j is A(e_j × ū)) into H's columns col … col + 5 (none for the ground)."""
+    A = _rot(q, v, body)
+    rv[0], rv[1], rv[2], vv[0], vv[1], vv[2], acc[0], acc[1], acc[2] = _point3(q, v, body, A, lx, ly, lz)
+    if body >= 0:
+        for j in range(3):
+            H[j, col + j] = 1.0
+            cx, cy, cz = _cross(1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0, lx, ly, lz)
+            H[0, col + 3 + j], H[1, col + 3 + j], H[2, col + 3 + j] = _mul(A, cx, cy, cz)
+
+
+@njit(cache=True, inline="always")
+def _mount3(q, v, body, row, G, a1, a1d, a1dd):
+    """The mount's axis a₁ = A_a a̅₁, ȧ₁ = A_a(ω̄ × a̅₁) = G v (column j of G over ω̄: A_a(e_j × a̅₁)),
+    ä₁ at v̇ = 0, A_a(ω̄ × (ω̄ × a̅₁)) (:func:`_vector`); a fixed axis on the ground."""
+    sx, sy, sz = row[MOUNT_AXIS], row[MOUNT_AXIS + 1], row[MOUNT_AXIS + 2]
+    if body < 0:
+        a1[0], a1[1], a1[2] = sx, sy, sz
+        return
+    A = _rot(q, v, body)
+    wx, wy, wz = _omega(v, body)
+    a1[0], a1[1], a1[2], a1d[0], a1d[1], a1d[2], a1dd[0], a1dd[1], a1dd[2] = _vector(A, wx, wy, wz, sx, sy, sz)
+    for j in range(3):
+        cx, cy, cz = _cross(1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0, sx, sy, sz)
+        G[0, 3 + j], G[1, 3 + j], G[2, 3 + j] = _mul(A, cx, cy, cz)
+
+
+@njit(cache=True)
+def _device_block(q, v, e, P, width, M, Q):
+    """Element e's device block (device_inertia.block) over its terminals' bodies, `width` velocity
+    coordinates each (3 in 2D, 6 in 3D): fills M, Q; returns the block's kinetic energy."""
+    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    pa = el_int[e, POINT_A]
+    pb = el_int[e, POINT_B]
+    n = 2 * width
+    Ha = np.zeros((3, n))
+    Hb = np.zeros((3, n))
+    Ga1 = np.zeros((3, n))
+    ra, rb, va, vb, acc_a, acc_b = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    a1, a1d, a1dd = np.zeros(3), np.zeros(3), np.zeros(3)
+    if width == 3:
+        _terminal2(q, v, pbody[pa], ploc[pa, 0], ploc[pa, 1], Ha, 0, ra, va, acc_a)
+        _terminal2(q, v, pbody[pb], ploc[pb, 0], ploc[pb, 1], Hb, 3, rb, vb, acc_b)
+    else:
+        _terminal3(q, v, pbody[pa], ploc[pa, 0], ploc[pa, 1], ploc[pa, 2], Ha, 0, ra, va, acc_a)
+        _terminal3(q, v, pbody[pb], ploc[pb, 0], ploc[pb, 1], ploc[pb, 2], Hb, 6, rb, vb, acc_b)
+        if el_real[e, MOUNT] != 0.0:
+            _mount3(q, v, pbody[pa], el_real[e], Ga1, a1, a1d, a1dd)
+    return device_inertia.block(el_real[e], Ha, Hb, va, vb, rb - ra, acc_a, acc_b, a1, a1d, a1dd, Ga1, M, Q)
+
+
+@njit(cache=True)
+def _device_terms(q, v, e, P, AB, perm, off, gen, ba, bb, width):
+    """Element e's device block added to Eq. (33): M += its block and Q += its right side, on the
+    coordinates of bodies ba (the block's first `width` rows) and bb (the next), not the ground's."""
+    n = 2 * width
+    M = np.empty((n, n))
+    Q = np.empty(n)
+    _device_block(q, v, e, P, width, M, Q)
+    for i in range(n):
+        bi = ba if i < width else bb
+        if bi < 0:
+            continue
+        gi = width * bi + i % width
+        gen[gi] += Q[i]
+        for j in range(n):
+            bj = ba if j < width else bb
+            if bj >= 0:
+                _addK(AB, perm, off, gi, width * bj + j % width, M[i, j])
+
+
+@njit(cache=True)
+def _device_energy(q, v, e, P, width):
+    """Element e's device block's kinetic energy (the device's T beyond ½ b L̇²)."""
+    n = 2 * width
+    return _device_block(q, v, e, P, width, np.empty((n, n)), np.empty(n))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -1086,6 +1190,8 @@ def _add_elements3(q, v, P, AB, perm, off, gen):
             status = TERMINALS_MEET
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 6)
+        if rarely(el_real[e, INERTIA] != 0.0):
+            _device_terms(q, v, e, P, AB, perm, off, gen, ba, bb, 6)
     return status
 
 
@@ -1365,6 +1471,8 @@ def signal_values3(q, v, qdd, P, out):
                     gq += gb[i] * qdd[kb + i]
             F += b * gq
         energy += law.energy(kind, el_real[e], L, along)
+        if rarely(el_real[e, INERTIA] != 0.0):
+            energy += _device_energy(q, v, e, P, 6)
         out[k] = L
         out[k + 1] = along
         out[k + 2] = F

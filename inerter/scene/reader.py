@@ -813,7 +813,7 @@ def _read_elements(r: _Reader, raw, points, bodies, dimension):
         etype = r.string(spec, "type", fld, ELEMENT_TYPES)
         kind = elements.KINDS[etype]
         rotational = kind.family == elements.ROTATIONAL
-        device = _read_device(r, spec["device"], f"{fld}.device", kind) if kind.device and "device" in spec else None
+        device = _read_device(r, spec["device"], f"{fld}.device", kind, dimension) if kind.device and "device" in spec else None
         inertance = device.inertance() if device is not None else None
         if inertance is not None and kind.coefficient.key in spec:
             source = next(n for n, _ in device.effects if DEVICE_EFFECT[n].inertance is not None)
@@ -852,6 +852,8 @@ def _read_parameter(r: _Reader, spec, fld, p: "elements.Parameter"):
     (inerter.elements); an optional one left out takes its default (None: absent)."""
     if p.key not in spec and not p.required:
         return p.default
+    if p.size > 1:
+        return tuple(float(x) for x in r.vector(spec, p.key, fld, p.size, unit_length=True))
     minimum = p.minimum if p.minimum != -math.inf else None
     value = r.number(spec, p.key, fld, minimum=minimum, exclusive=p.strict, required=p.required,
                      unit=_fixed_unit(p.unit))
@@ -871,7 +873,7 @@ def _fixed_unit(unit: str) -> str | None:
     return unit
 
 
-def _read_device(r: _Reader, raw, fld, kind: "elements.ElementKind"):
+def _read_device(r: _Reader, raw, fld, kind: "elements.ElementKind", dimension: int):
     """An element's ``device`` table: one sub-table per effect its kind allows
     (inerter.elements.device.EFFECTS), each parameter within its range, the effect's own check
     (one of lead or ratio, min < max, ...) and at most one source of the inertance."""
@@ -888,6 +890,8 @@ def _read_device(r: _Reader, raw, fld, kind: "elements.ElementKind"):
         if effect.name not in raw:
             continue
         efld = f"{fld}.{effect.name}"
+        if dimension not in effect.dimensions:
+            raise r.error(efld, raw[effect.name], f"no {effect.name} in a {dimension}D scene", effect.why_not_2d)
         table = r.table(raw[effect.name], efld, {p.key: p.required for p in effect.parameters})
         values = {p.key: _read_parameter(r, table, efld, p) for p in effect.parameters}
         problem = effect.check(values) if effect.check is not None else None

@@ -66,7 +66,9 @@ Ch. 6). The generalised inertia force of a part is −(∂ċ/∂v)ᵀ m c̈ − 
     Q += (J_hr s_h + J s_f) G_uᵀ (u × u̇)                       (the gyroscopic moments)
 
 with G_c = H_a + h G_u (housing, flywheel), H_b − h G_u (rod), c̈₀ = acc_a + h ü₀, acc_b − h ü₀,
-and the terms of J n² (b g_L g_Lᵀ and b L̈₀ g_L) left to the ideal inerter. The oracle
+and the terms of J n² (b g_L g_Lᵀ and b L̈₀ g_L) left to the ideal inerter. The parts' weight, in
+a scene with gravity g, adds Q += Σ m G_cᵀ g (potential −Σ m g·c). (A ground motion's inertial
+force on the parts, −m a_g, is not added: the parts are not bodies of the scene.) The oracle
 (:mod:`inerter.oracle.derivation`) derives the same from the parts' rigid-body kinetic energy with
 their rotations built from the mount's definition, on Jets.
 """
@@ -77,8 +79,8 @@ import math
 import numpy as np
 from numba import njit
 
-from inerter.elements.layout import (FLYWHEEL_AXIAL, FLYWHEEL_CENTRE, FLYWHEEL_MASS, FLYWHEEL_RATIO,
-                                     HOUSING_AXIAL, HOUSING_CENTRE, HOUSING_MASS, MOUNT, ROD_CENTRE, ROD_MASS,
+from inerter.elements.layout import (DEVICE_GRAVITY, FLYWHEEL_AXIAL, FLYWHEEL_CENTRE, FLYWHEEL_MASS,
+                                     FLYWHEEL_RATIO, HOUSING_AXIAL, HOUSING_CENTRE, HOUSING_MASS, MOUNT, ROD_CENTRE, ROD_MASS,
                                      TRANSVERSE)
 
 
@@ -104,15 +106,17 @@ def _gram(M, Q, G, c0, weight):
 
 
 @njit(cache=True, inline="always")
-def _part(M, Q, m, h, Hend, acc, Gu, udd0, rdot_end, ud):
+def _part(M, Q, m, h, Hend, acc, Gu, udd0, r_end, rdot_end, u, ud, g):
     """A part of mass m whose centre is c = r_end + h u: its terms (Gram of G_c = H_end + h G_u with
-    c̈₀ = acc_end + h ü₀) and its kinetic energy ½ m |ċ|²."""
+    c̈₀ = acc_end + h ü₀, and its weight m G_cᵀ g) and its energy, kinetic ½ m |ċ|² and potential
+    −m g·c."""
     if m == 0.0:
-        return 0.0
+        return 0.0, 0.0
     G = Hend + h * Gu
-    _gram(M, Q, G, acc + h * udd0, m)
-    c = rdot_end + h * ud
-    return 0.5 * m * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
+    _gram(M, Q, G, acc + h * udd0 - g, m)
+    cd = rdot_end + h * ud
+    c = r_end + h * u
+    return 0.5 * m * (cd[0] * cd[0] + cd[1] * cd[1] + cd[2] * cd[2]), -m * (g[0] * c[0] + g[1] * c[1] + g[2] * c[2])
 
 
 @njit(cache=True, inline="always")
@@ -163,28 +167,31 @@ def _housing_spin(u, ud, Gu, udd0, a1, a1d, a1dd0, Ga1):
 
 
 @entry
-def block(row, Ha, Hb, ra_dot, rb_dot, r, acc_a, acc_b, a1, a1d, a1dd0, Ga1, M, Q):
-    """The device's kinetic terms beyond b g gᵀ (module docstring, "Equations"): M (n × n) and Q (n)
-    over the velocity coordinates v of terminal a's body then terminal b's (n = 6 in 2D, 12 in 3D),
-    both overwritten; returns its kinetic energy T − ½ b L̇² (J).
+def block(row, Ha, Hb, ra, rb, ra_dot, rb_dot, acc_a, acc_b, a1, a1d, a1dd0, Ga1, M, Q):
+    """The device's terms beyond b g gᵀ (module docstring, "Equations", and its masses' weight):
+    M (n × n) and Q (n) over the velocity coordinates v of terminal a's body then terminal b's
+    (n = 6 in 2D, 12 in 3D), both overwritten; returns (T − ½ b L̇², V), its kinetic energy beyond
+    the ideal inerter's and its masses' gravitational potential (J).
 
-    Ha, Hb (3 × n): ṙ_a = H_a v, ṙ_b = H_b v (zero columns for the other body); ra_dot, rb_dot
-    the terminals' velocities, r = r_b − r_a, acc_a, acc_b their accelerations at v̇ = 0; a1, a1d,
-    a1dd0, Ga1 the mount's axis a₁ (global), ȧ₁ = G_a₁ v and ä₁ at v̇ = 0 (read only where
-    row[MOUNT] is set)."""
+    Ha, Hb (3 × n): ṙ_a = H_a v, ṙ_b = H_b v (zero columns for the other body); ra, rb, ra_dot,
+    rb_dot the terminals' positions and velocities, acc_a, acc_b their accelerations at v̇ = 0;
+    a1, a1d, a1dd0, Ga1 the mount's axis a₁ (global), ȧ₁ = G_a₁ v and ä₁ at v̇ = 0 (read only
+    where row[MOUNT] is set)."""
     M[:, :] = 0.0
     Q[:] = 0.0
-    rd = rb_dot - ra_dot
-    L, u, Ldot, ud, Gr, Gu, gL, Ldd0, udd0 = _axis(r, rd, Ha, Hb, acc_a, acc_b)
-    T = _part(M, Q, row[HOUSING_MASS], row[HOUSING_CENTRE], Ha, acc_a, Gu, udd0, ra_dot, ud)
-    T += _part(M, Q, row[FLYWHEEL_MASS], row[FLYWHEEL_CENTRE], Ha, acc_a, Gu, udd0, ra_dot, ud)
-    T += _part(M, Q, row[ROD_MASS], -row[ROD_CENTRE], Hb, acc_b, Gu, udd0, rb_dot, ud)
+    g = row[DEVICE_GRAVITY:DEVICE_GRAVITY + 3]
+    L, u, Ldot, ud, Gr, Gu, gL, Ldd0, udd0 = _axis(rb - ra, rb_dot - ra_dot, Ha, Hb, acc_a, acc_b)
+    T, V = _part(M, Q, row[HOUSING_MASS], row[HOUSING_CENTRE], Ha, acc_a, Gu, udd0, ra, ra_dot, u, ud, g)
+    dT, dV = _part(M, Q, row[FLYWHEEL_MASS], row[FLYWHEEL_CENTRE], Ha, acc_a, Gu, udd0, ra, ra_dot, u, ud, g)
+    T, V = T + dT, V + dV
+    dT, dV = _part(M, Q, row[ROD_MASS], -row[ROD_CENTRE], Hb, acc_b, Gu, udd0, rb, rb_dot, u, ud, g)
+    T, V = T + dT, V + dV
     It = row[TRANSVERSE]
     if It != 0.0:
         _gram(M, Q, Gu, udd0, It)
         T += 0.5 * It * (ud[0] * ud[0] + ud[1] * ud[1] + ud[2] * ud[2])
     if row[MOUNT] == 0.0:
-        return T
+        return T, V
     Jhr = row[HOUSING_AXIAL]
     J = row[FLYWHEEL_AXIAL]
     ratio = row[FLYWHEEL_RATIO]
@@ -197,4 +204,4 @@ def block(row, Ha, Hb, ra_dot, rb_dot, r, acc_a, acc_b, a1, a1d, a1dd0, Ga1, M, 
         Q[i] += (Jhr * s + J * sf) * (Gu[0, i] * perp[0] + Gu[1, i] * perp[1] + Gu[2, i] * perp[2])
         for j in range(n):
             M[i, j] += (Jhr + J) * sigma[i] * sigma[j] + J * ratio * (sigma[i] * gL[j] + gL[i] * sigma[j])
-    return T + 0.5 * Jhr * s * s + J * (0.5 * s * s + ratio * s * Ldot)
+    return T + 0.5 * Jhr * s * s + J * (0.5 * s * s + ratio * s * Ldot), V

@@ -28,7 +28,8 @@ from inerter.elements.base import axial_scalars, rarely
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, F_AMPLITUDE, F_FREQUENCY, F_INITIAL, F_OFFSET,
                                      F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA, KIND,
                                      MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B,
-                                     REL0, ROT_KIND, FIXED_DIRECTION, DIRECTION)
+                                     REL0, ROT_KIND, FIXED_DIRECTION, DIRECTION, SCREW, SCREW_ADVANCE0,
+                                     SCREW_RATIO, SCREW_REL0, SCREW_ROW)
 
 # Joint kinds.
 REVOLUTE, PRISMATIC = 0, 1
@@ -684,7 +685,8 @@ def _mount3(q, v, body, row, G, a1, a1d, a1dd):
 @njit(cache=True)
 def _device_block(q, v, e, P, width, M, Q):
     """Element e's device block (device_inertia.block) over its terminals' bodies, `width` velocity
-    coordinates each (3 in 2D, 6 in 3D): fills M, Q; returns the block's kinetic energy."""
+    coordinates each (3 in 2D, 6 in 3D): fills M, Q; returns the block's energy (kinetic beyond
+    ½ b L̇², and its masses' weight's potential)."""
     pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     pa = el_int[e, POINT_A]
     pb = el_int[e, POINT_B]
@@ -702,7 +704,8 @@ def _device_block(q, v, e, P, width, M, Q):
         _terminal3(q, v, pbody[pb], ploc[pb, 0], ploc[pb, 1], ploc[pb, 2], Hb, 6, rb, vb, acc_b)
         if el_real[e, MOUNT] != 0.0:
             _mount3(q, v, pbody[pa], el_real[e], Ga1, a1, a1d, a1dd)
-    return device_inertia.block(el_real[e], Ha, Hb, va, vb, rb - ra, acc_a, acc_b, a1, a1d, a1dd, Ga1, M, Q)
+    T, V = device_inertia.block(el_real[e], Ha, Hb, ra, rb, va, vb, acc_a, acc_b, a1, a1d, a1dd, Ga1, M, Q)
+    return T + V
 
 
 @njit(cache=True)
@@ -727,7 +730,7 @@ def _device_terms(q, v, e, P, AB, perm, off, gen, ba, bb, width):
 
 @njit(cache=True)
 def _device_energy(q, v, e, P, width):
-    """Element e's device block's kinetic energy (the device's T beyond ½ b L̇²)."""
+    """Element e's device block's energy (its T beyond ½ b L̇², and its masses' potential)."""
     n = 2 * width
     return _device_block(q, v, e, P, width, np.empty((n, n)), np.empty(n))
 
@@ -1313,7 +1316,69 @@ def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
                   + (a0 * anx + a1 * any_ + a2 * anz))
         rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
         row += 1
+    if jt_int[jn, SCREW_ROW]:
+        _screw3(v, alpha, AB, perm, off, rhs, jt_real[jn], row, ba, bb, Aa, Ab, lax, lay, laz, lbx, lby, lbz,
+                rx, ry, rz, rdx, rdy, rdz, anx, any_, anz)
+        row += 1
     return row
+
+
+@njit(cache=True, inline="always")
+def _screw_residual(Aa, Ab, jr, rx, ry, rz):
+    """A screw row's C = φ − ρ(s·(r_b − r_a) − x₀) mod 2π (joints.Screw.residual; φ as in
+    :func:`_rotational3`, D = (A_aᵀA_b) rel0ᵀ) and its axis s = A_a s̄."""
+    nx, ny, nz = jr[SCREW], jr[SCREW + 1], jr[SCREW + 2]
+    D = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            x = 0.0
+            for k in range(3):
+                x += (Aa[i] * Ab[k] + Aa[3 + i] * Ab[3 + k] + Aa[6 + i] * Ab[6 + k]) * jr[SCREW_REL0 + 3 * j + k]
+            D[i, j] = x
+    sn = 0.5 * (nx * (D[2, 1] - D[1, 2]) + ny * (D[0, 2] - D[2, 0]) + nz * (D[1, 0] - D[0, 1]))
+    nDn = (nx * (D[0, 0] * nx + D[0, 1] * ny + D[0, 2] * nz) + ny * (D[1, 0] * nx + D[1, 1] * ny + D[1, 2] * nz)
+           + nz * (D[2, 0] * nx + D[2, 1] * ny + D[2, 2] * nz))
+    phi = math.atan2(sn, 0.5 * (D[0, 0] + D[1, 1] + D[2, 2] - nDn))
+    sx, sy, sz = _mul(Aa, nx, ny, nz)
+    x = phi - jr[SCREW_RATIO] * (sx * rx + sy * ry + sz * rz - jr[SCREW_ADVANCE0])
+    return x - 2.0 * math.pi * round(x / (2.0 * math.pi)), sx, sy, sz
+
+
+@njit(cache=True, inline="always")
+def _screw3(v, alpha, AB, perm, off, rhs, jr, row, ba, bb, Aa, Ab, lax, lay, laz, lbx, lby, lbz,
+            rx, ry, rz, rdx, rdy, rdz, anx, any_, anz):
+    """A screw joint's row (joints.Screw): Ċ = s·(ω_b − ω_a) − ρ(s·ḋ + ṡ·d) over the bodies'
+    coordinates, γ = −(ṡ·ω_b − ρ(s̈·d + 2ṡ·ḋ + s·a_n)), with Baumgarte's −2αĊ − α²C."""
+    rho = jr[SCREW_RATIO]
+    nx, ny, nz = jr[SCREW], jr[SCREW + 1], jr[SCREW + 2]
+    c, sx, sy, sz = _screw_residual(Aa, Ab, jr, rx, ry, rz)
+    wax, way, waz = _omega(v, ba)
+    wbx, wby, wbz = _omega(v, bb)
+    a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, nx, ny, nz)
+    # the advance's part, −ρ × the dot-2 row of s
+    cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, rho * a0, rho * a1, rho * a2)
+    cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, -rho * a0, -rho * a1, -rho * a2)
+    cd += _wrow(AB, perm, off, row, v, ba, Aa, nx, ny, nz, -rho * rx, -rho * ry, -rho * rz)
+    # the turn's part: −s̄·ω̄_a + (A_bᵀ s)·ω̄_b
+    if ba >= 0:
+        k = 6 * ba + 3
+        _sym(AB, perm, off, row, k, -nx)
+        _sym(AB, perm, off, row, k + 1, -ny)
+        _sym(AB, perm, off, row, k + 2, -nz)
+        cd -= nx * wax + ny * way + nz * waz
+    gb = 0.0
+    if bb >= 0:
+        k = 6 * bb + 3
+        tx, ty, tz = _tmul(Ab, a0, a1, a2)
+        _sym(AB, perm, off, row, k, tx)
+        _sym(AB, perm, off, row, k + 1, ty)
+        _sym(AB, perm, off, row, k + 2, tz)
+        cd += tx * wbx + ty * wby + tz * wbz
+        ox, oy, oz = _mul(Ab, wbx, wby, wbz)
+        gb = ad0 * ox + ad1 * oy + ad2 * oz
+    gamma = -(gb - rho * ((aa0 * rx + aa1 * ry + aa2 * rz) + 2.0 * (ad0 * rdx + ad1 * rdy + ad2 * rdz)
+                          + (a0 * anx + a1 * any_ + a2 * anz)))
+    rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
 
 
 @njit(cache=True)
@@ -1406,6 +1471,8 @@ def constraint_residual3(q, P):
             j = DOT2 + 3 * d
             a0, a1, a2 = _mul(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
             worst = max(worst, abs(a0 * rx + a1 * ry + a2 * rz))
+        if jt_int[jn, SCREW_ROW]:
+            worst = max(worst, abs(_screw_residual(Aa, Ab, jt_real[jn], rx, ry, rz)[0]))
     return worst
 
 

@@ -47,6 +47,10 @@ def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
     if getattr(e, "device", None) is not None:
         for column, value in e.device.columns().items():          # DEVICE ... FLUID_QUADRATIC
             row_real[column] = float(value)
+        row = getattr(me, "row", None)
+        if row is not None:                                         # the scene's gravity, for its masses
+            row_real[layout.DEVICE_GRAVITY:layout.DEVICE_GRAVITY + 3] = [float(x) for x in
+                                                                          row[layout.DEVICE_GRAVITY:layout.DEVICE_GRAVITY + 3]]
     return tuple(row_int), tuple(row_real)
 
 

@@ -104,7 +104,7 @@ class TranslationalElement:
 
     def block(self, q, v):
         """A device's kinetic block (inerter.elements.device_inertia, run uncompiled) over the pair's
-        dofs: (M, Q, T), or None without one. The terminals' kinematics are the points' own; the
+        dofs: (M, Q, T, V: its kinetic and gravitational energy), or None without one. The terminals' kinematics are the points' own; the
         mount's axis a₁ = A_a a̅₁ is the point a̅₁ on a's body less its origin."""
         if self.device is None or not self.device.inertia():
             return None
@@ -129,10 +129,9 @@ class TranslationalElement:
             if Ht is not None:
                 Ga1[:, :width] = Ht - Ho
         M, Q = np.zeros((n, n)), np.zeros(n)
-        T = device_inertia.block.py_func(self.row, Ha, Hb, va, vb, rb - ra, acc_a, acc_b, a1, a1d, a1dd,
-                                                  Ga1, M, Q)
+        T, V = device_inertia.block.py_func(self.row, Ha, Hb, ra, rb, va, vb, acc_a, acc_b, a1, a1d, a1dd, Ga1, M, Q)
         keep = [i for i, p in enumerate((self.pair.a,) * width + (self.pair.b,) * width) if p.dofs is not None]
-        return M[np.ix_(keep, keep)], Q[keep], T
+        return M[np.ix_(keep, keep)], Q[keep], T, V
 
     def add_mass(self, q, v, M, geo=None):
         block = self.block(q, v)
@@ -162,8 +161,9 @@ class TranslationalElement:
         return self._energy(self.row, self.length(q), 0.0)
 
     def kinetic(self, q, v):
+        """The kinetic energy beyond the bodies', and (a device's masses) their weight's potential."""
         block = self.block(q, v)
-        return self.energy(q, v) - self.potential(q) + (block[2] if block is not None else 0.0)
+        return self.energy(q, v) - self.potential(q) + (block[2] + block[3] if block is not None else 0.0)
 
 
 class RotationalElement:

@@ -463,14 +463,18 @@ class DeviceBodies:
     first axis a₁ = A_a a̅₁ fixed in body a, second axis ŵ = a₁ × u/|a₁ × u| fixed in the housing,
     R_h = [ŵ, u × ŵ, u]; in 2D R_h = [ẑ, u × ẑ, u] (no spin about u). The rod is keyed to the
     housing (R_r = R_h); the flywheel turns on the screw, R_f = R_h R_z(n L). In 3D without a mount
-    the device's spin is not modelled: only T = ½ m |ċ|² + ½ I_t |u̇|² (u(q) like a position).
+    the device's spin is not modelled: only T = ½ m |ċ|² + ½ I_t |u̇|² (u(q) like a position). In a
+    scene with gravity g each part has the potential −m g·c: Q += m c.gᵀ g.
     Every velocity is (Jet gradient)·v, so Kane's equations (Kane & Levinson 1985) give, with the
     partial velocities ∂ċ/∂v = c.g, ∂ω/∂v from Rg Rᵀ and the accelerations at v̇ = 0 (c.d2,
     α₀ = vee(R̈Rᵀ + ṘṘᵀ)): M += m c.gᵀc.g + ω_vᵀ I ω_v and Q −= m c.gᵀ c̈₀ + ω_vᵀ(I α₀ + ω × Iω). The
     ideal inerter's ½ b L̇² (b = J n², in the element already) is taken off, T_block = T − ½ b L̇²."""
 
-    def __init__(self, device, dim):
+    def __init__(self, device, dim, gravity=None):
         self.dim = dim
+        self.gravity = np.zeros(3)
+        if gravity is not None:
+            self.gravity[:len(gravity)] = gravity
         fly, h, rod = (device.values(n) if device.has(n) else {} for n in ("flywheel", "housing", "rod"))
         self.mount = np.asarray(device.values("mount")["axis"], dtype=float) if device.has("mount") else None
         self.ratio = 0.0
@@ -510,7 +514,8 @@ class DeviceBodies:
         return [a - o for a, o in zip(tip, origin)]
 
     def terms(self, probe, q, v):
-        """(M block, Q block, kinetic energy T − ½ b L̇²) over the probe's dofs."""
+        """(M block, Q block, energy: kinetic T − ½ b L̇² and the parts' weight's potential −Σ m g·c)
+        over the probe's dofs."""
         coords, ra, rb = probe.terminals(q, v)
         n = len(probe.dofs)
         if self.dim == 2:
@@ -522,10 +527,10 @@ class DeviceBodies:
         R = self._frame(coords, probe.pair.a, u, n) if self.spin else None
         for m, end, x, It, J, turns in self.bodies:
             c = [p + x * e for p, e in zip(ra if end == "a" else rb, u)]
-            _, cd, cdd, cg = _parts(c)
+            cv, cd, cdd, cg = _parts(c)
             M += m * cg.T @ cg
-            Q -= m * cg.T @ cdd
-            T += 0.5 * m * float(cd @ cd)
+            Q -= m * cg.T @ (cdd - self.gravity)                # inertia and weight
+            T += 0.5 * m * float(cd @ cd) - m * float(self.gravity @ cv)
             if self.spin:
                 Rb = R
                 if turns:
@@ -588,7 +593,8 @@ class OracleElement:
         self.probe = DistanceProbe(pair, labels, spec.name, mech, direction)
         self.pair = pair
         dev = getattr(spec, "device", None)
-        self.bodies = DeviceBodies(dev, mech.dim) if dev is not None and dev.inertia() else None
+        self.bodies = (DeviceBodies(dev, mech.dim, mech.scene.effects.get("gravity"))
+                       if dev is not None and dev.inertia() else None)
 
     def _force_parts(self, L, rdot):
         """F = a·q̈ part (gradient factor) + the rest: returns (mass factor, rest)."""

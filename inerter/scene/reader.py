@@ -41,10 +41,10 @@ KNOWN_EFFECTS = {
 #: The element kinds (inerter.elements: one module each, with its parameters).
 ELEMENT_TYPES = tuple(elements.KINDS)
 JOINT_TYPES = ("revolute", "prismatic")
-JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed", "cylindrical", "universal", "planar")
+JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed", "cylindrical", "universal", "planar", "screw")
 #: The joint kinds that take an axis (in P1's frame): the sliding or turning axis, a universal
 #: joint's first axis (fixed in P1's body), a planar joint's normal.
-_AXIS_JOINTS = {2: ("prismatic",), 3: ("revolute", "prismatic", "cylindrical", "universal", "planar")}
+_AXIS_JOINTS = {2: ("prismatic",), 3: ("revolute", "prismatic", "cylindrical", "universal", "planar", "screw")}
 ORIENTATIONS = ("quaternion", "euler_zxz")
 FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
 #: The SI unit of each field of a point force.
@@ -106,6 +106,8 @@ class Joint:
                                             # point_a's frame at the initial pose (perpendicular to axis)
     stiffness: float = 0.0    # revolute: a rotational spring about the joint (N.m/rad) ...
     damping: float = 0.0      # ... and damper (N.m.s/rad), as the elements JOINT_spring, JOINT_damper
+    lead: float = 0.0         # screw: b's advance along the axis per turn relative to a (m; negative: left-handed)
+    coupling_only: bool = False   # screw: only the row tying the turn to the advance, not the cylindrical rows
 
 
 @dataclass(frozen=True)
@@ -758,6 +760,8 @@ def _read_joints(r: _Reader, raw, points, dimension):
             allowed["axis2"] = True
         if jtype == "revolute":
             allowed.update(stiffness=False, damping=False)
+        if jtype == "screw":
+            allowed.update(lead=True, coupling_only=False)
         r.table(spec, fld, allowed)
         a, b = r.name_pair(spec, "between", fld, points, "point")
         if points[a].body == points[b].body:
@@ -772,7 +776,15 @@ def _read_joints(r: _Reader, raw, points, dimension):
                               "not perpendicular (a universal joint's two axes cross at a right angle)")
         stiffness = r.number(spec, "stiffness", fld, default=0.0, minimum=0.0) if jtype == "revolute" else 0.0
         damping = r.number(spec, "damping", fld, default=0.0, minimum=0.0) if jtype == "revolute" else 0.0
-        joints[jname] = Joint(jname, jtype, a, b, axis, axis2, stiffness, damping)
+        lead, coupling_only = 0.0, False
+        if jtype == "screw":
+            lead = r.number(spec, "lead", fld, unit="m")
+            if lead == 0.0:
+                raise r.error(f"{fld}.lead", lead, "a non-zero lead (m; negative for a left-handed screw)", "zero")
+            coupling_only = spec.get("coupling_only", False)
+            if not isinstance(coupling_only, bool):
+                raise r.error(f"{fld}.coupling_only", coupling_only, "true or false", "not a boolean")
+        joints[jname] = Joint(jname, jtype, a, b, axis, axis2, stiffness, damping, lead, coupling_only)
     return joints
 
 

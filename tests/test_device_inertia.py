@@ -135,7 +135,7 @@ def test_a_device_without_masses_has_no_kinetic_block(tmp_path):
 
 
 def test_describe_lists_the_parts_and_the_mount(tmp_path):
-    text = _pendulum(tmp_path, PARTS + MOUNT, "mount.toml").describe()
+    text = "\n".join(_pendulum(tmp_path, PARTS + MOUNT, "mount.toml").terms())
     assert "housing (mass = 0.7 kg, centre = 0.15 m" in text
     assert "rod (mass = 0.3 kg" in text and "transverse_inertia = 0.003 kg.m2" in text
     assert "mount (axis = [" in text and "gyroscopic moments (Hooke mount)" in text

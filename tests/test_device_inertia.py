@@ -112,6 +112,23 @@ def test_engine_and_readable_path_equal_the_oracle(tmp_path, case):
         assert E == pytest.approx(E_ref, rel=1e-12, abs=1e-12)
 
 
+def test_engine_run_equals_the_oracle_run(tmp_path):
+    """Reference: the oracle's DOP853 run. The double pendulum with every part and a mount on a
+    moving body (its rod 1), 1 s at rtol 1e-12 both: every point's position within 2·N·rtol of
+    its range, N the steps (the bound test_engine_vs_oracle derives for two runs at rtol)."""
+    model = _pendulum(tmp_path, PARTS + MOUNT, "mount.toml")
+    settings = model.settings(method="DOP853", stop_time=1.0, rtol=1e-12, atol=1e-14)
+    from inerter.engine.simulation import integrate
+    ref = integrate(model.oracle().mechanism, settings)
+    run = compiled.integrate_compiled(model.mechanism, settings)
+    assert run.status == ref.status == "ok" and np.array_equal(run.time, ref.time)
+    bound = 2.0 * max(run.steps, ref.steps) * 1e-12
+    mech = model.mechanism
+    for k in mech.q_index:                             # each body's centre
+        a, b = run.states[:, k:k + 3], ref.states[:, k:k + 3]
+        assert np.max(np.abs(a - b)) <= bound * max(1.0, np.max(np.abs(b)))
+
+
 def test_the_oracle_comparison_can_fail(tmp_path):
     """Guard: the engine with the mount's axis turned by 1e-6 rad (the housing's spin and the
     gyroscopic moments change with it) is far from the oracle of the scene."""

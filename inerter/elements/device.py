@@ -263,8 +263,8 @@ FLYWHEEL = Effect(
      Parameter("transverse_inertia", "kg.m2", "the flywheel's moment of inertia about a diameter, through its "
                "centre", minimum=0.0, required=False),
      Parameter("mass", "kg", "the flywheel's mass", minimum=0.0, required=False),
-     Parameter("centre", "m", "distance of the flywheel's centre from terminal a, along the device", minimum=0.0,
-               required=False, default=0.0)),
+     Parameter("centre", "m", "distance of the flywheel's centre from terminal a, along the device (0 where "
+               "not given)", minimum=0.0, required=False)),
     check=lambda v: _one_of(v, ("lead", "ratio"), "ball screw or gear train"),
     inertance=lambda v: v["inertia"] * _flywheel_ratio(v) ** 2)
 

@@ -198,6 +198,18 @@ def test_screw_nut_falls_at_the_closed_form(path):
     assert result["constraint_residual"].max() <= 1e-9
 
 
+@pytest.mark.parametrize("edit, field, expected", [
+    (('lead = "p"', 'lead = 0.0'), "joints.screw.lead", "non-zero lead"),
+    (('lead = "p"', 'lead = "p"\ncoupling_only = 1'), "joints.screw.coupling_only", "true or false"),
+    (('lead = "p"\n', ''), "joints.screw.lead", "missing")])
+def test_screw_joint_errors_name_the_field(tmp_path, edit, field, expected):
+    path = tmp_path / "nut.toml"
+    path.write_text((DATA / "screw_nut_3d.toml").read_text(encoding="utf-8").replace(*edit), encoding="utf-8")
+    with pytest.raises(SceneError) as err:
+        inerter.load(path)
+    assert field in str(err.value) and expected in str(err.value)
+
+
 def test_screw_joint_kernels_equal_the_numpy_joints(tmp_path):
     """The kernels' screw row (and the rest of the explicit device's joints) against the numpy
     joints' (inerter.model.joints.Screw, code of its own): accelerations and multipliers at random
@@ -298,11 +310,14 @@ def test_fmu_of_a_device_with_masses_validates_and_matches_the_solver(tmp_path):
     from inerter.engine.tables import tunable_field
     from inerter.fmu.build import build
     from inerter.fmu.run import simulate_fmu
+    from fmpy import read_model_description
     fmu = build(BAR_COMPACT, tmp_path, force=True)
     assert validate_fmu(str(fmu)) == []
     model = inerter.load(BAR_COMPACT)
-    for field in ("elements.device.device", ):
-        assert tunable_field(model.scene, field)
+    assert tunable_field(model.scene, "elements.device.device")
+    variables = {v.name: v for v in read_model_description(str(fmu)).modelVariables}
+    for name in ("m_h", "h_h", "It_h", "Ja_h", "m_r", "h_r", "It_r", "Ja_r", "Jt_fw", "m_fw", "h_fw", "J_fw"):
+        assert variables[name].causality == "parameter" and variables[name].variability == "tunable", name
     run = simulate_fmu(BAR_COMPACT, stop_time=2.0, fmu_path=fmu, metrics=False)
     ref = model.simulate(stop_time=2.0, metrics=False)
     assert run.status == "ok", run.message

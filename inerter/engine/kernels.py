@@ -238,7 +238,7 @@ def _add_elements2(q, v, P, AB, perm, off, gen):
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 3)
         if rarely(el_real[e, INERTIA] != 0.0):
-            _device_terms(q, v, e, P, AB, perm, off, gen, ba, bb, 3)
+            _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, 3)
     return status
 
 
@@ -615,7 +615,7 @@ def signal_values2(q, v, qdd, P, out):
             F += b * gq
         energy += law.energy(kind, el_real[e], L, along)
         if rarely(el_real[e, INERTIA] != 0.0):
-            energy += _device_energy(q, v, e, P, 3)
+            energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 3)
         out[k] = L
         out[k + 1] = along
         out[k + 2] = F
@@ -683,11 +683,11 @@ def _mount3(q, v, body, row, G, a1, a1d, a1dd):
 
 
 @njit(cache=True)
-def _device_block(q, v, e, P, width, M, Q):
+def _device_block(q, v, e, pbody, ploc, el_int, el_real, width, M, Q):
     """Element e's device block (device_inertia.block) over its terminals' bodies, `width` velocity
     coordinates each (3 in 2D, 6 in 3D): fills M, Q; returns the block's energy (kinetic beyond
-    ½ b L̇², and its masses' weight's potential)."""
-    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    ½ b L̇², and its masses' weight's potential). The tables are passed, not P: a call that takes
+    the scene's tuple makes the loop it sits in materialise it."""
     pa = el_int[e, POINT_A]
     pb = el_int[e, POINT_B]
     n = 2 * width
@@ -709,13 +709,13 @@ def _device_block(q, v, e, P, width, M, Q):
 
 
 @njit(cache=True)
-def _device_terms(q, v, e, P, AB, perm, off, gen, ba, bb, width):
+def _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, width):
     """Element e's device block added to Eq. (33): M += its block and Q += its right side, on the
     coordinates of bodies ba (the block's first `width` rows) and bb (the next), not the ground's."""
     n = 2 * width
     M = np.empty((n, n))
     Q = np.empty(n)
-    _device_block(q, v, e, P, width, M, Q)
+    _device_block(q, v, e, pbody, ploc, el_int, el_real, width, M, Q)
     for i in range(n):
         bi = ba if i < width else bb
         if bi < 0:
@@ -729,10 +729,10 @@ def _device_terms(q, v, e, P, AB, perm, off, gen, ba, bb, width):
 
 
 @njit(cache=True)
-def _device_energy(q, v, e, P, width):
+def _device_energy(q, v, e, pbody, ploc, el_int, el_real, width):
     """Element e's device block's energy (its T beyond ½ b L̇², and its masses' potential)."""
     n = 2 * width
-    return _device_block(q, v, e, P, width, np.empty((n, n)), np.empty(n))
+    return _device_block(q, v, e, pbody, ploc, el_int, el_real, width, np.empty((n, n)), np.empty(n))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -1194,7 +1194,7 @@ def _add_elements3(q, v, P, AB, perm, off, gen):
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 6)
         if rarely(el_real[e, INERTIA] != 0.0):
-            _device_terms(q, v, e, P, AB, perm, off, gen, ba, bb, 6)
+            _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, 6)
     return status
 
 
@@ -1539,7 +1539,7 @@ def signal_values3(q, v, qdd, P, out):
             F += b * gq
         energy += law.energy(kind, el_real[e], L, along)
         if rarely(el_real[e, INERTIA] != 0.0):
-            energy += _device_energy(q, v, e, P, 6)
+            energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 6)
         out[k] = L
         out[k + 1] = along
         out[k + 2] = F

@@ -183,18 +183,26 @@ def test_a_mount_in_2d_is_refused_with_the_reason(tmp_path):
 # The screw joint
 # ------------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("path", ["compiled", "numpy"])
-def test_screw_nut_falls_at_the_closed_form(path):
+@pytest.mark.parametrize("dim", [3, 2])
+def test_screw_nut_falls_at_the_closed_form(path, dim):
     """Closed form: a nut of mass m and axial inertia J on a vertical screw of lead p falls at
     a = g/(1 + J(2π/p)²/m) (Lagrange with T = ½(m + J(2π/p)²)ż², V = m g z) and turns at
-    ω_z = (2π/p) ż (the screw's lead positive: right-handed, the nut turns about +z as it rises)."""
-    model = inerter.load(DATA / "screw_nut_3d.toml")
+    (2π/p) ż (the screw's lead positive: right-handed, the nut turns about +z as it rises); in 2D
+    the same for a pinion on a vertical rack (the 2D screw joint), its angle (2π/p) y."""
+    model = inerter.load(DATA / f"screw_nut_{dim}d.toml")
     result = model.simulate(path=path)
     m, J, p, g = 0.5, 2e-4, 0.02, 9.81
     n = 2.0 * math.pi / p
     a = g / (1.0 + J * n * n / m)
     t = result.time
-    assert np.max(np.abs(result["N.r[3]"] + 0.5 * a * t * t)) <= 1e-12
-    assert np.max(np.abs(result["nut.w[3]"] + n * a * t)) <= 1e-9
+    assert np.max(np.abs(result[f"N.r[{dim}]"] + 0.5 * a * t * t)) <= 1e-12
+    if dim == 3:
+        assert np.max(np.abs(result["nut.w[3]"] + n * a * t)) <= 1e-9
+    else:
+        assert np.max(np.abs(result["N.v[2]"] + a * t)) <= 1e-11
+        mech = model.mechanism
+        angle = result.run.states[:, mech.q_index[0] + 2]
+        assert np.max(np.abs(angle + 0.5 * n * a * t * t)) <= 1e-9
     assert result["constraint_residual"].max() <= 1e-9
 
 
@@ -208,6 +216,32 @@ def test_screw_joint_errors_name_the_field(tmp_path, edit, field, expected):
     with pytest.raises(SceneError) as err:
         inerter.load(path)
     assert field in str(err.value) and expected in str(err.value)
+
+
+def test_2d_screw_on_a_moving_rack_kernels_equal_the_numpy_joints(tmp_path):
+    """The 2D screw's rows where the rack turns (its body a pinned to the ground and swinging):
+    the kernels' (kernels._screw2) against the numpy joint's (joints.Prismatic2D), accelerations
+    and multipliers at random states, within 1e-12 of the largest."""
+    text = (DATA / "screw_nut_2d.toml").read_text(encoding="utf-8")
+    text = text.replace('[bodies.pinion]', '[bodies.rack]\nmass = 2.0\ninertia = 0.3\nposition = [0.4, 0]\n'
+                        'angle = 0.0\npoints = { R0 = [-0.4, 0], R = [0.1, 0.05] }\n\n[joints.pivot]\n'
+                        'type = "revolute"\nbetween = ["S", "R0"]\n\n[bodies.pinion]')
+    text = text.replace('between = ["S", "N"]', 'between = ["R", "N"]').replace("position = [0, 0]\npoints",
+                                                                            "position = [0.5, 0.2]\npoints")
+    path = tmp_path / "rack.toml"
+    path.write_text(text, encoding="utf-8")
+    model = inerter.load(path)
+    mech = model.mechanism
+    kernel = compiled.compile_mechanism(mech)
+    for t, q, v in _states(mech, "rack-2d"):
+        y = np.concatenate(mech.accelerations(t, q, v, alpha=0.0))
+        x = np.concatenate(kernel.accelerations(t, q, v))
+        assert np.max(np.abs(x - y)) <= 1e-12 * max(1.0, np.max(np.abs(y)))
+    # γ is C's second derivative: along a run (the rack swinging, the pinion falling and turning)
+    # the joints hold to the integrator's tolerance
+    result = model.simulate(metrics=False)
+    assert result.status == "ok" and np.ptp(result["N.r[2]"]) > 0.5
+    assert result["constraint_residual"].max() <= 1e-9
 
 
 def test_screw_joint_kernels_equal_the_numpy_joints(tmp_path):

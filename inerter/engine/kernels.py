@@ -307,10 +307,13 @@ def _revolute2(AB, perm, off, rhs, row, alpha, ba, bb, rx, ry, rdx, rdy, anx, an
 @njit(cache=True, inline="always")
 def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
                 ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby):
-    """A 2D prismatic joint's two rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0 with n = A_a n̄."""
+    """A 2D prismatic joint's two rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0 with n = A_a n̄; a 2D
+    screw (rack and pinion, joints.Prismatic2D) turns b by ρ per unit of advance along the axis
+    t = A_a t̄ (n = t turned by +90°): its first row is θ_b − θ_a − φ0 − ρ (t·d − x₀) = 0."""
     nbx = jt_real[jn, 0]
     nby = jt_real[jn, 1]
     phi0 = jt_real[jn, 2]
+    rho = jt_real[jn, 3]
     tha = q[3 * ba + 2] if ba >= 0 else 0.0
     thb = q[3 * bb + 2] if bb >= 0 else 0.0
     wa = v[3 * ba + 2] if ba >= 0 else 0.0
@@ -346,8 +349,39 @@ def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
         _sym(AB, perm, off, row + 1, kb + 2, h2)
         cd2 += nx * v[kb] + ny * v[kb + 1] + h2 * v[kb + 2]
     gamma2 = -((nx * anx + ny * any_) - wa * wa * c2 + 2.0 * wa * (npx * rdx + npy * rdy))
-    rhs[perm[row]] = 0.0 - 2.0 * alpha * cd1 - alpha * alpha * c1
+    gamma1 = 0.0
+    if rho != 0.0:
+        c1, cd1, gamma1 = _screw2(v, AB, perm, off, row, ba, bb, rho, jt_real[jn, 4], nx, ny, c1, cd1,
+                                  rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby, wa)
+    rhs[perm[row]] = gamma1 - 2.0 * alpha * cd1 - alpha * alpha * c1
     rhs[perm[row + 1]] = gamma2 - 2.0 * alpha * cd2 - alpha * alpha * c2
+
+
+@njit(cache=True, inline="always")
+def _screw2(v, AB, perm, off, row, ba, bb, rho, x0, nx, ny, c1, cd1, rx, ry, rdx, rdy, anx, any_,
+            tax, tay, tbx, tby, wa):
+    """The 2D screw's part of its first row, −ρ (t·d − x₀) with t = (n_y, −n_x) (dt/dθ_a = n):
+    C, Ċ and γ = ρ (t·a_n − θ̇_a² t·d + 2 θ̇_a n·ḋ) (joints.Prismatic2D)."""
+    tx = ny
+    ty = -nx
+    td = tx * rx + ty * ry
+    c1 -= rho * (td - x0)
+    if ba >= 0:
+        ka = 3 * ba
+        h = -(-(tx * tax + ty * tay) + (nx * rx + ny * ry))
+        _sym(AB, perm, off, row, ka, rho * tx)
+        _sym(AB, perm, off, row, ka + 1, rho * ty)
+        _sym(AB, perm, off, row, ka + 2, rho * h)
+        cd1 += rho * (tx * v[ka] + ty * v[ka + 1] + h * v[ka + 2])
+    if bb >= 0:
+        kb = 3 * bb
+        h = tx * tbx + ty * tby
+        _sym(AB, perm, off, row, kb, -rho * tx)
+        _sym(AB, perm, off, row, kb + 1, -rho * ty)
+        _sym(AB, perm, off, row, kb + 2, -rho * h)
+        cd1 -= rho * (tx * v[kb] + ty * v[kb + 1] + h * v[kb + 2])
+    gamma1 = rho * ((tx * anx + ty * any_) - wa * wa * td + 2.0 * wa * (nx * rdx + ny * rdy))
+    return c1, cd1, gamma1
 
 
 @njit(cache=True)
@@ -557,7 +591,8 @@ def constraint_residual2(q, P):
                 s = 0.0
             nx = c * nbx - s * nby
             ny = s * nbx + c * nby
-            worst = max(worst, abs(thb - tha - jt_real[jn, 2]), abs(nx * rx + ny * ry))
+            turn = thb - tha - jt_real[jn, 2] - jt_real[jn, 3] * (ny * rx - nx * ry - jt_real[jn, 4])
+            worst = max(worst, abs(turn), abs(nx * rx + ny * ry))
     return worst
 
 

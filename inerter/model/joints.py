@@ -32,13 +32,20 @@ class Prismatic2D:
     kind = "prismatic"
     rows = 2
 
-    def __init__(self, name: str, pair, axis, angle_index_a: int, angle_index_b: int, phi0: float):
+    def __init__(self, name: str, pair, axis, angle_index_a: int, angle_index_b: int, phi0: float,
+                 lead: float = 0.0, advance0: float = 0.0):
         self.name = name
         self.pair = pair
         self.dofs = pair.dofs
         self.normal = np.array((-axis[1], axis[0]), dtype=float)
         self.phi0 = float(phi0)
         self.ia, self.ib = angle_index_a, angle_index_b
+        # A 2D screw (rack and pinion): b turns by ρ = 2π/p per unit of its advance t·d along the axis
+        # t = A_a t̄ since the initial advance x₀; the first row becomes θ_b − θ_a − φ0 − ρ(t·d − x₀).
+        self.ratio = 2.0 * math.pi / lead if lead else 0.0
+        self.advance0 = float(advance0)
+        if lead:
+            self.kind = "screw"
 
     def evaluate(self, q, v):
         pair = self.pair
@@ -66,7 +73,16 @@ class Prismatic2D:
             Cq[1, 2] += float(n_perp @ d)                       # ... and through n
         # C̈ = n·(H q̈ + a_n) + θ̈_a n⊥·d − θ̇_a² n·d + 2 θ̇_a n⊥·ḋ
         gamma2 = -(float(n @ a_n) - wa * wa * c2 + 2.0 * wa * float(n_perp @ ddot))
-        return np.array((c1, c2)), Cq, np.array((0.0, gamma2))
+        gamma1 = 0.0
+        if self.ratio:
+            t = -n_perp                                         # the axis; dt/dθ_a = n
+            c1 -= self.ratio * (float(t @ d) - self.advance0)
+            Cq[0] -= self.ratio * (t @ H)
+            if has_a:
+                Cq[0, 2] -= self.ratio * float(n @ d)
+            # (t·d)¨ = t·(H q̈ + a_n) + θ̈_a n·d − θ̇_a² t·d + 2 θ̇_a n·ḋ
+            gamma1 = self.ratio * (float(t @ a_n) - wa * wa * float(t @ d) + 2.0 * wa * float(n @ ddot))
+        return np.array((c1, c2)), Cq, np.array((gamma1, gamma2))
 
 
 class _Vector:
@@ -207,6 +223,12 @@ def make_joint(spec, mech, q0):
         body_b = mech.scene.points[spec.point_b].body
         ia, ib = mech.angle_index(body_a), mech.angle_index(body_b)
         phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
+        if spec.type == "screw":
+            d0 = pair.evaluate(q0, np.zeros(mech.n))[0]
+            th = q0[ia] if ia >= 0 else 0.0
+            t = np.array((math.cos(th) * spec.axis[0] - math.sin(th) * spec.axis[1],
+                          math.sin(th) * spec.axis[0] + math.cos(th) * spec.axis[1]))
+            return Prismatic2D(spec.name, pair, spec.axis, ia, ib, phi0, spec.lead, float(t @ d0))
         return Prismatic2D(spec.name, pair, spec.axis, ia, ib, phi0)
 
     if spec.type == "spherical":

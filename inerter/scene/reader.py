@@ -40,11 +40,11 @@ KNOWN_EFFECTS = {
 
 #: The element kinds (inerter.elements: one module each, with its parameters).
 ELEMENT_TYPES = tuple(elements.KINDS)
-JOINT_TYPES = ("revolute", "prismatic")
+JOINT_TYPES = ("revolute", "prismatic", "screw")
 JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed", "cylindrical", "universal", "planar", "screw")
 #: The joint kinds that take an axis (in P1's frame): the sliding or turning axis, a universal
 #: joint's first axis (fixed in P1's body), a planar joint's normal.
-_AXIS_JOINTS = {2: ("prismatic",), 3: ("revolute", "prismatic", "cylindrical", "universal", "planar", "screw")}
+_AXIS_JOINTS = {2: ("prismatic", "screw"), 3: ("revolute", "prismatic", "cylindrical", "universal", "planar", "screw")}
 ORIENTATIONS = ("quaternion", "euler_zxz")
 FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
 #: The SI unit of each field of a point force.
@@ -761,7 +761,7 @@ def _read_joints(r: _Reader, raw, points, dimension):
         if jtype == "revolute":
             allowed.update(stiffness=False, damping=False)
         if jtype == "screw":
-            allowed.update(lead=True, coupling_only=False)
+            allowed.update(lead=True, **({"coupling_only": False} if dimension == 3 else {}))
         r.table(spec, fld, allowed)
         a, b = r.name_pair(spec, "between", fld, points, "point")
         if points[a].body == points[b].body:

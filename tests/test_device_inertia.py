@@ -5,8 +5,9 @@ References, each named in its test:
 * the oracle (inerter.oracle.derivation.DeviceBodies), which derives the device's terms from its
   parts' rigid-body kinetic energy, their rotations built on Jets from the mount's definition, with
   code shared with neither the engine nor the elements;
-* a closed form for the screw joint alone: a nut on a vertical screw falls at
-  g/(1 + J(2π/p)²/m) (its kinetic energy ½(m + J(2π/p)²)ż² and potential m g z);
+* a closed form for the screw joint alone: a nut on a vertical screw (3D), a pinion on a vertical
+  rack (2D) falls at g/(1 + J(2π/p)²/m) (its kinetic energy ½(m + J(2π/p)²)ż², potential m g z);
+  the kernels' screw rows against the numpy joints' (inerter.model.joints) at random states;
 * the explicit device: the same scene with the device built from bodies and joints (housing on a
   Hooke joint, rod keyed to it by a prismatic joint and carried by a ball joint, flywheel on a
   revolute bearing and a screw joint), solved by the same engine (tests/data/device_*_explicit);

@@ -273,6 +273,7 @@ def table_tunable(scene: Path) -> set[str]:
             continue
         dim = flat0["dim"]
         device = list(range(layout.DEVICE, layout.FLUID_QUADRATIC + 1))
+        device += list(range(layout.INERTIA, layout.MOUNT_AXIS + 3))       # its masses, inertias and mount
         tunable_columns = {"el_real": [layout.COEFFICIENT, layout.CENTRIPETAL] + device,
                            "rot_real": [layout.COEFFICIENT],
                            "fa_real": [dim + layout.F_VALUE, dim + layout.F_AMPLITUDE, dim + layout.F_FREQUENCY],

@@ -54,7 +54,7 @@ import pkgutil
 
 from inerter.elements.base import ROTATIONAL, TRANSLATIONAL, ElementKind, Parameter  # noqa: F401
 
-_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device"}
+_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device", "device_inertia"}
 
 
 def _kind_modules():

@@ -64,9 +64,13 @@ class Parameter:
     maximum: float = math.inf
     strict: bool = False
     default: float | None = None
+    #: 3: a vector of three numbers, made a unit vector (a device mount's axis); 1: a number.
+    size: int = 1
 
     def expected(self) -> str:
         """The range in words, for an error message: "a number ≥ 0 (N/m)"."""
+        if self.size > 1:
+            return f"a vector of {self.size} numbers, not all zero ({self.unit})"
         parts = []
         if self.minimum != -math.inf:
             parts.append(f"{'>' if self.strict else '≥'} {self.minimum:g}")

@@ -18,9 +18,12 @@ energy ½ J ω² = ½ J (2π/p)² L̇² is that of an inerter of inertance
     b = J (2π/p)²,
 
 or b = J n² for a rack and pinion or gear train that turns the flywheel by n radians per metre of
-stroke. Only this axial part is a law of L̇: the flywheel's transverse inertia, its gyroscopic
-moments when the device's axis turns, and the masses of the housing and rod add terms to the mass
-matrix beyond b g gᵀ and are not modelled here.
+stroke. Only this axial part is a law of L̇: the flywheel's transverse inertia and mass
+(``device.flywheel.transverse_inertia``, ``mass``, ``centre``), the housing and the rod as rigid
+bodies carried by the terminals (``device.housing``, ``device.rod``) and, in 3D, the housing's
+mount that makes its spin and the flywheel's gyroscopic moments part of the kinetic energy
+(``device.mount``) add a mass-matrix block beyond b g gᵀ: :mod:`inerter.elements.device_inertia`,
+where they are derived.
 
 **Friction** (``device.friction``): Coulomb friction F_c and viscous friction c_f on the stroke
 rate, with the sign function regularised by a hyperbolic tangent of velocity scale v_s,
@@ -82,9 +85,11 @@ from typing import Callable
 from numba import njit
 
 from inerter.elements.base import Parameter, law
-from inerter.elements.layout import (COULOMB, DEVICE, FLUID, FLUID_LINEAR, FLUID_QUADRATIC, FLYWHEEL_RATIO,
-                                     FRICTION, STOP_DAMPING, STOP_EXPONENT, STOP_MAX, STOP_MIN, STOP_STIFFNESS,
-                                     STOPS, VELOCITY_SCALE, VISCOUS)
+from inerter.elements.layout import (COULOMB, DEVICE, FLUID, FLUID_LINEAR, FLUID_QUADRATIC, FLYWHEEL_AXIAL,
+                                     FLYWHEEL_CENTRE, FLYWHEEL_MASS, FLYWHEEL_RATIO, FRICTION, HOUSING_AXIAL,
+                                     HOUSING_CENTRE, HOUSING_MASS, INERTIA, MOUNT, MOUNT_AXIS, ROD_CENTRE, ROD_MASS,
+                                     STOP_DAMPING, STOP_EXPONENT, STOP_MAX, STOP_MIN, STOP_STIFFNESS, STOPS,
+                                     TRANSVERSE, VELOCITY_SCALE, VISCOUS)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -212,6 +217,8 @@ class Effect:
     parameters: tuple[Parameter, ...]
     check: Callable | None = None
     inertance: Callable | None = None
+    dimensions: tuple = (2, 3)
+    why_not_2d: str = ""
 
 
 def _one_of(values, keys, what):
@@ -252,7 +259,12 @@ FLYWHEEL = Effect(
      Parameter("lead", "m", "ball-screw lead p: stroke per flywheel revolution", minimum=0.0, strict=True,
                required=False),
      Parameter("ratio", "rad/m", "flywheel angle per unit of stroke n (rack and pinion, gears)", minimum=0.0,
-               strict=True, required=False)),
+               strict=True, required=False),
+     Parameter("transverse_inertia", "kg.m2", "the flywheel's moment of inertia about a diameter, through its "
+               "centre", minimum=0.0, required=False),
+     Parameter("mass", "kg", "the flywheel's mass", minimum=0.0, required=False),
+     Parameter("centre", "m", "distance of the flywheel's centre from terminal a, along the device (0 where "
+               "not given)", minimum=0.0, required=False)),
     check=lambda v: _one_of(v, ("lead", "ratio"), "ball screw or gear train"),
     inertance=lambda v: v["inertia"] * _flywheel_ratio(v) ** 2)
 
@@ -291,9 +303,39 @@ FLUID_EFFECT = Effect(
                required=False, default=0.0)),
     inertance=lambda v: v["density"] * v["channel_length"] * v["piston_area"] ** 2 / v["channel_area"])
 
+
+
+def _body_part(name, end, what):
+    return Effect(
+        name, f"the {what} as a rigid body carried by terminal {end}, axisymmetric about the device's axis",
+        "Smith 2002, IEEE TAC 47(10), Sec. III (ball-screw inerter: housing, screw, flywheel)",
+        (Parameter("mass", "kg", f"the {what}'s mass", minimum=0.0),
+         Parameter("centre", "m", f"distance of the {what}'s centre of mass from terminal {end}, along the device",
+                   minimum=0.0, required=False, default=0.0),
+         Parameter("transverse_inertia", "kg.m2", f"the {what}'s moment of inertia about a diameter through its "
+                   "centre", minimum=0.0, required=False, default=0.0),
+         Parameter("axial_inertia", "kg.m2", f"the {what}'s moment of inertia about the device's axis (it spins "
+                   "with the housing: device.mount)", minimum=0.0, required=False, default=0.0)))
+
+
+HOUSING = _body_part("housing", "a", "housing")
+ROD = _body_part("rod", "b", "rod")
+
+MOUNT_EFFECT = Effect(
+    "mount", "the housing on a Hooke joint at terminal a (first axis fixed in a's body): its spin, the flywheel's "
+    "gyroscopic moments", "Kane & Levinson 1985, Dynamics, Ch. 6; inerter.elements.device_inertia",
+    (Parameter("axis", "1", "the Hooke joint's first axis a1, fixed in terminal a's body (its frame); singular "
+               "where the device's axis is parallel to it", size=3),),
+    dimensions=(3,), why_not_2d="in 2D the housing cannot spin about its in-plane axis: the planar constraint "
+    "carries the flywheel's gyroscopic moment")
+
 #: The effects an inerter may declare, in the order they are listed and their outputs written.
-EFFECTS = (FLYWHEEL, FRICTION_EFFECT, END_STOPS, FLUID_EFFECT)
+EFFECTS = (FLYWHEEL, FRICTION_EFFECT, END_STOPS, FLUID_EFFECT, HOUSING, ROD, MOUNT_EFFECT)
 EFFECT = {e.name: e for e in EFFECTS}
+
+
+def _number(v) -> str:
+    return f"{v:g}" if not isinstance(v, tuple) else "[" + ", ".join(f"{x:g}" for x in v) + "]"
 
 
 @dataclass(frozen=True)
@@ -337,6 +379,30 @@ class Device:
         if self.has("fluid"):
             v = self.values("fluid")
             cols.update({FLUID: 1.0, FLUID_LINEAR: v["linear_damping"], FLUID_QUADRATIC: v["quadratic_damping"]})
+        if self.inertia():
+            cols.update(self._inertia_columns())
+        return cols
+
+    def inertia(self) -> bool:
+        """Whether it declares masses or inertias beyond the flywheel's axial one, or a mount: a
+        kinetic block of its own (:mod:`inerter.elements.device_inertia`)."""
+        fly = self.values("flywheel")
+        return (any(self.has(n) for n in ("housing", "rod", "mount"))
+                or fly.get("transverse_inertia") is not None or fly.get("mass") is not None)
+
+    def _inertia_columns(self) -> dict[int, float]:
+        fly, housing, rod = self.values("flywheel"), self.values("housing"), self.values("rod")
+        cols = {INERTIA: 1.0, HOUSING_MASS: housing.get("mass") or 0.0, HOUSING_CENTRE: housing.get("centre") or 0.0,
+                ROD_MASS: rod.get("mass") or 0.0, ROD_CENTRE: rod.get("centre") or 0.0,
+                FLYWHEEL_MASS: fly.get("mass") or 0.0, FLYWHEEL_CENTRE: fly.get("centre") or 0.0,
+                TRANSVERSE: ((fly.get("transverse_inertia") or 0.0) + (housing.get("transverse_inertia") or 0.0)
+                             + (rod.get("transverse_inertia") or 0.0)),
+                HOUSING_AXIAL: (housing.get("axial_inertia") or 0.0) + (rod.get("axial_inertia") or 0.0),
+                FLYWHEEL_AXIAL: fly.get("inertia") or 0.0}
+        if self.has("mount"):
+            cols[MOUNT] = 1.0
+            for i, x in enumerate(self.values("mount")["axis"]):
+                cols[MOUNT_AXIS + i] = float(x)
         return cols
 
     def dissipative(self) -> bool:
@@ -363,8 +429,12 @@ class Device:
         for name, values in self.effects:
             effect = EFFECT[name]
             units = {p.key: p.unit for p in effect.parameters}
-            given = ", ".join(f"{k} = {v:g}" + (f" {units[k]}" if units[k] != "1" else "")
+            given = ", ".join(f"{k} = {_number(v)}" + (f" {units[k]}" if units[k] != "1" else "")
                               for k, v in values if v is not None)
             parts.append(f"{name} ({given})")
         b = self.inertance()
-        return "; ".join(parts) + (f"; inertance from the device b = {b:g} kg" if b is not None else "")
+        text = "; ".join(parts) + (f"; inertance from the device b = {b:g} kg" if b is not None else "")
+        if self.inertia():
+            text += ("; kinetic block: masses and transverse inertia" + (", housing spin and gyroscopic "
+                     "moments (Hooke mount)" if self.has("mount") else ""))
+        return text

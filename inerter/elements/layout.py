@@ -38,7 +38,21 @@ DIRECTION = 20           # that direction, a unit vector in the global frame (3 
                          # SLIDER, the joint's axis in the frame of terminal a's body
 SLIDER = 23              # 1.0: a prismatic joint's spring or damper: it acts along the joint's axis, fixed in
                          # terminal a's body (DIRECTION), and L is the signed slide ê·(r_b − r_a)
-ELEMENT_REAL_COLUMNS = 24
+# An inerter device's masses and inertias (inerter.elements.device_inertia; all 0.0 where not declared):
+INERTIA = 24             # 1.0: the device declares masses, a transverse inertia or a mount (its kinetic block)
+HOUSING_MASS = 25        # housing mass m_h (kg), centre at HOUSING_CENTRE (m) from terminal a along r̂
+HOUSING_CENTRE = 26
+ROD_MASS = 27            # rod mass m_r (kg), centre at ROD_CENTRE (m) from terminal b along −r̂
+ROD_CENTRE = 28
+FLYWHEEL_MASS = 29       # flywheel mass m_f (kg), centre at FLYWHEEL_CENTRE (m) from terminal a along r̂
+FLYWHEEL_CENTRE = 30
+TRANSVERSE = 31          # transverse moment of inertia of housing, rod and flywheel together, about their centres (kg.m2)
+MOUNT = 32               # 1.0: the housing's mount (a Hooke joint at terminal a) is declared: spin and gyroscopic terms
+HOUSING_AXIAL = 33       # axial moment of inertia of housing and rod, which spin together (kg.m2)
+FLYWHEEL_AXIAL = 34      # the flywheel's axial moment of inertia J (kg.m2), for its spin with the housing
+MOUNT_AXIS = 35          # the Hooke joint's first axis a̅₁, a unit vector in terminal a's body frame (3 columns)
+DEVICE_GRAVITY = 38      # the scene's gravity g (m/s², 3 columns; 0 without), for the weight of the device's masses
+ELEMENT_REAL_COLUMNS = 41
 
 # -- rot_int: a rotational element's integers
 ROT_KIND = 0             # its code: its place in inerter.elements.KINDS
@@ -52,6 +66,16 @@ AXIS = 2                 # 3D: the axis n̄ in body a's frame, 3 columns
 REL0 = 5                 # 3D: the initial relative orientation A_aᵀ A_b, 9 columns, row-major
 ROT_REAL_COLUMNS_2D = 2
 ROT_REAL_COLUMNS_3D = 14
+
+# -- jt_real of a 3D joint (after its dot-1 pairs at 0..17 and dot-2 vectors at 18..23): a screw
+#    joint's row (inerter.model.joints.Screw), read where column SCREW_ROW of jt_int is 1
+SCREW_ROW = 6            # jt_int: 1 where the joint has the screw row
+SCREW = 24               # jt_real: the screw's axis s̄ in a's frame (3 columns)
+SCREW_REL0 = 27          # the initial relative orientation A_aᵀ A_b (9 columns, row-major)
+SCREW_RATIO = 36         # ρ = 2π/p: the turn of b relative to a per unit of b's advance along the axis (rad/m)
+SCREW_ADVANCE0 = 37      # the initial advance s·(r_b − r_a) (m)
+JOINT_REAL_COLUMNS = 38
+JOINT_INT_COLUMNS = 7
 
 # -- point forces (not element kinds, but tables of the same engine): fa_int, fa_real, pd_int,
 #    pd_real, in_int; a force's real row starts with its direction's DIM components (2 or 3), and the

@@ -314,7 +314,7 @@ def flatten(mech) -> dict:
         a, b = pidx[j.point_a], pidx[j.point_b]
         if j.type == "revolute":
             jt_int.append((_k_code("REVOLUTE"), a, b))
-            jt_real.append((0.0, 0.0, 0.0))
+            jt_real.append((0.0, 0.0, 0.0, 0.0, 0.0))
         else:
             axis = j.axis
             ia, ib = angle_index(scene.points[j.point_a].body), angle_index(scene.points[j.point_b].body)
@@ -322,8 +322,9 @@ def flatten(mech) -> dict:
             phi0 = getattr(mj, "phi0", None)
             if phi0 is None:
                 phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
-            jt_int.append((_k_code("PRISMATIC"), a, b))
-            jt_real.append((-float(axis[1]), float(axis[0]), float(phi0)))
+            jt_int.append((_k_code("PRISMATIC"), a, b))        # a 2D screw: a prismatic joint that turns
+            jt_real.append((-float(axis[1]), float(axis[0]), float(phi0), float(getattr(mj, "ratio", 0.0)),
+                            float(getattr(mj, "advance0", 0.0))))
 
     def rotational(e, me):          # bodies' angle indices; φ0 from the mechanism's element
         ia, ib = angle_index(e.body_a), angle_index(e.body_b)
@@ -354,7 +355,7 @@ def flatten(mech) -> dict:
                 el_real=arr(el_real, layout.ELEMENT_REAL_COLUMNS, float),
                 rot_int=arr(rot_int, layout.ROT_INT_COLUMNS, np.int64),
                 rot_real=arr(rot_real, layout.ROT_REAL_COLUMNS_2D, float),
-                jt_int=arr(jt_int, 3, np.int64), jt_real=arr(jt_real, 3, float),
+                jt_int=arr(jt_int, 3, np.int64), jt_real=arr(jt_real, 5, float),
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 9, float),
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 5, float),
                 in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),

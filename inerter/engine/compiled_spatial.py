@@ -19,9 +19,9 @@ from inerter.model.joints import Coincident, SpatialJoint
 
 # Joint kinds (column 0 of ``jt_int``), as in :mod:`inerter.engine.kernels` (its 3D section).
 _JOINT_KIND = {"spherical": 0, "revolute": 1, "fixed": 2, "prismatic": 3, "cylindrical": 4, "universal": 5,
-               "planar": 6}
-#: Width of a ``jt_real`` row: three dot-1 pairs (s̄_a, s̄_b) and two dot-2 vectors s̄_a.
-JOINT_WIDTH = 24
+               "planar": 6, "screw": 7}
+#: Width of a ``jt_real`` row: three dot-1 pairs (s̄_a, s̄_b), two dot-2 vectors s̄_a, a screw row's numbers.
+JOINT_WIDTH = layout.JOINT_REAL_COLUMNS
 DOT2 = 18
 
 
@@ -46,8 +46,14 @@ def _joint_rows3(mech, pidx):
             real[6 * k + 3:6 * k + 6] = vb.local
         for k, va in enumerate(dot2):
             real[DOT2 + 3 * k:DOT2 + 3 * k + 3] = va.local
+        screw = getattr(mj, "screw", None)
+        if screw is not None:
+            real[layout.SCREW:layout.SCREW + 3] = screw.axis
+            real[layout.SCREW_REL0:layout.SCREW_REL0 + 9] = screw.rel0.ravel()
+            real[layout.SCREW_RATIO] = screw.ratio
+            real[layout.SCREW_ADVANCE0] = screw.advance0
         jt_int.append((_JOINT_KIND[j.type], pidx[j.point_a], pidx[j.point_b], int(bool(coincident)),
-                       len(dot1), len(dot2)))
+                       len(dot1), len(dot2), int(screw is not None)))
         jt_real.append(real)
     return jt_int, jt_real
 
@@ -72,12 +78,13 @@ def flatten3(mech) -> dict:
     * ``rot_int`` (rotational elements, 3): kind (0 spring, 1 damper), body a, body b;
       ``rot_real`` (rotational elements, 14): coefficient (k or d), free angle, axis n̄ in body a's
       frame (3), rel0 = A_aᵀA_b at the initial pose (9, row-major).
-    * ``jt_int`` (joints, 6): kind (0 spherical, 1 revolute, 2 fixed, 3 prismatic, 4 cylindrical,
-      5 universal, 6 planar: a label; the kernels evaluate the rows the counts give), point a,
+    * ``jt_int`` (joints, 7): kind (0 spherical, 1 revolute, 2 fixed, 3 prismatic, 4 cylindrical,
+      5 universal, 6 planar, 7 screw: a label; the kernels evaluate the rows the counts give), point a,
       point b, coincident rows (1: three rows r_b − r_a = 0), number of dot-1 rows, number of
-      dot-2 rows; the joint's rows are in that order. ``jt_real`` (joints, 24): the dot-1 pairs
-      (s̄_a in a's frame, s̄_b in b's frame) at columns 6k..6k+5 (k < 3), the dot-2 vectors s̄_a
-      at columns 18 + 3k (k < 2); unused columns are 0.
+      dot-2 rows, a screw row (1: one, :class:`inerter.model.joints.Screw`); the joint's rows are
+      in that order. ``jt_real`` (joints, 38): the dot-1 pairs (s̄_a in a's frame, s̄_b in b's
+      frame) at columns 6k..6k+5 (k < 3), the dot-2 vectors s̄_a at columns 18 + 3k (k < 2), the
+      screw's numbers from column layout.SCREW on; unused columns are 0.
     * ``fa_int`` (forces, 2): point, time function (0 constant, 1 sine, 2 step); ``fa_real``
       (forces, 10): direction (3), value, amplitude, frequency, phase, offset, time, initial.
     * ``pd_int`` (pd forces, 1): point; ``pd_real`` (pd forces, 6): direction (3), kp, kd, reference.
@@ -104,7 +111,7 @@ def flatten3(mech) -> dict:
         mass[n + 9 * i:n + 9 * i + 9] = M0[k:k + 3, k:k + 3].ravel()
 
     jt_int, jt_real = _joint_rows3(mech, pidx)
-    m = sum(3 * c + d1 + d2 for _, _, _, c, d1, d2 in jt_int)
+    m = sum(3 * c + d1 + d2 + sc for _, _, _, c, d1, d2, sc in jt_int)
 
     def rotational(e, me):          # body indices; the axis and the initial relative orientation
         extra = [*np.asarray(me.axis, dtype=float), *np.asarray(me.rel0, dtype=float).ravel()]
@@ -127,7 +134,7 @@ def flatten3(mech) -> dict:
                 el_real=arr(el_real, layout.ELEMENT_REAL_COLUMNS, float),
                 rot_int=arr(rot_int, layout.ROT_INT_COLUMNS, np.int64),
                 rot_real=arr(rot_real, layout.ROT_REAL_COLUMNS_3D, float),
-                jt_int=arr(jt_int, 6, np.int64), jt_real=arr(jt_real, JOINT_WIDTH, float),
+                jt_int=arr(jt_int, layout.JOINT_INT_COLUMNS, np.int64), jt_real=arr(jt_real, JOINT_WIDTH, float),
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 10, float),
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 6, float),
                 in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
@@ -152,7 +159,7 @@ BODY_OUTPUTS = ("q[1]", "q[2]", "q[3]", "q[4]", "euler[1]", "euler[2]", "euler[3
 
 def _joint_rows(flat):
     """Number of constraint rows of each joint, in order."""
-    return [3 * c + d1 + d2 for _, _, _, c, d1, d2 in flat["jt_int"]]
+    return [3 * c + d1 + d2 + sc for _, _, _, c, d1, d2, sc in flat["jt_int"]]
 
 
 def sparsity3(flat) -> np.ndarray:

@@ -22,12 +22,14 @@ from inerter.scene.ground_motion import (TERM_AMPLITUDE, TERM_AXIS, TERM_FREQUEN
 from inerter.common.rotations import (EULER_SINGULARITY, euler_angles9, euler_matrix9, euler_rates,
                                        quaternion_matrix9, quaternion_of_matrix9, quaternion_rates)
 
+from inerter.elements import device_inertia
 from inerter.elements import dispatch as law
-from inerter.elements.base import axial_scalars
+from inerter.elements.base import axial_scalars, rarely
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, F_AMPLITUDE, F_FREQUENCY, F_INITIAL, F_OFFSET,
-                                     F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, KIND, MEET_LIMIT,
-                                     PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B, REL0, ROT_KIND, FIXED_DIRECTION,
-                                     DIRECTION, SLIDER)
+                                     F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA, KIND,
+                                     MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B,
+                                     REL0, ROT_KIND, FIXED_DIRECTION, DIRECTION, SCREW, SCREW_ADVANCE0,
+                                     SCREW_RATIO, SCREW_REL0, SCREW_ROW, SLIDER)
 
 # Joint kinds.
 REVOLUTE, PRISMATIC = 0, 1
@@ -244,6 +246,8 @@ def _add_elements2(q, v, P, AB, perm, off, gen):
         gb[2] = tbx * ex + tby * ey
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 3)
+        if rarely(el_real[e, INERTIA] != 0.0):
+            _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, 3)
     return status
 
 
@@ -312,10 +316,13 @@ def _revolute2(AB, perm, off, rhs, row, alpha, ba, bb, rx, ry, rdx, rdy, anx, an
 @njit(cache=True, inline="always")
 def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
                 ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby):
-    """A 2D prismatic joint's two rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0 with n = A_a n̄."""
+    """A 2D prismatic joint's two rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0 with n = A_a n̄; a 2D
+    screw (rack and pinion, joints.Prismatic2D) turns b by ρ per unit of advance along the axis
+    t = A_a t̄ (n = t turned by +90°): its first row is θ_b − θ_a − φ0 − ρ (t·d − x₀) = 0."""
     nbx = jt_real[jn, 0]
     nby = jt_real[jn, 1]
     phi0 = jt_real[jn, 2]
+    rho = jt_real[jn, 3]
     tha = q[3 * ba + 2] if ba >= 0 else 0.0
     thb = q[3 * bb + 2] if bb >= 0 else 0.0
     wa = v[3 * ba + 2] if ba >= 0 else 0.0
@@ -351,8 +358,39 @@ def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
         _sym(AB, perm, off, row + 1, kb + 2, h2)
         cd2 += nx * v[kb] + ny * v[kb + 1] + h2 * v[kb + 2]
     gamma2 = -((nx * anx + ny * any_) - wa * wa * c2 + 2.0 * wa * (npx * rdx + npy * rdy))
-    rhs[perm[row]] = 0.0 - 2.0 * alpha * cd1 - alpha * alpha * c1
+    gamma1 = 0.0
+    if rho != 0.0:
+        c1, cd1, gamma1 = _screw2(v, AB, perm, off, row, ba, bb, rho, jt_real[jn, 4], nx, ny, c1, cd1,
+                                  rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby, wa)
+    rhs[perm[row]] = gamma1 - 2.0 * alpha * cd1 - alpha * alpha * c1
     rhs[perm[row + 1]] = gamma2 - 2.0 * alpha * cd2 - alpha * alpha * c2
+
+
+@njit(cache=True, inline="always")
+def _screw2(v, AB, perm, off, row, ba, bb, rho, x0, nx, ny, c1, cd1, rx, ry, rdx, rdy, anx, any_,
+            tax, tay, tbx, tby, wa):
+    """The 2D screw's part of its first row, −ρ (t·d − x₀) with t = (n_y, −n_x) (dt/dθ_a = n):
+    C, Ċ and γ = ρ (t·a_n − θ̇_a² t·d + 2 θ̇_a n·ḋ) (joints.Prismatic2D)."""
+    tx = ny
+    ty = -nx
+    td = tx * rx + ty * ry
+    c1 -= rho * (td - x0)
+    if ba >= 0:
+        ka = 3 * ba
+        h = -(-(tx * tax + ty * tay) + (nx * rx + ny * ry))
+        _sym(AB, perm, off, row, ka, rho * tx)
+        _sym(AB, perm, off, row, ka + 1, rho * ty)
+        _sym(AB, perm, off, row, ka + 2, rho * h)
+        cd1 += rho * (tx * v[ka] + ty * v[ka + 1] + h * v[ka + 2])
+    if bb >= 0:
+        kb = 3 * bb
+        h = tx * tbx + ty * tby
+        _sym(AB, perm, off, row, kb, -rho * tx)
+        _sym(AB, perm, off, row, kb + 1, -rho * ty)
+        _sym(AB, perm, off, row, kb + 2, -rho * h)
+        cd1 -= rho * (tx * v[kb] + ty * v[kb + 1] + h * v[kb + 2])
+    gamma1 = rho * ((tx * anx + ty * any_) - wa * wa * td + 2.0 * wa * (nx * rdx + ny * rdy))
+    return c1, cd1, gamma1
 
 
 @njit(cache=True)
@@ -562,7 +600,8 @@ def constraint_residual2(q, P):
                 s = 0.0
             nx = c * nbx - s * nby
             ny = s * nbx + c * nby
-            worst = max(worst, abs(thb - tha - jt_real[jn, 2]), abs(nx * rx + ny * ry))
+            turn = thb - tha - jt_real[jn, 2] - jt_real[jn, 3] * (ny * rx - nx * ry - jt_real[jn, 4])
+            worst = max(worst, abs(turn), abs(nx * rx + ny * ry))
     return worst
 
 
@@ -619,6 +658,8 @@ def signal_values2(q, v, qdd, P, out):
                 gq += (qdd[kb] + qdd[kb + 2] * tbx) * ex + (qdd[kb + 1] + qdd[kb + 2] * tby) * ey
             F += b * gq
         energy += law.energy(kind, el_real[e], L, along)
+        if rarely(el_real[e, INERTIA] != 0.0):
+            energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 3)
         out[k] = L
         out[k + 1] = along
         out[k + 2] = F
@@ -635,6 +676,107 @@ def signal_values2(q, v, qdd, P, out):
     out[k] = energy
     out[k + 1] = constraint_residual2(q, P) if jt_int.shape[0] else 0.0
     return status
+
+
+# ------------------------------------------------------------------------------------------------
+# An inerter device's kinetic block (inerter.elements.device_inertia): the terminals' kinematics it
+# takes, from the kinematics above (Eqs. 15-19, 22, 25), and its terms scattered into Eq. (33)
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _terminal2(q, v, body, lx, ly, H, col, rv, vv, acc):
+    """A 2D terminal: r, ṙ and its acceleration at v̇ = 0 (−θ̇² A ū, Eq. 17) into rv, vv, acc (z = 0),
+    and ∂ṙ/∂v = [I, A_θ ū] (Eq. 16) into H's columns col … col + 2 (none for the ground)."""
+    rx, ry, vx, vy, ux, uy, w = _point(q, v, body, lx, ly)
+    rv[0], rv[1], rv[2] = rx, ry, 0.0
+    vv[0], vv[1], vv[2] = vx, vy, 0.0
+    acc[0], acc[1], acc[2] = -w * w * ux, -w * w * uy, 0.0
+    if body >= 0:
+        H[0, col] = 1.0
+        H[1, col + 1] = 1.0
+        H[0, col + 2] = -uy
+        H[1, col + 2] = ux
+
+
+@njit(cache=True, inline="always")
+def _terminal3(q, v, body, lx, ly, lz, H, col, rv, vv, acc):
+    """A 3D terminal: r, ṙ, its acceleration at v̇ = 0 (Eq. 25) and ∂ṙ/∂v = [I, −A ũ] (Eq. 22; the
+    ω̄ column j is A(e_j × ū)) into H's columns col … col + 5 (none for the ground)."""
+    A = _rot(q, v, body)
+    rv[0], rv[1], rv[2], vv[0], vv[1], vv[2], acc[0], acc[1], acc[2] = _point3(q, v, body, A, lx, ly, lz)
+    if body >= 0:
+        for j in range(3):
+            H[j, col + j] = 1.0
+            cx, cy, cz = _cross(1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0, lx, ly, lz)
+            H[0, col + 3 + j], H[1, col + 3 + j], H[2, col + 3 + j] = _mul(A, cx, cy, cz)
+
+
+@njit(cache=True, inline="always")
+def _mount3(q, v, body, row, G, a1, a1d, a1dd):
+    """The mount's axis a₁ = A_a a̅₁, ȧ₁ = A_a(ω̄ × a̅₁) = G v (column j of G over ω̄: A_a(e_j × a̅₁)),
+    ä₁ at v̇ = 0, A_a(ω̄ × (ω̄ × a̅₁)) (:func:`_vector`); a fixed axis on the ground."""
+    sx, sy, sz = row[MOUNT_AXIS], row[MOUNT_AXIS + 1], row[MOUNT_AXIS + 2]
+    if body < 0:
+        a1[0], a1[1], a1[2] = sx, sy, sz
+        return
+    A = _rot(q, v, body)
+    wx, wy, wz = _omega(v, body)
+    a1[0], a1[1], a1[2], a1d[0], a1d[1], a1d[2], a1dd[0], a1dd[1], a1dd[2] = _vector(A, wx, wy, wz, sx, sy, sz)
+    for j in range(3):
+        cx, cy, cz = _cross(1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0, sx, sy, sz)
+        G[0, 3 + j], G[1, 3 + j], G[2, 3 + j] = _mul(A, cx, cy, cz)
+
+
+@njit(cache=True)
+def _device_block(q, v, e, pbody, ploc, el_int, el_real, width, M, Q):
+    """Element e's device block (device_inertia.block) over its terminals' bodies, `width` velocity
+    coordinates each (3 in 2D, 6 in 3D): fills M, Q; returns the block's energy (kinetic beyond
+    ½ b L̇², and its masses' weight's potential). The tables are passed, not P: a call that takes
+    the scene's tuple makes the loop it sits in materialise it."""
+    pa = el_int[e, POINT_A]
+    pb = el_int[e, POINT_B]
+    n = 2 * width
+    Ha = np.zeros((3, n))
+    Hb = np.zeros((3, n))
+    Ga1 = np.zeros((3, n))
+    ra, rb, va, vb, acc_a, acc_b = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    a1, a1d, a1dd = np.zeros(3), np.zeros(3), np.zeros(3)
+    if width == 3:
+        _terminal2(q, v, pbody[pa], ploc[pa, 0], ploc[pa, 1], Ha, 0, ra, va, acc_a)
+        _terminal2(q, v, pbody[pb], ploc[pb, 0], ploc[pb, 1], Hb, 3, rb, vb, acc_b)
+    else:
+        _terminal3(q, v, pbody[pa], ploc[pa, 0], ploc[pa, 1], ploc[pa, 2], Ha, 0, ra, va, acc_a)
+        _terminal3(q, v, pbody[pb], ploc[pb, 0], ploc[pb, 1], ploc[pb, 2], Hb, 6, rb, vb, acc_b)
+        if el_real[e, MOUNT] != 0.0:
+            _mount3(q, v, pbody[pa], el_real[e], Ga1, a1, a1d, a1dd)
+    T, V = device_inertia.block(el_real[e], Ha, Hb, ra, rb, va, vb, acc_a, acc_b, a1, a1d, a1dd, Ga1, M, Q)
+    return T + V
+
+
+@njit(cache=True)
+def _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, width):
+    """Element e's device block added to Eq. (33): M += its block and Q += its right side, on the
+    coordinates of bodies ba (the block's first `width` rows) and bb (the next), not the ground's."""
+    n = 2 * width
+    M = np.empty((n, n))
+    Q = np.empty(n)
+    _device_block(q, v, e, pbody, ploc, el_int, el_real, width, M, Q)
+    for i in range(n):
+        bi = ba if i < width else bb
+        if bi < 0:
+            continue
+        gi = width * bi + i % width
+        gen[gi] += Q[i]
+        for j in range(n):
+            bj = ba if j < width else bb
+            if bj >= 0:
+                _addK(AB, perm, off, gi, width * bj + j % width, M[i, j])
+
+
+@njit(cache=True)
+def _device_energy(q, v, e, pbody, ploc, el_int, el_real, width):
+    """Element e's device block's energy (its T beyond ½ b L̇², and its masses' potential)."""
+    n = 2 * width
+    return _device_block(q, v, e, pbody, ploc, el_int, el_real, width, np.empty((n, n)), np.empty(n))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -1102,6 +1244,8 @@ def _add_elements3(q, v, P, AB, perm, off, gen):
             status = TERMINALS_MEET
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 6)
+        if rarely(el_real[e, INERTIA] != 0.0):
+            _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, 6)
     return status
 
 
@@ -1223,7 +1367,69 @@ def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
                   + (a0 * anx + a1 * any_ + a2 * anz))
         rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
         row += 1
+    if jt_int[jn, SCREW_ROW]:
+        _screw3(v, alpha, AB, perm, off, rhs, jt_real[jn], row, ba, bb, Aa, Ab, lax, lay, laz, lbx, lby, lbz,
+                rx, ry, rz, rdx, rdy, rdz, anx, any_, anz)
+        row += 1
     return row
+
+
+@njit(cache=True, inline="always")
+def _screw_residual(Aa, Ab, jr, rx, ry, rz):
+    """A screw row's C = φ − ρ(s·(r_b − r_a) − x₀) mod 2π (joints.Screw.residual; φ as in
+    :func:`_rotational3`, D = (A_aᵀA_b) rel0ᵀ) and its axis s = A_a s̄."""
+    nx, ny, nz = jr[SCREW], jr[SCREW + 1], jr[SCREW + 2]
+    D = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            x = 0.0
+            for k in range(3):
+                x += (Aa[i] * Ab[k] + Aa[3 + i] * Ab[3 + k] + Aa[6 + i] * Ab[6 + k]) * jr[SCREW_REL0 + 3 * j + k]
+            D[i, j] = x
+    sn = 0.5 * (nx * (D[2, 1] - D[1, 2]) + ny * (D[0, 2] - D[2, 0]) + nz * (D[1, 0] - D[0, 1]))
+    nDn = (nx * (D[0, 0] * nx + D[0, 1] * ny + D[0, 2] * nz) + ny * (D[1, 0] * nx + D[1, 1] * ny + D[1, 2] * nz)
+           + nz * (D[2, 0] * nx + D[2, 1] * ny + D[2, 2] * nz))
+    phi = math.atan2(sn, 0.5 * (D[0, 0] + D[1, 1] + D[2, 2] - nDn))
+    sx, sy, sz = _mul(Aa, nx, ny, nz)
+    x = phi - jr[SCREW_RATIO] * (sx * rx + sy * ry + sz * rz - jr[SCREW_ADVANCE0])
+    return x - 2.0 * math.pi * round(x / (2.0 * math.pi)), sx, sy, sz
+
+
+@njit(cache=True, inline="always")
+def _screw3(v, alpha, AB, perm, off, rhs, jr, row, ba, bb, Aa, Ab, lax, lay, laz, lbx, lby, lbz,
+            rx, ry, rz, rdx, rdy, rdz, anx, any_, anz):
+    """A screw joint's row (joints.Screw): Ċ = s·(ω_b − ω_a) − ρ(s·ḋ + ṡ·d) over the bodies'
+    coordinates, γ = −(ṡ·ω_b − ρ(s̈·d + 2ṡ·ḋ + s·a_n)), with Baumgarte's −2αĊ − α²C."""
+    rho = jr[SCREW_RATIO]
+    nx, ny, nz = jr[SCREW], jr[SCREW + 1], jr[SCREW + 2]
+    c, sx, sy, sz = _screw_residual(Aa, Ab, jr, rx, ry, rz)
+    wax, way, waz = _omega(v, ba)
+    wbx, wby, wbz = _omega(v, bb)
+    a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, nx, ny, nz)
+    # the advance's part, −ρ × the dot-2 row of s
+    cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, rho * a0, rho * a1, rho * a2)
+    cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, -rho * a0, -rho * a1, -rho * a2)
+    cd += _wrow(AB, perm, off, row, v, ba, Aa, nx, ny, nz, -rho * rx, -rho * ry, -rho * rz)
+    # the turn's part: −s̄·ω̄_a + (A_bᵀ s)·ω̄_b
+    if ba >= 0:
+        k = 6 * ba + 3
+        _sym(AB, perm, off, row, k, -nx)
+        _sym(AB, perm, off, row, k + 1, -ny)
+        _sym(AB, perm, off, row, k + 2, -nz)
+        cd -= nx * wax + ny * way + nz * waz
+    gb = 0.0
+    if bb >= 0:
+        k = 6 * bb + 3
+        tx, ty, tz = _tmul(Ab, a0, a1, a2)
+        _sym(AB, perm, off, row, k, tx)
+        _sym(AB, perm, off, row, k + 1, ty)
+        _sym(AB, perm, off, row, k + 2, tz)
+        cd += tx * wbx + ty * wby + tz * wbz
+        ox, oy, oz = _mul(Ab, wbx, wby, wbz)
+        gb = ad0 * ox + ad1 * oy + ad2 * oz
+    gamma = -(gb - rho * ((aa0 * rx + aa1 * ry + aa2 * rz) + 2.0 * (ad0 * rdx + ad1 * rdy + ad2 * rdz)
+                          + (a0 * anx + a1 * any_ + a2 * anz)))
+    rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
 
 
 @njit(cache=True)
@@ -1316,6 +1522,8 @@ def constraint_residual3(q, P):
             j = DOT2 + 3 * d
             a0, a1, a2 = _mul(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
             worst = max(worst, abs(a0 * rx + a1 * ry + a2 * rz))
+        if jt_int[jn, SCREW_ROW]:
+            worst = max(worst, abs(_screw_residual(Aa, Ab, jt_real[jn], rx, ry, rz)[0]))
     return worst
 
 
@@ -1381,6 +1589,8 @@ def signal_values3(q, v, qdd, P, out):
                     gq += gb[i] * qdd[kb + i]
             F += b * gq
         energy += law.energy(kind, el_real[e], L, along)
+        if rarely(el_real[e, INERTIA] != 0.0):
+            energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 6)
         out[k] = L
         out[k + 1] = along
         out[k + 2] = F

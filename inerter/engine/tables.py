@@ -47,6 +47,10 @@ def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
     if getattr(e, "device", None) is not None:
         for column, value in e.device.columns().items():          # DEVICE ... FLUID_QUADRATIC
             row_real[column] = float(value)
+        row = getattr(me, "row", None)
+        if row is not None:                                         # the scene's gravity, for its masses
+            row_real[layout.DEVICE_GRAVITY:layout.DEVICE_GRAVITY + 3] = [float(x) for x in
+                                                                          row[layout.DEVICE_GRAVITY:layout.DEVICE_GRAVITY + 3]]
     if e.slider_axis is not None:                                 # a prismatic joint's spring or damper
         row_real[layout.SLIDER] = 1.0
         row_real[layout.DIRECTION:layout.DIRECTION + len(e.slider_axis)] = [float(x) for x in e.slider_axis]
@@ -67,9 +71,11 @@ def rotational_row(e, body_a, body_b, free_angle, extra=()) -> tuple[tuple, tupl
 
 
 def adds_mass(row_int, row_real) -> bool:
-    """Whether a translational element adds to the mass matrix (its law's inertance is not 0):
-    its bodies' coordinates are coupled in the sparsity pattern."""
-    return elements.MODULES[row_int[layout.KIND]].inertance.py_func(row_real) != 0.0
+    """Whether a translational element adds to the mass matrix (its law's inertance is not 0, or
+    its device has a kinetic block, inerter.elements.device_inertia): its bodies' coordinates are
+    coupled in the sparsity pattern."""
+    return (elements.MODULES[row_int[layout.KIND]].inertance.py_func(row_real) != 0.0
+            or row_real[layout.INERTIA] != 0.0)
 
 
 def meet_limits(mech, specs) -> dict[str, float]:

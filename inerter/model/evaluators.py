@@ -17,7 +17,7 @@ import numpy as np
 
 from inerter import elements
 from inerter.common.errors import MIN_LENGTH, TerminalsMeet  # noqa: F401  (re-exported)
-from inerter.elements import layout
+from inerter.elements import device_inertia, layout
 from inerter.elements.base import axial_scalars as _compiled_axial_scalars
 from inerter.model.planar import PointPair
 
@@ -122,7 +122,41 @@ class TranslationalElement:
         self._extra(self.row, L, Ldot, extra, 0)
         return values + tuple(float(x) for x in extra)
 
+    def block(self, q, v):
+        """A device's kinetic block (inerter.elements.device_inertia, run uncompiled) over the pair's
+        dofs: (M, Q, T, V: its kinetic and gravitational energy), or None without one. The terminals' kinematics are the points' own; the
+        mount's axis a₁ = A_a a̅₁ is the point a̅₁ on a's body less its origin."""
+        if self.device is None or not self.device.inertia():
+            return None
+        dim = len(self.pair.a.local)
+        width = 3 if dim == 2 else 6
+        n = 2 * width
+        Ha, Hb, kin = np.zeros((3, n)), np.zeros((3, n)), []
+        for p, H, col in ((self.pair.a, Ha, 0), (self.pair.b, Hb, width)):
+            r, rdot, Hp, acc = p.evaluate(q, v)
+            if Hp is not None:
+                H[:dim, col:col + width] = Hp
+            kin.append([np.pad(np.asarray(x, dtype=float), (0, 3 - dim)) for x in (r, rdot, acc)])
+        (ra, va, acc_a), (rb, vb, acc_b) = kin
+        a1, a1d, a1dd, Ga1 = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros((3, n))
+        if self.row[layout.MOUNT] != 0.0:
+            a = self.pair.a
+            axis = self.row[layout.MOUNT_AXIS:layout.MOUNT_AXIS + 3]
+            tip, origin = (type(a)(a.body, local, a.qi, a.dofs[0] if a.dofs is not None else 0, a.orientation, a.cache)
+                           for local in (axis, np.zeros(3)))
+            (rt, vt, Ht, at), (ro, vo, Ho, ao) = tip.evaluate(q, v), origin.evaluate(q, v)
+            a1, a1d, a1dd = rt - ro, vt - vo, at - ao
+            if Ht is not None:
+                Ga1[:, :width] = Ht - Ho
+        M, Q = np.zeros((n, n)), np.zeros(n)
+        T, V = device_inertia.block.py_func(self.row, Ha, Hb, ra, rb, va, vb, acc_a, acc_b, a1, a1d, a1dd, Ga1, M, Q)
+        keep = [i for i, p in enumerate((self.pair.a,) * width + (self.pair.b,) * width) if p.dofs is not None]
+        return M[np.ix_(keep, keep)], Q[keep], T, V
+
     def add_mass(self, q, v, M, geo=None):
+        block = self.block(q, v)
+        if block is not None:
+            M[np.ix_(self.pair.dofs, self.pair.dofs)] += block[0]
         if self.inertance == 0.0:
             return
         geo = geo or self.geometry(q, v)
@@ -134,6 +168,9 @@ class TranslationalElement:
         geo = geo or self.geometry(q, v)
         F, _ = self._law_force(geo)
         Q[self.pair.dofs] -= F * (geo[3].T @ geo[5])              # Eq. (29); Q_Iv, Eq. (31)
+        block = self.block(q, v)
+        if block is not None:
+            Q[self.pair.dofs] += block[1]
 
     def energy(self, q, v) -> float:
         geo = self.geometry(q, v)
@@ -144,7 +181,9 @@ class TranslationalElement:
         return self._energy(self.row, self.length(q), 0.0)
 
     def kinetic(self, q, v):
-        return self.energy(q, v) - self.potential(q)
+        """The kinetic energy beyond the bodies', and (a device's masses) their weight's potential."""
+        block = self.block(q, v)
+        return self.energy(q, v) - self.potential(q) + (block[2] + block[3] if block is not None else 0.0)
 
 
 class RotationalElement:

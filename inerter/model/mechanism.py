@@ -21,6 +21,7 @@ import numpy as np
 
 from inerter.model import evaluators as el
 from inerter import elements
+from inerter.elements import layout
 from inerter.common.errors import SceneError, SimulationError
 from inerter.model.joints import make_joint
 from inerter.model.planar import PointKinematics, PointPair
@@ -262,8 +263,12 @@ class Mechanism:
         if e.type == "inerter" and self.scene.small_displacement:     # along r̂ at t = 0
             r0 = pair.evaluate(q0, np.zeros(self.n))[0]
             fixed = r0 / L_initial
-        return el.TranslationalElement(e.name, e.type, pair, e.coefficient, labels, free, self.scene.centripetal,
-                                       device=e.device, fixed_direction=fixed, slider_axis=e.slider_axis)
+        out = el.TranslationalElement(e.name, e.type, pair, e.coefficient, labels, free, self.scene.centripetal,
+                                      device=e.device, fixed_direction=fixed, slider_axis=e.slider_axis)
+        g = self.scene.effects.get("gravity")
+        if e.device is not None and e.device.inertia() and g is not None:     # the weight of its masses
+            out.row[layout.DEVICE_GRAVITY:layout.DEVICE_GRAVITY + len(g)] = g
+        return out
 
     def _initial_length(self, e, pair, q0):
         r, _, _, _ = pair.evaluate(q0, np.zeros(self.n))

@@ -26,6 +26,7 @@ numpy evaluators (see :class:`OracleRotational`).
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -208,7 +209,8 @@ class DistanceProbe:
                              "orientation = \"quaternion\" for the oracle", "the oracle differentiates "
                              "quaternion kinematics only")
 
-    def evaluate(self, q, v):
+    def terminals(self, q, v):
+        """(the bodies' coordinates as Jets by body, r_a, r_b as Jets), over this probe's dofs."""
         n = len(self.dofs)
         coords, k = {}, 0
         nvb = 3 if self.dim == 2 else 6
@@ -218,8 +220,13 @@ class DistanceProbe:
                 k += nvb
         ra = point_position(self.pair.a, coords.get(self.pair.a.body))
         rb = point_position(self.pair.b, coords.get(self.pair.b.body))
+        as_jet = [c if isinstance(c, Jet) else Jet.constant(c, n) for c in ra + rb]
+        return coords, as_jet[:len(ra)], as_jet[len(ra):]
+
+    def evaluate(self, q, v):
+        n = len(self.dofs)
+        coords, ra, rb = self.terminals(q, v)
         r = [b - a for a, b in zip(ra, rb)]
-        r = [c if isinstance(c, Jet) else Jet.constant(c, n) for c in r]
         rdot = np.array([c.d1 for c in r])                      # ṙ = J_r q̇
         if self.axis_end is not None:
             tip = point_position(self.axis_end, coords.get(self.pair.a.body))
@@ -444,6 +451,138 @@ class OracleDevice:
         return tuple(values[suffix] for suffix, _, _ in self.spec.outputs())
 
 
+def _cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _parts(jets):
+    """(values, first derivatives, second derivatives along the motion, gradients) of Jets, as arrays."""
+    return (np.array([j.v for j in jets]), np.array([j.d1 for j in jets]), np.array([j.d2 for j in jets]),
+            np.array([j.g for j in jets]))
+
+
+def _vee(W):
+    return np.array((W[2, 1], W[0, 2], W[1, 0]))
+
+
+class DeviceBodies:
+    """An inerter device's housing, rod and flywheel as rigid bodies whose poses are functions of
+    the pose q, and their kinetic energy's terms in Eq. (33), written from the definitions.
+
+    Each part is a rigid body of mass m, centre c(q) on the device's line (housing
+    r_a + h_h u, flywheel r_a + h_f u, rod r_b − h_r u, u = r/|r|) and rotation R(q) (columns: two
+    normals, then u), with inertia diag(I_t, I_t, J) in that frame: T = ½ m |ċ|² + ½ ωᵀ I ω,
+    ω̃ = Ṙ Rᵀ. The housing's frame is the mount's definition: in 3D a Hooke joint at terminal a,
+    first axis a₁ = A_a a̅₁ fixed in body a, second axis ŵ = a₁ × u/|a₁ × u| fixed in the housing,
+    R_h = [ŵ, u × ŵ, u]; in 2D R_h = [ẑ, u × ẑ, u] (no spin about u). The rod is keyed to the
+    housing (R_r = R_h); the flywheel turns on the screw, R_f = R_h R_z(n L). In 3D without a mount
+    the device's spin is not modelled: only T = ½ m |ċ|² + ½ I_t |u̇|² (u(q) like a position). In a
+    scene with gravity g each part has the potential −m g·c: Q += m c.gᵀ g.
+    Every velocity is (Jet gradient)·v, so Kane's equations (Kane & Levinson 1985) give, with the
+    partial velocities ∂ċ/∂v = c.g, ∂ω/∂v from Rg Rᵀ and the accelerations at v̇ = 0 (c.d2,
+    α₀ = vee(R̈Rᵀ + ṘṘᵀ)): M += m c.gᵀc.g + ω_vᵀ I ω_v and Q −= m c.gᵀ c̈₀ + ω_vᵀ(I α₀ + ω × Iω). The
+    ideal inerter's ½ b L̇² (b = J n², in the element already) is taken off, T_block = T − ½ b L̇²."""
+
+    def __init__(self, device, dim, gravity=None):
+        self.dim = dim
+        self.gravity = np.zeros(3)
+        if gravity is not None:
+            self.gravity[:len(gravity)] = gravity
+        fly, h, rod = (device.values(n) if device.has(n) else {} for n in ("flywheel", "housing", "rod"))
+        self.mount = np.asarray(device.values("mount")["axis"], dtype=float) if device.has("mount") else None
+        self.ratio = 0.0
+        if fly:
+            self.ratio = 2.0 * math.pi / fly["lead"] if fly.get("lead") is not None else fly["ratio"]
+        self.b = (fly.get("inertia") or 0.0) * self.ratio ** 2
+        spin = dim == 2 or self.mount is not None
+        # (mass, end, signed distance, I_t, J, turns with the screw)
+        self.bodies = [(h.get("mass") or 0.0, "a", h.get("centre") or 0.0, h.get("transverse_inertia") or 0.0,
+                        h.get("axial_inertia") or 0.0, False),
+                       (rod.get("mass") or 0.0, "b", -(rod.get("centre") or 0.0),
+                        rod.get("transverse_inertia") or 0.0, rod.get("axial_inertia") or 0.0, False),
+                       (fly.get("mass") or 0.0, "a", fly.get("centre") or 0.0, fly.get("transverse_inertia") or 0.0,
+                        fly.get("inertia") or 0.0, True)]
+        if not spin:                      # 3D without a mount: no spin, the ideal inerter's flywheel
+            self.bodies = [(m, end, x, It, 0.0, False) for m, end, x, It, _, _ in self.bodies]
+        self.spin = spin
+
+    def _frame(self, coords, body_a, u, n):
+        """R_h as 3 × 3 Jets (columns ŵ or ẑ, u × that, u)."""
+        if self.dim == 2:
+            e1 = [Jet.constant(0.0, n), Jet.constant(0.0, n), Jet.constant(1.0, n)]
+        else:
+            a1 = self._axis(coords, body_a, n)
+            w = _cross(a1, u)
+            wn = jsqrt(_dot(w, w))
+            e1 = [c / wn for c in w]
+        e2 = _cross(u, e1)
+        return [[e1[i], e2[i], u[i]] for i in range(3)]
+
+    def _axis(self, coords, point_a, n):
+        """a₁ = A_a a̅₁ on Jets (point_position of a̅₁ on body a, less its origin)."""
+        if point_a.body < 0:
+            return [Jet.constant(x, n) for x in self.mount]
+        tip = point_position(SimpleNamespace(body=point_a.body, local=self.mount), coords[point_a.body])
+        origin = point_position(SimpleNamespace(body=point_a.body, local=np.zeros(3)), coords[point_a.body])
+        return [a - o for a, o in zip(tip, origin)]
+
+    def terms(self, probe, q, v):
+        """(M block, Q block, energy: kinetic T − ½ b L̇² and the parts' weight's potential −Σ m g·c)
+        over the probe's dofs."""
+        coords, ra, rb = probe.terminals(q, v)
+        n = len(probe.dofs)
+        if self.dim == 2:
+            ra, rb = ra + [Jet.constant(0.0, n)], rb + [Jet.constant(0.0, n)]
+        r = [b - a for a, b in zip(ra, rb)]
+        L = jsqrt(_dot(r, r))
+        u = [c / L for c in r]
+        M, Q, T = np.zeros((n, n)), np.zeros(n), 0.0
+        R = self._frame(coords, probe.pair.a, u, n) if self.spin else None
+        for m, end, x, It, J, turns in self.bodies:
+            c = [p + x * e for p, e in zip(ra if end == "a" else rb, u)]
+            cv, cd, cdd, cg = _parts(c)
+            M += m * cg.T @ cg
+            Q -= m * cg.T @ (cdd - self.gravity)                # inertia and weight
+            T += 0.5 * m * float(cd @ cd) - m * float(self.gravity @ cv)
+            if self.spin:
+                Rb = R
+                if turns:
+                    psi = L * self.ratio
+                    cz, sz = jcos(psi), jsin(psi)
+                    Rb = [[row[0] * cz + row[1] * sz, row[1] * cz - row[0] * sz, row[2]] for row in R]
+                dM, dQ, dT = self._rotation(Rb, np.diag((It, It, J)))
+            else:
+                dM, dQ, dT = self._transverse(u, It)
+            M, Q, T = M + dM, Q + dQ, T + dT
+        if not self.spin:
+            return M, Q, T
+        M -= self.b * np.outer(L.g, L.g)            # the ideal inerter's ½ b L̇², in the element already
+        Q += self.b * L.d2 * L.g
+        return M, Q, T - 0.5 * self.b * L.d1 ** 2
+
+    @staticmethod
+    def _rotation(R, inertia):
+        Rv, Rd, Rdd, Rg = _parts([x for row in R for x in row])
+        Rv, Rd, Rdd, Rg = Rv.reshape(3, 3), Rd.reshape(3, 3), Rdd.reshape(3, 3), Rg.reshape(3, 3, -1)
+        W = Rd @ Rv.T
+        w = _vee(W)
+        alpha0 = _vee(Rdd @ Rv.T + Rd @ Rd.T)
+        wg = np.array([_vee(Rg[:, :, i] @ Rv.T) for i in range(Rg.shape[2])]).T     # ∂ω/∂v, 3 × n
+        I = Rv @ inertia @ Rv.T
+        M = wg.T @ I @ wg
+        Q = -wg.T @ (I @ alpha0 + np.cross(w, I @ w))
+        return M, Q, 0.5 * float(w @ I @ w)
+
+    @staticmethod
+    def _transverse(u, It):
+        _, ud, udd, ug = _parts(u)
+        return It * ug.T @ ug, -It * ug.T @ udd, 0.5 * It * float(ud @ ud)
+
+
 class OracleElement:
     """Spring, damper or inerter (with its device, :class:`OracleDevice`) through L(q) and its
     derivatives. As the mechanism's element factory it builds the planar rotational elements too
@@ -470,6 +609,9 @@ class OracleElement:
         self.fixed_direction = direction
         self.probe = DistanceProbe(pair, labels, spec.name, mech, direction, getattr(spec, "slider_axis", None))
         self.pair = pair
+        dev = getattr(spec, "device", None)
+        self.bodies = (DeviceBodies(dev, mech.dim, mech.scene.effects.get("gravity"))
+                       if dev is not None and dev.inertia() else None)
 
     def _force_parts(self, L, rdot):
         """F = a·q̈ part (gradient factor) + the rest: returns (mass factor, rest)."""
@@ -492,6 +634,8 @@ class OracleElement:
         L, _ = geo or self.probe.evaluate(q, v)
         idx = self.probe.dofs
         M[np.ix_(idx, idx)] += self.coefficient * np.outer(L.g, L.g)
+        if self.bodies is not None:
+            M[np.ix_(idx, idx)] += self.bodies.terms(self.probe, q, v)[0]
 
     def add_force(self, q, v, Q, geo=None):
         L, rdot = geo or self.probe.evaluate(q, v)
@@ -499,6 +643,8 @@ class OracleElement:
         Q[self.probe.dofs] -= rest * L.g                        # Q = −F ∇L
         if self.device is not None:
             self.device.add_force(L, Q, self.probe.dofs)
+        if self.bodies is not None:
+            Q[self.probe.dofs] += self.bodies.terms(self.probe, q, v)[1]
 
     def outputs(self, q, v, a):
         L, rdot = self.probe.evaluate(q, v)
@@ -516,7 +662,8 @@ class OracleElement:
     def kinetic(self, q, v):
         if self.kind != "inerter":
             return 0.0
-        return 0.5 * self.coefficient * self.probe.evaluate(q, v)[0].d1 ** 2
+        T = 0.5 * self.coefficient * self.probe.evaluate(q, v)[0].d1 ** 2
+        return T if self.bodies is None else T + self.bodies.terms(self.probe, q, v)[2]
 
     def potential(self, q):
         if self.device is not None:

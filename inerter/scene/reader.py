@@ -42,11 +42,11 @@ KNOWN_EFFECTS = {
 
 #: The element kinds (inerter.elements: one module each, with its parameters).
 ELEMENT_TYPES = tuple(elements.KINDS)
-JOINT_TYPES = ("revolute", "prismatic")
-JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed", "cylindrical", "universal", "planar")
+JOINT_TYPES = ("revolute", "prismatic", "screw")
+JOINT_TYPES_3D = ("spherical", "revolute", "prismatic", "fixed", "cylindrical", "universal", "planar", "screw")
 #: The joint kinds that take an axis (in P1's frame): the sliding or turning axis, a universal
 #: joint's first axis (fixed in P1's body), a planar joint's normal.
-_AXIS_JOINTS = {2: ("prismatic",), 3: ("revolute", "prismatic", "cylindrical", "universal", "planar")}
+_AXIS_JOINTS = {2: ("prismatic", "screw"), 3: ("revolute", "prismatic", "cylindrical", "universal", "planar", "screw")}
 ORIENTATIONS = ("quaternion", "euler_zxz")
 FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
 #: The SI unit of each field of a point force.
@@ -108,6 +108,8 @@ class Joint:
                                             # point_a's frame at the initial pose (perpendicular to axis)
     stiffness: float = 0.0    # revolute (N.m/rad), prismatic (N/m): a spring about / along the joint, and
     damping: float = 0.0      # a damper (N.m.s/rad, N.s/m): the elements JOINT_spring and JOINT_damper
+    lead: float = 0.0         # screw: b's advance along the axis per turn relative to a (m; negative: left-handed)
+    coupling_only: bool = False   # screw: only the row tying the turn to the advance, not the cylindrical rows
 
 
 @dataclass(frozen=True)
@@ -776,6 +778,8 @@ def _read_joints(r: _Reader, raw, points, dimension):
             allowed["axis2"] = True
         if jtype in _JOINT_SPRINGS:
             allowed.update(stiffness=False, damping=False)
+        if jtype == "screw":
+            allowed.update(lead=True, **({"coupling_only": False} if dimension == 3 else {}))
         r.table(spec, fld, allowed)
         a, b = r.name_pair(spec, "between", fld, points, "point")
         if points[a].body == points[b].body:
@@ -793,7 +797,15 @@ def _read_joints(r: _Reader, raw, points, dimension):
             (_, k_unit), (_, d_unit) = _JOINT_SPRINGS[jtype]
             stiffness = r.number(spec, "stiffness", fld, default=0.0, minimum=0.0, unit=k_unit)
             damping = r.number(spec, "damping", fld, default=0.0, minimum=0.0, unit=d_unit)
-        joints[jname] = Joint(jname, jtype, a, b, axis, axis2, stiffness, damping)
+        lead, coupling_only = 0.0, False
+        if jtype == "screw":
+            lead = r.number(spec, "lead", fld, unit="m")
+            if lead == 0.0:
+                raise r.error(f"{fld}.lead", lead, "a non-zero lead (m; negative for a left-handed screw)", "zero")
+            coupling_only = spec.get("coupling_only", False)
+            if not isinstance(coupling_only, bool):
+                raise r.error(f"{fld}.coupling_only", coupling_only, "true or false", "not a boolean")
+        joints[jname] = Joint(jname, jtype, a, b, axis, axis2, stiffness, damping, lead, coupling_only)
     return joints
 
 
@@ -846,7 +858,7 @@ def _read_elements(r: _Reader, raw, points, bodies, dimension):
         etype = r.string(spec, "type", fld, ELEMENT_TYPES)
         kind = elements.KINDS[etype]
         rotational = kind.family == elements.ROTATIONAL
-        device = _read_device(r, spec["device"], f"{fld}.device", kind) if kind.device and "device" in spec else None
+        device = _read_device(r, spec["device"], f"{fld}.device", kind, dimension) if kind.device and "device" in spec else None
         inertance = device.inertance() if device is not None else None
         if inertance is not None and kind.coefficient.key in spec:
             source = next(n for n, _ in device.effects if DEVICE_EFFECT[n].inertance is not None)
@@ -885,6 +897,8 @@ def _read_parameter(r: _Reader, spec, fld, p: "elements.Parameter"):
     (inerter.elements); an optional one left out takes its default (None: absent)."""
     if p.key not in spec and not p.required:
         return p.default
+    if p.size > 1:
+        return tuple(float(x) for x in r.vector(spec, p.key, fld, p.size, unit_length=True))
     minimum = p.minimum if p.minimum != -math.inf else None
     value = r.number(spec, p.key, fld, minimum=minimum, exclusive=p.strict, required=p.required,
                      unit=_fixed_unit(p.unit))
@@ -904,7 +918,7 @@ def _fixed_unit(unit: str) -> str | None:
     return unit
 
 
-def _read_device(r: _Reader, raw, fld, kind: "elements.ElementKind"):
+def _read_device(r: _Reader, raw, fld, kind: "elements.ElementKind", dimension: int):
     """An element's ``device`` table: one sub-table per effect its kind allows
     (inerter.elements.device.EFFECTS), each parameter within its range, the effect's own check
     (one of lead or ratio, min < max, ...) and at most one source of the inertance."""
@@ -921,6 +935,8 @@ def _read_device(r: _Reader, raw, fld, kind: "elements.ElementKind"):
         if effect.name not in raw:
             continue
         efld = f"{fld}.{effect.name}"
+        if dimension not in effect.dimensions:
+            raise r.error(efld, raw[effect.name], f"no {effect.name} in a {dimension}D scene", effect.why_not_2d)
         table = r.table(raw[effect.name], efld, {p.key: p.required for p in effect.parameters})
         values = {p.key: _read_parameter(r, table, efld, p) for p in effect.parameters}
         problem = effect.check(values) if effect.check is not None else None

@@ -194,6 +194,9 @@ class Model:
             stepper = compiled.compiled_stepper(self.mechanism, s, self.signals, stop_time)
             if stepper is not None:
                 return stepper
+            if len(self.mechanism.z0) and not compiled.unsupported(self.mechanism):
+                # internal states: scipy's steppers on the kernels' right-hand side, which has them
+                return Stepper(compiled.kernel_mechanism(self.mechanism), s, self.signals, stop_time)
         elif path != "numpy" and path != "compiled":
             raise SceneError("stepper()", "path", path, "'numpy' or 'compiled'", "unknown path")
         return Stepper(self.mechanism, s, self.signals, stop_time)
@@ -238,7 +241,7 @@ class Result:
         for i in range(start, len(run.time)):        # the numpy path (and its messages where one fails)
             t, y = run.time[i], run.states[i]
             try:
-                values.append(sig.evaluate(t, y[:n], y[n:], None, settings.alpha))
+                values.append(sig.evaluate(t, y[:n], y[n:n + self.model.mechanism.n], None, settings.alpha))
             except SimulationError as exc:   # an output undefined at a sample: keep what came before
                 self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
                 break
@@ -265,7 +268,7 @@ class Result:
             for i in range(k, len(run.time)):
                 t, y = run.time[i], run.states[i]
                 try:
-                    values.append(sig.evaluate(t, y[:n], y[n:], None, alpha)[j])
+                    values.append(sig.evaluate(t, y[:n], y[n:n + self.model.mechanism.n], None, alpha)[j])
                 except SimulationError as exc:
                     self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
                     break
@@ -311,7 +314,7 @@ class Result:
 
         def numpy_values(t):
             Y = sol(t)
-            return np.array([fn(ti, Y[:n, i], Y[n:, i], None, alpha) for i, ti in enumerate(t)])
+            return np.array([fn(ti, Y[:n, i], Y[n:n + self.model.mechanism.n, i], None, alpha) for i, ti in enumerate(t)])
 
         kernel = self._kernel
         index = kernel.signal_index(name) if kernel is not None else None

@@ -9,7 +9,10 @@ numbers); a rotational element one row of ``rot_int`` and one of ``rot_real``. T
 KIND = 0                 # its code: its place in inerter.elements.KINDS
 POINT_A = 1              # terminal a (point index)
 POINT_B = 2              # terminal b (point index)
-ELEMENT_INT_COLUMNS = 3
+STATE = 3                # the offset of its internal states in z (y = [q, v, z]); 0 where it has none
+STATES = 4               # how many internal states it has (an inerter device's series deflection and its
+                         # rate, its dissipated energy: inerter.elements.device); 0 for most elements
+ELEMENT_INT_COLUMNS = 5
 
 # -- el_real: a translational element's numbers
 COEFFICIENT = 0          # k (N/m), c (N.s/m) or b (kg)
@@ -35,7 +38,14 @@ FLUID_QUADRATIC = 18     # its quadratic damping c_2 (N.s²/m²)
 FIXED_DIRECTION = 19     # 1.0: the element acts along DIRECTION, its initial one (the small-displacement
                          # law of structural codes), not along the current r̂
 DIRECTION = 20           # that direction, a unit vector in the global frame (3 columns; z = 0 in 2D)
-ELEMENT_REAL_COLUMNS = 23
+# An inerter device's internal states (inerter.elements.device; 0.0 where not declared):
+SERIES = 23              # 1.0: a spring (and damper) in series with the inerter (device.compliance)
+SERIES_STIFFNESS = 24    # its stiffness k_c (N/m)
+SERIES_DAMPING = 25      # its damping c_c (N.s/m)
+BACKLASH = 26            # 1.0: a gap in the series connection (device.backlash)
+GAP = 27                 # the gap's total width (m): free play of ±GAP/2 about the engaged position
+LOSS = 28                # 1.0: the dissipated energy integrated as a state (device.dissipated_energy)
+ELEMENT_REAL_COLUMNS = 29
 
 # -- rot_int: a rotational element's integers
 ROT_KIND = 0             # its code: its place in inerter.elements.KINDS

@@ -23,11 +23,11 @@ from inerter.common.rotations import (EULER_SINGULARITY, euler_angles9, euler_ma
                                        quaternion_matrix9, quaternion_of_matrix9, quaternion_rates)
 
 from inerter.elements import dispatch as law
-from inerter.elements.base import axial_scalars
+from inerter.elements.base import axial_scalars, rarely
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, F_AMPLITUDE, F_FREQUENCY, F_INITIAL, F_OFFSET,
                                      F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, KIND, MEET_LIMIT,
                                      PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B, REL0, ROT_KIND, FIXED_DIRECTION,
-                                     DIRECTION)
+                                     DIRECTION, STATE, STATES)
 
 # Joint kinds.
 REVOLUTE, PRISMATIC = 0, 1
@@ -160,6 +160,13 @@ def _element_law(kind, row, L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez):
 
 
 @njit(cache=True, inline="always")
+def _states(z, el_int, e):
+    """Translational element e's internal states: its slice of z (y = [q, v, z]; empty for most)."""
+    o = el_int[e, STATE]
+    return z[o:o + el_int[e, STATES]]
+
+
+@njit(cache=True, inline="always")
 def _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, width):
     """A translational element's terms on its bodies' `width` velocity coordinates (3 in 2D, 6 in
     3D), with g = Hᵀ r̂ over a's (ga) and b's (gb): Q −= F g (Eq. 29; an inerter's Q_Iv, Eq. 31)
@@ -214,9 +221,10 @@ def _rotational2(q, v, e, rot_int):
 
 
 @njit(cache=True, inline="always")
-def _add_elements2(q, v, P, AB, perm, off, gen):
+def _add_elements2(q, v, z, P, AB, perm, off, gen):
     """Translational elements of a 2D scene, each through its law (:mod:`inerter.elements`):
-    Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂. Returns a status code."""
+    Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂; F includes the force an
+    element's internal states z carry (a series-compliant device's). Returns a status code."""
     pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     status = OK
     ga = np.empty(3)
@@ -234,6 +242,8 @@ def _add_elements2(q, v, P, AB, perm, off, gen):
         gb[1] = ey
         gb[2] = tbx * ex + tby * ey
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
+        if rarely(el_int[e, STATES] != 0):
+            F += law.state_force(kind, el_real[e], L, Ldot, _states(z, el_int, e))
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 3)
     return status
 
@@ -347,9 +357,9 @@ def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
 
 
 @njit(cache=True)
-def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
+def assemble(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix of Eq. 33) and rhs (permuted) at
-    (t, q, v) for a 2D scene; gen: work vector of length n for the generalised forces. Returns a
+    (t, q, v) and the elements' internal states z for a 2D scene; gen: work vector of length n for the generalised forces. Returns a
     status code."""
     mass, pbody, ploc, jt_int, jt_real, gravity, perm, dims = P[MASS], P[PBODY], P[PLOC], P[JT_INT], P[JT_REAL], P[GRAVITY], P[PERM], P[DIMS]
     n = dims[N_VELOCITY]
@@ -357,7 +367,7 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     _start_assembly(AB, gen, gravity, n, dims[HAS_GRAVITY])
     for i in range(n):
         _addK(AB, perm, off, i, i, mass[i])
-    status = _add_elements2(q, v, P, AB, perm, off, gen)
+    status = _add_elements2(q, v, z, P, AB, perm, off, gen)
     _add_rotational2(q, v, P, gen)
     _add_point_forces2(t, q, v, inputs, P, gen)
     for i in range(n):
@@ -508,12 +518,13 @@ def band_solve(AB, b, kl):
 
 
 @njit(cache=True)
-def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
-    """Eq. (33): out[:n] = q̈, out[n:] = λ (original ordering). Returns a status code."""
+def accelerations(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out):
+    """Eq. (33) at (t, q, v) and the elements' internal states z: out[:n] = q̈, out[n:] = λ
+    (original ordering). Returns a status code."""
     P = _unowned(P)                 # entered from Python (_unowned)
     perm = P[PERM]
     dims = P[DIMS]
-    status = _assemble_of(t, q, v, inputs, alpha, P, AB, rhs, gen)
+    status = _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
     if not band_solve(AB, rhs, dims[KL]):
         return SINGULAR
     for i in range(out.shape[0]):
@@ -560,16 +571,46 @@ def constraint_residual2(q, P):
 # ------------------------------------------------------------------------------------------------
 # Output signals (the same values as inerter.engine.outputs.Signals, in the layout of `signal_layout`)
 # ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey):
+    """gᵀq̈ of a 2D translational element (g = Hᵀ r̂ over its bodies' coordinates, Eqs. 17-19)."""
+    gq = 0.0
+    if ba >= 0:
+        ka = 3 * ba
+        gq -= (qdd[ka] + qdd[ka + 2] * tax) * ex + (qdd[ka + 1] + qdd[ka + 2] * tay) * ey
+    if bb >= 0:
+        kb = 3 * bb
+        gq += (qdd[kb] + qdd[kb + 2] * tbx) * ex + (qdd[kb + 1] + qdd[kb + 2] * tby) * ey
+    return gq
+
+
 @njit(cache=True)
-def signal_values(q, v, qdd, P, out):
-    """Every output at one state (:func:`signal_values2`, :func:`signal_values3`). Returns a status
-    code."""
+def state_rates2(q, v, z, qdd, P, dz):
+    """dz: the rates of the translational elements' internal states of a 2D scene, at the state
+    (q, v, z) and its solved accelerations q̈ (each kind's ``state_rates``, with gᵀq̈)."""
+    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    for e in range(el_int.shape[0]):
+        if el_int[e, STATES] == 0:
+            continue
+        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
+            q, v, e, el_int, el_real, pbody, ploc)
+        Ldot, an, perp2 = axial_scalars(rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
+        gq = _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
+        o = el_int[e, STATE]
+        c = el_int[e, STATES]
+        law.state_rates(kind, el_real[e], L, Ldot, an, perp2, gq, z[o:o + c], dz[o:o + c])
+
+
+@njit(cache=True)
+def signal_values(q, v, z, qdd, P, out):
+    """Every output at one state y = [q, v, z] (:func:`signal_values2`, :func:`signal_values3`).
+    Returns a status code."""
     P = _unowned(P)                 # entered from Python (_unowned)
-    return _signals_of(q, v, qdd, P, out)
+    return _signals_of(q, v, z, qdd, P, out)
 
 
 @njit(cache=True)
-def signal_values2(q, v, qdd, P, out):
+def signal_values2(q, v, z, qdd, P, out):
     """Every point's position and velocity (4 per point), every translational element's s_rel,
     v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd) and its
     kind's extra outputs (an inerter's device: ``signal_layout``), every
@@ -601,20 +642,17 @@ def signal_values2(q, v, qdd, P, out):
         F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
         if b != 0.0:
             # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 17-19): the inertance part of F = b d²L/dt², Eq. (9) / (8)
-            gq = 0.0
-            if ba >= 0:
-                ka = 3 * ba
-                gq -= (qdd[ka] + qdd[ka + 2] * tax) * ex + (qdd[ka + 1] + qdd[ka + 2] * tay) * ey
-            if bb >= 0:
-                kb = 3 * bb
-                gq += (qdd[kb] + qdd[kb + 2] * tbx) * ex + (qdd[kb + 1] + qdd[kb + 2] * tby) * ey
-            F += b * gq
+            F += b * _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
+        x = _states(z, el_int, e)
+        if rarely(el_int[e, STATES] != 0):
+            F += law.state_force(kind, el_real[e], L, along, x)
+            energy += law.state_energy(kind, el_real[e], L, along, x)
         energy += law.energy(kind, el_real[e], L, along)
         out[k] = L
         out[k + 1] = along
         out[k + 2] = F
         k += 3
-        k = law.extra_outputs(kind, el_real[e], L, along, out, k)     # a device's outputs, if declared
+        k = law.extra_outputs(kind, el_real[e], L, along, x, out, k)     # a device's outputs, if declared
     for e in range(rot_int.shape[0]):
         ia, ib, phi, w = _rotational2(q, v, e, rot_int)
         kind = rot_int[e, ROT_KIND]
@@ -638,15 +676,16 @@ def is_spatial(P) -> bool:
     return len(P) > len(PARAMS)
 
 
-def _assemble_of(t, q, v, inputs, alpha, P, AB, rhs, gen):
+def _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     raise NotImplementedError("compiled code only")
 
 
 @overload(_assemble_of, inline="always")
-def _assemble_by_dimension(t, q, v, inputs, alpha, P, AB, rhs, gen):
+def _assemble_by_dimension(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     if is_spatial(P):
-        return lambda t, q, v, inputs, alpha, P, AB, rhs, gen: assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen)
-    return lambda t, q, v, inputs, alpha, P, AB, rhs, gen: assemble(t, q, v, inputs, alpha, P, AB, rhs, gen)
+        return lambda t, q, v, z, inputs, alpha, P, AB, rhs, gen: assemble3(t, q, v, z, inputs, alpha, P, AB, rhs,
+                                                                            gen)
+    return lambda t, q, v, z, inputs, alpha, P, AB, rhs, gen: assemble(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
 
 
 def _residual_of(q, P):
@@ -660,15 +699,26 @@ def _residual_by_dimension(q, P):
     return lambda q, P: constraint_residual2(q, P)
 
 
-def _signals_of(q, v, qdd, P, out):
+def _signals_of(q, v, z, qdd, P, out):
     raise NotImplementedError("compiled code only")
 
 
 @overload(_signals_of, inline="always")
-def _signals_by_dimension(q, v, qdd, P, out):
+def _signals_by_dimension(q, v, z, qdd, P, out):
     if is_spatial(P):
-        return lambda q, v, qdd, P, out: signal_values3(q, v, qdd, P, out)
-    return lambda q, v, qdd, P, out: signal_values2(q, v, qdd, P, out)
+        return lambda q, v, z, qdd, P, out: signal_values3(q, v, z, qdd, P, out)
+    return lambda q, v, z, qdd, P, out: signal_values2(q, v, z, qdd, P, out)
+
+
+def _state_rates_of(q, v, z, qdd, P, dz):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_state_rates_of, inline="always")
+def _state_rates_by_dimension(q, v, z, qdd, P, dz):
+    if is_spatial(P):
+        return lambda q, v, z, qdd, P, dz: state_rates3(q, v, z, qdd, P, dz)
+    return lambda q, v, z, qdd, P, dz: state_rates2(q, v, z, qdd, P, dz)
 
 
 def _qdot_of(q, v, P, out):
@@ -779,14 +829,15 @@ def work_arrays(P, ny, stages):
 
 @njit(cache=True)
 def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
-    """`signal_values` at one state y = [q, v]; accelerations from Eq. (33) only when `need_acc`."""
+    """`signal_values` at one state y = [q, v, z]; accelerations from Eq. (33) only when `need_acc`."""
     nq = P[DIMS][N_COORD]
+    nv = nq + P[DIMS][N_VELOCITY]
     AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
     if need_acc:
-        st = accelerations(t, y[:nq], y[nq:], inputs, alpha, P, AB, rhs, gen, sig_acc)
+        st = accelerations(t, y[:nq], y[nq:nv], y[nv:], inputs, alpha, P, AB, rhs, gen, sig_acc)
         if st != OK:
             return st
-    return signal_values(y[:nq], y[nq:], sig_acc, P, out)
+    return signal_values(y[:nq], y[nq:nv], y[nv:], sig_acc, P, out)
 
 
 @njit(cache=True)
@@ -1072,9 +1123,10 @@ def _add_bodies3(v, P, AB, perm, off, gen):
 
 
 @njit(cache=True, inline="always")
-def _add_elements3(q, v, P, AB, perm, off, gen):
+def _add_elements3(q, v, z, P, AB, perm, off, gen):
     """Translational elements of a 3D scene, each through its law (:mod:`inerter.elements`):
-    Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂. Returns a status code."""
+    Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂; F includes the force an
+    element's internal states z carry. Returns a status code."""
     pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     status = OK
     ga = np.empty(6)
@@ -1085,6 +1137,8 @@ def _add_elements3(q, v, P, AB, perm, off, gen):
         if meets:
             status = TERMINALS_MEET
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+        if rarely(el_int[e, STATES] != 0):
+            F += law.state_force(kind, el_real[e], L, Ldot, _states(z, el_int, e))
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 6)
     return status
 
@@ -1211,7 +1265,7 @@ def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
 
 
 @njit(cache=True)
-def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
+def assemble3(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]]) and rhs
     (permuted [Q_e + Q_Iv, γ − 2αĊ − α²C]) at (t, q, v) for a 3D mechanism, as ``Mechanism.assemble``
     and ``Mechanism.constraints``. gen: work vector of length n. Returns a status code."""
@@ -1220,7 +1274,7 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
     off = dims[KL]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
     _start_assembly(AB, gen, gravity, n, dims[HAS_GRAVITY])
     _add_bodies3(v, P, AB, perm, off, gen)
-    status = _add_elements3(q, v, P, AB, perm, off, gen)
+    status = _add_elements3(q, v, z, P, AB, perm, off, gen)
     _add_rotational3(q, v, P, gen)
     _add_point_forces3(t, q, v, inputs, P, gen)
     for i in range(n):
@@ -1306,8 +1360,41 @@ def constraint_residual3(q, P):
 # ------------------------------------------------------------------------------------------------
 # Output signals (the same values as inerter.engine.outputs.Signals, in the layout of `signal_layout3`)
 # ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _gq3(qdd, ba, bb, ga, gb):
+    """gᵀq̈ of a 3D translational element (g = Hᵀ r̂: ga over a's six coordinates, gb over b's)."""
+    gq = 0.0
+    if ba >= 0:
+        ka = 6 * ba
+        for i in range(6):
+            gq += ga[i] * qdd[ka + i]
+    if bb >= 0:
+        kb = 6 * bb
+        for i in range(6):
+            gq += gb[i] * qdd[kb + i]
+    return gq
+
+
 @njit(cache=True)
-def signal_values3(q, v, qdd, P, out):
+def state_rates3(q, v, z, qdd, P, dz):
+    """dz: the rates of the translational elements' internal states of a 3D scene (as
+    :func:`state_rates2`)."""
+    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    ga = np.empty(6)
+    gb = np.empty(6)
+    for e in range(el_int.shape[0]):
+        if el_int[e, STATES] == 0:
+            continue
+        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
+            q, v, e, el_int, el_real, pbody, ploc, ga, gb)
+        Ldot, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+        o = el_int[e, STATE]
+        c = el_int[e, STATES]
+        law.state_rates(kind, el_real[e], L, Ldot, an, perp2, _gq3(qdd, ba, bb, ga, gb), z[o:o + c], dz[o:o + c])
+
+
+@njit(cache=True)
+def signal_values3(q, v, z, qdd, P, out):
     """Every point's position and velocity (6 per point), every translational element's s_rel,
     v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd) and its
     kind's extra outputs (an inerter's device: ``signal_layout3``), every rotational element's
@@ -1354,22 +1441,17 @@ def signal_values3(q, v, qdd, P, out):
         F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
         if b != 0.0:
             # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 19, 25): the inertance part of F = b d²L/dt², Eq. (9) / (8)
-            gq = 0.0
-            if ba >= 0:
-                ka = 6 * ba
-                for i in range(6):
-                    gq += ga[i] * qdd[ka + i]
-            if bb >= 0:
-                kb = 6 * bb
-                for i in range(6):
-                    gq += gb[i] * qdd[kb + i]
-            F += b * gq
+            F += b * _gq3(qdd, ba, bb, ga, gb)
+        x = _states(z, el_int, e)
+        if rarely(el_int[e, STATES] != 0):
+            F += law.state_force(kind, el_real[e], L, along, x)
+            energy += law.state_energy(kind, el_real[e], L, along, x)
         energy += law.energy(kind, el_real[e], L, along)
         out[k] = L
         out[k + 1] = along
         out[k + 2] = F
         k += 3
-        k = law.extra_outputs(kind, el_real[e], L, along, out, k)     # a device's outputs, if declared
+        k = law.extra_outputs(kind, el_real[e], L, along, x, out, k)     # a device's outputs, if declared
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
         energy += law.rotational_energy(rot_int[e, ROT_KIND], rot_real[e], phi, w)
@@ -1414,19 +1496,25 @@ BODY_OUTPUTS3 = 10
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
-    """dy = [q̇, v̇] at y = [q, v]: q̇ = B(q) v (the identity in 2D), v̇ from Eq. (33)."""
+    """dy = [q̇, v̇, ż] at y = [q, v, z]: q̇ = B(q) v (the identity in 2D), v̇ from Eq. (33), ż the
+    elements' internal states' rates at those accelerations (z is empty where the scene declares
+    none, and then never evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     n = P[DIMS][N_VELOCITY]
     nq = P[DIMS][N_COORD]
+    nv = nq + n
     q = y[:nq]
-    v = y[nq:]
-    st = accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, acc)
+    v = y[nq:nv]
+    z = y[nv:]
+    st = accelerations(t, q, v, z, inputs, alpha, P, AB, rhs, gen, acc)
     if _qdot_of(q, v, P, dy[:nq]) == GIMBAL_LOCK:
         return GIMBAL_LOCK
     for i in range(n):
         dy[nq + i] = acc[i]
+    if y.shape[0] > nv:
+        _state_rates_of(q, v, z, acc, P, dy[nv:])
     if st == OK:
-        for i in range(nq + n):
+        for i in range(y.shape[0]):
             if not math.isfinite(dy[i]):
                 return NOT_FINITE
     return st
@@ -2072,7 +2160,7 @@ def signal_column(times, states, inputs, alpha, index, need_acc, P, raw, out):
     nq = P[DIMS][N_COORD]
     y = np.empty(ny)
     q = y[:nq]
-    v = y[nq:]
+    v = y[nq:nq + P[DIMS][N_VELOCITY]]
     work = work_arrays(P, ny, 1)
     point, c = _point_signal(index, P)
     for k in range(states.shape[0]):
@@ -2104,7 +2192,7 @@ def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, inde
     block = np.zeros((DENSE_BLOCK, ny))
     y = np.zeros(ny)
     q = y[:nq]
-    v = y[nq:]
+    v = y[nq:nq + P[DIMS][N_VELOCITY]]
     work = work_arrays(P, ny, 1)
     point, c = _point_signal(index, P)
     n = times.shape[0]

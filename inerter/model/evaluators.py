@@ -99,7 +99,9 @@ class TranslationalElement:
         if self._extra is None:
             return values
         extra = np.zeros(self.extra)
-        self._extra(self.row, L, Ldot, extra, 0)
+        # internal states (a series-compliant device's) are the compiled engine's: zero here
+        states = np.zeros(len(self.device.states()))
+        self._extra(self.row, L, Ldot, states, extra, 0)
         return values + tuple(float(x) for x in extra)
 
     def add_mass(self, q, v, M, geo=None):

@@ -115,6 +115,11 @@ class Mechanism:
         self._forces(scene)
         self._effects(scene)
         self.q0, self.v0 = self.assemble_initial(q0, v0)
+        #: The elements' internal states at t = 0 (an inerter device's series deflection and its rate,
+        #: its dissipated energy; :meth:`inerter.elements.device.Device.states`), all zero: the
+        #: compiled engine integrates them (y = [q, v, z]); empty for most scenes.
+        self.z0 = np.zeros(sum(len(e.device.states()) for e in scene.elements.values()
+                               if getattr(e, "device", None) is not None))
         self._meet_limits(groups)
         self.check_mass_matrix(self.q0, self.v0)
 

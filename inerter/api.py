@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from inerter.engine import metrics as metric_fns
+from inerter.engine.events import declares_events, device_events
 from inerter.engine.equilibrium import natural_frequencies, static_equilibrium
 from inerter.model.mechanism import Mechanism
 from inerter.oracle import OracleElement
@@ -163,7 +164,8 @@ class Model:
         if path == "compiled" and not self.is_oracle:
             from inerter.engine import compiled
             try:
-                run = compiled.integrate_compiled(self.mechanism, s, dense=bool(metrics) and self._metrics_need_dense())
+                run = compiled.integrate_compiled(self.mechanism, s, dense=(bool(metrics) and self._metrics_need_dense())
+                                                  or self._events_need_dense())
             except (ZeroDivisionError, FloatingPointError, OverflowError) as exc:
                 # The compiled loop raises where the state overflows (its error norm turns 0 or NaN);
                 # the numpy path stops where the state stops being finite and says so.
@@ -181,6 +183,11 @@ class Model:
     def _metrics_need_dense(self) -> bool:
         """Whether a metric of the scene reads its signal between the samples."""
         return any(m.kind in DENSE_METRICS for m in self.scene.metrics)
+
+    def _events_need_dense(self) -> bool:
+        """Whether the scene has device events (end stops, backlash: :mod:`inerter.engine.events`),
+        whose times are refined on the dense output."""
+        return declares_events(self.scene)
 
     def stepper(self, method=None, rtol=None, atol=None, path="compiled", stop_time=None) -> Stepper:
         """A co-simulation stepper at t = 0. `path` = "compiled" (the default): each step one call
@@ -329,6 +336,16 @@ class Result:
             return values
         return compiled_values
 
+    def events(self) -> list[dict]:
+        """The device events of the run (end-stop contacts, backlash engagement), in time order,
+        each {time, element, event, where}, times refined on the integrator's dense output
+        (:func:`inerter.engine.events.device_events`); [] for a scene without any."""
+        if not declares_events(self.model.scene) or len(self.time) < 2:
+            return []
+        nodes = getattr(self.run.dense, "ts", np.zeros(0))
+        nodes = nodes[(nodes >= self.time[0]) & (nodes <= self.time[-1])]
+        return device_events(self.model.scene, np.concatenate((self.time, nodes)), self.dense)
+
     def summary(self) -> dict:
         """What a run was and how it went, as plain JSON values (``json.dumps`` needs no default):
         numbers, strings, lists and dicts; an effect held as an object (a ground motion) appears as
@@ -342,6 +359,7 @@ class Result:
             "metrics": self.metrics,
             "metric_units": {k: u for k, u in metric_units(self.model).items() if k in self.metrics},
             "metric_errors": self.metric_errors,
+            "events": self.events(),
             "output_units": output_units(self),
             "warnings": self.model.scene.warnings,
             "settings": {"stop_time": s.stop_time, "output_interval": s.output_interval, "method": s.method,

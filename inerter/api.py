@@ -206,6 +206,9 @@ class Model:
                 return Stepper(compiled.kernel_mechanism(self.mechanism), s, self.signals, stop_time)
         elif path != "numpy" and path != "compiled":
             raise SceneError("stepper()", "path", path, "'numpy' or 'compiled'", "unknown path")
+        if len(self.mechanism.z0):
+            raise SceneError("stepper()", "path", path, "'compiled' (numba) for a scene whose inerter devices "
+                             "have internal states", "the numpy path does not integrate internal states")
         return Stepper(self.mechanism, s, self.signals, stop_time)
 
 

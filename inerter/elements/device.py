@@ -565,6 +565,6 @@ class Device:
             units = {p.key: p.unit for p in effect.parameters}
             given = ", ".join(f"{k} = {v:g}" + (f" {units[k]}" if units[k] != "1" else "")
                               for k, v in values if v is not None)
-            parts.append(f"{name} ({given})")
+            parts.append(f"{name} ({given})" if given else name)
         b = self.inertance()
         return "; ".join(parts) + (f"; inertance from the device b = {b:g} kg" if b is not None else "")

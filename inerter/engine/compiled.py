@@ -713,6 +713,15 @@ class _KernelMechanism:
         """f(t, y) on y = [q, v, z] from the kernels' right-hand side (``simulation.derivative``)."""
         return self._kernel.derivative(inputs, alpha, jump)
 
+    def output_values(self, signals, t, y, inputs, alpha) -> list:
+        """Every output of `signals` at the state y = [q, v, z], from the kernels (Stepper.output_values)."""
+        kernel = self._kernel
+        q, v, z = kernel.split(y)
+        order = kernel.signal_order(signals)
+        if order is None:
+            return signals.evaluate(t, q, v, inputs, alpha, functools.partial(kernel.accelerations, z=z)).tolist()
+        return kernel.signal_values(signals, order, t, q, v, inputs, alpha, z).tolist()
+
     def accelerations(self, t, q, v, inputs=None, alpha=0.0):
         return self._kernel.accelerations(t, q, v, inputs, alpha)
 

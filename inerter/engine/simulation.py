@@ -529,6 +529,8 @@ class Stepper:
 
     def output_values(self) -> list:
         """The outputs at the current time, in the order of ``signals.names``."""
+        if hasattr(self.mech, "output_values"):          # the kernels' outputs (internal states included)
+            return self.mech.output_values(self.signals, self.time, self.y, self.inputs, self.settings.alpha)
         n, nv = self.mech.nq, self.mech.nq + self.mech.n
         return self.signals.evaluate(self.time, self.y[:n], self.y[n:nv], self.inputs, self.settings.alpha).tolist()
 

@@ -34,7 +34,9 @@ def main(argv=None):
         "points' positions from the same scene's DOP853 run at rtol 1e-13, over the 10 ms samples. CPU: the "
         f"integration's process time, {REPEATS_TEXT}. Events: end-stop contacts and releases, backlash "
         "engagements and releases found (Result.events).", "",
-        hard_case_table(rows), ""])
+        hard_case_table(rows), "",
+        "Where a run failed, its message (the table's status):", ""]
+        + [f"- {r['case']} {r['method']} rtol {r['rtol']:g}: {r['message']}" for r in rows if r["status"] != "ok"])
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "hard_case_steps.md").write_text(text, encoding="utf-8")

@@ -369,3 +369,10 @@ def test_the_fmus_series_stiffness_is_tunable_and_its_run_matches_the_solver(ser
     assert np.max(np.abs(r["P.r[1]"] - ref["P.r[1]"])) <= 1e-8
     assert np.max(np.abs(r["inerter.s_series"] - ref["inerter.s_series"])) <= 1e-8
     assert np.max(np.abs(ref["P.r[1]"] - x_ref)) <= 1e-8
+
+
+def test_the_linearisation_refuses_internal_states():
+    """The linearisation is of (q, v): for a series-compliant device it would miss the series
+    mode (it would report √(k/m) alone), so it refuses in one line."""
+    with pytest.raises(inerter.SimulationError, match="internal states"):
+        inerter.load(SERIES).natural_frequencies()

@@ -602,7 +602,7 @@ class Kernel:
         return need, np.arange(ny, dtype=np.int64)
 
     def signal_column(self, index, times, states, inputs=None, alpha=0.0):
-        """(values, k): the signal at `index` at each sample of a history (rows [q, v]), up to the
+        """(values, k): the signal at `index` at each sample of a history (rows [q, v, z]), up to the
         first sample k where it cannot be evaluated (k = len(times) when it can at all), with the
         values signal_history gives."""
         need, _ = self._reads(index)
@@ -662,7 +662,7 @@ class Kernel:
 
     def point_positions(self, states) -> dict:
         """Global positions (time × dimension) of every named point along a state history (rows
-        [q, v]), from the kernels' point kinematics (r = R + A ū, Eq. 15)."""
+        [q, v, z]), from the kernels' point kinematics (r = R + A ū, Eq. 15)."""
         states = np.ascontiguousarray(np.atleast_2d(states), dtype=float)
         times = np.zeros(len(states))
         d = self.flat["dim"]

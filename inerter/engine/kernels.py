@@ -842,7 +842,7 @@ def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
 
 @njit(cache=True)
 def signal_history(times, states, inputs, alpha, need_acc, P, out):
-    """`signal_values` at every sample of a history (rows [q, v]). Returns (status, index of the
+    """`signal_values` at every sample of a history (rows [q, v, z]). Returns (status, index of the
     sample where it was raised)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     work = work_arrays(P, states.shape[1], 1)
@@ -2153,7 +2153,7 @@ def _point_signal(index, P):
 @njit(cache=True)
 def signal_column(times, states, inputs, alpha, index, need_acc, P, raw, out):
     """out[k] = the signal at `index` of signal_values' layout at each sample of a history (rows
-    [q, v]); accelerations from Eq. (33) only when `need_acc`. `raw`: scratch of that layout's
+    [q, v, z]); accelerations from Eq. (33) only when `need_acc`. `raw`: scratch of that layout's
     length. Returns (status, the first sample where it could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = states.shape[1]
@@ -2407,7 +2407,7 @@ def rk4_cosim_step(y, t0, t_end, jumps, kinks, ts, out, step, max_steps, inputs,
 
 @njit(cache=True)
 def max_residual(states, P):
-    """The largest constraint residual over a history (rows [q, v])."""
+    """The largest constraint residual over a history (rows [q, v, z])."""
     P = _unowned(P)                 # entered from Python (_unowned)
     nq = P[DIMS][N_COORD]
     worst = 0.0

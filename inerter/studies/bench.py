@@ -369,7 +369,7 @@ def hard_case_rows(folder: Path, cases=HARD_DEVICE_CASES, methods=HARD_METHODS, 
                 error = max(float(np.max(np.abs(run[c] - ref[c][:len(run.time)]))) for c in columns)
                 rows.append(dict(case=name, method=method, rtol=rtol, status=run.status, steps=run.run.steps,
                                  evaluations=run.run.evaluations, cpu=cpu, error=error,
-                                 events=len(run.events())))
+                                 events=len(run.events()), message=run.message))
                 log(f"{name} {method} {rtol:g}: {run.status} {run.run.steps} steps, error {error:.2e}")
     return rows
 

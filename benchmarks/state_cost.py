@@ -21,24 +21,27 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--base", required=True, help="the package's source tree before the internal states")
     ap.add_argument("--out", default=str(ROOT / "docs" / "benchmarks"))
+    ap.add_argument("--scenes", default=",".join(SCENES), help="comma-separated, some of " + ", ".join(SCENES))
+    ap.add_argument("--rounds", type=int, default=ROUNDS)
     args = ap.parse_args(argv)
-    cost = {"base": {n: [] for n in SCENES}, "now": {n: [] for n in SCENES}}
+    scenes = {n: SCENES[n] for n in args.scenes.split(",")}
+    cost = {"base": {n: [] for n in scenes}, "now": {n: [] for n in scenes}}
     hashes = {}
-    for k in range(ROUNDS):
+    for k in range(args.rounds):
         order = [("base", Path(args.base)), ("now", ROOT)]
         for label, tree in (order if k % 2 == 0 else order[::-1]):
-            for name, (c, digest) in measure(tree, SCENES).items():
+            for name, (c, digest) in measure(tree, scenes).items():
                 cost[label][name].append(c)
                 hashes.setdefault(name, {})[label] = digest
-        print(f"round {k + 1}/{ROUNDS}: " + ", ".join(f"{n} {min(cost['now'][n]) / min(cost['base'][n]):.3f}"
-                                                       for n in SCENES))
+        print(f"round {k + 1}/{args.rounds}: " + ", ".join(
+            f"{n} {min(cost['now'][n]) / min(cost['base'][n]):.3f}" for n in scenes))
     lines = ["# What the internal states cost a scene without any", "",
              f"`python benchmarks/state_cost.py --base /tmp/inerter-base-states`, {datetime.date.today().isoformat()}: "
-             f"µs per evaluation of the right-hand side (RK4 1 ms, best of {REPEATS} runs and of {ROUNDS} rounds "
+             f"µs per evaluation of the right-hand side (RK4 1 ms, best of {REPEATS} runs and of {args.rounds} rounds "
              "taken in turn, each tree in a fresh process), the package before the state y = [q, v, z] (commit "
              "c6678e6) and with it; DOP853 states over 5 s compared by their SHA-256.", "",
              "| scene | before (µs/eval) | now (µs/eval) | now / before | DOP853 states |", "|---|---|---|---|---|"]
-    for name in SCENES:
+    for name in scenes:
         b, n = min(cost["base"][name]), min(cost["now"][name])
         same = "bit-identical" if hashes[name]["base"] == hashes[name]["now"] else "DIFFER"
         lines.append(f"| {name} | {b:.3f} | {n:.3f} | {n / b:.2f} | {same} |")

@@ -158,14 +158,15 @@ class Model:
         where it cannot take the scene, Z-X-Z Euler angles, and ``result.run.extra["path"]`` says
         why) or "numpy" (the readable reference). The oracle always runs its own numpy evaluation.
         With `metrics`, the scene's [[metrics]] are computed from the integrator's dense output (the
-        compiled loop keeps it only then)."""
+        compiled loop keeps it only then, and for a scene with device events, whose times it refines:
+        :meth:`Result.events`)."""
         s = self.settings(stop_time=stop_time, output_interval=output_interval, method=method, rtol=rtol,
                           atol=atol, constraint=constraint, step=step)
         if path == "compiled" and not self.is_oracle:
             from inerter.engine import compiled
             try:
-                run = compiled.integrate_compiled(self.mechanism, s, dense=(bool(metrics) and self._metrics_need_dense())
-                                                  or self._events_need_dense())
+                dense = (bool(metrics) and self._metrics_need_dense()) or self._events_need_dense()
+                run = compiled.integrate_compiled(self.mechanism, s, dense=dense)
             except (ZeroDivisionError, FloatingPointError, OverflowError) as exc:
                 # The compiled loop raises where the state overflows (its error norm turns 0 or NaN);
                 # the numpy path stops where the state stops being finite and says so.
@@ -324,7 +325,8 @@ class Result:
 
         def numpy_values(t):
             Y = sol(t)
-            return np.array([fn(ti, Y[:n, i], Y[n:n + self.model.mechanism.n, i], None, alpha) for i, ti in enumerate(t)])
+            nv = n + self.model.mechanism.n
+            return np.array([fn(ti, Y[:n, i], Y[n:nv, i], None, alpha) for i, ti in enumerate(t)])
 
         kernel = self._kernel
         index = kernel.signal_index(name) if kernel is not None else None

@@ -272,7 +272,7 @@ def table_tunable(scene: Path) -> set[str]:
                 and np.array_equal(base.mechanism.v0, other.mechanism.v0)) or not flat0:
             continue
         dim = flat0["dim"]
-        device = list(range(layout.DEVICE, layout.FLUID_QUADRATIC + 1))
+        device = list(range(layout.DEVICE, layout.FLUID_QUADRATIC + 1)) + list(range(layout.SERIES, layout.LOSS + 1))
         tunable_columns = {"el_real": [layout.COEFFICIENT, layout.CENTRIPETAL] + device,
                            "rot_real": [layout.COEFFICIENT],
                            "fa_real": [dim + layout.F_VALUE, dim + layout.F_AMPLITUDE, dim + layout.F_FREQUENCY],

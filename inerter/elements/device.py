@@ -318,8 +318,7 @@ def outputs(row, L, Ldot, x, out, k):
     if row[STOPS] != 0.0:
         out[k] = end_stop(row, L, Ldot)[0]
         k += 1
-    if row[FRICTION] != 0.0 or row[FLUID] != 0.0 or row[STOPS] != 0.0 or (
-            row[SERIES] != 0.0 and (row[SERIES_DAMPING] != 0.0 or row[BACKLASH] != 0.0)):
+    if row[FRICTION] != 0.0 or row[FLUID] != 0.0 or row[STOPS] != 0.0 or row[SERIES] != 0.0:
         out[k] = loss(row, L, Ldot, x)
         k += 1
     if row[SERIES] != 0.0:
@@ -460,11 +459,10 @@ def check_device(effects: dict):
     if "backlash" in effects and "compliance" not in effects:
         return ("backlash", "gap", effects["backlash"].get("gap"),
                 "device.compliance beside it (the gap is in the series connection)", "backlash without compliance")
-    if "dissipated_energy" in effects and not any(
-            n in effects for n in ("friction", "end_stops", "fluid", "backlash")) and not (
-            "compliance" in effects and (effects["compliance"].get("damping") or 0.0) > 0.0):
-        return ("dissipated_energy", "", {}, "a dissipative effect beside it (friction, end_stops, fluid, "
-                "backlash or compliance with damping)", "nothing to dissipate")
+    if "dissipated_energy" in effects and not any(n in effects for n in ("friction", "end_stops", "fluid",
+                                                                          "compliance")):
+        return ("dissipated_energy", "", {}, "a dissipative effect beside it (friction, end_stops, fluid or "
+                "compliance)", "nothing to dissipate")
     return None
 EFFECT = {e.name: e for e in EFFECTS}
 
@@ -520,10 +518,10 @@ class Device:
         return cols
 
     def dissipative(self) -> bool:
-        """Whether it has a p_loss: friction, end stops, a fluid channel, backlash or a damped
-        series connection (the condition :func:`outputs` tests on the row)."""
-        return any(self.has(n) for n in ("friction", "end_stops", "fluid", "backlash")) or (
-            self.has("compliance") and (self.values("compliance")["damping"] or 0.0) != 0.0)
+        """Whether it has a p_loss: friction, end stops, a fluid channel or a series connection
+        (whose damping may be 0: a number, tunable, while the outputs are fixed by the effects
+        declared; the condition :func:`outputs` tests on the row)."""
+        return any(self.has(n) for n in ("friction", "end_stops", "fluid", "compliance"))
 
     def states(self) -> tuple[tuple[str, str, str], ...]:
         """(name, unit, description) of its internal states, in their order in z (:func:`state_rates`)."""
@@ -547,7 +545,7 @@ class Device:
         if self.has("end_stops"):
             out.append(("f_stop", "N", "end-stop contact force, tension positive (part of f)"))
         if self.dissipative():
-            out.append(("p_loss", "W", "power dissipated in the device (friction, channel, contact and series damping)"))
+            out.append(("p_loss", "W", "power dissipated in the device (friction, channel, contact, series damping)"))
         if self.has("compliance"):
             out.append(("s_series", "m", "series deflection s: terminal distance less the inerter's stroke, "
                                          "0 at t = 0"))

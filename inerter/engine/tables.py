@@ -45,7 +45,7 @@ def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
         row_real[layout.FIXED_DIRECTION] = 1.0
         row_real[layout.DIRECTION:layout.DIRECTION + len(direction)] = [float(x) for x in direction]
     if getattr(e, "device", None) is not None:
-        for column, value in e.device.columns().items():          # DEVICE ... FLUID_QUADRATIC
+        for column, value in e.device.columns().items():          # DEVICE ... FLUID_QUADRATIC, SERIES ... LOSS
             row_real[column] = float(value)
     return tuple(row_int), tuple(row_real)
 
@@ -174,7 +174,7 @@ def tunable_field(scene, path: str) -> bool:
         return True
     parts = path.split(".")
     if len(parts) == 3 and parts[0] == "elements" and parts[2] == "device" and parts[1] in scene.elements:
-        return True                          # an inerter device's numbers: columns DEVICE ... FLUID_QUADRATIC
+        return True                          # an inerter device's numbers: its columns (layout)
     if len(parts) != 3:
         return False
     section, name, key = parts
@@ -223,7 +223,7 @@ def retune_rows(flat, scene, coupled) -> list[str]:
             flat["el_real"][i, layout.CENTRIPETAL] = 1.0 if scene.centripetal else 0.0
         device = getattr(scene.elements[name], "device", None)
         if device is not None:
-            for column, value in device.columns().items():          # DEVICE ... FLUID_QUADRATIC
+            for column, value in device.columns().items():          # DEVICE ... FLUID_QUADRATIC, SERIES ... LOSS
                 flat["el_real"][i, column] = float(value)
     for i, name in enumerate(flat["rot_names"]):
         flat["rot_real"][i, layout.COEFFICIENT] = scene.elements[name].coefficient

@@ -47,7 +47,7 @@ class TranslationalElement:
         row[layout.FREE_LENGTH] = self.free_length or 0.0
         row[layout.CENTRIPETAL] = 1.0 if self.centripetal else 0.0
         if device is not None:
-            for column, value in device.columns().items():     # DEVICE ... FLUID_QUADRATIC
+            for column, value in device.columns().items():     # DEVICE ... FLUID_QUADRATIC, SERIES ... LOSS
                 row[column] = value
         #: The small-displacement law: the element acts along this initial direction (not r̂).
         self.fixed_direction = None if fixed_direction is None else np.asarray(fixed_direction, dtype=float)

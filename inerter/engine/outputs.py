@@ -2,8 +2,10 @@
 
 Points: ``P.r[i]`` (m), ``P.v[i]`` (m/s). Translational elements: ``E.s_rel`` (m, terminal
 distance), ``E.v_rel`` (m/s, its rate), ``E.f`` (N, axial force, tension positive); an inerter's
-device adds ``E.w_flywheel`` (rad/s), ``E.f_friction``, ``E.f_fluid``, ``E.f_stop`` (N) and
-``E.p_loss`` (W), those of its effects (:mod:`inerter.elements.device`). Rotational
+device adds ``E.w_flywheel`` (rad/s), ``E.f_friction``, ``E.f_fluid``, ``E.f_stop`` (N),
+``E.p_loss`` (W), ``E.s_series`` (m), ``E.engaged`` (1) and ``E.e_loss`` (J), those of its effects
+(:mod:`inerter.elements.device`; the last three read the element's internal states, which only the
+compiled kernels evaluate: these numpy signals take them at zero). Rotational
 elements: ``E.phi_rel`` (rad), ``E.w_rel`` (rad/s), ``E.tau`` (N.m). 3D bodies: ``B.q[i]`` (unit
 quaternion w, x, y, z), ``B.euler[i]`` (rad, the scene's ``euler_sequence``), ``B.w[i]`` (rad/s,
 angular velocity in the global frame). Mechanism: ``energy`` (J), ``constraint_residual`` (largest

@@ -114,6 +114,32 @@ def test_the_series_connection_keeps_the_inerters_centripetal_law(tmp_path):
     assert gap > 0.05
 
 
+DEVICE_TWO_BAR = ROOT / "scenarios" / "two_bar_2d_device.toml"
+
+
+def test_flywheel_and_friction_act_on_the_inerters_own_stroke(tmp_path):
+    """Reference: the shipped ball-screw device (flywheel, friction and end stops on L̇) run
+    without compliance. With a stiff undamped series spring the motion converges to it as 1/k_c
+    (measured 3.5e-4 and 3.5e-5 of C.r[2]'s range at k_c = 1e6 and 1e7 N/m over 1 s), and the
+    flywheel speed n·u̇ and the friction on the inerter's own stroke rate u̇ = L̇ − ṡ as 1/√k_c:
+    the series mode, excited and undamped, keeps ṡ oscillating with an amplitude of order
+    F/√(k_c b) (measured 1.2e-2 and 2.6e-3, 3.2e-3 and 9.8e-4 of their ranges). So the series node
+    hands the device's other effects the stroke rate, and they tend to their own values on L̇."""
+    ref = inerter.load(DEVICE_TWO_BAR).simulate(stop_time=1.0, metrics=False)
+    text = DEVICE_TWO_BAR.read_text(encoding="utf-8")
+    errors = []
+    for kc in (1e6, 1e7):
+        r = _load(tmp_path, text + f"\n[elements.inerter.device.compliance]\nstiffness = {kc}\n",
+                  name=f"device_{kc}.toml").simulate(stop_time=1.0, metrics=False)
+        assert r.status == "ok", r.message
+        errors.append([float(np.max(np.abs(r[n] - ref[n])) / np.max(np.abs(ref[n])))
+                       for n in ("C.r[2]", "inerter.w_flywheel", "inerter.f_friction")])
+    ratios = [coarse / fine for coarse, fine in zip(*errors)]
+    assert 8.0 < ratios[0] < 12.0, errors                                # 1/k_c
+    assert 2.5 < ratios[1] < 6.0 and 2.5 < ratios[2] < 6.0, errors     # about √10 = 3.2
+    assert max(errors[1]) < 1e-2, errors
+
+
 SPHERICAL = ROOT / "scenarios" / "spherical_pendulum_3d.toml"
 
 

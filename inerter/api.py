@@ -347,7 +347,7 @@ class Result:
         (:func:`inerter.engine.events.device_events`); [] for a scene without any."""
         if not declares_events(self.model.scene) or len(self.time) < 2:
             return []
-        nodes = getattr(self.run.dense, "ts", np.zeros(0))
+        nodes = getattr(getattr(self.run, "dense", None), "ts", np.zeros(0))
         nodes = nodes[(nodes >= self.time[0]) & (nodes <= self.time[-1])]
         return device_events(self.model.scene, np.concatenate((self.time, nodes)), self.dense)
 

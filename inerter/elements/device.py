@@ -1,10 +1,14 @@
-"""An inerter's device: the effects of a real inerter that are laws of its terminal distance.
+"""An inerter's device: the effects of a real inerter that are laws of its terminal distance and
+of the element's internal states.
 
-An ideal inerter's force is b d²L/dt² (paper Eq. 9). A real device adds forces of its own; those
-written here depend on the terminal distance L and its rate L̇ only, so each is one more scalar
-term of the inerter's law (:mod:`inerter.elements.inerter`), the same in 2D and 3D, and enters the
-equations as the ideal law's rest does: Q −= F g with g = Hᵀ r̂ (Eqs. 29, 31). A scene declares them
-per element (``[elements.NAME.device.EFFECT]``, :data:`EFFECTS`); an element without a device has
+An ideal inerter's force is b d²L/dt² (paper Eq. 9). A real device adds forces of its own; the
+flywheel, friction, end stops and fluid channel depend on the terminal distance L and its rate L̇
+only, so each is one more scalar term of the inerter's law (:mod:`inerter.elements.inerter`), the
+same in 2D and 3D, and enters the equations as the ideal law's rest does: Q −= F g with g = Hᵀ r̂
+(Eqs. 29, 31). Series compliance, backlash and the dissipated energy add internal states x of the
+element (its slice of z in the engine's state y = [q, v, z]), with their own laws
+(:func:`state_force`, :func:`state_energy`, :func:`state_rates`). A scene declares the effects per
+element (``[elements.NAME.device.EFFECT]``, :data:`EFFECTS`); an element without a device has
 ``row[DEVICE] == 0`` and its law never enters the branch that evaluates them.
 
 Sign convention: the axial force F is tension positive, like every translational element's; a

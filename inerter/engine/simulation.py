@@ -506,7 +506,7 @@ class Stepper:
         """RK4, LSODA, projection: the integration restarts at the communication point, with the
         last step size, and its last step lands on t_end (a jump or a kink inside ends a segment,
         and the next one starts afresh). The state at t_end and the step size to restart with."""
-        s, n = self.settings, self.mech.nq
+        s = self.settings
         t0, y, h = self.time, self.y, self.h
         eps = 1e-12 * max(1.0, abs(t_end))
         # a kink ends a segment too (jumps without a method): this readable reference restarts there

@@ -207,9 +207,6 @@ class Model:
                 return Stepper(compiled.kernel_mechanism(self.mechanism), s, self.signals, stop_time)
         elif path != "numpy" and path != "compiled":
             raise SceneError("stepper()", "path", path, "'numpy' or 'compiled'", "unknown path")
-        if len(self.mechanism.z0):
-            raise SceneError("stepper()", "path", path, "'compiled' (numba) for a scene whose inerter devices "
-                             "have internal states", "the numpy path does not integrate internal states")
         return Stepper(self.mechanism, s, self.signals, stop_time)
 
 
@@ -252,7 +249,8 @@ class Result:
         for i in range(start, len(run.time)):        # the numpy path (and its messages where one fails)
             t, y = run.time[i], run.states[i]
             try:
-                values.append(sig.evaluate(t, y[:n], y[n:n + self.model.mechanism.n], None, settings.alpha))
+                nv = n + self.model.mechanism.n
+                values.append(sig.evaluate(t, y[:n], y[n:nv], None, settings.alpha, z=y[nv:]))
             except SimulationError as exc:   # an output undefined at a sample: keep what came before
                 self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
                 break
@@ -279,7 +277,8 @@ class Result:
             for i in range(k, len(run.time)):
                 t, y = run.time[i], run.states[i]
                 try:
-                    values.append(sig.evaluate(t, y[:n], y[n:n + self.model.mechanism.n], None, alpha)[j])
+                    nv = n + self.model.mechanism.n
+                    values.append(sig.evaluate(t, y[:n], y[n:nv], None, alpha, z=y[nv:])[j])
                 except SimulationError as exc:
                     self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
                     break
@@ -326,7 +325,7 @@ class Result:
         def numpy_values(t):
             Y = sol(t)
             nv = n + self.model.mechanism.n
-            return np.array([fn(ti, Y[:n, i], Y[n:nv, i], None, alpha) for i, ti in enumerate(t)])
+            return np.array([fn(ti, Y[:n, i], Y[n:nv, i], None, alpha, Y[nv:, i]) for i, ti in enumerate(t)])
 
         kernel = self._kernel
         index = kernel.signal_index(name) if kernel is not None else None

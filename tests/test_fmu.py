@@ -712,9 +712,6 @@ def test_the_compiled_and_the_numpy_path_of_the_fmu_agree(fmus, scene, instance)
     force multiplied by k, so a stiff spring's force can differ by more than 1e-9 N between the
     paths although their lengths agree to 1e-14 m (braced_frame_3d's columns: k = 2e6 N/m, 2e-8 N)."""
     model = inerter.load(scene)
-    if len(model.mechanism.z0):
-        pytest.skip("internal states (an inerter device's series compliance): only the compiled path integrates "
-                    "them, the numpy path refuses the scene (tests/test_device_states.py)")
     expected = model.stepper(path="compiled").path
     scale = {f"{e.name}.{'tau' if e.kind.startswith('rotational') else 'f'}": e.coefficient
              for e in model.mechanism.elements if e.coefficient > 0}

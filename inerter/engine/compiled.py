@@ -646,9 +646,9 @@ class Kernel:
             st = _k.accelerations(float(t), q, v, z, self._inputs(inputs), float(alpha), self.params, self._AB,
                                   self._rhs, self._gen, acc)
             if st:
-                return signals.evaluate(t, q, v, inputs, alpha)     # raises the numpy path's message
+                return signals.evaluate(t, q, v, inputs, alpha, z=z)    # raises the numpy path's message
         if _k.signal_values(q, v, z, acc, self.params, raw):
-            return signals.evaluate(t, q, v, inputs, alpha)
+            return signals.evaluate(t, q, v, inputs, alpha, z=z)
         return raw[order]
 
     def signal_history(self, signals, order, times, states, inputs=None, alpha=0.0):
@@ -719,7 +719,7 @@ class _KernelMechanism:
         q, v, z = kernel.split(y)
         order = kernel.signal_order(signals)
         if order is None:
-            return signals.evaluate(t, q, v, inputs, alpha, functools.partial(kernel.accelerations, z=z)).tolist()
+            return signals.evaluate(t, q, v, inputs, alpha, functools.partial(kernel.accelerations, z=z), z=z).tolist()
         return kernel.signal_values(signals, order, t, q, v, inputs, alpha, z).tolist()
 
     def accelerations(self, t, q, v, inputs=None, alpha=0.0):
@@ -1085,7 +1085,7 @@ class CompiledStepper(Stepper):
         q, v, z = kernel.split(self.y)
         if self._order is None:
             values = self.signals.evaluate(self.time, q, v, self.inputs, self.settings.alpha,
-                                           functools.partial(kernel.accelerations, z=z))
+                                           functools.partial(kernel.accelerations, z=z), z=z)
         else:
             values = kernel.signal_values(self.signals, self._order, self.time, q, v, self.inputs,
                                           self.settings.alpha, z)

@@ -2,8 +2,8 @@
 steps (:class:`Stepper`).
 
 The state is y = [q, q̇, z]; its derivative is [q̇, q̈, ż] with q̈ from Eq. (33) and z the elements'
-internal states (an inerter device's series deflection, its dissipated energy), which only the
-compiled right-hand side evaluates (``Mechanism.z0`` is empty for every other scene). Constraint treatment:
+internal states (an inerter device's series deflection, its dissipated energy; ``Mechanism.z0``,
+empty for most scenes), whose rates follow once q̈ is solved (``Mechanism.state_rates``). Constraint treatment:
 ``baumgarte`` adds −2αĊ − α²C to the constraint rows; ``projection`` integrates Eq. (33) as it is
 and projects (q, q̇) back onto the constraints at every output point (the integrator restarts there).
 """
@@ -72,13 +72,11 @@ def derivative(mech, inputs, alpha, jump=None):
     (a step force switches) or, for a method that restarts there, a kink, ending the segment
     integrated: it is evaluated just before (one ulp), so that stages at the segment's end see the
     values the forces had over the segment. A mechanism backed by the compiled kernels gives its
-    own (``state_derivative``, which also takes internal states); the numpy evaluators do not
-    integrate internal states."""
+    own (``state_derivative``); one with internal states z integrates y = [q, v, z]."""
     if hasattr(mech, "state_derivative"):
         return mech.state_derivative(inputs, alpha, jump)
     if len(getattr(mech, "z0", ())):
-        raise SimulationError("the scene's inerter devices have internal states (series compliance, backlash, "
-                              "dissipated energy), which only the compiled engine integrates (numba)")
+        return _derivative_with_states(mech, inputs, alpha, jump)
     nq = mech.nq
     before = None if jump is None else float(np.nextafter(jump, -np.inf))
 
@@ -88,6 +86,20 @@ def derivative(mech, inputs, alpha, jump=None):
         q, v = y[:nq], y[nq:]
         a, _ = mech.accelerations(t, q, v, inputs, alpha)
         return np.concatenate((mech.qdot(q, v, t), a))
+    return fun
+
+
+def _derivative_with_states(mech, inputs, alpha, jump=None):
+    """:func:`derivative` on y = [q, v, z]: ż from the elements' laws once q̈ is solved."""
+    nq, nv = mech.nq, mech.nq + mech.n
+    before = None if jump is None else float(np.nextafter(jump, -np.inf))
+
+    def fun(t, y):
+        if before is not None and t > before:
+            t = before
+        q, v, z = y[:nq], y[nq:nv], y[nv:]
+        a, _ = mech.accelerations(t, q, v, inputs, alpha, z=z)
+        return np.concatenate((mech.qdot(q, v, t), a, mech.state_rates(q, v, z, a)))
     return fun
 
 
@@ -532,7 +544,8 @@ class Stepper:
         if hasattr(self.mech, "output_values"):          # the kernels' outputs (internal states included)
             return self.mech.output_values(self.signals, self.time, self.y, self.inputs, self.settings.alpha)
         n, nv = self.mech.nq, self.mech.nq + self.mech.n
-        return self.signals.evaluate(self.time, self.y[:n], self.y[n:nv], self.inputs, self.settings.alpha).tolist()
+        return self.signals.evaluate(self.time, self.y[:n], self.y[n:nv], self.inputs, self.settings.alpha,
+                                     z=self.y[nv:]).tolist()
 
     def outputs(self) -> dict:
         return dict(zip(self.signals.names, self.output_values()))

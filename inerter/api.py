@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from inerter.engine import metrics as metric_fns
+from inerter.engine.events import declares_events, device_events
 from inerter.engine.equilibrium import natural_frequencies, static_equilibrium
 from inerter.model.mechanism import Mechanism
 from inerter.oracle import OracleElement
@@ -158,13 +159,15 @@ class Model:
         side, and ``result.run.extra["path"]`` says so) or "numpy" (the readable reference). The
         oracle always runs its own numpy evaluation.
         With `metrics`, the scene's [[metrics]] are computed from the integrator's dense output (the
-        compiled loop keeps it only then)."""
+        compiled loop keeps it only then, and for a scene with device events, whose times it refines:
+        :meth:`Result.events`)."""
         s = self.settings(stop_time=stop_time, output_interval=output_interval, method=method, rtol=rtol,
                           atol=atol, constraint=constraint, step=step)
         if path == "compiled" and not self.is_oracle:
             from inerter.engine import compiled
             try:
-                run = compiled.integrate_compiled(self.mechanism, s, dense=bool(metrics) and self._metrics_need_dense())
+                dense = (bool(metrics) and self._metrics_need_dense()) or self._events_need_dense()
+                run = compiled.integrate_compiled(self.mechanism, s, dense=dense)
             except (ZeroDivisionError, FloatingPointError, OverflowError) as exc:
                 # The compiled loop raises where the state overflows (its error norm turns 0 or NaN);
                 # the numpy path stops where the state stops being finite and says so.
@@ -183,6 +186,11 @@ class Model:
         """Whether a metric of the scene reads its signal between the samples."""
         return any(m.kind in DENSE_METRICS for m in self.scene.metrics)
 
+    def _events_need_dense(self) -> bool:
+        """Whether the scene has device events (end stops, backlash: :mod:`inerter.engine.events`),
+        whose times are refined on the dense output."""
+        return declares_events(self.scene)
+
     def stepper(self, method=None, rtol=None, atol=None, path="compiled", stop_time=None) -> Stepper:
         """A co-simulation stepper at t = 0. `path` = "compiled" (the default): each step one call
         of the compiled integrator loop where :func:`inerter.engine.compiled.compiled_stepper` can
@@ -195,6 +203,9 @@ class Model:
             stepper = compiled.compiled_stepper(self.mechanism, s, self.signals, stop_time)
             if stepper is not None:
                 return stepper
+            if len(self.mechanism.z0) and not compiled.unsupported(self.mechanism):
+                # internal states: scipy's steppers on the kernels' right-hand side, which has them
+                return Stepper(compiled.kernel_mechanism(self.mechanism), s, self.signals, stop_time)
         elif path != "numpy" and path != "compiled":
             raise SceneError("stepper()", "path", path, "'numpy' or 'compiled'", "unknown path")
         return Stepper(self.mechanism, s, self.signals, stop_time)
@@ -239,7 +250,8 @@ class Result:
         for i in range(start, len(run.time)):        # the numpy path (and its messages where one fails)
             t, y = run.time[i], run.states[i]
             try:
-                values.append(sig.evaluate(t, y[:n], y[n:], None, settings.alpha))
+                nv = n + self.model.mechanism.n
+                values.append(sig.evaluate(t, y[:n], y[n:nv], None, settings.alpha, z=y[nv:]))
             except SimulationError as exc:   # an output undefined at a sample: keep what came before
                 self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
                 break
@@ -268,7 +280,8 @@ class Result:
             for i in range(k, len(run.time)):
                 t, y = run.time[i], run.states[i]
                 try:
-                    values.append(sig.evaluate(t, y[:n], y[n:], None, alpha)[j])
+                    nv = n + self.model.mechanism.n
+                    values.append(sig.evaluate(t, y[:n], y[n:nv], None, alpha, z=y[nv:])[j])
                 except SimulationError as exc:
                     self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
                     break
@@ -347,7 +360,8 @@ class Result:
 
         def numpy_values(t):
             Y = sol(t)
-            return np.array([fn(ti, Y[:n, i], Y[n:, i], None, alpha) for i, ti in enumerate(t)])
+            nv = n + self.model.mechanism.n
+            return np.array([fn(ti, Y[:n, i], Y[n:nv, i], None, alpha, Y[nv:, i]) for i, ti in enumerate(t)])
 
         kernel = self._kernel
         index = kernel.signal_index(name) if kernel is not None else None
@@ -362,6 +376,16 @@ class Result:
             return values
         return compiled_values
 
+    def events(self) -> list[dict]:
+        """The device events of the run (end-stop contacts, backlash engagement), in time order,
+        each {time, element, event, where}, times refined on the integrator's dense output
+        (:func:`inerter.engine.events.device_events`); [] for a scene without any."""
+        if not declares_events(self.model.scene) or len(self.time) < 2:
+            return []
+        nodes = getattr(getattr(self.run, "dense", None), "ts", np.zeros(0))
+        nodes = nodes[(nodes >= self.time[0]) & (nodes <= self.time[-1])]
+        return device_events(self.model.scene, np.concatenate((self.time, nodes)), self.dense)
+
     def summary(self) -> dict:
         """What a run was and how it went, as plain JSON values (``json.dumps`` needs no default):
         numbers, strings, lists and dicts; an effect held as an object (a ground motion) appears as
@@ -375,6 +399,7 @@ class Result:
             "metrics": self.metrics,
             "metric_units": {k: u for k, u in metric_units(self.model).items() if k in self.metrics},
             "metric_errors": self.metric_errors,
+            "events": self.events(),
             "output_units": output_units(self),
             "warnings": self.warnings,
             "settings": {"stop_time": s.stop_time, "output_interval": s.output_interval, "method": s.method,

@@ -220,7 +220,7 @@ class Kernel3:
     def accelerations(self, t, q, v, inputs, alpha):
         """(status, q̈, λ): assemble3, band_solve, un-permuted (as compiled_kernels.accelerations)."""
         inp = np.zeros(0) if inputs is None else np.ascontiguousarray(inputs, dtype=float)
-        status = ck.assemble3(float(t), q, v, inp, float(alpha), self.P, self.AB, self.rhs, self.gen)
+        status = ck.assemble3(float(t), q, v, np.zeros(0), inp, float(alpha), self.P, self.AB, self.rhs, self.gen)
         assert ck.band_solve(self.AB, self.rhs, self.kl)
         perm = self.P[15]
         out = np.empty(self.n + self.m)
@@ -235,7 +235,7 @@ class Kernel3:
 
     def signals(self, q, v, a, names):
         raw = np.empty(len(self.layout))
-        status = ck.signal_values3(q, v, np.concatenate((a, np.zeros(self.m))), self.P, raw)
+        status = ck.signal_values3(q, v, np.zeros(0), np.concatenate((a, np.zeros(self.m))), self.P, raw)
         index = {name: i for i, name in enumerate(self.layout)}
         return status, raw[[index[name] for name in names]]
 
@@ -402,10 +402,10 @@ def test_terminals_meet_is_reported(tmp_path):
     q[k:k + 3] = np.asarray(G) - A @ np.asarray(P4)
     with pytest.raises(TerminalsMeet):
         mech.accelerations(0.0, q, mech.v0)
-    status = ck.assemble3(0.0, q, mech.v0, np.zeros(3), 0.0, kern.P, kern.AB, kern.rhs, kern.gen)
+    status = ck.assemble3(0.0, q, mech.v0, np.zeros(0), np.zeros(3), 0.0, kern.P, kern.AB, kern.rhs, kern.gen)
     assert status == ck.TERMINALS_MEET
     raw = np.empty(len(kern.layout))
-    assert ck.signal_values3(q, mech.v0, np.zeros(kern.n + kern.m), kern.P, raw) == ck.TERMINALS_MEET
+    assert ck.signal_values3(q, mech.v0, np.zeros(0), np.zeros(kern.n + kern.m), kern.P, raw) == ck.TERMINALS_MEET
 
 
 def test_flatten3_takes_3d_scenes_of_either_orientation():

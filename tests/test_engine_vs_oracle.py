@@ -130,12 +130,21 @@ def _cases():
 CASES = _cases()
 
 
+#: Why a scene with internal states (an inerter device's series compliance, backlash, dissipated
+#: energy) is not a case: the oracle derives forces from L(q) and its rate only; such scenes are
+#: checked against closed forms in tests/test_device_states.py.
+NO_ORACLE = "its inerter device has internal states, which the oracle does not derive (see test_device_states.py)"
+
+
 def _params():
     """The engine check of every case (skipped, with the reason, where the compiled engine does not
-    take the scene) and, for those, the numpy path's check against the oracle."""
+    take the scene, or the oracle has no derivation of it) and, for those, the numpy path's check
+    against the oracle."""
     params = []
     for case, why in CASES:
-        if why:
+        if len(case.load().mechanism.z0):
+            params.append(pytest.param(case, "compiled", id=case.id, marks=pytest.mark.skip(reason=NO_ORACLE)))
+        elif why:
             params.append(pytest.param(case, "compiled", id=f"{case.id}-compiled",
                                        marks=pytest.mark.skip(reason=f"the compiled engine does not take "
                                                                      f"{case.id}: {why}")))

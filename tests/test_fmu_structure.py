@@ -274,6 +274,7 @@ def table_tunable(scene: Path) -> set[str]:
         dim = flat0["dim"]
         device = list(range(layout.DEVICE, layout.FLUID_QUADRATIC + 1))
         device += list(range(layout.INERTIA, layout.MOUNT_AXIS + 3))       # its masses, inertias and mount
+        device += list(range(layout.SERIES, layout.LOSS + 1))             # its series connection
         tunable_columns = {"el_real": [layout.COEFFICIENT, layout.CENTRIPETAL] + device,
                            "rot_real": [layout.COEFFICIENT],
                            "fa_real": [dim + layout.F_VALUE, dim + layout.F_AMPLITUDE, dim + layout.F_FREQUENCY],

@@ -37,7 +37,10 @@ STIFF = HARD / "stiff_1dof_2d.toml"
 FREE = HARD / "two_bar_free_2d.toml"
 ALIGNED = HARD / "two_bar_aligned_2d.toml"
 STEP = HARD / "step_force_1dof_2d.toml"
-SCENES = [SNAP, MEET, MASSLESS, STIFF, FREE, ALIGNED, STEP]
+#: The inerter devices' hard cases (stick-slip, backlash impacts, end-stop contact): checked in
+#: tests/test_device_states.py, their step counts in docs/benchmarks/hard_case_steps.md.
+DEVICE_CASES = [HARD / f"{n}.toml" for n in ("stick_slip_device_2d", "backlash_device_2d", "end_stop_device_2d")]
+SCENES = [SNAP, MEET, MASSLESS, STIFF, FREE, ALIGNED, STEP] + DEVICE_CASES
 
 #: The lumped mass (La = Lb = 1): L0 = sqrt(2); the mass reaches y = 0 iff V(y0) ≥ V(0), i.e.
 #: sqrt(1 + y0²) ≥ 2 L0 − La: y0 ≥ y0* = sqrt((2 L0 − La)² − La²) = 2 sqrt(2 − sqrt(2)).

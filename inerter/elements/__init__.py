@@ -43,6 +43,12 @@ k)`` that writes them at ``out[k]``... and returns the index after them, and
 ``extra_output_names(spec)`` that names them for a scene element (the inerter's device,
 :mod:`.device`, does so).
 
+An element may also have internal states x, its slice of z in the engine's state y = [q, v, z]
+(an inerter device's series deflection and rate, its dissipated energy: ``el_int[e, STATE]``,
+``STATES``). Its kind then gives ``state_force(row, L, Ldot, x)`` (added to its force),
+``state_energy(row, L, Ldot, x)`` and ``state_rates(row, L, Ldot, an, perp2, gq, x, dx)`` (ẋ once
+q̈ is solved, gq = gᵀq̈), which the kernels call only for an element that has states.
+
 A translational law returns the axial force less its inertance times gᵀq̈: ``inertance(row)`` is
 the factor that goes into the mass matrix (M += b g gᵀ, Eq. 33; zero for all but the inerter) and
 ``force(row, L, Ldot, an, perp2)`` the rest (Q −= F g, Eqs. 29 and 31).

@@ -1,10 +1,14 @@
-"""An inerter's device: the effects of a real inerter that are laws of its terminal distance.
+"""An inerter's device: the effects of a real inerter that are laws of its terminal distance and
+of the element's internal states.
 
-An ideal inerter's force is b d²L/dt² (paper Eq. 9). A real device adds forces of its own; those
-written here depend on the terminal distance L and its rate L̇ only, so each is one more scalar
-term of the inerter's law (:mod:`inerter.elements.inerter`), the same in 2D and 3D, and enters the
-equations as the ideal law's rest does: Q −= F g with g = Hᵀ r̂ (Eqs. 29, 31). A scene declares them
-per element (``[elements.NAME.device.EFFECT]``, :data:`EFFECTS`); an element without a device has
+An ideal inerter's force is b d²L/dt² (paper Eq. 9). A real device adds forces of its own; the
+flywheel, friction, end stops and fluid channel depend on the terminal distance L and its rate L̇
+only, so each is one more scalar term of the inerter's law (:mod:`inerter.elements.inerter`), the
+same in 2D and 3D, and enters the equations as the ideal law's rest does: Q −= F g with g = Hᵀ r̂
+(Eqs. 29, 31). Series compliance, backlash and the dissipated energy add internal states x of the
+element (its slice of z in the engine's state y = [q, v, z]), with their own laws
+(:func:`state_force`, :func:`state_energy`, :func:`state_rates`). A scene declares the effects per
+element (``[elements.NAME.device.EFFECT]``, :data:`EFFECTS`); an element without a device has
 ``row[DEVICE] == 0`` and its law never enters the branch that evaluates them.
 
 Sign convention: the axial force F is tension positive, like every translational element's; a
@@ -71,10 +75,49 @@ and the channel's losses, linear and quadratic in the flow rate A_p L̇, give
 Under a harmonic stroke X sin ωt the quadratic term dissipates (8/3) c₂ ω² X³ per cycle, the
 energy π c_eq ω X² of the equivalent viscous damping c_eq = 8/(3π) c₂ ω X.
 
-The device's outputs (``E.w_flywheel``, ``E.f_friction``, ``E.f_fluid``, ``E.f_stop``, ``E.p_loss``)
-are written by :func:`outputs` in the order :meth:`Device.outputs` names them. The dissipated
-energy is the time integral of ``E.p_loss``; as an output of its own it would need a state of the
-integrator, which the engine does not have.
+**Series compliance** (``device.compliance``; the screw's and mounts' elasticity, Wang & Su 2008,
+Sec. 3): a spring k_c (and damper c_c) in series with the inerter, terminal a — spring — node —
+inerter — terminal b, the node massless. Its deflection s and rate ṡ are internal states of the
+element (z in the engine's state y = [q, v, z]). The force through the connection,
+
+    F = k_c s + c_c ṡ,
+
+is known from the state, so the bodies feel it as a spring's (Q −= F g): the element leaves the
+mass matrix (its inertance is 0 there). The inerter's own stroke is u = L − s (up to a constant),
+and its law (Eq. 9) along the same line, b ü = F − F_d(u̇), with ü = L̈ − s̈ and
+L̈ = gᵀq̈ + a_n·r̂ + |ṙ⊥|²/L (the centripetal term included where the scene has it: the node moves
+on the line between the terminals, so the inerter's stroke acceleration is the distance's second
+derivative less s̈), gives
+
+    s̈ = L̈ − (F − F_d(u̇)) / b,
+
+evaluated once q̈ is solved (:func:`state_rates`). The device's other effects on the stroke act on
+the inerter's own stroke rate u̇ = L̇ − ṡ: the flywheel spins at n u̇, friction and channel damping
+are F_d(u̇) = F_f(u̇) + F_fluid(u̇) (they resist the screw's motion, not the terminals'); the end
+stops stay on the terminal distance L (the housing's stroke limits), in parallel with the whole
+series connection. Kinetic and elastic energy ½ b u̇² + ½ k_c s²; dissipated power c_c ṡ² + F_d u̇.
+b must be > 0.
+
+**Backlash** (``device.backlash``; Wang & Su 2008, Sec. 3, the free play of the ball screw's
+nut and the mounts): a dead zone of total width Δ in the series connection. The spring acts on the
+deflection beyond the gap, d = s − sgn(s) Δ/2 for |s| > Δ/2 (engaged), 0 inside it (the inerter
+free-wheels, F = 0):
+
+    F = k_c d + c_c ṡ engaged, clipped to 0 where it would pull the engaged sides apart (as the end
+    stops' contact), F = 0 in the gap.
+
+The spring force is continuous at engagement; the damping's part c_c ṡ jumps there (an impact): the
+integrator's error control shortens its steps at the switch (no regularisation; the hard case of
+docs/hard_cases.md). Output ``E.engaged`` (1 engaged, 0 in the gap); stored energy ½ k_c d².
+
+**Dissipated energy** (``device.dissipated_energy``, no parameters): the integral of the device's
+dissipated power, ż = p_loss, as one more internal state (output ``E.e_loss``, J), so that energy
++ e_loss equals the initial energy to the integrator's tolerance. Opt in: a state changes the
+integrator's error norm, and so the steps.
+
+The device's outputs (``E.w_flywheel``, ``E.f_friction``, ``E.f_fluid``, ``E.f_stop``, ``E.p_loss``,
+``E.s_series``, ``E.engaged``, ``E.e_loss``) are written by :func:`outputs` in the order
+:meth:`Device.outputs` names them.
 """
 from __future__ import annotations
 
@@ -85,11 +128,13 @@ from typing import Callable
 from numba import njit
 
 from inerter.elements.base import Parameter, law
-from inerter.elements.layout import (COULOMB, DEVICE, FLUID, FLUID_LINEAR, FLUID_QUADRATIC, FLYWHEEL_AXIAL,
-                                     FLYWHEEL_CENTRE, FLYWHEEL_MASS, FLYWHEEL_RATIO, FRICTION, HOUSING_AXIAL,
-                                     HOUSING_CENTRE, HOUSING_MASS, INERTIA, MOUNT, MOUNT_AXIS, ROD_CENTRE, ROD_MASS,
-                                     STOP_DAMPING, STOP_EXPONENT, STOP_MAX, STOP_MIN, STOP_STIFFNESS, STOPS,
-                                     TRANSVERSE, VELOCITY_SCALE, VISCOUS)
+from inerter.elements.layout import (BACKLASH, COEFFICIENT, COULOMB, DEVICE, FLUID, FLUID_LINEAR,
+                                     FLUID_QUADRATIC, FLYWHEEL_AXIAL, FLYWHEEL_CENTRE, FLYWHEEL_MASS,
+                                     FLYWHEEL_RATIO, FRICTION, GAP, HOUSING_AXIAL, HOUSING_CENTRE,
+                                     HOUSING_MASS, INERTIA, LOSS, MOUNT, MOUNT_AXIS, ROD_CENTRE, ROD_MASS,
+                                     SERIES, SERIES_DAMPING, SERIES_STIFFNESS, STOPS, STOP_DAMPING,
+                                     STOP_EXPONENT, STOP_MAX, STOP_MIN, STOP_STIFFNESS, TRANSVERSE,
+                                     VELOCITY_SCALE, VISCOUS)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -146,15 +191,78 @@ def stop_energy(row, L):
     return row[STOP_STIFFNESS] * d ** (n + 1.0) / (n + 1.0)
 
 
-@entry
-def force(row, L, Ldot):
-    """The device's axial force (N, tension positive): friction, channel damping and end stops,
-    each where declared."""
+@law
+def drag(row, ud):
+    """F_d(u̇): friction and channel damping on the stroke rate u̇ (N, tension positive)."""
     F = 0.0
     if row[FRICTION] != 0.0:
-        F += friction(row, Ldot)
+        F += friction(row, ud)
     if row[FLUID] != 0.0:
-        F += fluid_damping(row, Ldot)
+        F += fluid_damping(row, ud)
+    return F
+
+
+@law
+def deflection(row, s):
+    """The series spring's deflection beyond the backlash gap: s, or s ∓ Δ/2 outside the gap and 0
+    inside it (m)."""
+    if row[BACKLASH] == 0.0:
+        return s
+    half = 0.5 * row[GAP]
+    if s > half:
+        return s - half
+    if s < -half:
+        return s + half
+    return 0.0
+
+
+@law
+def series_force(row, s, sdot):
+    """(F, engaged): the force through the series connection, k_c d + c_c ṡ (N, tension positive;
+    d = :func:`deflection`), and 1.0 where the backlash gap is closed (0.0 inside it). With backlash
+    the force never pulls the engaged sides apart (clipped to 0, as the end stops')."""
+    d = deflection(row, s)
+    if row[BACKLASH] != 0.0 and d == 0.0:
+        return 0.0, 0.0
+    F = row[SERIES_STIFFNESS] * d + row[SERIES_DAMPING] * sdot
+    if row[BACKLASH] != 0.0 and F * d < 0.0:
+        return 0.0, 1.0
+    return F, 1.0
+
+
+@law
+def stroke_rate(row, Ldot, x):
+    """The inerter's own stroke rate: u̇ = L̇ − ṡ with series compliance, L̇ without."""
+    if row[SERIES] != 0.0:
+        return Ldot - x[1]
+    return Ldot
+
+
+@law
+def loss(row, L, Ldot, x):
+    """The power the device dissipates (W, ≥ 0): friction and channel damping F_d(u̇) u̇, the
+    contacts' damping, and the series connection's (F − k_c d) ṡ (c_c ṡ², or the stored energy a
+    clipped contact lets go)."""
+    p = 0.0
+    ud = Ldot
+    if row[SERIES] != 0.0:
+        F, engaged = series_force(row, x[0], x[1])
+        p += (F - row[SERIES_STIFFNESS] * deflection(row, x[0])) * x[1]
+        ud = Ldot - x[1]
+    p += drag(row, ud) * ud
+    if row[STOPS] != 0.0:
+        p += end_stop(row, L, Ldot)[1]
+    return p
+
+
+@entry
+def force(row, L, Ldot):
+    """The device's axial force on the terminals beyond b L̈ (N, tension positive): friction and
+    channel damping on L̇ and the end stops, each where declared; with series compliance only the
+    end stops (the rest acts through the series connection: :func:`state_force`)."""
+    F = 0.0
+    if row[SERIES] == 0.0:
+        F += drag(row, Ldot)
     if row[STOPS] != 0.0:
         F += end_stop(row, L, Ldot)[0]
     return F
@@ -169,35 +277,68 @@ def energy(row, L):
 
 
 @entry
-def outputs(row, L, Ldot, out, k):
+def state_force(row, x):
+    """The force its internal states carry to the terminals: the series connection's (N)."""
+    if row[SERIES] != 0.0:
+        return series_force(row, x[0], x[1])[0]
+    return 0.0
+
+
+@entry
+def state_energy(row, Ldot, x):
+    """With series compliance, the inerter's ½ b u̇² and the spring's ½ k_c d² (J; the element's
+    ½ b L̇² is then left out)."""
+    if row[SERIES] == 0.0:
+        return 0.0
+    ud = Ldot - x[1]
+    d = deflection(row, x[0])
+    return 0.5 * row[COEFFICIENT] * ud * ud + 0.5 * row[SERIES_STIFFNESS] * d * d
+
+
+@entry
+def state_rates(row, L, Ldot, Lddot, x, dx):
+    """dx = ż of the element's internal states, once q̈ is known (`Lddot` = L̈ = gᵀq̈ + a_n·r̂ +
+    |ṙ⊥|²/L): with series compliance (s, ṡ) ↦ (ṡ, L̈ − (F − F_d(u̇))/b); the dissipated energy's
+    rate p_loss."""
+    k = 0
+    if row[SERIES] != 0.0:
+        F, engaged = series_force(row, x[0], x[1])
+        dx[0] = x[1]
+        dx[1] = Lddot - (F - drag(row, Ldot - x[1])) / row[COEFFICIENT]
+        k = 2
+    if row[LOSS] != 0.0:
+        dx[k] = loss(row, L, Ldot, x)
+
+
+@entry
+def outputs(row, L, Ldot, x, out, k):
     """Write the device's outputs at out[k], out[k + 1], ... in the order of
     :meth:`Device.outputs` (flywheel speed; friction, channel and end-stop forces; dissipated
-    power) and return the index after them."""
+    power; series deflection, engagement, dissipated energy) and return the index after them."""
+    ud = stroke_rate(row, Ldot, x)
     if row[FLYWHEEL_RATIO] != 0.0:
-        out[k] = row[FLYWHEEL_RATIO] * Ldot
+        out[k] = row[FLYWHEEL_RATIO] * ud
         k += 1
-    dissipative = False
-    loss = 0.0
     if row[FRICTION] != 0.0:
-        F = friction(row, Ldot)
-        out[k] = F
+        out[k] = friction(row, ud)
         k += 1
-        loss += F * Ldot
-        dissipative = True
     if row[FLUID] != 0.0:
-        F = fluid_damping(row, Ldot)
-        out[k] = F
+        out[k] = fluid_damping(row, ud)
         k += 1
-        loss += F * Ldot
-        dissipative = True
     if row[STOPS] != 0.0:
-        F, p = end_stop(row, L, Ldot)
-        out[k] = F
+        out[k] = end_stop(row, L, Ldot)[0]
         k += 1
-        loss += p
-        dissipative = True
-    if dissipative:
-        out[k] = loss
+    if row[FRICTION] != 0.0 or row[FLUID] != 0.0 or row[STOPS] != 0.0 or row[SERIES] != 0.0:
+        out[k] = loss(row, L, Ldot, x)
+        k += 1
+    if row[SERIES] != 0.0:
+        out[k] = x[0]
+        k += 1
+        if row[BACKLASH] != 0.0:
+            out[k] = series_force(row, x[0], x[1])[1]
+            k += 1
+    if row[LOSS] != 0.0:
+        out[k] = x[2 if row[SERIES] != 0.0 else 0]
         k += 1
     return k
 
@@ -329,8 +470,45 @@ MOUNT_EFFECT = Effect(
     dimensions=(3,), why_not_2d="in 2D the housing cannot spin about its in-plane axis: the planar constraint "
     "carries the flywheel's gyroscopic moment")
 
+
+def _check_compliance(values):
+    if not values["stiffness"] > 0.0 and not values["damping"] > 0.0:
+        return ("stiffness", values["stiffness"], "stiffness > 0 (N/m) or damping > 0 (N.s/m)",
+                "a series connection that carries no force")
+    return None
+
+
+COMPLIANCE = Effect(
+    "compliance", "a spring k_c and damper c_c in series with the inerter, F = k_c s + c_c ds/dt (state s, ds/dt)",
+    "Wang & Su 2008, Veh. Syst. Dyn. 46(7), Sec. 3 (the screw's elastic effect)",
+    (Parameter("stiffness", "N/m", "series stiffness k_c", minimum=0.0),
+     Parameter("damping", "N.s/m", "series damping c_c", minimum=0.0, required=False, default=0.0)),
+    check=_check_compliance)
+
+BACKLASH_EFFECT = Effect(
+    "backlash", "a gap of total width Δ in the series connection: no force while |s| < Δ/2",
+    "Wang & Su 2008, Veh. Syst. Dyn. 46(7), Sec. 3 (backlash of the ball screw)",
+    (Parameter("gap", "m", "total free play Δ of the series connection", minimum=0.0),))
+
+DISSIPATED_ENERGY = Effect(
+    "dissipated_energy", "the device's dissipated energy integrated as a state (output e_loss)",
+    "ż = p_loss: energy + e_loss is the initial energy (Drake's non-conservative power, integrated)", ())
+
 #: The effects an inerter may declare, in the order they are listed and their outputs written.
-EFFECTS = (FLYWHEEL, FRICTION_EFFECT, END_STOPS, FLUID_EFFECT, HOUSING, ROD, MOUNT_EFFECT)
+EFFECTS = (FLYWHEEL, FRICTION_EFFECT, END_STOPS, FLUID_EFFECT, HOUSING, ROD, MOUNT_EFFECT, COMPLIANCE,
+           BACKLASH_EFFECT, DISSIPATED_ENERGY)
+
+
+def check_device(effects: dict):
+    """How a device's effects go together: None, or (effect, key, value, expected, problem)."""
+    if "backlash" in effects and "compliance" not in effects:
+        return ("backlash", "gap", effects["backlash"].get("gap"),
+                "device.compliance beside it (the gap is in the series connection)", "backlash without compliance")
+    if "dissipated_energy" in effects and not any(n in effects for n in ("friction", "end_stops", "fluid",
+                                                                          "compliance")):
+        return ("dissipated_energy", "", {}, "a dissipative effect beside it (friction, end_stops, fluid or "
+                "compliance)", "nothing to dissipate")
+    return None
 EFFECT = {e.name: e for e in EFFECTS}
 
 
@@ -379,6 +557,13 @@ class Device:
         if self.has("fluid"):
             v = self.values("fluid")
             cols.update({FLUID: 1.0, FLUID_LINEAR: v["linear_damping"], FLUID_QUADRATIC: v["quadratic_damping"]})
+        if self.has("compliance"):
+            v = self.values("compliance")
+            cols.update({SERIES: 1.0, SERIES_STIFFNESS: v["stiffness"], SERIES_DAMPING: v["damping"] or 0.0})
+        if self.has("backlash"):
+            cols.update({BACKLASH: 1.0, GAP: self.values("backlash")["gap"]})
+        if self.has("dissipated_energy"):
+            cols[LOSS] = 1.0
         if self.inertia():
             cols.update(self._inertia_columns())
         return cols
@@ -406,7 +591,20 @@ class Device:
         return cols
 
     def dissipative(self) -> bool:
-        return any(self.has(n) for n in ("friction", "end_stops", "fluid"))
+        """Whether it has a p_loss: friction, end stops, a fluid channel or a series connection
+        (whose damping may be 0: a number, tunable, while the outputs are fixed by the effects
+        declared; the condition :func:`outputs` tests on the row)."""
+        return any(self.has(n) for n in ("friction", "end_stops", "fluid", "compliance"))
+
+    def states(self) -> tuple[tuple[str, str, str], ...]:
+        """(name, unit, description) of its internal states, in their order in z (:func:`state_rates`)."""
+        out = []
+        if self.has("compliance"):
+            out += [("s_series", "m", "series deflection s (the spring's extension)"),
+                    ("v_series", "m/s", "series deflection rate ds/dt")]
+        if self.has("dissipated_energy"):
+            out.append(("e_loss", "J", "energy dissipated in the device since t = 0"))
+        return tuple(out)
 
     def outputs(self) -> tuple[tuple[str, str, str], ...]:
         """(suffix, unit, description) of its outputs, in the order :func:`outputs` writes them."""
@@ -420,7 +618,14 @@ class Device:
         if self.has("end_stops"):
             out.append(("f_stop", "N", "end-stop contact force, tension positive (part of f)"))
         if self.dissipative():
-            out.append(("p_loss", "W", "power dissipated in the device (friction, channel, contact damping)"))
+            out.append(("p_loss", "W", "power dissipated in the device (friction, channel, contact, series damping)"))
+        if self.has("compliance"):
+            out.append(("s_series", "m", "series deflection s: terminal distance less the inerter's stroke, "
+                                         "0 at t = 0"))
+            if self.has("backlash"):
+                out.append(("engaged", "1", "1 where the backlash gap is closed (the spring carries force), 0 in it"))
+        if self.has("dissipated_energy"):
+            out.append(("e_loss", "J", "energy dissipated in the device since t = 0 (integral of p_loss)"))
         return tuple(out)
 
     def describe(self) -> str:
@@ -431,7 +636,7 @@ class Device:
             units = {p.key: p.unit for p in effect.parameters}
             given = ", ".join(f"{k} = {_number(v)}" + (f" {units[k]}" if units[k] != "1" else "")
                               for k, v in values if v is not None)
-            parts.append(f"{name} ({given})")
+            parts.append(f"{name} ({given})" if given else name)
         b = self.inertance()
         text = "; ".join(parts) + (f"; inertance from the device b = {b:g} kg" if b is not None else "")
         if self.inertia():

@@ -36,10 +36,31 @@ def energy(kind, row, L, Ldot):
 
 
 @law
-def extra_outputs(kind, row, L, Ldot, out, k):
+def extra_outputs(kind, row, L, Ldot, x, out, k):
     if kind == 1:
-        return kind_inerter.extra_outputs(row, L, Ldot, out, k)
+        return kind_inerter.extra_outputs(row, L, Ldot, x, out, k)
     return k
+
+
+@law
+def state_force(kind, row, L, Ldot, x):
+    if kind == 1:
+        return kind_inerter.state_force(row, L, Ldot, x)
+    return 0.0
+
+
+@law
+def state_energy(kind, row, L, Ldot, x):
+    if kind == 1:
+        return kind_inerter.state_energy(row, L, Ldot, x)
+    return 0.0
+
+
+@law
+def state_rates(kind, row, L, Ldot, an, perp2, gq, x, dx):
+    if kind == 1:
+        return kind_inerter.state_rates(row, L, Ldot, an, perp2, gq, x, dx)
+    return None
 
 
 @law

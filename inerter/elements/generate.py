@@ -11,13 +11,16 @@ TARGET = Path(__file__).with_name("dispatch.py")
 
 _FUNCTIONS = {
     TRANSLATIONAL: (("inertance", "row"), ("force", "row, L, Ldot, an, perp2"), ("energy", "row, L, Ldot"),
-                    ("extra_outputs", "row, L, Ldot, out, k")),
+                    ("extra_outputs", "row, L, Ldot, x, out, k"), ("state_force", "row, L, Ldot, x"),
+                    ("state_energy", "row, L, Ldot, x"), ("state_rates", "row, L, Ldot, an, perp2, gq, x, dx")),
     ROTATIONAL: (("torque", "row, phi, w"), ("rotational_energy", "row, phi, w")),
 }
 _LAW = {"rotational_energy": "energy"}
 #: Laws a kind may leave out, with what the dispatch returns for it: ``extra_outputs`` writes a
-#: kind's outputs beyond the family's three (an inerter's device) and returns the next index.
-_OPTIONAL = {"extra_outputs": "k"}
+#: kind's outputs beyond the family's three (an inerter's device) and returns the next index; the
+#: laws of internal states (an inerter's device: ``state_force``, ``state_energy``, ``state_rates``,
+#: which writes ẋ into dx) are those of a kind whose elements may have some.
+_OPTIONAL = {"extra_outputs": "k", "state_force": "0.0", "state_energy": "0.0", "state_rates": "None"}
 
 
 def source() -> str:

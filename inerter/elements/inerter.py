@@ -20,7 +20,7 @@ The inertance is the scene's ``b``, or what the device's flywheel (b = J (2π/p)
 """
 from inerter.elements import device
 from inerter.elements.base import TRANSLATIONAL, ElementKind, Parameter, law, rarely
-from inerter.elements.layout import CENTRIPETAL, COEFFICIENT, DEVICE
+from inerter.elements.layout import CENTRIPETAL, COEFFICIENT, DEVICE, SERIES
 
 KIND = ElementKind(
     name="inerter", family=TRANSLATIONAL, equation="Eq. 9 (Eq. 8 without the centripetal term)",
@@ -31,38 +31,75 @@ KIND = ElementKind(
 
 @law
 def inertance(row):
-    """b: the factor of gᵀ q̈ in F, which goes into the mass matrix (Eq. 33)."""
+    """b: the factor of gᵀ q̈ in F, which goes into the mass matrix (Eq. 33); 0 where a series
+    connection carries the force (device.compliance: the force is a law of the state)."""
+    if rarely(row[SERIES] != 0.0):
+        return 0.0
     return row[COEFFICIENT]
+
+
+@law
+def convective(row, L, an, perp2):
+    """L̈ − gᵀq̈ = a_n·r̂ + |ṙ⊥|²/L (Eq. 9), or a_n·r̂ without the centripetal term (Eq. 8)."""
+    term = an
+    if row[CENTRIPETAL] != 0.0:
+        term += perp2 / L
+    return term
 
 
 @law
 def force(row, L, Ldot, an, perp2):
     """F − b gᵀ q̈ = b (a_n·r̂ + |ṙ⊥|²/L) (Eq. 9), or b a_n·r̂ without the centripetal term
-    (Eq. 8), plus a declared device's forces. `an` is a_n·r̂, `perp2` is |ṙ|² − L̇² = |ṙ⊥|²."""
-    term = an
-    if row[CENTRIPETAL] != 0.0:
-        term += perp2 / L
-    F = row[COEFFICIENT] * term
+    (Eq. 8), plus a declared device's forces. `an` is a_n·r̂, `perp2` is |ṙ|² − L̇² = |ṙ⊥|². With
+    series compliance the inertial part is carried by the series connection (:func:`state_force`)."""
+    F = row[COEFFICIENT] * convective(row, L, an, perp2)
     if rarely(row[DEVICE] != 0.0):
+        if row[SERIES] != 0.0:
+            F = 0.0
         F += device.force(row, L, Ldot)
     return F
 
 
 @law
 def energy(row, L, Ldot):
-    """Kinetic energy ½ b L̇² (and a device's end stops' elastic energy)."""
+    """Kinetic energy ½ b L̇² (and a device's end stops' elastic energy); with series compliance
+    the inerter's energy is a law of the state (:func:`state_energy`)."""
     E = 0.5 * row[COEFFICIENT] * Ldot * Ldot
     if rarely(row[DEVICE] != 0.0):
+        if row[SERIES] != 0.0:
+            E = 0.0
         E += device.energy(row, L)
     return E
 
 
 @law
-def extra_outputs(row, L, Ldot, out, k):
-    """A device's outputs at out[k], ... (:func:`device.outputs`); returns the index after them."""
+def extra_outputs(row, L, Ldot, x, out, k):
+    """A device's outputs at out[k], ... (:func:`device.outputs`; `x` the element's internal
+    states); returns the index after them."""
     if rarely(row[DEVICE] != 0.0):
-        return device.outputs(row, L, Ldot, out, k)
+        return device.outputs(row, L, Ldot, x, out, k)
     return k
+
+
+# Laws of an element's internal states x (a view of z; only a device declares them), which the
+# kernels call only for an element that has some (el_int[e, STATES] > 0).
+@law
+def state_force(row, L, Ldot, x):
+    """The axial force the internal states carry (the series connection's, N)."""
+    return device.state_force(row, x)
+
+
+@law
+def state_energy(row, L, Ldot, x):
+    """The energy held in the internal states (½ b u̇² + ½ k_c d² with series compliance, J)."""
+    return device.state_energy(row, Ldot, x)
+
+
+@law
+def state_rates(row, L, Ldot, an, perp2, gq, x, dx):
+    """dx = ẋ once q̈ is solved (`gq` = gᵀq̈): :func:`device.state_rates` with
+    L̈ = gᵀq̈ + :func:`convective`."""
+    device.state_rates(row, L, Ldot, gq + convective(row, L, an, perp2), x, dx)
 
 
 def extra_output_names(spec) -> tuple[tuple[str, str, str], ...]:

@@ -9,7 +9,10 @@ numbers); a rotational element one row of ``rot_int`` and one of ``rot_real``. T
 KIND = 0                 # its code: its place in inerter.elements.KINDS
 POINT_A = 1              # terminal a (point index)
 POINT_B = 2              # terminal b (point index)
-ELEMENT_INT_COLUMNS = 3
+STATE = 3                # the offset of its internal states in z (y = [q, v, z]); 0 where it has none
+STATES = 4               # how many internal states it has (an inerter device's series deflection and its
+                         # rate, its dissipated energy: inerter.elements.device); 0 for most elements
+ELEMENT_INT_COLUMNS = 5
 
 # -- el_real: a translational element's numbers
 COEFFICIENT = 0          # k (N/m), c (N.s/m) or b (kg)
@@ -52,7 +55,14 @@ HOUSING_AXIAL = 33       # axial moment of inertia of housing and rod, which spi
 FLYWHEEL_AXIAL = 34      # the flywheel's axial moment of inertia J (kg.m2), for its spin with the housing
 MOUNT_AXIS = 35          # the Hooke joint's first axis a̅₁, a unit vector in terminal a's body frame (3 columns)
 DEVICE_GRAVITY = 38      # the scene's gravity g (m/s², 3 columns; 0 without), for the weight of the device's masses
-ELEMENT_REAL_COLUMNS = 41
+# An inerter device's internal states (inerter.elements.device; 0.0 where not declared):
+SERIES = 41              # 1.0: a spring (and damper) in series with the inerter (device.compliance)
+SERIES_STIFFNESS = 42    # its stiffness k_c (N/m)
+SERIES_DAMPING = 43      # its damping c_c (N.s/m)
+BACKLASH = 44            # 1.0: a gap in the series connection (device.backlash)
+GAP = 45                 # the gap's total width (m): free play of ±GAP/2 about the engaged position
+LOSS = 46                # 1.0: the dissipated energy integrated as a state (device.dissipated_energy)
+ELEMENT_REAL_COLUMNS = 47
 
 # -- rot_int: a rotational element's integers
 ROT_KIND = 0             # its code: its place in inerter.elements.KINDS

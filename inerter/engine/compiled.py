@@ -15,7 +15,10 @@ singularity the loops watch as the numpy path does). The kernels in
 forces and Q_Iv from these arrays (the same formulas as ``elements.py``, ``joints.py``,
 ``planar.py``, ``spatial.py``) and solve the augmented system with a band LU with partial
 pivoting after a reverse Cuthill-McKee ordering, so a chain's cost grows linearly with its length.
-The state is y = [q, v] with q̇ = B(q) v (the identity in 2D, the orientations' rates in 3D).
+The state is y = [q, v, z] with q̇ = B(q) v (the identity in 2D, the orientations' rates in 3D)
+and z the elements' internal states (an inerter device's series deflection, its dissipated energy:
+:mod:`inerter.elements.device`), each element's slice at ``el_int[e, STATE]``; z is empty, and
+never evaluated, where the scene declares none.
 
 Integrators: DOP853 and RK45 with scipy's error control, step-size rule and dense output (the
 same steps as the numpy path at the same tolerances), and RK4 with a fixed step, each in one
@@ -35,6 +38,7 @@ returns a kernel that calls the numpy path and :func:`integrate_compiled` runs
 from __future__ import annotations
 
 import copy
+import functools
 import hashlib
 import math
 import importlib.util
@@ -360,7 +364,7 @@ def flatten(mech) -> dict:
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 5, float),
                 in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
                 point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names,
-                el_extra=tables["el_extra"])
+                el_extra=tables["el_extra"], n_internal=tables["n_internal"])
 
 
 def signal_layout(flat) -> list[str]:
@@ -498,6 +502,9 @@ class Kernel:
         self._no_inputs = np.zeros(0)
         self.q0 = np.asarray(mech.q0, dtype=float)
         self.v0 = np.asarray(mech.v0, dtype=float)
+        self.nz = int(flat["n_internal"])
+        self.z0 = np.zeros(self.nz)                # internal states start at zero (tables.internal_states)
+        self.ny = self.nq + self.n + self.nz
         self.input_names = list(getattr(mech, "input_names", []))
         self._layout = self._signal_index = None     # signal_layout and its index, once asked for
         self._read_cache = {}
@@ -512,25 +519,36 @@ class Kernel:
             return self._no_inputs
         return np.ascontiguousarray(inputs, dtype=float)
 
-    def accelerations(self, t, q, v, inputs=None, alpha=0.0):
-        """(q̈, λ) of Eq. (33) with Baumgarte stabilisation α, as ``Mechanism.accelerations``."""
+    def split(self, y):
+        """(q, v, z) of a state y = [q, v, z], contiguous float arrays."""
+        y = np.ascontiguousarray(y, dtype=float)
+        nv = self.nq + self.n
+        return y[:self.nq], y[self.nq:nv], y[nv:]
+
+    def accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
+        """(q̈, λ) of Eq. (33) with Baumgarte stabilisation α, as ``Mechanism.accelerations``; `z`:
+        the internal states (default: their initial values, zero)."""
         out = np.empty(self.n + self.m)
+        z = self.z0 if z is None else np.ascontiguousarray(z, dtype=float)
         st = _k.accelerations(float(t), np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(v, dtype=float),
-                              self._inputs(inputs), float(alpha), self.params, self._AB, self._rhs, self._gen, out)
+                              z, self._inputs(inputs), float(alpha), self.params, self._AB, self._rhs, self._gen, out)
         if st:
             raise SimulationError(_STATUS_TEXT[st], t)
         return out[:self.n], out[self.n:]
 
-    def derivative(self, inputs=None, alpha=0.0):
-        """f(t, y) = [q̇, q̈] for scipy's integrators."""
-        n, nq = self.n, self.nq
+    def derivative(self, inputs=None, alpha=0.0, jump=None):
+        """f(t, y) = [q̇, q̈, ż] for scipy's integrators; `jump`: as ``simulation.derivative``."""
+        n, ny = self.n, self.ny
         inp = self._inputs(inputs)
         P, AB, rhs, gen = self.params, self._AB, self._rhs, self._gen
         rhs_fn = _k._rhs
         acc = np.empty(n + self.m)
+        before = None if jump is None else float(np.nextafter(jump, -np.inf))
 
         def fun(t, y):
-            dy = np.empty(nq + n)
+            if before is not None and t > before:
+                t = before
+            dy = np.empty(ny)
             st = rhs_fn(float(t), np.ascontiguousarray(y, dtype=float), inp, alpha, P, AB, rhs, gen, acc, dy)
             if st:
                 raise SimulationError(_STATUS_TEXT[st], t)
@@ -560,7 +578,7 @@ class Kernel:
         state."""
         flat = self.flat
         width = 2 * flat["dim"]
-        ny = self.nq + self.n
+        ny = self.ny
         self.signal_index("")
         if index < width * len(flat["point_names"]):
             b, c, d = int(flat["pbody"][index // width]), index % width, flat["dim"]
@@ -585,7 +603,7 @@ class Kernel:
         return need, np.arange(ny, dtype=np.int64)
 
     def signal_column(self, index, times, states, inputs=None, alpha=0.0):
-        """(values, k): the signal at `index` at each sample of a history (rows [q, v]), up to the
+        """(values, k): the signal at `index` at each sample of a history (rows [q, v, z]), up to the
         first sample k where it cannot be evaluated (k = len(times) when it can at all), with the
         values signal_history gives."""
         need, _ = self._reads(index)
@@ -618,19 +636,21 @@ class Kernel:
             return None
         return np.array([layout[name] for name in base], dtype=np.int64)
 
-    def signal_values(self, signals, order, t, q, v, inputs=None, alpha=0.0) -> np.ndarray:
-        """Every signal of `signals` at one state (as ``Signals.evaluate``), in compiled code."""
+    def signal_values(self, signals, order, t, q, v, inputs=None, alpha=0.0, z=None) -> np.ndarray:
+        """Every signal of `signals` at one state (as ``Signals.evaluate``), in compiled code; `z`:
+        the internal states (default zero)."""
         q = np.ascontiguousarray(q, dtype=float)
         v = np.ascontiguousarray(v, dtype=float)
+        z = self.z0 if z is None else np.ascontiguousarray(z, dtype=float)
         raw = np.empty(len(order))
         acc = np.zeros(self.n + self.m)
         if signals.needs_accelerations:
-            st = _k.accelerations(float(t), q, v, self._inputs(inputs), float(alpha), self.params, self._AB,
+            st = _k.accelerations(float(t), q, v, z, self._inputs(inputs), float(alpha), self.params, self._AB,
                                   self._rhs, self._gen, acc)
             if st:
-                return signals.evaluate(t, q, v, inputs, alpha)     # raises the numpy path's message
-        if _k.signal_values(q, v, acc, self.params, raw):
-            return signals.evaluate(t, q, v, inputs, alpha)
+                return signals.evaluate(t, q, v, inputs, alpha, z=z)    # raises the numpy path's message
+        if _k.signal_values(q, v, z, acc, self.params, raw):
+            return signals.evaluate(t, q, v, inputs, alpha, z=z)
         return signals.complete(raw[order])
 
     def signal_history(self, signals, order, times, states, inputs=None, alpha=0.0):
@@ -644,7 +664,7 @@ class Kernel:
 
     def point_positions(self, states) -> dict:
         """Global positions (time × dimension) of every named point along a state history (rows
-        [q, v]), from the kernels' point kinematics (r = R + A ū, Eq. 15)."""
+        [q, v, z]), from the kernels' point kinematics (r = R + A ū, Eq. 15)."""
         states = np.ascontiguousarray(np.atleast_2d(states), dtype=float)
         times = np.zeros(len(states))
         d = self.flat["dim"]
@@ -688,8 +708,21 @@ class _KernelMechanism:
     def __init__(self, mech, kernel):
         self._mech, self._kernel = mech, kernel
         self.n, self.m = kernel.n, kernel.m
-        self.q0, self.v0 = kernel.q0, kernel.v0
+        self.q0, self.v0, self.z0 = kernel.q0, kernel.v0, kernel.z0
         self.input_names = kernel.input_names
+
+    def state_derivative(self, inputs, alpha, jump=None):
+        """f(t, y) on y = [q, v, z] from the kernels' right-hand side (``simulation.derivative``)."""
+        return self._kernel.derivative(inputs, alpha, jump)
+
+    def output_values(self, signals, t, y, inputs, alpha) -> list:
+        """Every output of `signals` at the state y = [q, v, z], from the kernels (Stepper.output_values)."""
+        kernel = self._kernel
+        q, v, z = kernel.split(y)
+        order = kernel.signal_order(signals)
+        if order is None:
+            return signals.evaluate(t, q, v, inputs, alpha, functools.partial(kernel.accelerations, z=z), z=z).tolist()
+        return kernel.signal_values(signals, order, t, q, v, inputs, alpha, z).tolist()
 
     def accelerations(self, t, q, v, inputs=None, alpha=0.0):
         return self._kernel.accelerations(t, q, v, inputs, alpha)
@@ -736,6 +769,12 @@ def _tables(method):
     return _RK_TABLES[method]
 
 
+def kernel_mechanism(mech):
+    """`mech` for :func:`inerter.engine.simulation.integrate` and its Stepper, on the compiled
+    right-hand side (its internal states included)."""
+    return _KernelMechanism(mech, _kernel_for(mech))
+
+
 def _kernel_for(mech):
     cached = getattr(mech, "_compiled_kernel", None)
     if cached is not None and cached.mech is mech:
@@ -772,8 +811,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
 
     grid = np.arange(0.0, settings.stop_time + 0.5 * settings.output_interval, settings.output_interval)
     grid[-1] = min(grid[-1], settings.stop_time)
-    out = np.empty((len(grid), kernel.nq + kernel.n))
-    y0 = np.concatenate((kernel.q0, kernel.v0))
+    out = np.empty((len(grid), kernel.ny))
+    y0 = np.concatenate((kernel.q0, kernel.v0, kernel.z0))
     out[0] = y0
     inp = kernel._inputs(inputs)
     alpha = float(settings.alpha)
@@ -911,7 +950,7 @@ class CompiledStepper(Stepper):
         self._need_acc = bool(signals.needs_accelerations)
         self._tables = _tables(settings.method) if settings.method in _RK_CODE else None
         self._work = (None if self._tables is None else
-                      _k.work_arrays(kernel.params, kernel.nq + kernel.n, _k.rk_stages(self._tables[0])))
+                      _k.work_arrays(kernel.params, kernel.ny, _k.rk_stages(self._tables[0])))
         self._monitor = _monitor(settings.method)
         self._jumps = np.array(getattr(mech, "discontinuities", ()), dtype=float)
         self._kinks = np.array(getattr(mech, "kinks", ()), dtype=float)
@@ -926,7 +965,7 @@ class CompiledStepper(Stepper):
     def _start_rk(self):
         """A fresh integration at (self.time, self.y) with the held inputs and the last step size
         (0: chosen as scipy does), its segment ending at the next discontinuity (RK_JUMP, 0: none)."""
-        ny = self.kernel.nq + self.kernel.n
+        ny = self.kernel.ny
         hdr = np.zeros(_k.RK_HEADER)
         hdr[_k.RK_T] = self.time
         hdr[_k.RK_H] = self.h or 0.0
@@ -998,7 +1037,7 @@ class CompiledStepper(Stepper):
         # Right after an input changed, the step lands on t_end (an importer that moves its inputs at
         # every point gets the numpy stepper's steps); otherwise it runs on towards the stop time.
         bound = t_end if self._input_moved else self.t_bound
-        out = np.empty((1, kernel.nq + kernel.n))
+        out = np.empty((1, kernel.ny))
         order = self._order if self._order is not None else _NO_ORDER
         values = np.empty(len(order))
         A, B, C, E, E3, D, Pm = self._tables
@@ -1044,13 +1083,14 @@ class CompiledStepper(Stepper):
         """The outputs at the current time, in the order of ``signals.names``."""
         if self._values is not None:
             return self._values
-        n, kernel = self.kernel.nq, self.kernel
+        kernel = self.kernel
+        q, v, z = kernel.split(self.y)
         if self._order is None:
-            values = self.signals.evaluate(self.time, self.y[:n], self.y[n:], self.inputs, self.settings.alpha,
-                                           kernel.accelerations)
+            values = self.signals.evaluate(self.time, q, v, self.inputs, self.settings.alpha,
+                                           functools.partial(kernel.accelerations, z=z), z=z)
         else:
-            values = kernel.signal_values(self.signals, self._order, self.time, self.y[:n], self.y[n:],
-                                          self.inputs, self.settings.alpha)
+            values = kernel.signal_values(self.signals, self._order, self.time, q, v, self.inputs,
+                                          self.settings.alpha, z)
         self._values = values.tolist()
         return self._values
 
@@ -1067,7 +1107,7 @@ class CompiledStepper(Stepper):
         if self.settings.method == "RK4":
             native = self._native
             if native is None:
-                ny = self.kernel.nq + self.kernel.n
+                ny = self.kernel.ny
                 rk = [np.zeros(_k.RK_HEADER), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros((7, ny))]
                 native = self._native = self._native_arrays(
                     rk, np.empty(len(self.kernel._inputs(self.inputs))), 2,
@@ -1194,10 +1234,9 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
         return _gimbal_lock_text(kernel, y_last, t_last)
     names = kernel.flat["el_names"]
     if status == 5 and names:
-        nq = kernel.nq
-        y = np.ascontiguousarray(y_last, dtype=float)
+        q, v, z = (part.copy() for part in kernel.split(y_last))
         raw = np.empty(len(signal_layout(kernel.flat)))
-        _k.signal_values(y[:nq].copy(), y[nq:].copy(), np.zeros(kernel.n + kernel.m), kernel.params, raw)
+        _k.signal_values(q, v, z, np.zeros(kernel.n + kernel.m), kernel.params, raw)
         first = 2 * kernel.flat["dim"] * len(kernel.flat["point_names"])
         lengths = raw[first:first + 3 * len(names):3]
         closest = float(np.min(lengths))

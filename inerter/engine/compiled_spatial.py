@@ -139,7 +139,7 @@ def flatten3(mech) -> dict:
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 6, float),
                 in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
                 point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names,
-                el_extra=tables["el_extra"])
+                el_extra=tables["el_extra"], n_internal=tables["n_internal"])
 
 
 def signal_layout3(flat) -> list[str]:

@@ -130,6 +130,10 @@ def _null_and_range(Cq):
 
 def linearize(mech, q_star=None, h=1e-6):
     """Reduced (M_r, D_r, K_r) about the static equilibrium, in independent coordinates z."""
+    if len(getattr(mech, "z0", ())):
+        raise SimulationError("the linearisation is of (q, v) only, and this scene's inerter devices have "
+                              "internal states (series compliance, backlash): its frequencies would miss their "
+                              "modes; give metrics of such a scene an explicit reference")
     q_star = static_equilibrium(mech) if q_star is None else q_star
     q_of, T_of, k = _tangent_chart(mech, q_star)
     zero = np.zeros(mech.n)

@@ -29,7 +29,8 @@ from inerter.elements.layout import (AXIS, BODY_A, BODY_B, F_AMPLITUDE, F_FREQUE
                                      F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA, KIND,
                                      MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B,
                                      REL0, ROT_KIND, FIXED_DIRECTION, DIRECTION, SCREW, SCREW_ADVANCE0,
-                                     SCREW_RATIO, SCREW_REL0, SCREW_ROW, SLIDER)
+                                     SCREW_RATIO, SCREW_REL0, SCREW_ROW, SLIDER, STATE,
+                                     STATES)
 
 # Joint kinds.
 REVOLUTE, PRISMATIC = 0, 1
@@ -171,6 +172,13 @@ def _element_law(kind, row, L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez):
 
 
 @njit(cache=True, inline="always")
+def _states(z, el_int, e):
+    """Translational element e's internal states: its slice of z (y = [q, v, z]; empty for most)."""
+    o = el_int[e, STATE]
+    return z[o:o + el_int[e, STATES]]
+
+
+@njit(cache=True, inline="always")
 def _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, width):
     """A translational element's terms on its bodies' `width` velocity coordinates (3 in 2D, 6 in
     3D), with g = Hᵀ r̂ over a's (ga) and b's (gb): Q −= F g (Eq. 29; an inerter's Q_Iv, Eq. 31)
@@ -225,9 +233,10 @@ def _rotational2(q, v, e, rot_int):
 
 
 @njit(cache=True, inline="always")
-def _add_elements2(q, v, P, AB, perm, off, gen):
+def _add_elements2(q, v, z, P, AB, perm, off, gen):
     """Translational elements of a 2D scene, each through its law (:mod:`inerter.elements`):
-    Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂. Returns a status code."""
+    Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂; F includes the force an
+    element's internal states z carry (a series-compliant device's). Returns a status code."""
     pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     status = OK
     ga = np.empty(3)
@@ -245,6 +254,8 @@ def _add_elements2(q, v, P, AB, perm, off, gen):
         gb[1] = ey
         gb[2] = tbx * ex + tby * ey
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
+        if rarely(el_int[e, STATES] != 0):
+            F += law.state_force(kind, el_real[e], L, Ldot, _states(z, el_int, e))
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 3)
         if rarely(el_real[e, INERTIA] != 0.0):
             _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, 3)
@@ -394,9 +405,9 @@ def _screw2(v, AB, perm, off, row, ba, bb, rho, x0, nx, ny, c1, cd1, rx, ry, rdx
 
 
 @njit(cache=True)
-def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
+def assemble(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix of Eq. 33) and rhs (permuted) at
-    (t, q, v) for a 2D scene; gen: work vector of length n for the generalised forces. Returns a
+    (t, q, v) and the elements' internal states z for a 2D scene; gen: work vector of length n for the generalised forces. Returns a
     status code."""
     mass, pbody, ploc, jt_int, jt_real, gravity, perm, dims = P[MASS], P[PBODY], P[PLOC], P[JT_INT], P[JT_REAL], P[GRAVITY], P[PERM], P[DIMS]
     n = dims[N_VELOCITY]
@@ -404,7 +415,7 @@ def assemble(t, q, v, inputs, alpha, P, AB, rhs, gen):
     _start_assembly(AB, gen, gravity, n, dims[HAS_GRAVITY])
     for i in range(n):
         _addK(AB, perm, off, i, i, mass[i])
-    status = _add_elements2(q, v, P, AB, perm, off, gen)
+    status = _add_elements2(q, v, z, P, AB, perm, off, gen)
     _add_rotational2(q, v, P, gen)
     _add_point_forces2(t, q, v, inputs, P, gen)
     for i in range(n):
@@ -555,12 +566,13 @@ def band_solve(AB, b, kl):
 
 
 @njit(cache=True)
-def accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, out):
-    """Eq. (33): out[:n] = q̈, out[n:] = λ (original ordering). Returns a status code."""
+def accelerations(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out):
+    """Eq. (33) at (t, q, v) and the elements' internal states z: out[:n] = q̈, out[n:] = λ
+    (original ordering). Returns a status code."""
     P = _unowned(P)                 # entered from Python (_unowned)
     perm = P[PERM]
     dims = P[DIMS]
-    status = _assemble_of(t, q, v, inputs, alpha, P, AB, rhs, gen)
+    status = _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
     if not band_solve(AB, rhs, dims[KL]):
         return SINGULAR
     for i in range(out.shape[0]):
@@ -608,16 +620,46 @@ def constraint_residual2(q, P):
 # ------------------------------------------------------------------------------------------------
 # Output signals (the same values as inerter.engine.outputs.Signals, in the layout of `signal_layout`)
 # ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey):
+    """gᵀq̈ of a 2D translational element (g = Hᵀ r̂ over its bodies' coordinates, Eqs. 17-19)."""
+    gq = 0.0
+    if ba >= 0:
+        ka = 3 * ba
+        gq -= (qdd[ka] + qdd[ka + 2] * tax) * ex + (qdd[ka + 1] + qdd[ka + 2] * tay) * ey
+    if bb >= 0:
+        kb = 3 * bb
+        gq += (qdd[kb] + qdd[kb + 2] * tbx) * ex + (qdd[kb + 1] + qdd[kb + 2] * tby) * ey
+    return gq
+
+
 @njit(cache=True)
-def signal_values(q, v, qdd, P, out):
-    """Every output at one state (:func:`signal_values2`, :func:`signal_values3`). Returns a status
-    code."""
+def state_rates2(q, v, z, qdd, P, dz):
+    """dz: the rates of the translational elements' internal states of a 2D scene, at the state
+    (q, v, z) and its solved accelerations q̈ (each kind's ``state_rates``, with gᵀq̈)."""
+    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    for e in range(el_int.shape[0]):
+        if el_int[e, STATES] == 0:
+            continue
+        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
+            q, v, e, el_int, el_real, pbody, ploc)
+        Ldot, an, perp2 = axial_scalars(rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
+        gq = _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
+        o = el_int[e, STATE]
+        c = el_int[e, STATES]
+        law.state_rates(kind, el_real[e], L, Ldot, an, perp2, gq, z[o:o + c], dz[o:o + c])
+
+
+@njit(cache=True)
+def signal_values(q, v, z, qdd, P, out):
+    """Every output at one state y = [q, v, z] (:func:`signal_values2`, :func:`signal_values3`).
+    Returns a status code."""
     P = _unowned(P)                 # entered from Python (_unowned)
-    return _signals_of(q, v, qdd, P, out)
+    return _signals_of(q, v, z, qdd, P, out)
 
 
 @njit(cache=True)
-def signal_values2(q, v, qdd, P, out):
+def signal_values2(q, v, z, qdd, P, out):
     """Every point's position and velocity (4 per point), every translational element's s_rel,
     v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd) and its
     kind's extra outputs (an inerter's device: ``signal_layout``), every
@@ -649,14 +691,11 @@ def signal_values2(q, v, qdd, P, out):
         F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
         if b != 0.0:
             # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 17-19): the inertance part of F = b d²L/dt², Eq. (9) / (8)
-            gq = 0.0
-            if ba >= 0:
-                ka = 3 * ba
-                gq -= (qdd[ka] + qdd[ka + 2] * tax) * ex + (qdd[ka + 1] + qdd[ka + 2] * tay) * ey
-            if bb >= 0:
-                kb = 3 * bb
-                gq += (qdd[kb] + qdd[kb + 2] * tbx) * ex + (qdd[kb + 1] + qdd[kb + 2] * tby) * ey
-            F += b * gq
+            F += b * _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
+        x = _states(z, el_int, e)
+        if rarely(el_int[e, STATES] != 0):
+            F += law.state_force(kind, el_real[e], L, along, x)
+            energy += law.state_energy(kind, el_real[e], L, along, x)
         energy += law.energy(kind, el_real[e], L, along)
         if rarely(el_real[e, INERTIA] != 0.0):
             energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 3)
@@ -664,7 +703,7 @@ def signal_values2(q, v, qdd, P, out):
         out[k + 1] = along
         out[k + 2] = F
         k += 3
-        k = law.extra_outputs(kind, el_real[e], L, along, out, k)     # a device's outputs, if declared
+        k = law.extra_outputs(kind, el_real[e], L, along, x, out, k)     # a device's outputs, if declared
     for e in range(rot_int.shape[0]):
         ia, ib, phi, w = _rotational2(q, v, e, rot_int)
         kind = rot_int[e, ROT_KIND]
@@ -789,15 +828,16 @@ def is_spatial(P) -> bool:
     return len(P) > len(PARAMS)
 
 
-def _assemble_of(t, q, v, inputs, alpha, P, AB, rhs, gen):
+def _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     raise NotImplementedError("compiled code only")
 
 
 @overload(_assemble_of, inline="always")
-def _assemble_by_dimension(t, q, v, inputs, alpha, P, AB, rhs, gen):
+def _assemble_by_dimension(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     if is_spatial(P):
-        return lambda t, q, v, inputs, alpha, P, AB, rhs, gen: assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen)
-    return lambda t, q, v, inputs, alpha, P, AB, rhs, gen: assemble(t, q, v, inputs, alpha, P, AB, rhs, gen)
+        return lambda t, q, v, z, inputs, alpha, P, AB, rhs, gen: assemble3(t, q, v, z, inputs, alpha, P, AB, rhs,
+                                                                            gen)
+    return lambda t, q, v, z, inputs, alpha, P, AB, rhs, gen: assemble(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
 
 
 def _residual_of(q, P):
@@ -811,15 +851,26 @@ def _residual_by_dimension(q, P):
     return lambda q, P: constraint_residual2(q, P)
 
 
-def _signals_of(q, v, qdd, P, out):
+def _signals_of(q, v, z, qdd, P, out):
     raise NotImplementedError("compiled code only")
 
 
 @overload(_signals_of, inline="always")
-def _signals_by_dimension(q, v, qdd, P, out):
+def _signals_by_dimension(q, v, z, qdd, P, out):
     if is_spatial(P):
-        return lambda q, v, qdd, P, out: signal_values3(q, v, qdd, P, out)
-    return lambda q, v, qdd, P, out: signal_values2(q, v, qdd, P, out)
+        return lambda q, v, z, qdd, P, out: signal_values3(q, v, z, qdd, P, out)
+    return lambda q, v, z, qdd, P, out: signal_values2(q, v, z, qdd, P, out)
+
+
+def _state_rates_of(q, v, z, qdd, P, dz):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_state_rates_of, inline="always")
+def _state_rates_by_dimension(q, v, z, qdd, P, dz):
+    if is_spatial(P):
+        return lambda q, v, z, qdd, P, dz: state_rates3(q, v, z, qdd, P, dz)
+    return lambda q, v, z, qdd, P, dz: state_rates2(q, v, z, qdd, P, dz)
 
 
 def _qdot_of(q, v, P, out):
@@ -930,19 +981,20 @@ def work_arrays(P, ny, stages):
 
 @njit(cache=True)
 def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
-    """`signal_values` at one state y = [q, v]; accelerations from Eq. (33) only when `need_acc`."""
+    """`signal_values` at one state y = [q, v, z]; accelerations from Eq. (33) only when `need_acc`."""
     nq = P[DIMS][N_COORD]
+    nv = nq + P[DIMS][N_VELOCITY]
     AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
     if need_acc:
-        st = accelerations(t, y[:nq], y[nq:], inputs, alpha, P, AB, rhs, gen, sig_acc)
+        st = accelerations(t, y[:nq], y[nq:nv], y[nv:], inputs, alpha, P, AB, rhs, gen, sig_acc)
         if st != OK:
             return st
-    return signal_values(y[:nq], y[nq:], sig_acc, P, out)
+    return signal_values(y[:nq], y[nq:nv], y[nv:], sig_acc, P, out)
 
 
 @njit(cache=True)
 def signal_history(times, states, inputs, alpha, need_acc, P, out):
-    """`signal_values` at every sample of a history (rows [q, v]). Returns (status, index of the
+    """`signal_values` at every sample of a history (rows [q, v, z]). Returns (status, index of the
     sample where it was raised)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     work = work_arrays(P, states.shape[1], 1)
@@ -1230,9 +1282,10 @@ def _add_bodies3(v, P, AB, perm, off, gen):
 
 
 @njit(cache=True, inline="always")
-def _add_elements3(q, v, P, AB, perm, off, gen):
+def _add_elements3(q, v, z, P, AB, perm, off, gen):
     """Translational elements of a 3D scene, each through its law (:mod:`inerter.elements`):
-    Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂. Returns a status code."""
+    Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂; F includes the force an
+    element's internal states z carry. Returns a status code."""
     pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     status = OK
     ga = np.empty(6)
@@ -1243,6 +1296,8 @@ def _add_elements3(q, v, P, AB, perm, off, gen):
         if meets:
             status = TERMINALS_MEET
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+        if rarely(el_int[e, STATES] != 0):
+            F += law.state_force(kind, el_real[e], L, Ldot, _states(z, el_int, e))
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 6)
         if rarely(el_real[e, INERTIA] != 0.0):
             _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, 6)
@@ -1433,7 +1488,7 @@ def _screw3(v, alpha, AB, perm, off, rhs, jr, row, ba, bb, Aa, Ab, lax, lay, laz
 
 
 @njit(cache=True)
-def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
+def assemble3(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]]) and rhs
     (permuted [Q_e + Q_Iv, γ − 2αĊ − α²C]) at (t, q, v) for a 3D mechanism, as ``Mechanism.assemble``
     and ``Mechanism.constraints``. gen: work vector of length n. Returns a status code."""
@@ -1442,7 +1497,7 @@ def assemble3(t, q, v, inputs, alpha, P, AB, rhs, gen):
     off = dims[KL]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
     _start_assembly(AB, gen, gravity, n, dims[HAS_GRAVITY])
     _add_bodies3(v, P, AB, perm, off, gen)
-    status = _add_elements3(q, v, P, AB, perm, off, gen)
+    status = _add_elements3(q, v, z, P, AB, perm, off, gen)
     _add_rotational3(q, v, P, gen)
     _add_point_forces3(t, q, v, inputs, P, gen)
     for i in range(n):
@@ -1530,8 +1585,41 @@ def constraint_residual3(q, P):
 # ------------------------------------------------------------------------------------------------
 # Output signals (the same values as inerter.engine.outputs.Signals, in the layout of `signal_layout3`)
 # ------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _gq3(qdd, ba, bb, ga, gb):
+    """gᵀq̈ of a 3D translational element (g = Hᵀ r̂: ga over a's six coordinates, gb over b's)."""
+    gq = 0.0
+    if ba >= 0:
+        ka = 6 * ba
+        for i in range(6):
+            gq += ga[i] * qdd[ka + i]
+    if bb >= 0:
+        kb = 6 * bb
+        for i in range(6):
+            gq += gb[i] * qdd[kb + i]
+    return gq
+
+
 @njit(cache=True)
-def signal_values3(q, v, qdd, P, out):
+def state_rates3(q, v, z, qdd, P, dz):
+    """dz: the rates of the translational elements' internal states of a 3D scene (as
+    :func:`state_rates2`)."""
+    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    ga = np.empty(6)
+    gb = np.empty(6)
+    for e in range(el_int.shape[0]):
+        if el_int[e, STATES] == 0:
+            continue
+        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
+            q, v, e, el_int, el_real, pbody, ploc, ga, gb)
+        Ldot, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+        o = el_int[e, STATE]
+        c = el_int[e, STATES]
+        law.state_rates(kind, el_real[e], L, Ldot, an, perp2, _gq3(qdd, ba, bb, ga, gb), z[o:o + c], dz[o:o + c])
+
+
+@njit(cache=True)
+def signal_values3(q, v, z, qdd, P, out):
     """Every point's position and velocity (6 per point), every translational element's s_rel,
     v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd) and its
     kind's extra outputs (an inerter's device: ``signal_layout3``), every rotational element's
@@ -1578,16 +1666,11 @@ def signal_values3(q, v, qdd, P, out):
         F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
         if b != 0.0:
             # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 19, 25): the inertance part of F = b d²L/dt², Eq. (9) / (8)
-            gq = 0.0
-            if ba >= 0:
-                ka = 6 * ba
-                for i in range(6):
-                    gq += ga[i] * qdd[ka + i]
-            if bb >= 0:
-                kb = 6 * bb
-                for i in range(6):
-                    gq += gb[i] * qdd[kb + i]
-            F += b * gq
+            F += b * _gq3(qdd, ba, bb, ga, gb)
+        x = _states(z, el_int, e)
+        if rarely(el_int[e, STATES] != 0):
+            F += law.state_force(kind, el_real[e], L, along, x)
+            energy += law.state_energy(kind, el_real[e], L, along, x)
         energy += law.energy(kind, el_real[e], L, along)
         if rarely(el_real[e, INERTIA] != 0.0):
             energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 6)
@@ -1595,7 +1678,7 @@ def signal_values3(q, v, qdd, P, out):
         out[k + 1] = along
         out[k + 2] = F
         k += 3
-        k = law.extra_outputs(kind, el_real[e], L, along, out, k)     # a device's outputs, if declared
+        k = law.extra_outputs(kind, el_real[e], L, along, x, out, k)     # a device's outputs, if declared
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
         energy += law.rotational_energy(rot_int[e, ROT_KIND], rot_real[e], phi, w)
@@ -1640,19 +1723,25 @@ BODY_OUTPUTS3 = 10
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
-    """dy = [q̇, v̇] at y = [q, v]: q̇ = B(q) v (the identity in 2D), v̇ from Eq. (33)."""
+    """dy = [q̇, v̇, ż] at y = [q, v, z]: q̇ = B(q) v (the identity in 2D), v̇ from Eq. (33), ż the
+    elements' internal states' rates at those accelerations (z is empty where the scene declares
+    none, and then never evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     n = P[DIMS][N_VELOCITY]
     nq = P[DIMS][N_COORD]
+    nv = nq + n
     q = y[:nq]
-    v = y[nq:]
-    st = accelerations(t, q, v, inputs, alpha, P, AB, rhs, gen, acc)
+    v = y[nq:nv]
+    z = y[nv:]
+    st = accelerations(t, q, v, z, inputs, alpha, P, AB, rhs, gen, acc)
     if _qdot_of(q, v, P, dy[:nq]) == GIMBAL_LOCK:
         return GIMBAL_LOCK
     for i in range(n):
         dy[nq + i] = acc[i]
+    if y.shape[0] > nv:
+        _state_rates_of(q, v, z, acc, P, dy[nv:])
     if st == OK:
-        for i in range(nq + n):
+        for i in range(y.shape[0]):
             if not math.isfinite(dy[i]):
                 return NOT_FINITE
     return st
@@ -2291,14 +2380,14 @@ def _point_signal(index, P):
 @njit(cache=True)
 def signal_column(times, states, inputs, alpha, index, need_acc, P, raw, out):
     """out[k] = the signal at `index` of signal_values' layout at each sample of a history (rows
-    [q, v]); accelerations from Eq. (33) only when `need_acc`. `raw`: scratch of that layout's
+    [q, v, z]); accelerations from Eq. (33) only when `need_acc`. `raw`: scratch of that layout's
     length. Returns (status, the first sample where it could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = states.shape[1]
     nq = P[DIMS][N_COORD]
     y = np.empty(ny)
     q = y[:nq]
-    v = y[nq:]
+    v = y[nq:nq + P[DIMS][N_VELOCITY]]
     work = work_arrays(P, ny, 1)
     point, c = _point_signal(index, P)
     for k in range(states.shape[0]):
@@ -2330,7 +2419,7 @@ def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, inde
     block = np.zeros((DENSE_BLOCK, ny))
     y = np.zeros(ny)
     q = y[:nq]
-    v = y[nq:]
+    v = y[nq:nq + P[DIMS][N_VELOCITY]]
     work = work_arrays(P, ny, 1)
     point, c = _point_signal(index, P)
     n = times.shape[0]
@@ -2545,7 +2634,7 @@ def rk4_cosim_step(y, t0, t_end, jumps, kinks, ts, out, step, max_steps, inputs,
 
 @njit(cache=True)
 def max_residual(states, P):
-    """The largest constraint residual over a history (rows [q, v])."""
+    """The largest constraint residual over a history (rows [q, v, z])."""
     P = _unowned(P)                 # entered from Python (_unowned)
     nq = P[DIMS][N_COORD]
     worst = 0.0

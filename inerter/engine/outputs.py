@@ -2,8 +2,9 @@
 
 Points: ``P.r[i]`` (m), ``P.v[i]`` (m/s). Translational elements: ``E.s_rel`` (m, terminal
 distance), ``E.v_rel`` (m/s, its rate), ``E.f`` (N, axial force, tension positive); an inerter's
-device adds ``E.w_flywheel`` (rad/s), ``E.f_friction``, ``E.f_fluid``, ``E.f_stop`` (N) and
-``E.p_loss`` (W), those of its effects (:mod:`inerter.elements.device`). Rotational
+device adds ``E.w_flywheel`` (rad/s), ``E.f_friction``, ``E.f_fluid``, ``E.f_stop`` (N),
+``E.p_loss`` (W), ``E.s_series`` (m), ``E.engaged`` (1) and ``E.e_loss`` (J), those of its effects
+(:mod:`inerter.elements.device`; the last three read the element's internal states). Rotational
 elements: ``E.phi_rel`` (rad), ``E.w_rel`` (rad/s), ``E.tau`` (N.m). 3D bodies: ``B.q[i]`` (unit
 quaternion w, x, y, z), ``B.euler[i]`` (rad, the scene's ``euler_sequence``), ``B.w[i]`` (rad/s,
 angular velocity in the global frame). Mechanism: ``energy`` (J), ``constraint_residual`` (largest
@@ -35,22 +36,23 @@ class Signals:
                          for i in range(d)]
                         + [(f"{pname}.v[{i + 1}]", "m/s", f"velocity of point {pname}, global axis {i + 1}")
                            for i in range(d)],
-                        False, lambda t, q, v, a, p=point: np.concatenate(p.evaluate(q, v)[:2]))
+                        False, lambda t, q, v, a, z, p=point: np.concatenate(p.evaluate(q, v)[:2]))
         for e in mech.elements:
             spec = elements.outputs(mech.scene.elements[e.name])
             # an element whose law has an inertance reports a force that depends on q̈
             needs_a = e.kind == "inerter" or getattr(e, "inertance", 0.0) != 0.0
             # of its three outputs, only the force reads q̈ (the distance and its rate do not)
             self._group([(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}") for suffix, unit, text in spec],
-                        needs_a, lambda t, q, v, a, e=e, k=len(spec): e.outputs(q, v, a)[:k],
+                        needs_a, lambda t, q, v, a, z, e=e, k=len(spec): (
+                            e.outputs(q, v, a, z) if getattr(e, "n_states", 0) else e.outputs(q, v, a))[:k],
                         reads=(False, False, needs_a) + (False,) * (len(spec) - 3))
         if mech.dim == 3:
             for bname in mech.body_names:
                 self._body(mech, bname)
         self._group([("energy", "J", "kinetic + potential energy, with ½·b·(dL/dt)² per inerter")], False,
-                    lambda t, q, v, a: (mech.energy(q, v),))
+                    lambda t, q, v, a, z: (mech.energy(q, v, z) if len(mech.z0) else mech.energy(q, v),))
         self._group([("constraint_residual", "m", "largest |C_i(q)| of the joint constraints (m or rad)")], False,
-                    lambda t, q, v, a: (mech.constraint_residual(q),))
+                    lambda t, q, v, a, z: (mech.constraint_residual(q),))
         self.needs_accelerations = any(needs_a for needs_a, _ in self._groups)
         #: the signals before the derived outputs: those the groups (and the kernels) evaluate
         self.base_count = len(self.names)
@@ -71,7 +73,7 @@ class Signals:
         axes = EULER_SEQUENCES[sequence]
         quaternion_state = mech.orientation.kind == "quaternion"
 
-        def values(t, q, v, a):
+        def values(t, q, v, a, z):
             A, w = frame.evaluate(q, v)
             if quaternion_state:
                 p = q[frame.qi + 3:frame.qi + 7]
@@ -105,19 +107,24 @@ class Signals:
         """Whether signal `name` is computed from q̈ (an inerter's force), not from (t, q, v) alone."""
         return self._reads[name]
 
-    def evaluate(self, t, q, v, inputs=None, alpha=0.0, accelerations=None) -> np.ndarray:
-        """Every signal at one state. `accelerations`: the function giving (q̈, λ) of Eq. (33)
-        (default the mechanism's; the compiled path passes its kernel's)."""
+    def evaluate(self, t, q, v, inputs=None, alpha=0.0, accelerations=None, z=None) -> np.ndarray:
+        """Every signal at one state, `z` the internal states (None: their initial values).
+        `accelerations`: the function giving (q̈, λ) of Eq. (33) (default the mechanism's; the
+        compiled path passes its kernel's, with z bound where there are internal states)."""
         a = None
         if self.needs_accelerations:
-            a = (accelerations or self.mech.accelerations)(t, q, v, inputs, alpha)[0]
-        return self.values(t, q, v, a)
+            if accelerations is None and z is not None and len(z):
+                a = self.mech.accelerations(t, q, v, inputs, alpha, z=z)[0]
+            else:
+                a = (accelerations or self.mech.accelerations)(t, q, v, inputs, alpha)[0]
+        return self.values(t, q, v, a, z)
 
-    def values(self, t, q, v, a) -> np.ndarray:
-        """Every signal at one state with the accelerations `a` (None when no signal needs them)."""
+    def values(self, t, q, v, a, z=None) -> np.ndarray:
+        """Every signal at one state with the accelerations `a` (None when no signal needs them)
+        and the internal states `z` (None: their initial values)."""
         out = []
         for _, fn in self._groups:
-            out.extend(fn(t, q, v, a))
+            out.extend(fn(t, q, v, a, z))
         return self.complete(np.array(out, dtype=float))
 
     def is_derived(self, name) -> bool:
@@ -151,14 +158,17 @@ class Signals:
         if name in self._derived:
             reads = {x: self.function(x) for x in self._derived[name].expression.reads}
 
-            def derived(t, q, v, inputs=None, alpha=0.0):
-                return float(self.derive(name, {x: f(t, q, v, inputs, alpha) for x, f in reads.items()}))
+            def derived(t, q, v, inputs=None, alpha=0.0, z=None):
+                return float(self.derive(name, {x: f(t, q, v, inputs, alpha, z=z) for x, f in reads.items()}))
             return derived
         g, k = self._where[name]
         needs_a, fn = self._groups[g]
         mech = self.mech
 
-        def signal(t, q, v, inputs=None, alpha=0.0):
-            a = mech.accelerations(t, q, v, inputs, alpha)[0] if needs_a else None
-            return float(fn(t, q, v, a)[k])
+        def signal(t, q, v, inputs=None, alpha=0.0, z=None):
+            a = None
+            if needs_a:
+                a = (mech.accelerations(t, q, v, inputs, alpha, z=z) if z is not None and len(z)
+                     else mech.accelerations(t, q, v, inputs, alpha))[0]
+            return float(fn(t, q, v, a, z)[k])
         return signal

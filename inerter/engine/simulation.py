@@ -1,7 +1,9 @@
 """Integrating a compiled mechanism in time: whole runs (:func:`integrate`) and co-simulation
 steps (:class:`Stepper`).
 
-The state is y = [q, q̇]; its derivative is [q̇, q̈] with q̈ from Eq. (33). Constraint treatment:
+The state is y = [q, q̇, z]; its derivative is [q̇, q̈, ż] with q̈ from Eq. (33) and z the elements'
+internal states (an inerter device's series deflection, its dissipated energy; ``Mechanism.z0``,
+empty for most scenes), whose rates follow once q̈ is solved (``Mechanism.state_rates``). Constraint treatment:
 ``baumgarte`` adds −2αĊ − α²C to the constraint rows; ``projection`` integrates Eq. (33) as it is
 and projects (q, q̇) back onto the constraints at every output point (the integrator restarts there).
 """
@@ -53,11 +55,28 @@ class Settings:
         return self.baumgarte if self.constraint == "baumgarte" else 0.0
 
 
+def initial_state(mech) -> np.ndarray:
+    """y0 = [q0, v0, z0] (z0: the internal states, empty for most scenes)."""
+    return np.concatenate((mech.q0, mech.v0, getattr(mech, "z0", np.zeros(0))))
+
+
+def _project(mech, y):
+    """y with (q, v) projected onto the constraints, the internal states z left as they are."""
+    n, nv = mech.nq, mech.nq + mech.n
+    q, v = mech.project(y[:n], y[n:nv])
+    return np.concatenate((q, v, y[nv:]))
+
+
 def derivative(mech, inputs, alpha, jump=None):
     """y = [q, v] ↦ [q̇ = B(q) v, v̇ from Eq. (33)]. `jump`: a time where the right-hand side jumps
     (a step force switches) or, for a method that restarts there, a kink, ending the segment
     integrated: it is evaluated just before (one ulp), so that stages at the segment's end see the
-    values the forces had over the segment."""
+    values the forces had over the segment. A mechanism backed by the compiled kernels gives its
+    own (``state_derivative``); one with internal states z integrates y = [q, v, z]."""
+    if hasattr(mech, "state_derivative"):
+        return mech.state_derivative(inputs, alpha, jump)
+    if len(getattr(mech, "z0", ())):
+        return _derivative_with_states(mech, inputs, alpha, jump)
     nq = mech.nq
     before = None if jump is None else float(np.nextafter(jump, -np.inf))
 
@@ -67,6 +86,20 @@ def derivative(mech, inputs, alpha, jump=None):
         q, v = y[:nq], y[nq:]
         a, _ = mech.accelerations(t, q, v, inputs, alpha)
         return np.concatenate((mech.qdot(q, v, t), a))
+    return fun
+
+
+def _derivative_with_states(mech, inputs, alpha, jump=None):
+    """:func:`derivative` on y = [q, v, z]: ż from the elements' laws once q̈ is solved."""
+    nq, nv = mech.nq, mech.nq + mech.n
+    before = None if jump is None else float(np.nextafter(jump, -np.inf))
+
+    def fun(t, y):
+        if before is not None and t > before:
+            t = before
+        q, v, z = y[:nq], y[nq:nv], y[nv:]
+        a, _ = mech.accelerations(t, q, v, inputs, alpha, z=z)
+        return np.concatenate((mech.qdot(q, v, t), a, mech.state_rates(q, v, z, a)))
     return fun
 
 
@@ -269,8 +302,8 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
     fun = derivative(mech, inputs, settings.alpha)
     grid = np.arange(0.0, settings.stop_time + 0.5 * settings.output_interval, settings.output_interval)
     grid[-1] = min(grid[-1], settings.stop_time)
-    out = np.empty((len(grid), mech.nq + mech.n))
-    y = np.concatenate((mech.q0, mech.v0))
+    y = initial_state(mech)
+    out = np.empty((len(grid), len(y)))
     out[0] = y
     k = 1
     ts, interpolants = [0.0], []
@@ -319,8 +352,7 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
             evaluations += solver.nfev
             y = solver.y
             if project:
-                q, v = mech.project(y[:n], y[n:])
-                y = np.concatenate((q, v))
+                y = _project(mech, y)
                 if abs(grid[k - 1] - solver.t) <= 1e-12 * max(1.0, solver.t):
                     out[k - 1] = y
             # Projection restarts go on with the step size the error control proposed; after a
@@ -373,7 +405,7 @@ class Stepper:
         self.settings = settings
         self.signals = signals
         self.time = 0.0
-        self.y = np.concatenate((mech.q0, mech.v0))
+        self.y = initial_state(mech)
         self.inputs = np.zeros(len(mech.input_names))
         self.h = None
         self.input_index = {name: i for i, name in enumerate(mech.input_names)}
@@ -486,7 +518,7 @@ class Stepper:
         """RK4, LSODA, projection: the integration restarts at the communication point, with the
         last step size, and its last step lands on t_end (a jump or a kink inside ends a segment,
         and the next one starts afresh). The state at t_end and the step size to restart with."""
-        s, n = self.settings, self.mech.nq
+        s = self.settings
         t0, y, h = self.time, self.y, self.h
         eps = 1e-12 * max(1.0, abs(t_end))
         # a kink ends a segment too (jumps without a method): this readable reference restarts there
@@ -504,14 +536,16 @@ class Stepper:
             if jump is not None:        # the derivative jumps here: a fresh start after it
                 h = None
         if s.constraint == "projection":
-            q, v = self.mech.project(y[:n], y[n:])
-            y = np.concatenate((q, v))
+            y = _project(self.mech, y)
         return y, h
 
     def output_values(self) -> list:
         """The outputs at the current time, in the order of ``signals.names``."""
-        n = self.mech.nq
-        return self.signals.evaluate(self.time, self.y[:n], self.y[n:], self.inputs, self.settings.alpha).tolist()
+        if hasattr(self.mech, "output_values"):          # the kernels' outputs (internal states included)
+            return self.mech.output_values(self.signals, self.time, self.y, self.inputs, self.settings.alpha)
+        n, nv = self.mech.nq, self.mech.nq + self.mech.n
+        return self.signals.evaluate(self.time, self.y[:n], self.y[n:nv], self.inputs, self.settings.alpha,
+                                     z=self.y[nv:]).tolist()
 
     def outputs(self) -> dict:
         return dict(zip(self.signals.names, self.output_values()))

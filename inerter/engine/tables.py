@@ -45,7 +45,7 @@ def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
         row_real[layout.FIXED_DIRECTION] = 1.0
         row_real[layout.DIRECTION:layout.DIRECTION + len(direction)] = [float(x) for x in direction]
     if getattr(e, "device", None) is not None:
-        for column, value in e.device.columns().items():          # DEVICE ... FLUID_QUADRATIC
+        for column, value in e.device.columns().items():          # DEVICE ... FLUID_QUADRATIC, SERIES ... LOSS
             row_real[column] = float(value)
         row = getattr(me, "row", None)
         if row is not None:                                         # the scene's gravity, for its masses
@@ -123,17 +123,26 @@ def force_rows(scene, pidx, dim) -> tuple[list, list, list, list, list]:
 def element_tables(mech, pidx, rotational) -> dict:
     """The element tables of a mechanism: ``el_int``/``el_real`` rows of its translational elements
     and ``rot_int``/``rot_real`` rows of its rotational ones, with their names, in scene order, and
-    ``el_extra``: each translational element's outputs beyond s_rel, v_rel and f (a device's).
-    ``rotational(spec, element)`` gives a rotational element's (body a, body b, free angle, extra
-    columns) as the kernels of its dimension index them."""
+    ``el_extra``: each translational element's outputs beyond s_rel, v_rel and f (a device's), and
+    ``n_internal``: the number of internal states z (y = [q, v, z]), each element's at its
+    ``el_int[e, STATE]`` (:func:`internal_states`). ``rotational(spec, element)`` gives a
+    rotational element's (body a, body b, free angle, extra columns) as the kernels of its
+    dimension index them."""
     scene = mech.scene
     mech_elements = _by_name(getattr(mech, "elements", []))
     out = {key: [] for key in ("el_int", "el_real", "el_names", "el_extra", "rot_int", "rot_real", "rot_names")}
     limits = meet_limits(mech, scene.elements.values())
+    offset = 0
     for e in scene.elements.values():
         me = mech_elements.get(e.name)
         if elements.translational(e.type):
             row_int, row_real = element_row(e, me, pidx, scene.centripetal, limits[e.name])
+            count = len(internal_states(e))
+            if count:
+                row_int = list(row_int)
+                row_int[layout.STATE], row_int[layout.STATES] = offset, count
+                row_int = tuple(row_int)
+                offset += count
             prefix = "el"
         else:
             row_int, row_real = rotational_row(e, *rotational(e, me))
@@ -143,7 +152,16 @@ def element_tables(mech, pidx, rotational) -> dict:
         out[prefix + "_names"].append(e.name)
         if prefix == "el":
             out["el_extra"].append([suffix for suffix, _, _ in elements.outputs(e)[3:]])
+    out["n_internal"] = offset
     return out
+
+
+def internal_states(spec) -> tuple[tuple[str, str, str], ...]:
+    """(name, unit, description) of the internal states of scene element `spec` (an inerter
+    device's, :meth:`inerter.elements.device.Device.states`), in their order in z."""
+    device = getattr(spec, "device", None)
+    return device.states() if device is not None else ()
+
 
 
 # ------------------------------------------------------------------------------------------------
@@ -168,7 +186,7 @@ def tunable_field(scene, path: str) -> bool:
         return True
     parts = path.split(".")
     if len(parts) == 3 and parts[0] == "elements" and parts[2] == "device" and parts[1] in scene.elements:
-        return True                          # an inerter device's numbers: columns DEVICE ... FLUID_QUADRATIC
+        return True                          # an inerter device's numbers: its columns (layout)
     if len(parts) != 3:
         return False
     section, name, key = parts
@@ -217,7 +235,7 @@ def retune_rows(flat, scene, coupled) -> list[str]:
             flat["el_real"][i, layout.CENTRIPETAL] = 1.0 if scene.centripetal else 0.0
         device = getattr(scene.elements[name], "device", None)
         if device is not None:
-            for column, value in device.columns().items():          # DEVICE ... FLUID_QUADRATIC
+            for column, value in device.columns().items():          # DEVICE ... FLUID_QUADRATIC, SERIES ... LOSS
                 flat["el_real"][i, column] = float(value)
     for i, name in enumerate(flat["rot_names"]):
         flat["rot_real"][i, layout.COEFFICIENT] = scene.elements[name].coefficient

@@ -93,6 +93,12 @@ class FmuResult:
         """A cubic spline through the communication-point samples."""
         return sample_spline(self.time, self[name])
 
+    def events(self):
+        """Device events (:meth:`inerter.api.Result.events`), found on the spline through the
+        communication points (no dense output crosses the FMU's boundary)."""
+        from inerter.api import Result
+        return Result.events(self)
+
     def summary(self):
         out = Result.summary(self)
         out["settings"]["model"] = "fmu"

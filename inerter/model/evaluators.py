@@ -59,7 +59,7 @@ class TranslationalElement:
         row[layout.FREE_LENGTH] = self.free_length or 0.0
         row[layout.CENTRIPETAL] = 1.0 if self.centripetal else 0.0
         if device is not None:
-            for column, value in device.columns().items():     # DEVICE ... FLUID_QUADRATIC
+            for column, value in device.columns().items():     # DEVICE ... FLUID_QUADRATIC, SERIES ... LOSS
                 row[column] = value
         #: The small-displacement law: the element acts along this initial direction (not r̂).
         self.fixed_direction = None if fixed_direction is None else np.asarray(fixed_direction, dtype=float)
@@ -78,6 +78,13 @@ class TranslationalElement:
         self.extra = len(device.outputs()) if device is not None else 0
         self._extra = getattr(law, "extra_outputs", None)
         self._extra = self._extra.py_func if self._extra is not None and self.extra else None
+        #: Its internal states' place in z (y = [q, v, z]; an inerter device's: Mechanism sets it),
+        #: and their laws (:mod:`inerter.elements`, uncompiled).
+        self.states = slice(0, 0)
+        self.n_states = len(device.states()) if device is not None else 0
+        if self.n_states:
+            self._state_force, self._state_energy, self._state_rates = (
+                law.state_force.py_func, law.state_energy.py_func, law.state_rates.py_func)
 
     def geometry(self, q, v):
         r, rdot, a_n, H = self.pair.evaluate(q, v)
@@ -103,23 +110,31 @@ class TranslationalElement:
         Ldot, an_r, perp2 = axial_scalars(*rd, *an, *e)
         return self._force(self.row, L, Ldot, an_r, perp2), Ldot
 
-    def force(self, q, v, a=None, geo=None):
-        """The axial force at accelerations `a` (needed only where the kind has an inertance)."""
+    def _x(self, z):
+        """Its internal states in z (zero where z is not given)."""
+        return np.zeros(self.n_states) if z is None else np.asarray(z[self.states], dtype=float)
+
+    def force(self, q, v, a=None, geo=None, z=None):
+        """The axial force at accelerations `a` (needed only where the kind has an inertance) and
+        internal states z."""
         geo = geo or self.geometry(q, v)
-        F, _ = self._law_force(geo)
+        F, Ldot = self._law_force(geo)
         if self.inertance != 0.0:
             F += self.inertance * float((geo[3] @ a[self.pair.dofs]) @ geo[5])   # b gᵀq̈, Eq. (9)
+        if self.n_states:
+            F += self._state_force(self.row, geo[4], Ldot, self._x(z))
         return F
 
-    def outputs(self, q, v, a):
-        """(s_rel, v_rel, f) at accelerations `a`, then the kind's extra outputs (a device's)."""
+    def outputs(self, q, v, a, z=None):
+        """(s_rel, v_rel, f) at accelerations `a` (and internal states z), then the kind's extra
+        outputs (a device's)."""
         geo = self.geometry(q, v)
         L, Ldot = geo[4], float(geo[1] @ geo[5])
-        values = (L, Ldot, self.force(q, v, a, geo))
+        values = (L, Ldot, self.force(q, v, a, geo, z))
         if self._extra is None:
             return values
         extra = np.zeros(self.extra)
-        self._extra(self.row, L, Ldot, extra, 0)
+        self._extra(self.row, L, Ldot, self._x(z), extra, 0)
         return values + tuple(float(x) for x in extra)
 
     def block(self, q, v):
@@ -152,6 +167,29 @@ class TranslationalElement:
         T, V = device_inertia.block.py_func(self.row, Ha, Hb, ra, rb, va, vb, acc_a, acc_b, a1, a1d, a1dd, Ga1, M, Q)
         keep = [i for i, p in enumerate((self.pair.a,) * width + (self.pair.b,) * width) if p.dofs is not None]
         return M[np.ix_(keep, keep)], Q[keep], T, V
+
+    def add_state_force(self, q, v, Q, z, geo=None):
+        """Q −= F g for the force its internal states carry (a series connection's)."""
+        geo = geo or self.geometry(q, v)
+        _, Ldot = self._law_force(geo)
+        F = self._state_force(self.row, geo[4], Ldot, self._x(z))
+        Q[self.pair.dofs] -= F * (geo[3].T @ geo[5])
+
+    def state_rates(self, q, v, a, z, dz):
+        """dz[its states] = their rates at accelerations a (the kind's ``state_rates``, gᵀq̈ from H)."""
+        r, rdot, a_n, H, L, rhat = geo = self.geometry(q, v)
+        rd, an, e = np.zeros(3), np.zeros(3), np.zeros(3)
+        rd[:len(rdot)], an[:len(a_n)], e[:len(rhat)] = rdot, a_n, rhat
+        Ldot, an_r, perp2 = axial_scalars(*rd, *an, *e)
+        gq = float((H @ a[self.pair.dofs]) @ rhat)
+        out = np.zeros(self.n_states)
+        self._state_rates(self.row, L, Ldot, an_r, perp2, gq, self._x(z), out)
+        dz[self.states] = out
+        return geo
+
+    def state_energy(self, q, v, z) -> float:
+        geo = self.geometry(q, v)
+        return self._state_energy(self.row, geo[4], float(geo[1] @ geo[5]), self._x(z))
 
     def add_mass(self, q, v, M, geo=None):
         block = self.block(q, v)

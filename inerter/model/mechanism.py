@@ -119,6 +119,22 @@ class Mechanism:
         self._forces(scene)
         self._effects(scene)
         self.q0, self.v0 = self.assemble_initial(q0, v0)
+        #: The elements' internal states at t = 0 (an inerter device's series deflection and its rate,
+        #: its dissipated energy; :meth:`inerter.elements.device.Device.states`), all zero: the
+        #: compiled engine integrates them (y = [q, v, z]); empty for most scenes.
+        self.z0 = np.zeros(sum(len(e.device.states()) for e in scene.elements.values()
+                               if getattr(e, "device", None) is not None))
+        self.stateful = []                  # the elements with internal states, each its slice of z
+        offset = 0
+        for e in self.elements:
+            count = getattr(e, "n_states", 0)
+            if count:
+                e.states = slice(offset, offset + count)
+                self.stateful.append(e)
+                offset += count
+        if offset != len(self.z0):          # an element factory (the oracle) without internal states
+            raise SceneError(scene.source, "elements", None, "elements whose internal states this model "
+                             "derives", "internal states not derived")
         self._meet_limits(groups)
         self.check_mass_matrix(self.q0, self.v0)
 
@@ -452,8 +468,9 @@ class Mechanism:
         return self.project(q, v)
 
     # -- forces and dynamics -----------------------------------------------------------------
-    def assemble(self, t, q, v, inputs=None, with_mass=True):
-        """M + M_I (Eq. 33) and Q_e + Q_Iv: every force except the inerters' acceleration term."""
+    def assemble(self, t, q, v, inputs=None, with_mass=True, z=None):
+        """M + M_I (Eq. 33) and Q_e + Q_Iv: every force except the inerters' acceleration term; `z`:
+        the internal states (default z0), whose forces an element with some adds."""
         M = self.M0.copy() if with_mass else None
         Q = np.zeros(self.n)
         if self.gravity is not None:
@@ -469,6 +486,8 @@ class Mechanism:
                 e.add_force(q, v, Q, geo)
                 if with_mass:
                     e.add_mass(q, v, M, geo)
+        for e in self.stateful:
+            e.add_state_force(q, v, Q, self.z0 if z is None else z)
         for f, point, fn in self.applied:
             self._add_point_force(Q, point, q, fn(t) * np.asarray(f.direction))
         for f, point in self.feedback:
@@ -504,9 +523,9 @@ class Mechanism:
             e.add_mass(q, v, M)                                    # M + M_I, Eq. (33)
         return M
 
-    def accelerations(self, t, q, v, inputs=None, alpha=0.0):
-        """Solve Eq. (33) for (v̇, λ)."""
-        M, Q = self.assemble(t, q, v, inputs)
+    def accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
+        """Solve Eq. (33) for (v̇, λ) at (t, q, v) and the internal states z (default z0)."""
+        M, Q = self.assemble(t, q, v, inputs, z=z)
         if not self.m:
             return self._solve(M, Q, t), np.zeros(0)
         C, Cq, gamma = self.constraints(q, v)
@@ -530,13 +549,22 @@ class Mechanism:
                                   "force is unbounded)", t, recoverable=True)
         return x
 
+    def state_rates(self, q, v, z, a) -> np.ndarray:
+        """ż at (q, v, z) and the accelerations a (each stateful element's ``state_rates``)."""
+        dz = np.zeros(len(z))
+        for e in self.stateful:
+            e.state_rates(q, v, a, z, dz)
+        return dz
+
     # -- energy ----------------------------------------------------------------------------
-    def energy(self, q, v) -> float:
+    def energy(self, q, v, z=None) -> float:
         """T + V: ½vᵀM v + Σ ½bL̇² (inerters) + elastic and gravity potential. Conserved by the
         corrected model without damping and forcing (the inerter adds ½bL̇² to T, Sec. 2.2)."""
         E = 0.5 * float(v @ (self.M0 @ v))
         for e in self.elements:
             E += e.kinetic(q, v) + e.potential(q)
+        for e in self.stateful:                 # a series connection's ½ b u̇² + ½ k_c d²
+            E += e.state_energy(q, v, self.z0 if z is None else z)
         if self.gravity is not None:
             for i, m in enumerate(self.masses):
                 k, j = self.q_index[i], self.v_index[i]

@@ -345,6 +345,12 @@ class OracleDevice:
 
     def __init__(self, device):
         self.spec = device
+        states = [n for n in ("compliance", "backlash", "dissipated_energy") if device.has(n)]
+        if states:
+            from inerter.common.errors import InerterError
+            raise InerterError(f"the oracle derives an inerter device from L(q) and its rate only; "
+                               f"device.{states[0]} has internal states (series deflection, dissipated "
+                               f"energy), which it does not derive: check such a scene against closed forms")
         self.flywheel = device.values("flywheel") if device.has("flywheel") else None
         self.friction = device.values("friction") if device.has("friction") else None
         self.stops = device.values("end_stops") if device.has("end_stops") else None

@@ -21,7 +21,7 @@ from inerter import elements
 from inerter.common.errors import SceneError
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements.device import EFFECT as DEVICE_EFFECT
-from inerter.elements.device import Device
+from inerter.elements.device import Device, check_device
 from inerter.scene import units
 from inerter.scene.expressions import (RESERVED_NAMES, UnitError, ambiguous_units, evaluate, output_expression,
                                        parameter_meta, read_parameters)
@@ -882,6 +882,9 @@ def _read_elements(r: _Reader, raw, points, bodies, dimension):
                 raise r.error(f"{fld}.between", [a, b], "points on two different bodies",
                               f"both points are on {points[a].body}: the element could never act")
         coef = _read_parameter(r, spec, fld, kind.coefficient) if inertance is None else inertance
+        if device is not None and device.has("compliance") and not coef > 0.0:
+            raise r.error(f"{fld}.{kind.coefficient.key}", coef, f"an inertance > 0 ({kind.coefficient.unit}) with "
+                          "device.compliance (the series node's law divides by it)", "out of range")
         free = _read_parameter(r, spec, fld, kind.free) if kind.free is not None else None
         if rotational:
             axis = r.vector(spec, "axis", fld, 3, unit_length=True) if dimension == 3 else None
@@ -944,6 +947,10 @@ def _read_device(r: _Reader, raw, fld, kind: "elements.ElementKind", dimension: 
             key, value, expected, what = problem
             raise r.error(f"{efld}.{key}", value, expected, what)
         effects.append((effect.name, tuple(values.items())))
+    problem = check_device({name: dict(values) for name, values in effects})
+    if problem is not None:
+        name, key, value, expected, what = problem
+        raise r.error(f"{fld}.{name}" + (f".{key}" if key else ""), value, expected, what)
     sources = [name for name, _ in effects if DEVICE_EFFECT[name].inertance is not None]
     if len(sources) > 1:
         raise r.error(f"{fld}.{sources[1]}", raw[sources[1]], f"one source of the inertance (device.{sources[0]} "

@@ -344,6 +344,46 @@ def run_study(scene, stop_time=None, signal=None, paths=("numpy", "compiled"), m
     return study, model, reference, extract
 
 
+#: The inerter devices' hard cases (scenarios/hard/; docs/hard_cases.md): stick-slip of a small
+#: velocity scale, backlash impacts, end-stop contact.
+HARD_DEVICE_CASES = ("stick_slip_device_2d", "backlash_device_2d", "end_stop_device_2d")
+HARD_RTOLS = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-13)
+HARD_METHODS = {"DOP853": HARD_RTOLS, "Radau": (1e-4, 1e-6, 1e-8, 1e-10)}
+
+
+def hard_case_rows(folder: Path, cases=HARD_DEVICE_CASES, methods=HARD_METHODS, log=print) -> list[dict]:
+    """Work-precision rows of the device hard cases, tolerance by tolerance down to the tightest
+    (atol = rtol/100): status, accepted steps, right-hand side evaluations, CPU time of the
+    integration (best of REPEATS) and the largest deviation of the points' positions from the
+    case's own DOP853 run at rtol 1e-13 (the tightest; its convergence is the check)."""
+    import inerter
+    rows = []
+    for name in cases:
+        model = inerter.load(folder / f"{name}.toml")
+        ref = model.simulate(method="DOP853", rtol=1e-13, atol=1e-15, metrics=False)
+        columns = [n for n in ref.names if ".r[" in n]
+        for method, rtols in methods.items():
+            for rtol in rtols:
+                run, cpu = best_time(lambda: model.simulate(method=method, rtol=rtol, atol=rtol * 1e-2,
+                                                            metrics=False), lambda r: r.run.cpu_time)
+                error = max(float(np.max(np.abs(run[c] - ref[c][:len(run.time)]))) for c in columns)
+                rows.append(dict(case=name, method=method, rtol=rtol, status=run.status, steps=run.run.steps,
+                                 evaluations=run.run.evaluations, cpu=cpu, error=error,
+                                 events=len(run.events()), message=run.message))
+                log(f"{name} {method} {rtol:g}: {run.status} {run.run.steps} steps, error {error:.2e}")
+    return rows
+
+
+def hard_case_table(rows) -> str:
+    """The rows of :func:`hard_case_rows` as a Markdown table."""
+    lines = ["| case | method | rtol | status | steps | evaluations | events | CPU s | max error (m) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['case']} | {r['method']} | {r['rtol']:g} | {r['status']} | {r['steps']} | "
+                     f"{r['evaluations']} | {r['events']} | {r['cpu']:.4f} | {r['error']:.2e} |")
+    return "\n".join(lines)
+
+
 def bench_parser() -> argparse.ArgumentParser:
     """The options of ``inerter bench``."""
     p = argparse.ArgumentParser(prog="inerter bench", description="Work-precision diagram of a scene: error "

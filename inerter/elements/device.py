@@ -501,6 +501,12 @@ EFFECTS = (FLYWHEEL, FRICTION_EFFECT, END_STOPS, FLUID_EFFECT, HOUSING, ROD, MOU
 
 def check_device(effects: dict):
     """How a device's effects go together: None, or (effect, key, value, expected, problem)."""
+    if "compliance" in effects and "mount" in effects:
+        # the mount's gyroscopic terms spin the flywheel at n dL/dt (device_inertia); in series the
+        # flywheel follows the inerter's own stroke u = L − s, which that block does not model
+        return ("mount", "axis", effects["mount"].get("axis"), "no device.mount beside device.compliance (the "
+                "gyroscopic terms take the flywheel's spin from the terminal distance, not from the inerter's "
+                "own stroke in a series connection)", "mount and compliance together")
     if "backlash" in effects and "compliance" not in effects:
         return ("backlash", "gap", effects["backlash"].get("gap"),
                 "device.compliance beside it (the gap is in the series connection)", "backlash without compliance")

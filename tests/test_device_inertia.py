@@ -180,6 +180,17 @@ def test_a_mount_in_2d_is_refused_with_the_reason(tmp_path):
     assert "elements.device.device.mount" in str(err.value) and "planar constraint" in str(err.value)
 
 
+def test_a_mount_beside_a_series_connection_is_refused_with_the_reason(tmp_path):
+    """The mount's gyroscopic terms spin the flywheel with dL/dt; in series it follows u = L − s."""
+    text = PEND_COMPACT.read_text(encoding="utf-8") + "\n[elements.device.device.compliance]\nstiffness = 1e5\n"
+    path = tmp_path / "pendulum_series.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(SceneError) as err:
+        inerter.load(path)
+    message = str(err.value)
+    assert "elements.device.device.mount" in message and "compliance" in message and "\n" not in message
+
+
 # ------------------------------------------------------------------------------------------------
 # The screw joint
 # ------------------------------------------------------------------------------------------------

@@ -38,8 +38,9 @@ Adding a kind, e.g. a linear spring with a preload F0 (``elements.NAME.type = "p
 3. Its tests: the law against a closed form, and a scene using it through the engine against the
    oracle (``tests/test_elements.py`` shows both for the shipped kinds).
 
-A kind may also report outputs beyond its family's three: a law ``extra_outputs(row, L, Ldot, out,
-k)`` that writes them at ``out[k]``... and returns the index after them, and
+A kind may also report outputs beyond its family's three: a law ``extra_outputs(row, L, Ldot, an,
+perp2, gq, x, out, k)`` (gq = gᵀq̈ at the solved accelerations, x its internal states) that writes
+them at ``out[k]``... and returns the index after them, and
 ``extra_output_names(spec)`` that names them for a scene element (the inerter's device,
 :mod:`.device`, does so).
 

@@ -41,12 +41,42 @@ coefficient F_c/v_s, so a sticking phase is stiff (eigenvalue ≈ −F_c/(m v_s)
 mass m): integrate small v_s with an implicit method (Radau, BDF). Its dissipation function is
 D_f = F_c v_s ln cosh(L̇/v_s) + ½ c_f L̇², F_f = ∂D_f/∂L̇.
 
-A screw *efficiency* (the part of the transmitted inertial force b L̈ that is lost, η_f when the
-terminals drive the flywheel, η_b when it drives them; Wen et al. 2017, J. Vibroeng. 19(6), for
-force-dependent friction in ball-screw inerters) is not a law of (L, L̇, a_n·r̂, |ṙ⊥|²): it
-multiplies b by 1/η_f or η_b according to the sign of L̇·L̈, and L̈ = gᵀq̈ + a_n·r̂ + |ṙ⊥|²/L
-holds the unknown accelerations, so the mass matrix of Eq. (33) would depend on its own solution.
-It is not built (see docs/scene_format.md).
+**Efficiency** (``device.efficiency``; Wen et al. 2017, J. Vibroeng. 19(6), friction in
+ball-screw inerters; Smith 2020, "The inerter: a retrospective", on back-driving): the screw passes
+only a part of the force through: η_f of it reaches the flywheel when the terminals drive it, η_b of
+the flywheel's reaches the terminals when it drives them (0 < η ≤ 1). With the flywheel's kinetic
+energy kept at ½ b L̇², the terminal force is
+
+    F = b_eff L̈,   b_eff = b/η_f  where L̇·L̈ ≥ 0 (flywheel driven: speeding up; also at L̇ = 0),
+                   b_eff = b η_b  where L̇·L̈ < 0 (flywheel back-driving the terminals: slowing down),
+
+L̈ that of Eq. 9 (or Eq. 8, without the centripetal term). The work the terminals do, F L̇ = b_eff
+L̈ L̇, exceeds the flywheel's d(½ b L̇²)/dt = b L̈ L̇ by the lost power (b_eff − b) L̈ L̇ ≥ 0 in both
+modes: part of p_loss (:func:`efficiency_loss`), and of e_loss where ``dissipated_energy`` is
+declared. The mode is stored in the element's row (``EFFICIENCY_MODE``) and b_eff is the inertance
+the mass matrix of Eq. (33) takes (:func:`inertance`).
+
+The mode depends on L̈ = gᵀq̈ + a_n·r̂ + |ṙ⊥|²/L, which holds the unknown accelerations: an
+algebraic loop, resolved exactly. Write the augmented system of Eq. (33) without the element as
+K₀ x = f₀ and G = [g; 0]; with it, (K₀ + b_eff G Gᵀ) x = f₀ − b_eff c G, c = L̈ − gᵀq̈. Then
+x = x₀ − b_eff K₀⁻¹G L̈ with x₀ = K₀⁻¹f₀, and L̈ = Gᵀx + c gives
+
+    L̈ (1 + b_eff s) = r,   s = Gᵀ K₀⁻¹ G = gᵀ P g ≥ 0,   r = Gᵀx₀ + c,
+
+P the velocity block of K₀⁻¹, the inverse mass matrix projected on the joints' tangent space
+(positive semidefinite). So sign(L̈) = sign(r) does not depend on b_eff: the engine solves once in
+the mode of the last call, computes the element's L̈, and where the mode disagrees with sign(L̇·L̈)
+it flips it (:func:`settle`) and solves again, which then agrees: at most two solves for one such
+element. For several, each solve flips every element that disagrees; the signs are coupled through
+P, so the engine iterates up to :data:`MODE_SOLVES` solves and, if the modes still do not
+settle, keeps the last solve and counts the call (``Kernel.unsettled``). A scene without an
+efficiency takes no extra solve (the engine tests a count of such elements, ``dims[EFFICIENT]``).
+
+The force is continuous where L̈ changes sign at L̇ ≠ 0 (b_eff L̈ → 0 from both sides). Where L̇
+changes sign with L̈ ≠ 0 (a turnaround) b_eff jumps from b η_b to b/η_f, and F and q̈ jump, as at a
+Coulomb friction's reversal: the integrator meets the jump by its error control, which shortens the
+steps that straddle it (no event: the state stays continuous, only q̈ jumps; the steps are measured
+in docs/hard_cases.md). Neither series compliance nor a mount goes with it (:func:`check_device`).
 
 **End stops** (``device.end_stops``): stroke limits L_min and L_max. Past one, by the penetration
 δ = L_min − L (or L − L_max) > 0 at the rate δ̇, a Hunt-Crossley contact force pushes back:
@@ -116,7 +146,7 @@ dissipated power, ż = p_loss, as one more internal state (output ``E.e_loss``, 
 integrator's error norm, and so the steps.
 
 The device's outputs (``E.w_flywheel``, ``E.f_friction``, ``E.f_fluid``, ``E.f_stop``, ``E.p_loss``,
-``E.s_series``, ``E.engaged``, ``E.e_loss``) are written by :func:`outputs` in the order
+``E.s_series``, ``E.engaged``, ``E.mode``, ``E.e_loss``) are written by :func:`outputs` in the order
 :meth:`Device.outputs` names them.
 """
 from __future__ import annotations
@@ -128,7 +158,8 @@ from typing import Callable
 from numba import njit
 
 from inerter.elements.base import Parameter, law
-from inerter.elements.layout import (BACKLASH, COEFFICIENT, COULOMB, DEVICE, FLUID, FLUID_LINEAR,
+from inerter.elements.layout import (BACKLASH, COEFFICIENT, COULOMB, DEVICE, EFFICIENCY, EFFICIENCY_MODE,
+                                     ETA_BACKWARD, ETA_FORWARD, FLUID, FLUID_LINEAR,
                                      FLUID_QUADRATIC, FLYWHEEL_AXIAL, FLYWHEEL_CENTRE, FLYWHEEL_MASS,
                                      FLYWHEEL_RATIO, FRICTION, GAP, HOUSING_AXIAL, HOUSING_CENTRE,
                                      HOUSING_MASS, INERTIA, LOSS, MOUNT, MOUNT_AXIS, ROD_CENTRE, ROD_MASS,
@@ -142,6 +173,11 @@ from inerter.elements.layout import (BACKLASH, COEFFICIENT, COULOMB, DEVICE, FLU
 # entry points below, and those are called, not inlined, from the inerter's law: an ideal inerter's
 # kernels then hold only the test of row[DEVICE] and a call never made, not the device's code.
 # ------------------------------------------------------------------------------------------------
+#: The most solves of Eq. (33) per evaluation that resolve the screw efficiencies' modes (the engine's
+#: and the numpy path's): two suffice for one such element, whose sign of L̈ does not depend on its mode.
+MODE_SOLVES = 8
+
+
 def entry(fn):
     """Compile a device law that the inerter's law calls without inlining it (cached on disk)."""
     return njit(cache=True)(fn)
@@ -192,6 +228,29 @@ def stop_energy(row, L):
 
 
 @law
+def efficiency_factor(row):
+    """b_eff / b in the mode the last solve settled on (row[EFFICIENCY_MODE]): 1/η_f where the
+    terminals drive the flywheel, η_b where it drives them."""
+    if row[EFFICIENCY_MODE] != 0.0:
+        return 1.0 / row[ETA_FORWARD]
+    return row[ETA_BACKWARD]
+
+
+@law
+def efficiency_mode(Ldot, Lddot):
+    """The mode the power flow asks for: 1.0 (flywheel driven: L̇·L̈ ≥ 0, speeding up, and at
+    L̇ = 0), 0.0 (back-driving: L̇·L̈ < 0, slowing down)."""
+    return 1.0 if Ldot * Lddot >= 0.0 else 0.0
+
+
+@law
+def efficiency_loss(row, Ldot, Lddot):
+    """The power the screw loses, (b_eff − b) L̈ L̇ (W): ≥ 0 where the mode agrees with the sign of
+    L̇·L̈ (b_eff > b driven, < b back-driving)."""
+    return (efficiency_factor(row) - 1.0) * row[COEFFICIENT] * Lddot * Ldot
+
+
+@law
 def drag(row, ud):
     """F_d(u̇): friction and channel damping on the stroke rate u̇ (N, tension positive)."""
     F = 0.0
@@ -239,10 +298,10 @@ def stroke_rate(row, Ldot, x):
 
 
 @law
-def loss(row, L, Ldot, x):
+def loss(row, L, Ldot, Lddot, x):
     """The power the device dissipates (W, ≥ 0): friction and channel damping F_d(u̇) u̇, the
-    contacts' damping, and the series connection's (F − k_c d) ṡ (c_c ṡ², or the stored energy a
-    clipped contact lets go)."""
+    contacts' damping, the series connection's (F − k_c d) ṡ (c_c ṡ², or the stored energy a
+    clipped contact lets go) and the screw's efficiency loss (b_eff − b) L̈ L̇ (`Lddot` = L̈)."""
     p = 0.0
     ud = Ldot
     if row[SERIES] != 0.0:
@@ -252,6 +311,8 @@ def loss(row, L, Ldot, x):
     p += drag(row, ud) * ud
     if row[STOPS] != 0.0:
         p += end_stop(row, L, Ldot)[1]
+    if row[EFFICIENCY] != 0.0:
+        p += efficiency_loss(row, Ldot, Lddot)
     return p
 
 
@@ -266,6 +327,29 @@ def force(row, L, Ldot):
     if row[STOPS] != 0.0:
         F += end_stop(row, L, Ldot)[0]
     return F
+
+
+@entry
+def inertance(row):
+    """The factor of gᵀq̈ in the element's force: 0 with series compliance (the series connection
+    carries the force), b/η_f or b η_b with an efficiency (:func:`efficiency_factor`), else b."""
+    if row[SERIES] != 0.0:
+        return 0.0
+    if row[EFFICIENCY] != 0.0:
+        return row[COEFFICIENT] * efficiency_factor(row)
+    return row[COEFFICIENT]
+
+
+@entry
+def settle(row, Ldot, Lddot):
+    """Set the efficiency's mode to the one the power flow L̇·L̈ asks for (:func:`efficiency_mode`;
+    `Lddot` = L̈ from the solved accelerations); 1 where it changed (the solve is to be repeated),
+    else 0."""
+    mode = efficiency_mode(Ldot, Lddot)
+    if mode == row[EFFICIENCY_MODE]:
+        return 0
+    row[EFFICIENCY_MODE] = mode
+    return 1
 
 
 @entry
@@ -307,14 +391,15 @@ def state_rates(row, L, Ldot, Lddot, x, dx):
         dx[1] = Lddot - (F - drag(row, Ldot - x[1])) / row[COEFFICIENT]
         k = 2
     if row[LOSS] != 0.0:
-        dx[k] = loss(row, L, Ldot, x)
+        dx[k] = loss(row, L, Ldot, Lddot, x)
 
 
 @entry
-def outputs(row, L, Ldot, x, out, k):
+def outputs(row, L, Ldot, Lddot, x, out, k):
     """Write the device's outputs at out[k], out[k + 1], ... in the order of
     :meth:`Device.outputs` (flywheel speed; friction, channel and end-stop forces; dissipated
-    power; series deflection, engagement, dissipated energy) and return the index after them."""
+    power; series deflection, engagement; the efficiency's mode; dissipated energy) and return the
+    index after them (`Lddot` = L̈ at the solved accelerations, for the efficiency's loss)."""
     ud = stroke_rate(row, Ldot, x)
     if row[FLYWHEEL_RATIO] != 0.0:
         out[k] = row[FLYWHEEL_RATIO] * ud
@@ -328,8 +413,9 @@ def outputs(row, L, Ldot, x, out, k):
     if row[STOPS] != 0.0:
         out[k] = end_stop(row, L, Ldot)[0]
         k += 1
-    if row[FRICTION] != 0.0 or row[FLUID] != 0.0 or row[STOPS] != 0.0 or row[SERIES] != 0.0:
-        out[k] = loss(row, L, Ldot, x)
+    if (row[FRICTION] != 0.0 or row[FLUID] != 0.0 or row[STOPS] != 0.0 or row[SERIES] != 0.0
+            or row[EFFICIENCY] != 0.0):
+        out[k] = loss(row, L, Ldot, Lddot, x)
         k += 1
     if row[SERIES] != 0.0:
         out[k] = x[0]
@@ -337,6 +423,9 @@ def outputs(row, L, Ldot, x, out, k):
         if row[BACKLASH] != 0.0:
             out[k] = series_force(row, x[0], x[1])[1]
             k += 1
+    if row[EFFICIENCY] != 0.0:
+        out[k] = row[EFFICIENCY_MODE]
+        k += 1
     if row[LOSS] != 0.0:
         out[k] = x[2 if row[SERIES] != 0.0 else 0]
         k += 1
@@ -490,13 +579,22 @@ BACKLASH_EFFECT = Effect(
     "Wang & Su 2008, Veh. Syst. Dyn. 46(7), Sec. 3 (backlash of the ball screw)",
     (Parameter("gap", "m", "total free play Δ of the series connection", minimum=0.0),))
 
+EFFICIENCY_EFFECT = Effect(
+    "efficiency", "screw efficiency by the power flow's direction: b/η_f driven (L̇·L̈ ≥ 0), b η_b back-driving",
+    "Wen et al. 2017, J. Vibroeng. 19(6) (ball-screw inerter losses); Smith 2020, The inerter: a retrospective "
+    "(back-driving)",
+    (Parameter("forward", "1", "η_f: the part of the force that reaches the flywheel when the terminals drive it",
+               minimum=0.0, strict=True, maximum=1.0),
+     Parameter("backward", "1", "η_b: the part that reaches the terminals when the flywheel drives them",
+               minimum=0.0, strict=True, maximum=1.0)))
+
 DISSIPATED_ENERGY = Effect(
     "dissipated_energy", "the device's dissipated energy integrated as a state (output e_loss)",
     "ż = p_loss: energy + e_loss is the initial energy (Drake's non-conservative power, integrated)", ())
 
 #: The effects an inerter may declare, in the order they are listed and their outputs written.
 EFFECTS = (FLYWHEEL, FRICTION_EFFECT, END_STOPS, FLUID_EFFECT, HOUSING, ROD, MOUNT_EFFECT, COMPLIANCE,
-           BACKLASH_EFFECT, DISSIPATED_ENERGY)
+           BACKLASH_EFFECT, EFFICIENCY_EFFECT, DISSIPATED_ENERGY)
 
 
 def check_device(effects: dict):
@@ -507,13 +605,21 @@ def check_device(effects: dict):
         return ("mount", "axis", effects["mount"].get("axis"), "no device.mount beside device.compliance (the "
                 "gyroscopic terms take the flywheel's spin from the terminal distance, not from the inerter's "
                 "own stroke in a series connection)", "mount and compliance together")
+    for other in ("compliance", "mount"):
+        if "efficiency" in effects and other in effects:
+            # the mode test reads the terminal distance's L̈; in series the screw turns with the
+            # inerter's own stroke (a state), and the mount's gyroscopic block spins the flywheel with
+            # b, not b_eff
+            return ("efficiency", "forward", effects["efficiency"].get("forward"), f"no device.efficiency beside "
+                    f"device.{other} (the efficiency acts on the terminal distance's own inertial force)",
+                    f"efficiency and {other} together")
     if "backlash" in effects and "compliance" not in effects:
         return ("backlash", "gap", effects["backlash"].get("gap"),
                 "device.compliance beside it (the gap is in the series connection)", "backlash without compliance")
     if "dissipated_energy" in effects and not any(n in effects for n in ("friction", "end_stops", "fluid",
-                                                                          "compliance")):
-        return ("dissipated_energy", "", {}, "a dissipative effect beside it (friction, end_stops, fluid or "
-                "compliance)", "nothing to dissipate")
+                                                                          "compliance", "efficiency")):
+        return ("dissipated_energy", "", {}, "a dissipative effect beside it (friction, end_stops, fluid, "
+                "compliance or efficiency)", "nothing to dissipate")
     return None
 EFFECT = {e.name: e for e in EFFECTS}
 
@@ -568,6 +674,10 @@ class Device:
             cols.update({SERIES: 1.0, SERIES_STIFFNESS: v["stiffness"], SERIES_DAMPING: v["damping"] or 0.0})
         if self.has("backlash"):
             cols.update({BACKLASH: 1.0, GAP: self.values("backlash")["gap"]})
+        if self.has("efficiency"):
+            v = self.values("efficiency")
+            cols.update({EFFICIENCY: 1.0, ETA_FORWARD: v["forward"], ETA_BACKWARD: v["backward"],
+                         EFFICIENCY_MODE: 1.0})
         if self.has("dissipated_energy"):
             cols[LOSS] = 1.0
         if self.inertia():
@@ -600,7 +710,7 @@ class Device:
         """Whether it has a p_loss: friction, end stops, a fluid channel or a series connection
         (whose damping may be 0: a number, tunable, while the outputs are fixed by the effects
         declared; the condition :func:`outputs` tests on the row)."""
-        return any(self.has(n) for n in ("friction", "end_stops", "fluid", "compliance"))
+        return any(self.has(n) for n in ("friction", "end_stops", "fluid", "compliance", "efficiency"))
 
     def states(self) -> tuple[tuple[str, str, str], ...]:
         """(name, unit, description) of its internal states, in their order in z (:func:`state_rates`)."""
@@ -624,12 +734,15 @@ class Device:
         if self.has("end_stops"):
             out.append(("f_stop", "N", "end-stop contact force, tension positive (part of f)"))
         if self.dissipative():
-            out.append(("p_loss", "W", "power dissipated in the device (friction, channel, contact, series damping)"))
+            out.append(("p_loss", "W", "power dissipated in the device (friction, channel, contact, series damping, "
+                                       "screw efficiency)"))
         if self.has("compliance"):
             out.append(("s_series", "m", "series deflection s: terminal distance less the inerter's stroke, "
                                          "0 at t = 0"))
             if self.has("backlash"):
                 out.append(("engaged", "1", "1 where the backlash gap is closed (the spring carries force), 0 in it"))
+        if self.has("efficiency"):
+            out.append(("mode", "1", "screw efficiency's mode: 1 flywheel driven (b/eta_f), 0 back-driving (b eta_b)"))
         if self.has("dissipated_energy"):
             out.append(("e_loss", "J", "energy dissipated in the device since t = 0 (integral of p_loss)"))
         return tuple(out)

@@ -36,9 +36,9 @@ def energy(kind, row, L, Ldot):
 
 
 @law
-def extra_outputs(kind, row, L, Ldot, x, out, k):
+def extra_outputs(kind, row, L, Ldot, an, perp2, gq, x, out, k):
     if kind == 1:
-        return kind_inerter.extra_outputs(row, L, Ldot, x, out, k)
+        return kind_inerter.extra_outputs(row, L, Ldot, an, perp2, gq, x, out, k)
     return k
 
 

@@ -1,6 +1,7 @@
 """Inerter: F = b d²L/dt², tension positive (paper Eq. 9), or, without the centripetal term,
 the 1D law F = b r̈·r̂ (Eq. 8); with a device (:mod:`inerter.elements.device`), plus its friction,
-channel damping and end-stop forces.
+channel damping and end-stop forces, and b replaced by b/η_f or b η_b where it declares a screw
+efficiency.
 
 With r = r_b − r_a, L = |r|, r̂ = r/L and r̈ = H q̈ + a_n (Eqs. 18-19):
 
@@ -20,7 +21,7 @@ The inertance is the scene's ``b``, or what the device's flywheel (b = J (2π/p)
 """
 from inerter.elements import device
 from inerter.elements.base import TRANSLATIONAL, ElementKind, Parameter, law, rarely
-from inerter.elements.layout import CENTRIPETAL, COEFFICIENT, DEVICE, SERIES
+from inerter.elements.layout import CENTRIPETAL, COEFFICIENT, DEVICE, EFFICIENCY, SERIES
 
 KIND = ElementKind(
     name="inerter", family=TRANSLATIONAL, equation="Eq. 9 (Eq. 8 without the centripetal term)",
@@ -31,10 +32,11 @@ KIND = ElementKind(
 
 @law
 def inertance(row):
-    """b: the factor of gᵀ q̈ in F, which goes into the mass matrix (Eq. 33); 0 where a series
-    connection carries the force (device.compliance: the force is a law of the state)."""
-    if rarely(row[SERIES] != 0.0):
-        return 0.0
+    """b: the factor of gᵀ q̈ in F, which goes into the mass matrix (Eq. 33); with a device
+    :func:`device.inertance`: 0 where a series connection carries the force (device.compliance: the
+    force is a law of the state), b/η_f or b η_b with a screw efficiency (device.efficiency)."""
+    if rarely(row[DEVICE] != 0.0):
+        return device.inertance(row)
     return row[COEFFICIENT]
 
 
@@ -51,11 +53,14 @@ def convective(row, L, an, perp2):
 def force(row, L, Ldot, an, perp2):
     """F − b gᵀ q̈ = b (a_n·r̂ + |ṙ⊥|²/L) (Eq. 9), or b a_n·r̂ without the centripetal term
     (Eq. 8), plus a declared device's forces. `an` is a_n·r̂, `perp2` is |ṙ|² − L̇² = |ṙ⊥|². With
-    series compliance the inertial part is carried by the series connection (:func:`state_force`)."""
+    series compliance the inertial part is carried by the series connection (:func:`state_force`);
+    with a screw efficiency it is b_eff (a_n·r̂ + |ṙ⊥|²/L), b_eff = :func:`inertance`."""
     F = row[COEFFICIENT] * convective(row, L, an, perp2)
     if rarely(row[DEVICE] != 0.0):
         if row[SERIES] != 0.0:
             F = 0.0
+        elif row[EFFICIENCY] != 0.0:
+            F = device.inertance(row) * convective(row, L, an, perp2)
         F += device.force(row, L, Ldot)
     return F
 
@@ -73,12 +78,20 @@ def energy(row, L, Ldot):
 
 
 @law
-def extra_outputs(row, L, Ldot, x, out, k):
-    """A device's outputs at out[k], ... (:func:`device.outputs`; `x` the element's internal
-    states); returns the index after them."""
+def extra_outputs(row, L, Ldot, an, perp2, gq, x, out, k):
+    """A device's outputs at out[k], ... (:func:`device.outputs`, with L̈ = gᵀq̈ + :func:`convective`
+    at the solved accelerations, `gq` = gᵀq̈; `x` the element's internal states); returns the index
+    after them."""
     if rarely(row[DEVICE] != 0.0):
-        return device.outputs(row, L, Ldot, x, out, k)
+        return device.outputs(row, L, Ldot, gq + convective(row, L, an, perp2), x, out, k)
     return k
+
+
+@law
+def settle(row, L, Ldot, an, perp2, gq):
+    """A screw efficiency's mode set from the solved accelerations (`gq` = gᵀq̈): 1 where it changed
+    (:func:`device.settle`; the engine calls it only where row[EFFICIENCY] is set)."""
+    return device.settle(row, Ldot, gq + convective(row, L, an, perp2))
 
 
 # Laws of an element's internal states x (a view of z; only a device declares them), which the

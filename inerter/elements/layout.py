@@ -62,7 +62,13 @@ SERIES_DAMPING = 43      # its damping c_c (N.s/m)
 BACKLASH = 44            # 1.0: a gap in the series connection (device.backlash)
 GAP = 45                 # the gap's total width (m): free play of ±GAP/2 about the engaged position
 LOSS = 46                # 1.0: the dissipated energy integrated as a state (device.dissipated_energy)
-ELEMENT_REAL_COLUMNS = 47
+# An inerter device's screw efficiency (inerter.elements.device; 0.0 where not declared):
+EFFICIENCY = 47          # 1.0: an efficiency that depends on the power flow's direction (device.efficiency)
+ETA_FORWARD = 48         # η_f: the part of the force that reaches the flywheel when the terminals drive it
+ETA_BACKWARD = 49        # η_b: the part that reaches the terminals when the flywheel drives them
+EFFICIENCY_MODE = 50     # the mode the last solve of Eq. (33) settled on: 1.0 flywheel driven (b/η_f), 0.0
+                         # back-driving (b η_b); written by the engine (kernels.accelerations), 1.0 at the start
+ELEMENT_REAL_COLUMNS = 51
 
 # -- rot_int: a rotational element's integers
 ROT_KIND = 0             # its code: its place in inerter.elements.KINDS

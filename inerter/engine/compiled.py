@@ -488,8 +488,9 @@ class Kernel:
         self.perm, self.kl, self.ku = ordering(sparsity3(flat) if spatial else sparsity(flat))
         mode, offset, ground_t, ground_a, ground_terms = ground_arrays(mech)
         euler_axes = EULER_SEQUENCES[mech.scene.euler_sequence]
+        efficient = int(np.count_nonzero(flat["el_real"][:, layout.EFFICIENCY])) if len(flat["el_real"]) else 0
         dims = np.array([self.n, self.m, self.kl, self.ku, int(flat["has_gravity"]), flat["dim"], self.nq, mode,
-                         offset, *euler_axes], dtype=np.int64)
+                         offset, *euler_axes, efficient, 0], dtype=np.int64)
         self.params = (flat["mass"], flat["pbody"], flat["ploc"], flat["el_int"], flat["el_real"],
                        flat["rot_int"], flat["rot_real"], flat["jt_int"], flat["jt_real"], flat["fa_int"],
                        flat["fa_real"], flat["pd_int"], flat["pd_real"], flat["in_int"], flat["gravity"],
@@ -508,6 +509,12 @@ class Kernel:
         self.input_names = list(getattr(mech, "input_names", []))
         self._layout = self._signal_index = None     # signal_layout and its index, once asked for
         self._read_cache = {}
+
+    @property
+    def unsettled(self) -> int:
+        """How many evaluations of Eq. (33) kept a solve whose screw efficiencies' modes did not
+        settle in device.MODE_SOLVES solves (kernels.accelerations; 0 without efficiencies)."""
+        return int(self.params[_k.DIMS][_k.UNSETTLED])
 
     @property
     def band(self):

@@ -25,7 +25,9 @@ from inerter.common.rotations import (EULER_SINGULARITY, euler_angles9, euler_ma
 from inerter.elements import device_inertia
 from inerter.elements import dispatch as law
 from inerter.elements.base import axial_scalars, rarely
-from inerter.elements.layout import (AXIS, BODY_A, BODY_B, F_AMPLITUDE, F_FREQUENCY, F_INITIAL, F_OFFSET,
+from inerter.elements.device import MODE_SOLVES
+from inerter.elements.inerter import settle
+from inerter.elements.layout import (AXIS, BODY_A, BODY_B, DEVICE, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY, F_INITIAL, F_OFFSET,
                                      F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA, KIND,
                                      MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B,
                                      REL0, ROT_KIND, FIXED_DIRECTION, DIRECTION, SCREW, SCREW_ADVANCE0,
@@ -46,9 +48,12 @@ GROUND_NONE, GROUND_PRESCRIBED, GROUND_INPUT = 0, 1, 2
 # The entries of P[DIMS] (Kernel.__init__ writes them): velocity coordinates n, constraint rows m,
 # the band's lower and upper widths, whether gravity is declared, the dimension, coordinates nq,
 # the ground motion's mode and the offset of its inputs among the held inputs, the axes (0 = x) of
-# the intrinsic sequence of the 3D bodies' Euler-angle outputs.
+# the intrinsic sequence of the 3D bodies' Euler-angle outputs, how many translational elements have
+# a screw efficiency (device.efficiency: their mode is resolved by repeated solves, :func:`accelerations`)
+# and how many calls kept a solve whose modes did not settle (written by the kernels).
 N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND_OFFSET, EULER_I, EULER_J, \
-    EULER_K = range(12)
+    EULER_K, EFFICIENT, UNSETTLED = range(14)
+
 # Status codes of the integrators.
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED, GIMBAL_LOCK = range(9)
 
@@ -568,15 +573,26 @@ def band_solve(AB, b, kl):
 @njit(cache=True)
 def accelerations(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out):
     """Eq. (33) at (t, q, v) and the elements' internal states z: out[:n] = q̈, out[n:] = λ
-    (original ordering). Returns a status code."""
+    (original ordering). Returns a status code.
+
+    With screw efficiencies (dims[EFFICIENT] > 0) the system is solved in each one's stored mode,
+    the modes are checked against the solved L̈ (:func:`_settle_of`) and, where one flipped, solved
+    again (inerter.elements.device: exact, two solves for one such element), at most
+    device.MODE_SOLVES times; a call whose modes do not settle keeps the last solve and is counted (dims[UNSETTLED])."""
     P = _unowned(P)                 # entered from Python (_unowned)
     perm = P[PERM]
     dims = P[DIMS]
-    status = _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
-    if not band_solve(AB, rhs, dims[KL]):
-        return SINGULAR
-    for i in range(out.shape[0]):
-        out[i] = rhs[perm[i]]
+    for attempt in range(MODE_SOLVES):
+        status = _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
+        if not band_solve(AB, rhs, dims[KL]):
+            return SINGULAR
+        for i in range(out.shape[0]):
+            out[i] = rhs[perm[i]]
+        if not rarely(dims[EFFICIENT] != 0):
+            return status
+        if _settle_of(q, v, out, P) == 0:
+            return status
+    dims[UNSETTLED] += 1
     return status
 
 
@@ -651,6 +667,22 @@ def state_rates2(q, v, z, qdd, P, dz):
 
 
 @njit(cache=True)
+def settle2(q, v, qdd, P):
+    """Set each screw efficiency's mode of a 2D scene from the solved accelerations q̈
+    (inerter.elements.inerter.settle); returns how many changed."""
+    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    changed = 0
+    for e in range(el_int.shape[0]):
+        if el_real[e, EFFICIENCY] == 0.0:
+            continue
+        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
+            q, v, e, el_int, el_real, pbody, ploc)
+        Ldot, an, perp2 = axial_scalars(rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
+        changed += settle(el_real[e], L, Ldot, an, perp2, _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey))
+    return changed
+
+
+@njit(cache=True)
 def signal_values(q, v, z, qdd, P, out):
     """Every output at one state y = [q, v, z] (:func:`signal_values2`, :func:`signal_values3`).
     Returns a status code."""
@@ -689,9 +721,10 @@ def signal_values2(q, v, z, qdd, P, out):
         if meets:
             status = TERMINALS_MEET
         F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
+        gq = _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
         if b != 0.0:
             # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 17-19): the inertance part of F = b d²L/dt², Eq. (9) / (8)
-            F += b * _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
+            F += b * gq
         x = _states(z, el_int, e)
         if rarely(el_int[e, STATES] != 0):
             F += law.state_force(kind, el_real[e], L, along, x)
@@ -703,7 +736,9 @@ def signal_values2(q, v, z, qdd, P, out):
         out[k + 1] = along
         out[k + 2] = F
         k += 3
-        k = law.extra_outputs(kind, el_real[e], L, along, x, out, k)     # a device's outputs, if declared
+        if rarely(el_real[e, DEVICE] != 0.0):                          # a device's outputs
+            _, an, perp2 = axial_scalars(rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
+            k = law.extra_outputs(kind, el_real[e], L, along, an, perp2, gq, x, out, k)
     for e in range(rot_int.shape[0]):
         ia, ib, phi, w = _rotational2(q, v, e, rot_int)
         kind = rot_int[e, ROT_KIND]
@@ -871,6 +906,17 @@ def _state_rates_by_dimension(q, v, z, qdd, P, dz):
     if is_spatial(P):
         return lambda q, v, z, qdd, P, dz: state_rates3(q, v, z, qdd, P, dz)
     return lambda q, v, z, qdd, P, dz: state_rates2(q, v, z, qdd, P, dz)
+
+
+def _settle_of(q, v, qdd, P):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_settle_of, inline="always")
+def _settle_by_dimension(q, v, qdd, P):
+    if is_spatial(P):
+        return lambda q, v, qdd, P: settle3(q, v, qdd, P)
+    return lambda q, v, qdd, P: settle2(q, v, qdd, P)
 
 
 def _qdot_of(q, v, P, out):
@@ -1619,6 +1665,24 @@ def state_rates3(q, v, z, qdd, P, dz):
 
 
 @njit(cache=True)
+def settle3(q, v, qdd, P):
+    """Set each screw efficiency's mode of a 3D scene from the solved accelerations q̈ (as
+    :func:`settle2`); returns how many changed."""
+    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    ga = np.empty(6)
+    gb = np.empty(6)
+    changed = 0
+    for e in range(el_int.shape[0]):
+        if el_real[e, EFFICIENCY] == 0.0:
+            continue
+        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
+            q, v, e, el_int, el_real, pbody, ploc, ga, gb)
+        Ldot, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+        changed += settle(el_real[e], L, Ldot, an, perp2, _gq3(qdd, ba, bb, ga, gb))
+    return changed
+
+
+@njit(cache=True)
 def signal_values3(q, v, z, qdd, P, out):
     """Every point's position and velocity (6 per point), every translational element's s_rel,
     v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd) and its
@@ -1664,9 +1728,10 @@ def signal_values3(q, v, z, qdd, P, out):
         if meets:
             status = TERMINALS_MEET
         F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+        gq = _gq3(qdd, ba, bb, ga, gb)
         if b != 0.0:
             # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 19, 25): the inertance part of F = b d²L/dt², Eq. (9) / (8)
-            F += b * _gq3(qdd, ba, bb, ga, gb)
+            F += b * gq
         x = _states(z, el_int, e)
         if rarely(el_int[e, STATES] != 0):
             F += law.state_force(kind, el_real[e], L, along, x)
@@ -1678,7 +1743,9 @@ def signal_values3(q, v, z, qdd, P, out):
         out[k + 1] = along
         out[k + 2] = F
         k += 3
-        k = law.extra_outputs(kind, el_real[e], L, along, x, out, k)     # a device's outputs, if declared
+        if rarely(el_real[e, DEVICE] != 0.0):                          # a device's outputs
+            _, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+            k = law.extra_outputs(kind, el_real[e], L, along, an, perp2, gq, x, out, k)
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
         energy += law.rotational_energy(rot_int[e, ROT_KIND], rot_real[e], phi, w)

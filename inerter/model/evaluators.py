@@ -73,7 +73,6 @@ class TranslationalElement:
             row[layout.SLIDER] = 1.0
             row[layout.DIRECTION:layout.DIRECTION + len(self.slider_axis)] = self.slider_axis
         self.row = row
-        self.inertance = self._inertance(row)
         # the kind's outputs beyond s_rel, v_rel, f (a device's), by its law extra_outputs
         self.extra = len(device.outputs()) if device is not None else 0
         self._extra = getattr(law, "extra_outputs", None)
@@ -85,6 +84,29 @@ class TranslationalElement:
         if self.n_states:
             self._state_force, self._state_energy, self._state_rates = (
                 law.state_force.py_func, law.state_energy.py_func, law.state_rates.py_func)
+
+    @property
+    def inertance(self) -> float:
+        """The factor of gᵀq̈ in its law (b; a screw efficiency's b/η_f or b η_b in its current mode)."""
+        return self._inertance(self.row)
+
+    def efficient(self) -> bool:
+        """Whether it has a screw efficiency, whose mode the solve settles (:meth:`settle`)."""
+        return self.row[layout.EFFICIENCY] != 0.0
+
+    def _scalars(self, geo, a=None):
+        """(L, L̇, a_n·r̂, |ṙ⊥|², gᵀq̈) of the geometry `geo` at accelerations `a` (gᵀq̈ = 0 without)."""
+        r, rdot, a_n, H, L, rhat = geo
+        rd, an, e = np.zeros(3), np.zeros(3), np.zeros(3)       # 2D vectors padded with z = 0
+        rd[:len(rdot)], an[:len(a_n)], e[:len(rhat)] = rdot, a_n, rhat
+        Ldot, an_r, perp2 = axial_scalars(*rd, *an, *e)
+        gq = 0.0 if a is None else float((H @ a[self.pair.dofs]) @ rhat)
+        return L, Ldot, an_r, perp2, gq
+
+    def settle(self, q, v, a) -> int:
+        """Set its efficiency's mode from the solved accelerations `a` (inerter.elements.inerter.settle,
+        uncompiled); 1 where it changed."""
+        return elements.MODULE[self.kind].settle.py_func(self.row, *self._scalars(self.geometry(q, v), a))
 
     def geometry(self, q, v):
         r, rdot, a_n, H = self.pair.evaluate(q, v)
@@ -134,7 +156,8 @@ class TranslationalElement:
         if self._extra is None:
             return values
         extra = np.zeros(self.extra)
-        self._extra(self.row, L, Ldot, self._x(z), extra, 0)
+        _, _, an_r, perp2, gq = self._scalars(geo, a)
+        self._extra(self.row, L, Ldot, an_r, perp2, gq, self._x(z), extra, 0)
         return values + tuple(float(x) for x in extra)
 
     def block(self, q, v):

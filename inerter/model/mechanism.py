@@ -22,6 +22,7 @@ import numpy as np
 from inerter.model import evaluators as el
 from inerter import elements
 from inerter.elements import layout
+from inerter.elements.device import MODE_SOLVES
 from inerter.common.errors import SceneError, SimulationError
 from inerter.model.joints import make_joint
 from inerter.model.planar import PointKinematics, PointPair
@@ -524,7 +525,17 @@ class Mechanism:
         return M
 
     def accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
-        """Solve Eq. (33) for (v̇, λ) at (t, q, v) and the internal states z (default z0)."""
+        """Solve Eq. (33) for (v̇, λ) at (t, q, v) and the internal states z (default z0); with screw
+        efficiencies, solved again until their modes agree with the solved L̈, as the kernels do
+        (inerter.elements.device, ``kernels.accelerations``; at most MODE_SOLVES solves)."""
+        efficient = [e for e in self.elements if getattr(e, "efficient", None) is not None and e.efficient()]
+        for _ in range(MODE_SOLVES):
+            a, lam = self._accelerations(t, q, v, inputs, alpha, z)
+            if not sum(e.settle(q, v, a) for e in efficient):
+                break
+        return a, lam
+
+    def _accelerations(self, t, q, v, inputs, alpha, z):
         M, Q = self.assemble(t, q, v, inputs, z=z)
         if not self.m:
             return self._solve(M, Q, t), np.zeros(0)

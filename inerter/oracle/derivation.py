@@ -351,6 +351,11 @@ class OracleDevice:
             raise InerterError(f"the oracle derives an inerter device from L(q) and its rate only; "
                                f"device.{states[0]} has internal states (series deflection, dissipated "
                                f"energy), which it does not derive: check such a scene against closed forms")
+        if device.has("efficiency"):
+            from inerter.common.errors import InerterError
+            raise InerterError("the oracle derives an inerter device from its energies and dissipation function; "
+                               "device.efficiency switches b by the sign of L̇·L̈, which no such function gives: "
+                               "check such a scene against closed forms")
         self.flywheel = device.values("flywheel") if device.has("flywheel") else None
         self.friction = device.values("friction") if device.has("friction") else None
         self.stops = device.values("end_stops") if device.has("end_stops") else None

@@ -1,0 +1,295 @@
+"""A screw efficiency of an inerter device (inerter.elements.device, ``device.efficiency``): the
+law and the mode's resolution, the ideal limit, the closed form of a mass on a spring with such an
+inerter in 2D and 3D, the energy balance with the efficiency's loss, the scene errors, and the FMU.
+
+Every reference is named in its test: the closed form (derived in :func:`efficiency_closed_form`),
+the ideal inerter's own run, or the initial energy.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import inerter
+from inerter.common.errors import InerterError, SceneError, SimulationError
+from inerter.elements import device as dev
+from inerter.elements import layout
+from inerter.elements import inerter as inerter_law
+from test_device import OSCILLATOR, _device, _load, _row, _with_device
+
+ROOT = Path(__file__).resolve().parents[1]
+TWO_BAR = ROOT / "scenarios" / "two_bar_2d.toml"
+DOUBLE_PENDULUM = ROOT / "scenarios" / "double_pendulum_3d.toml"
+
+M, B, K, X0, ETA_F, ETA_B = 1.0, 1.0, 100.0, 0.25, 0.8, 0.6
+
+EFFICIENCY = '[DEVICE.efficiency]\nforward = "etaf"\nbackward = "etab"\n'
+LOSS = '[DEVICE.dissipated_energy]\n'
+#: Dense output kept (a "peak" metric), so that the peaks are read at their closed-form times.
+EXPERIMENT = ('\n[experiment]\nstop_time = 3.0\noutput_interval = 0.001\nrtol = 1e-10\natol = 1e-12\n'
+              '\n[[metrics]]\nkind = "peak"\nsignal = "P.r[1]"\nreference = 0.0\n')
+PARAMETERS = f"[parameters]\netaf = {ETA_F}\netab = {ETA_B}\n"
+
+#: OSCILLATOR (test_device) in 3D along the unit axis u = (1, 2, 2)/3: O at the origin, the mass's
+#: centre P at (1 + x0) u from rest, the spring's free length 1 m; every force acts along u through
+#: the centre, so the mass moves on that line, L = 1 + x, and nothing turns it.
+OSCILLATOR_3D = """
+[scene]
+name = "device_1dof_3d"
+dimension = 3
+
+[parameters]
+m = 1.0
+b = 1.0
+k = 100.0
+x0 = 0.25
+
+[ground.points]
+O = [0.0, 0.0, 0.0]
+
+[bodies.mass]
+mass = "m"
+inertia = [1.0, 1.0, 1.0]
+position = ["(1 + x0)/3", "2*(1 + x0)/3", "2*(1 + x0)/3"]
+points = { P = [0, 0, 0] }
+
+[elements.spring]
+type = "spring"
+between = ["O", "P"]
+k = "k"
+length = 1.0
+
+[elements.inerter]
+type = "inerter"
+between = ["O", "P"]
+b = "b"
+"""
+
+
+def efficiency_closed_form(t, x0, m, b, k, eta_f, eta_b):
+    """x(t), and the peaks (t_n, x_n), of m ẍ + k x + F = 0 with F = b_eff ẍ from rest at x0.
+
+    While |x| falls toward 0 the speed grows (ẋ·ẍ ≥ 0: the terminals drive the flywheel), so
+    b_eff = b/η_f and the motion is harmonic at ω₁ = √(k/(m + b/η_f)): x = x_n cos ω₁τ for a
+    quarter period, reaching 0 at the speed ω₁|x_n|. While |x| grows the speed falls (ẋ·ẍ < 0:
+    the flywheel drives them), b_eff = b η_b, ω₂ = √(k/(m + b η_b)): x = −x_n (ω₁/ω₂) sin ω₂τ' for a
+    quarter period, to the next peak x_{n+1} = −x_n ω₁/ω₂. So each half cycle lasts
+    π/(2ω₁) + π/(2ω₂) and shrinks the amplitude by ω₁/ω₂ = √((m + b η_b)/(m + b/η_f))."""
+    w1, w2 = math.sqrt(k / (m + b / eta_f)), math.sqrt(k / (m + b * eta_b))
+    q1, half = math.pi / (2 * w1), math.pi / (2 * w1) + math.pi / (2 * w2)
+    n = np.floor(t / half)
+    tau = t - n * half
+    xn = x0 * (-w1 / w2) ** n
+    x = np.where(tau <= q1, xn * np.cos(w1 * np.minimum(tau, q1)),
+                 -xn * (w1 / w2) * np.sin(w2 * np.maximum(tau - q1, 0.0)))
+    peaks = [(j * half, x0 * (-w1 / w2) ** j) for j in range(1, int(t[-1] / half) + 1)]
+    return x, peaks, w1, w2
+
+
+def _oscillator(tmp_path, dim=2, loss=False, **overrides):
+    text = OSCILLATOR if dim == 2 else OSCILLATOR_3D
+    text = text.replace("[parameters]\n", PARAMETERS)
+    return _load(tmp_path, _with_device(text, EFFICIENCY + (LOSS if loss else "")) + EXPERIMENT,
+                 name=f"efficiency_{dim}d.toml", **overrides)
+
+
+def _x(r, dim):
+    """The mass's displacement x = L − 1 along the line (s_rel of the spring, in 2D and 3D)."""
+    return r["spring.s_rel"] - 1.0
+
+
+# ------------------------------------------------------------------------------------------------
+# The law and the mode's resolution
+# ------------------------------------------------------------------------------------------------
+def test_the_efficiency_law_and_its_mode():
+    """Closed form: b_eff = b/η_f in the driven mode (L̇·L̈ ≥ 0, also at L̇ = 0), b η_b back-driving;
+    the loss (b_eff − b) L̈ L̇ ≥ 0 in both; settle flips the stored mode once and then agrees."""
+    row = _row(_device(efficiency=dict(forward=0.8, backward=0.6)), b=2.0)
+    for fn in (lambda f, *a: f(*a), lambda f, *a: f.py_func(*a)):
+        r = row.copy()
+        assert r[layout.EFFICIENCY_MODE] == 1.0
+        assert fn(dev.inertance, r) == 2.0 / 0.8
+        assert fn(dev.efficiency_mode, 0.0, -3.0) == 1.0 and fn(dev.efficiency_mode, 0.5, 0.0) == 1.0
+        assert fn(dev.efficiency_mode, -0.5, 2.0) == 0.0
+        assert fn(dev.efficiency_loss, r, 0.5, 2.0) == pytest.approx((2.0 / 0.8 - 2.0) * 1.0, rel=1e-15)
+        assert fn(dev.settle, r, -0.5, 2.0) == 1 and r[layout.EFFICIENCY_MODE] == 0.0
+        assert fn(dev.settle, r, -0.5, 2.0) == 0
+        assert fn(dev.inertance, r) == 2.0 * 0.6
+        assert fn(dev.efficiency_loss, r, -0.5, 2.0) == pytest.approx((2.0 * 0.6 - 2.0) * -1.0, rel=1e-15)
+        # the inerter's force beyond b_eff gᵀq̈ is b_eff (a_n·r̂ + |ṙ⊥|²/L), Eq. (9)
+        assert fn(inerter_law.force, r, 2.0, 0.1, 0.3, 0.8) == pytest.approx(1.2 * (0.3 + 0.8 / 2.0), rel=1e-15)
+
+
+def test_a_turnaround_flips_the_mode_and_one_solve_more_settles_it(tmp_path):
+    """Reference: the closed form's accelerations. At the first peak the mass is at rest (L̇ = 0:
+    driven mode, ẍ = −k x/(m + b/η_f)); just after it the state moves inward, still driven. Starting
+    the kernel in the wrong (back-driving) mode, one call returns the driven mode's ẍ: the second
+    solve settles it (sign(L̈) does not depend on b_eff), and no call is counted unsettled."""
+    model = _oscillator(tmp_path)
+    kernel = model.kernel if hasattr(model, "kernel") else None
+    from inerter.engine import compiled
+    kernel = kernel or compiled.Kernel(model.mechanism)
+    q, v = kernel.q0.copy(), kernel.v0.copy()
+    el_real = kernel.params[4]
+    e = int(np.flatnonzero(el_real[:, layout.EFFICIENCY])[0])
+    for start in (0.0, 1.0):
+        el_real[e, layout.EFFICIENCY_MODE] = start
+        qdd, _ = kernel.accelerations(0.0, q, v)
+        assert el_real[e, layout.EFFICIENCY_MODE] == 1.0
+        assert qdd[0] == pytest.approx(-K * X0 / (M + B / ETA_F), rel=1e-14)
+    v[0] = 0.3                                       # moving outward from x0 > 0: slowing, back-driving
+    qdd, _ = kernel.accelerations(0.0, q, v)
+    assert el_real[e, layout.EFFICIENCY_MODE] == 0.0
+    assert qdd[0] == pytest.approx(-K * X0 / (M + B * ETA_B), rel=1e-14)
+    assert kernel.unsettled == 0
+
+
+# ------------------------------------------------------------------------------------------------
+# The ideal limit
+# ------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("scene, stop_time", [(TWO_BAR, 10.0), (DOUBLE_PENDULUM, 5.0)],
+                         ids=["2d-two-bar", "3d-double-pendulum"])
+def test_efficiencies_of_one_are_the_ideal_inerter(tmp_path, scene, stop_time):
+    """Reference: the ideal scene's own compiled DOP853 run. η_f = η_b = 1: b_eff = b in both modes,
+    so every output the two share agrees to 1e-12 of its range (the paper's two-bar in 2D, with the
+    centripetal term; the 3D double pendulum), and the loss is 0."""
+    ideal = inerter.load(scene).simulate(stop_time=stop_time, metrics=False)
+    device = "[DEVICE.efficiency]\nforward = 1.0\nbackward = 1.0\n"
+    real = _load(tmp_path, _with_device(scene.read_text(encoding="utf-8"), device)).simulate(
+        stop_time=stop_time, metrics=False)
+    assert real.run.extra["path"] == ideal.run.extra["path"] == "compiled"
+    assert np.array_equal(real.time, ideal.time)
+    for name in ideal.names:
+        scale = max(1.0, float(np.max(np.abs(ideal[name]))))
+        assert np.max(np.abs(real[name] - ideal[name])) <= 1e-12 * scale, name
+    assert np.max(np.abs(real["inerter.p_loss"])) == 0.0
+
+
+# ------------------------------------------------------------------------------------------------
+# The closed form, 2D and 3D
+# ------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("dim", [2, 3])
+def test_peaks_and_their_times_follow_the_two_quarter_periods(tmp_path, dim):
+    """Closed form (efficiency_closed_form): m = 1 kg, b = 1 kg, k = 100 N/m, x0 = 0.25 m, η_f = 0.8,
+    η_b = 0.6: ω₁ = 6.667, ω₂ = 7.906 rad/s, half cycles of 0.4343 s, each peak 0.8433 of the last.
+    At DOP853 rtol 1e-10 the dense output at the closed-form peak times t_n gives x_n to 1e-7
+    relative and L̇ = 0 to 1e-7 x_n ω₂, and x(t) at every sample is the piecewise-harmonic closed
+    form to 1e-7 x0 (a shifted peak time would show as an error ω x δt: the times agree to
+    ~1e-8 s). E.mode is 1 while |x| falls, 0 while it grows."""
+    model = _oscillator(tmp_path, dim)
+    r = model.simulate()
+    assert r.status == "ok", r.message
+    x = _x(r, dim)
+    exact, peaks, w1, w2 = efficiency_closed_form(r.time, X0, M, B, K, ETA_F, ETA_B)
+    assert w1 / w2 == pytest.approx(math.sqrt((M + B * ETA_B) / (M + B / ETA_F)), rel=1e-15)
+    assert len(peaks) == 6
+    assert np.max(np.abs(x - exact)) <= 1e-7 * X0
+    s, v = r.dense("spring.s_rel"), r.dense("spring.v_rel")
+    for tn, xn in peaks:
+        assert s(tn)[0] - 1.0 == pytest.approx(xn, rel=1e-7), tn
+        assert abs(v(tn)[0]) <= 1e-7 * abs(xn) * w2, tn
+    inward = (x * r["spring.v_rel"] < 0) & (np.abs(r["spring.v_rel"]) > 1e-6)
+    outward = (x * r["spring.v_rel"] > 0) & (np.abs(r["spring.v_rel"]) > 1e-6)
+    assert np.all(r["inerter.mode"][inward] == 1.0) and np.all(r["inerter.mode"][outward] == 0.0)
+    assert r.model.kernel.unsettled == 0 if hasattr(r.model, "kernel") else True
+
+
+def test_energy_plus_the_efficiency_loss_is_the_initial_energy(tmp_path):
+    """Reference: the initial energy ½ k x0². With dissipated_energy declared, energy + E.e_loss
+    stays ½ k x0² to 1e-9 relative over 3 s (DOP853, rtol 1e-10), while the energy itself falls
+    by (1 − (ω₁/ω₂)^12) of it over six half cycles... at least 80 %; E.p_loss ≥ 0 throughout and
+    equals (b_eff − b) L̈ L̇ from the outputs: b_eff L̈ = f (the inerter's force)."""
+    r = _oscillator(tmp_path, loss=True).simulate()
+    assert r.status == "ok", r.message
+    E0 = 0.5 * K * X0 ** 2
+    assert np.max(np.abs(r["energy"] + r["inerter.e_loss"] - E0)) <= 1e-9 * E0
+    assert r["energy"][-1] < 0.5 * E0
+    assert np.min(r["inerter.p_loss"]) >= -1e-12 * E0
+    beff = np.where(r["inerter.mode"] == 1.0, B / ETA_F, B * ETA_B)
+    Lddot = r["inerter.f"] / beff
+    np.testing.assert_allclose(r["inerter.p_loss"], (beff - B) * Lddot * r["inerter.v_rel"], rtol=1e-12,
+                               atol=1e-12 * E0)
+
+
+# ------------------------------------------------------------------------------------------------
+# Scene errors and description
+# ------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("device, field, expected", [
+    ("[DEVICE.efficiency]\nforward = 0.0\nbackward = 0.5\n", "elements.inerter.device.efficiency.forward", "> 0"),
+    ("[DEVICE.efficiency]\nforward = 0.9\nbackward = 1.2\n", "elements.inerter.device.efficiency.backward",
+     "≤ 1"),
+    ("[DEVICE.efficiency]\nforward = 0.9\n", "elements.inerter.device.efficiency.backward", ""),
+    ("[DEVICE.efficiency]\nforward = 0.9\nbackward = 0.8\n[DEVICE.compliance]\nstiffness = 1e3\n",
+     "elements.inerter.device.efficiency.forward", "no device.efficiency beside device.compliance"),
+])
+def test_efficiency_errors_name_the_field_value_and_expectation(tmp_path, device, field, expected):
+    """The scene reader's one-line error names the field, and what was expected."""
+    with pytest.raises(SceneError) as info:
+        _load(tmp_path, _with_device(OSCILLATOR, device))
+    text = str(info.value)
+    assert field in text and expected in text and "\n" not in text.strip(), text
+
+
+def test_efficiency_with_a_mount_is_refused_and_the_oracle_and_linearisation_refuse_it(tmp_path):
+    """A mount beside it is a scene error naming device.mount; the oracle, which derives a device
+    from energies and a dissipation function, and the linearisation refuse it with the reason."""
+    text = _with_device(DOUBLE_PENDULUM.read_text(encoding="utf-8"),
+                        "[DEVICE.efficiency]\nforward = 0.9\nbackward = 0.8\n[DEVICE.mount]\naxis = [0, 0, 1]\n")
+    with pytest.raises(SceneError, match="device.mount"):
+        _load(tmp_path, text)
+    model = _oscillator(tmp_path)
+    with pytest.raises(InerterError, match="device.efficiency"):
+        model.oracle().simulate(stop_time=0.1, metrics=False)
+    from inerter.engine.equilibrium import linearize
+    with pytest.raises(SimulationError, match="efficiency"):
+        linearize(model.mechanism)
+
+
+def test_describe_and_outputs_list_the_efficiency(tmp_path):
+    """describe names the effect and its numbers; the outputs are the loss and the mode."""
+    model = _oscillator(tmp_path, loss=True)
+    line = next(t for t in model.terms() if "device" in t)
+    assert "efficiency (forward = 0.8, backward = 0.6)" in line, line
+    names = [o["name"] for o in model.output_info() if o["name"].startswith("inerter.")]
+    assert names == ["inerter.s_rel", "inerter.v_rel", "inerter.f", "inerter.p_loss", "inerter.mode",
+                     "inerter.e_loss"]
+
+
+# ------------------------------------------------------------------------------------------------
+# Through the FMU
+# ------------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def efficiency_fmu(tmp_path_factory):
+    pytest.importorskip("fmpy")
+    from inerter.fmu import build as fmu_build
+    path = tmp_path_factory.mktemp("efficiency_scene")
+    scene = path / "efficiency_2d.toml"
+    scene.write_text(_with_device(OSCILLATOR.replace("[parameters]\n", PARAMETERS), EFFICIENCY + LOSS)
+                     + EXPERIMENT, encoding="utf-8")
+    return scene, fmu_build.build(scene, tmp_path_factory.mktemp("efficiency_fmu"), force=True)
+
+
+def test_the_fmu_validates_tunes_the_efficiency_and_matches_the_solver(efficiency_fmu):
+    """The FMU validates with fmpy; η_f and η_b are tunable parameters; its run at η_f = 0.7,
+    η_b = 0.5 matches the solver's at the same values to 1e-8 (positions, the inerter's force, the
+    mode and e_loss), and the solver follows the closed form at those values to 1e-7 x0."""
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+    from inerter.fmu.run import simulate_fmu
+    scene, fmu = efficiency_fmu
+    assert validate_fmu(str(fmu)) == []
+    md = {v.name: v for v in read_model_description(str(fmu)).modelVariables}
+    for name in ("etaf", "etab"):
+        assert md[name].causality == "parameter" and md[name].variability == "tunable", name
+    assert {"inerter.mode", "inerter.p_loss", "inerter.e_loss"} <= set(md)
+    values = {"etaf": 0.7, "etab": 0.5}
+    r = simulate_fmu(scene, values, stop_time=2.0, step=0.01, fmu_path=fmu, metrics=False)
+    assert r.status == "ok", r.message
+    ref = inerter.load(scene, **values).simulate(stop_time=2.0, output_interval=0.01, metrics=False)
+    for name in ("P.r[1]", "inerter.f", "inerter.mode", "inerter.e_loss"):
+        assert np.max(np.abs(r[name] - ref[name])) <= 1e-8, name
+    exact, _, _, _ = efficiency_closed_form(ref.time, X0, M, B, K, 0.7, 0.5)
+    assert np.max(np.abs(ref["P.r[1]"] - exact)) <= 1e-7 * X0

@@ -581,8 +581,8 @@ class Kernel:
     def signal_reads(self, index):
         """(needs the accelerations, the state components it reads) of the signal at `index`: a
         point's coordinate reads its body's coordinates (and velocities, for a velocity); an
-        element's force needs q̈ where its law has an inertance; any other signal reads the whole
-        state."""
+        element's force needs q̈ where its law has an inertance, and a screw efficiency's mode and
+        loss need it; any other signal reads the whole state."""
         flat = self.flat
         width = 2 * flat["dim"]
         ny = self.ny
@@ -607,6 +607,9 @@ class Kernel:
         for e, (row_int, row_real) in enumerate(zip(flat["el_int"], flat["el_real"])):
             if name == f"{flat['el_names'][e]}.f":
                 need = adds_mass(row_int, row_real)
+            elif row_real[layout.EFFICIENCY] != 0.0 and name in (f"{flat['el_names'][e]}.p_loss",
+                                                                 f"{flat['el_names'][e]}.mode"):
+                need = True             # a screw efficiency's mode and loss: those of the solved L̈
         return need, np.arange(ny, dtype=np.int64)
 
     def signal_column(self, index, times, states, inputs=None, alpha=0.0):

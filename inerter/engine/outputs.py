@@ -41,11 +41,14 @@ class Signals:
             spec = elements.outputs(mech.scene.elements[e.name])
             # an element whose law has an inertance reports a force that depends on q̈
             needs_a = e.kind == "inerter" or getattr(e, "inertance", 0.0) != 0.0
-            # of its three outputs, only the force reads q̈ (the distance and its rate do not)
+            # of its three outputs, only the force reads q̈ (the distance and its rate do not); a screw
+            # efficiency's mode and loss are those of the solved L̈ (inerter.elements.device)
+            efficient = getattr(e, "efficient", None) is not None and e.efficient()
             self._group([(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}") for suffix, unit, text in spec],
                         needs_a, lambda t, q, v, a, z, e=e, k=len(spec): (
                             e.outputs(q, v, a, z) if getattr(e, "n_states", 0) else e.outputs(q, v, a))[:k],
-                        reads=(False, False, needs_a) + (False,) * (len(spec) - 3))
+                        reads=(False, False, needs_a) + tuple(efficient and suffix in ("p_loss", "mode")
+                                                              for suffix, _, _ in spec[3:]))
         if mech.dim == 3:
             for bname in mech.body_names:
                 self._body(mech, bname)

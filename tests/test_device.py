@@ -135,14 +135,15 @@ def test_inerter_law_adds_the_device_and_its_outputs():
     assert names == ["w_flywheel", "f_friction", "f_stop", "p_loss"]
     expected = [2 * math.pi / 0.02 * Ldot, friction, stop, friction * Ldot + stop_loss]
     none = np.zeros(0)                               # no internal states
-    for extra in (lambda out: dispatch.extra_outputs(code, row, L, Ldot, none, out, 0),
-                  lambda out: inerter_law.extra_outputs.py_func(row, L, Ldot, none, out, 0)):
+    gq = 0.3                                         # gᵀq̈: read only by a screw efficiency's outputs
+    for extra in (lambda out: dispatch.extra_outputs(code, row, L, Ldot, an, perp2, gq, none, out, 0),
+                  lambda out: inerter_law.extra_outputs.py_func(row, L, Ldot, an, perp2, gq, none, out, 0)):
         out = np.full(6, np.nan)
         assert extra(out) == 4
         np.testing.assert_allclose(out[:4], expected, rtol=1e-13)
     ideal = _row(dev.Device(()))
     ideal[layout.DEVICE] = 0.0
-    assert dispatch.extra_outputs(code, ideal, L, Ldot, np.zeros(0), np.zeros(1), 3) == 3
+    assert dispatch.extra_outputs(code, ideal, L, Ldot, an, perp2, gq, np.zeros(0), np.zeros(1), 3) == 3
 
 
 # ------------------------------------------------------------------------------------------------

@@ -73,11 +73,17 @@ def main() -> None:
              "| η_f | η_b | rtol | steps | evaluations | steps within 0.02 s of a peak | "
              "smallest there (s) | median step (s) | max error (m) | unsettled calls |",
              "|---|---|---|---|---|---|---|---|---|---|"]
+    notes = ["", "With η < 1 the acceleration jumps at each peak (L̇ = 0: b η_b → b/η_f). DOP853 meets each jump by "
+             "its error control: it rejects the steps that straddle it and shrinks them until the jump falls in a "
+             "step of about rtol times the previous one, then grows them again; the error stays at the tolerance "
+             "(compare the ideal rows), at several times the steps and evaluations. The crossings of x = 0, where "
+             "L̈ changes sign at L̇ ≠ 0, cost nothing: the force is continuous there. Every call settled its mode "
+             "(one efficiency element: at most two solves)."]
     for w in rows:
         lines.append(f"| {w['etaf']:g} | {w['etab']:g} | {w['rtol']:g} | {w['steps']} | {w['evaluations']} | "
                      f"{w['near']} | {w['h_near']:.2e} | {w['h_median']:.2e} | {w['error']:.1e} | "
                      f"{w['unsettled']} |")
-    text = "\n".join(lines) + "\n"
+    text = "\n".join(lines + notes) + "\n"
     print(text)
     if args.out:
         (args.out / "efficiency_steps.md").write_text(text, encoding="utf-8")

@@ -76,7 +76,8 @@ The force is continuous where L̈ changes sign at L̇ ≠ 0 (b_eff L̈ → 0 fro
 changes sign with L̈ ≠ 0 (a turnaround) b_eff jumps from b η_b to b/η_f, and F and q̈ jump, as at a
 Coulomb friction's reversal: the integrator meets the jump by its error control, which shortens the
 steps that straddle it (no event: the state stays continuous, only q̈ jumps; the steps are measured
-in docs/hard_cases.md). Neither series compliance nor a mount goes with it (:func:`check_device`).
+in docs/benchmarks/efficiency_steps.md: at rtol 1e-10 on the 1-DOF case, 303 steps in 3 s against
+64 for the ideal inerter, the smallest 4e-11 s, the error still at the tolerance). Neither series compliance nor a mount goes with it (:func:`check_device`).
 
 **End stops** (``device.end_stops``): stroke limits L_min and L_max. Past one, by the penetration
 δ = L_min − L (or L − L_max) > 0 at the rate δ̇, a Hunt-Crossley contact force pushes back:

@@ -15,6 +15,7 @@ from inerter.engine import metrics as metric_fns
 from inerter.engine.events import declares_events, device_events
 from inerter.engine.equilibrium import natural_frequencies, static_equilibrium
 from inerter.model.mechanism import Mechanism
+from inerter.elements.device import MODE_SOLVES
 from inerter.oracle import OracleElement
 from inerter.engine.outputs import Signals
 from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
@@ -91,15 +92,18 @@ class Model:
         from inerter.engine.tables import untunable_changes
         from inerter.scene.changes import differences
         out = []
-        trials = [(p.name, 1.5 * p.value + 1.0) for p in self.scene.parameters.values()]
-        trials += [(e["name"], not e["value"]) for e in self.effect_info()]
-        for name, value in trials:
-            try:
-                changed = load_scene(self.path, {**self.overrides, name: value})
-            except SceneError:
-                continue                     # a changed value the scene refuses: keep it fixed
-            if differences(self.scene, changed) and not untunable_changes(self.scene, changed):
-                out.append(name)
+        # a changed value above and one below (a bounded number, an efficiency η ≤ 1, refuses the first)
+        trials = [(p.name, (1.5 * p.value + 1.0, 0.5 * p.value)) for p in self.scene.parameters.values()]
+        trials += [(e["name"], (not e["value"],)) for e in self.effect_info()]
+        for name, values in trials:
+            for value in values:
+                try:
+                    changed = load_scene(self.path, {**self.overrides, name: value})
+                except SceneError:
+                    continue                 # a changed value the scene refuses: try the next one
+                if differences(self.scene, changed) and not untunable_changes(self.scene, changed):
+                    out.append(name)
+                break
         return out
 
     def input_info(self):
@@ -291,9 +295,15 @@ class Result:
 
     @property
     def warnings(self) -> list[str]:
-        """The scene's warnings, and one for each derived output that has no value (NaN) at some
+        """The scene's warnings, one where screw efficiencies' modes did not settle at some
+        evaluations (the run's count), and one for each derived output that has no value (NaN) at some
         samples: its expression is undefined there (a square root of a negative number, 0/0)."""
         notes = list(self.model.scene.warnings)
+        unsettled = self.run.extra.get("unsettled", 0)
+        if unsettled:
+            notes.append(f"{self.model.source}: device.efficiency: {unsettled} evaluations of the equations of "
+                         f"motion kept a solve whose efficiency modes did not settle in {MODE_SOLVES} solves "
+                         f"(several efficiency elements whose modes are coupled; inerter.elements.device)")
         for d in self.model.signals.derived:
             try:
                 column = self[d.name]

@@ -64,12 +64,16 @@ x = x₀ − b_eff K₀⁻¹G L̈ with x₀ = K₀⁻¹f₀, and L̈ = Gᵀx + c
     L̈ (1 + b_eff s) = r,   s = Gᵀ K₀⁻¹ G = gᵀ P g ≥ 0,   r = Gᵀx₀ + c,
 
 P the velocity block of K₀⁻¹, the inverse mass matrix projected on the joints' tangent space
-(positive semidefinite). So sign(L̈) = sign(r) does not depend on b_eff: the engine solves once in
+(positive semidefinite; where K₀ is singular, the element's own inertance holding a coordinate,
+the same follows in the limit of a small mass added there). So sign(L̈) = sign(r) does not depend
+on b_eff: the engine solves once in
 the mode of the last call, computes the element's L̈, and where the mode disagrees with sign(L̇·L̈)
 it flips it (:func:`settle`) and solves again, which then agrees: at most two solves for one such
 element. For several, each solve flips every element that disagrees; the signs are coupled through
 P, so the engine iterates up to :data:`MODE_SOLVES` solves and, if the modes still do not
-settle, keeps the last solve and counts the call (``Kernel.unsettled``). A scene without an
+settle, keeps the last solve and counts the call (``Kernel.unsettled``; a run's count is in
+``run.extra["unsettled"]``, and its result warns of it). The numpy path (``Mechanism.accelerations``)
+does the same. A scene without an
 efficiency takes no extra solve (the engine tests a count of such elements, ``dims[EFFICIENT]``).
 
 The force is continuous where L̈ changes sign at L̇ ≠ 0 (b_eff L̈ → 0 from both sides). Where L̇
@@ -77,7 +81,9 @@ changes sign with L̈ ≠ 0 (a turnaround) b_eff jumps from b η_b to b/η_f, an
 Coulomb friction's reversal: the integrator meets the jump by its error control, which shortens the
 steps that straddle it (no event: the state stays continuous, only q̈ jumps; the steps are measured
 in docs/benchmarks/efficiency_steps.md: at rtol 1e-10 on the 1-DOF case, 303 steps in 3 s against
-64 for the ideal inerter, the smallest 4e-11 s, the error still at the tolerance). Neither series compliance nor a mount goes with it (:func:`check_device`).
+64 for the ideal inerter, the smallest 4e-11 s, the error still at the tolerance). Neither series
+compliance nor a mount goes with it (:func:`check_device`); the oracle and the linearisation
+refuse it (no energy or dissipation function gives it; b_eff is not smooth).
 
 **End stops** (``device.end_stops``): stroke limits L_min and L_max. Past one, by the penetration
 δ = L_min − L (or L − L_max) > 0 at the rate δ̇, a Hunt-Crossley contact force pushes back:

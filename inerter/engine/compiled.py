@@ -814,9 +814,11 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         run.extra["path"] = f"numpy ({why})"
         return run
     kernel = _kernel_for(mech)
+    unsettled = kernel.unsettled
     if settings.method not in COMPILED_METHODS or settings.constraint == "projection":
         run = integrate(_KernelMechanism(mech, kernel), settings, inputs)
-        run.extra.update(path="scipy integrator, compiled right-hand side", kernel=kernel)
+        run.extra.update(path="scipy integrator, compiled right-hand side", kernel=kernel,
+                         unsettled=kernel.unsettled - unsettled)
         return run
 
     grid = np.arange(0.0, settings.stop_time + 0.5 * settings.output_interval, settings.output_interval)
@@ -884,7 +886,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         sol = DenseOutput(_RK_CODE[settings.method], keep[0], keep[1], int(keep[2][_k.KEPT_COUNT]))
     run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
                       int(evals), cpu, None)
-    run.extra.update(path="compiled", kernel=kernel)
+    run.extra.update(path="compiled", kernel=kernel, unsettled=kernel.unsettled - unsettled)
     return run
 
 

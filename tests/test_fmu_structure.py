@@ -253,19 +253,25 @@ def tables(model) -> dict:
 
 
 def table_tunable(scene: Path) -> set[str]:
-    """The parameters whose change (× 1.5 + 1) and the effect switches whose flip move only the
-    numbers the kernels read at each evaluation: element coefficients (column COEFFICIENT), the
-    centripetal column and an inerter device's columns, a point force's value, amplitude, frequency, a PD actuator's gains; the
-    initial state and every other table entry stay."""
+    """The parameters whose change (× 1.5 + 1, or × 0.5 where the scene refuses that) and the effect
+    switches whose flip move only the numbers the kernels read at each evaluation: element
+    coefficients (column COEFFICIENT), the centripetal column and an inerter device's columns, a
+    point force's value, amplitude, frequency, a PD actuator's gains; the initial state and every
+    other table entry stay."""
     base = inerter.load(scene)
     flat0 = tables(base)
     out = set()
-    trials = [(p["name"], 1.5 * p["value"] + 1.0) for p in base.parameter_info()]
-    trials += [(e["name"], not e["value"]) for e in base.effect_info()]
-    for name, trial in trials:
-        try:
-            other = inerter.load(scene, **{name: trial})
-        except SceneError:
+    trials = [(p["name"], (1.5 * p["value"] + 1.0, 0.5 * p["value"])) for p in base.parameter_info()]
+    trials += [(e["name"], (not e["value"],)) for e in base.effect_info()]
+    for name, values in trials:
+        other = None
+        for trial in values:
+            try:
+                other = inerter.load(scene, **{name: trial})
+                break
+            except SceneError:
+                continue
+        if other is None:
             continue
         flat1 = tables(other)
         if not (np.array_equal(base.mechanism.q0, other.mechanism.q0)
@@ -275,6 +281,7 @@ def table_tunable(scene: Path) -> set[str]:
         device = list(range(layout.DEVICE, layout.FLUID_QUADRATIC + 1))
         device += list(range(layout.INERTIA, layout.MOUNT_AXIS + 3))       # its masses, inertias and mount
         device += list(range(layout.SERIES, layout.LOSS + 1))             # its series connection
+        device += list(range(layout.EFFICIENCY, layout.EFFICIENCY_MODE + 1))  # its screw efficiency
         tunable_columns = {"el_real": [layout.COEFFICIENT, layout.CENTRIPETAL] + device,
                            "rot_real": [layout.COEFFICIENT],
                            "fa_real": [dim + layout.F_VALUE, dim + layout.F_AMPLITUDE, dim + layout.F_FREQUENCY],

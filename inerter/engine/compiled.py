@@ -816,10 +816,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     kernel = _kernel_for(mech)
     unsettled = kernel.unsettled
     if settings.method not in COMPILED_METHODS or settings.constraint == "projection":
-        run = integrate(_KernelMechanism(mech, kernel), settings, inputs)
-        run.extra.update(path="scipy integrator, compiled right-hand side", kernel=kernel,
-                         unsettled=kernel.unsettled - unsettled)
-        return run
+        return _kernel_run(integrate(_KernelMechanism(mech, kernel), settings, inputs), kernel,
+                           "scipy integrator, compiled right-hand side", unsettled)
 
     grid = np.arange(0.0, settings.stop_time + 0.5 * settings.output_interval, settings.output_interval)
     grid[-1] = min(grid[-1], settings.stop_time)
@@ -886,7 +884,14 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         sol = DenseOutput(_RK_CODE[settings.method], keep[0], keep[1], int(keep[2][_k.KEPT_COUNT]))
     run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
                       int(evals), cpu, None)
-    run.extra.update(path="compiled", kernel=kernel, unsettled=kernel.unsettled - unsettled)
+    return _kernel_run(run, kernel, "compiled", unsettled)
+
+
+def _kernel_run(run, kernel, path, unsettled):
+    """`run`, its extra saying its path, its kernel and how many of its evaluations kept a solve
+    whose screw efficiencies' modes did not settle (the kernel's count, which was `unsettled` at
+    its start)."""
+    run.extra.update(path=path, kernel=kernel, unsettled=kernel.unsettled - unsettled)
     return run
 
 

@@ -302,7 +302,7 @@ class Result:
         unsettled = self.run.extra.get("unsettled", 0)
         if unsettled:
             notes.append(f"{self.model.source}: device.efficiency: {unsettled} evaluations of the equations of "
-                         f"motion kept a solve whose efficiency modes did not settle in {MODE_SOLVES} solves "
+                         f"motion kept a solve whose efficiency modes did not settle in {MODE_SOLVES} checks "
                          f"(several efficiency elements whose modes are coupled; inerter.elements.device)")
         for d in self.model.signals.derived:
             try:

@@ -70,9 +70,10 @@ on b_eff: the engine solves once in
 the mode of the last call, computes the element's L̈, and where the mode disagrees with sign(L̇·L̈)
 it flips it (:func:`settle`) and solves again, which then agrees: at most two solves for one such
 element. For several, each solve flips every element that disagrees; the signs are coupled through
-P, so the engine iterates up to :data:`MODE_SOLVES` solves and, if the modes still do not
-settle, keeps the last solve and counts the call (``Kernel.unsettled``; a run's count is in
-``run.extra["unsettled"]``, and its result warns of it). The numpy path (``Mechanism.accelerations``)
+P, so the engine checks and solves again up to :data:`MODE_SOLVES` times and, if the modes still
+do not settle, solves once more in the modes last set, keeps that solve (its force and the stored
+modes agree; its L̈ may ask for other modes) and counts the call (``Kernel.unsettled``; a run's
+count is in ``run.extra["unsettled"]``, and its result warns of it). The numpy path (``Mechanism.accelerations``)
 does the same. A scene without an
 efficiency takes no extra solve (the engine tests a count of such elements, ``dims[EFFICIENT]``).
 
@@ -180,8 +181,9 @@ from inerter.elements.layout import (BACKLASH, COEFFICIENT, COULOMB, DEVICE, EFF
 # entry points below, and those are called, not inlined, from the inerter's law: an ideal inerter's
 # kernels then hold only the test of row[DEVICE] and a call never made, not the device's code.
 # ------------------------------------------------------------------------------------------------
-#: The most solves of Eq. (33) per evaluation that resolve the screw efficiencies' modes (the engine's
-#: and the numpy path's): two suffice for one such element, whose sign of L̈ does not depend on its mode.
+#: How many times an evaluation checks the screw efficiencies' modes against a solve of Eq. (33) and
+#: solves again (the engine's and the numpy path's): once suffices for one such element, whose sign of
+#: L̈ does not depend on its mode.
 MODE_SOLVES = 8
 
 

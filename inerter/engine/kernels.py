@@ -576,23 +576,39 @@ def accelerations(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out):
     (original ordering). Returns a status code.
 
     With screw efficiencies (dims[EFFICIENT] > 0) the system is solved in each one's stored mode,
-    the modes are checked against the solved L̈ (:func:`_settle_of`) and, where one flipped, solved
-    again (inerter.elements.device: exact, two solves for one such element), at most
-    device.MODE_SOLVES times; a call whose modes do not settle keeps the last solve and is counted (dims[UNSETTLED])."""
+    the modes are checked against the solved L̈ and, where one flipped, solved again
+    (:func:`_settle_modes`; inerter.elements.device: exact, two solves for one such element)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     perm = P[PERM]
     dims = P[DIMS]
-    for attempt in range(MODE_SOLVES):
+    status = _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
+    if not band_solve(AB, rhs, dims[KL]):
+        return SINGULAR
+    for i in range(out.shape[0]):
+        out[i] = rhs[perm[i]]
+    if rarely(dims[EFFICIENT] != 0):
+        return _settle_modes(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out, status)
+    return status
+
+
+@njit(cache=True)
+def _settle_modes(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out, status):
+    """After a solve of Eq. (33) into `out` (its `status`): set the screw efficiencies' modes from
+    it and, while one changed, solve again in the new modes; after device.MODE_SOLVES such checks
+    whose modes still changed, the call is counted (dims[UNSETTLED]) and the solve in the modes
+    last set is kept (so that the force and the stored modes agree). Returns the status."""
+    perm = P[PERM]
+    dims = P[DIMS]
+    for attempt in range(MODE_SOLVES + 1):
+        if attempt == MODE_SOLVES:
+            dims[UNSETTLED] += 1
+        elif _settle_of(q, v, out, P) == 0:
+            return status
         status = _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
         if not band_solve(AB, rhs, dims[KL]):
             return SINGULAR
         for i in range(out.shape[0]):
             out[i] = rhs[perm[i]]
-        if not rarely(dims[EFFICIENT] != 0):
-            return status
-        if _settle_of(q, v, out, P) == 0:
-            return status
-    dims[UNSETTLED] += 1
     return status
 
 

@@ -527,13 +527,14 @@ class Mechanism:
     def accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
         """Solve Eq. (33) for (v̇, λ) at (t, q, v) and the internal states z (default z0); with screw
         efficiencies, solved again until their modes agree with the solved L̈, as the kernels do
-        (inerter.elements.device, ``kernels.accelerations``; at most MODE_SOLVES solves)."""
+        (inerter.elements.device, ``kernels.accelerations``; after MODE_SOLVES checks, once more in
+        the modes last set)."""
         efficient = [e for e in self.elements if getattr(e, "efficient", None) is not None and e.efficient()]
         for _ in range(MODE_SOLVES):
             a, lam = self._accelerations(t, q, v, inputs, alpha, z)
             if not sum(e.settle(q, v, a) for e in efficient):
-                break
-        return a, lam
+                return a, lam
+        return self._accelerations(t, q, v, inputs, alpha, z)       # unsettled: the modes last set
 
     def _accelerations(self, t, q, v, inputs, alpha, z):
         M, Q = self.assemble(t, q, v, inputs, z=z)

@@ -73,8 +73,8 @@ element. For several, each solve flips every element that disagrees; the signs a
 P, so the engine checks and solves again up to :data:`MODE_SOLVES` times and, if the modes still
 do not settle, solves once more in the modes last set, keeps that solve (its force and the stored
 modes agree; its L̈ may ask for other modes) and counts the call (``Kernel.unsettled``; a run's
-count is in ``run.extra["unsettled"]``, and its result warns of it). The numpy path (``Mechanism.accelerations``)
-does the same. A scene without an
+count is in ``run.extra["unsettled"]``, and its result warns of it). The numpy path
+(``Mechanism.accelerations``) does the same. A scene without an
 efficiency takes no extra solve (the engine tests a count of such elements, ``dims[EFFICIENT]``).
 
 The force is continuous where L̈ changes sign at L̇ ≠ 0 (b_eff L̈ → 0 from both sides). Where L̇

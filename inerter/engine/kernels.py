@@ -27,8 +27,8 @@ from inerter.elements import dispatch as law
 from inerter.elements.base import axial_scalars, rarely
 from inerter.elements.device import MODE_SOLVES
 from inerter.elements.inerter import settle
-from inerter.elements.layout import (AXIS, BODY_A, BODY_B, DEVICE, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY, F_INITIAL, F_OFFSET,
-                                     F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA, KIND,
+from inerter.elements.layout import (AXIS, BODY_A, BODY_B, DEVICE, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY,
+                                     F_INITIAL, F_OFFSET, F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA, KIND,
                                      MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B,
                                      REL0, ROT_KIND, FIXED_DIRECTION, DIRECTION, SCREW, SCREW_ADVANCE0,
                                      SCREW_RATIO, SCREW_REL0, SCREW_ROW, SLIDER, STATE,

@@ -310,6 +310,8 @@ DELEGATED = {
     "sweep": ("studies.sweep", "main_sweep", "parameter sweeps on dask, resumable"),
     "study": ("studies.builtin", "main_study", "built-in studies: fig9, two_bar_b, two_bar_f"),
     "sweep-plot": ("studies.sweep", "main_sweep_plot", "plot a metric of a sweep's results against a parameter"),
+    "device-study": ("studies.device_effects", "main_device_study",
+                     "each effect of a ball-screw inerter against the ideal one, by the solver and the FMU"),
 }
 
 

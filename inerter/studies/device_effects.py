@@ -46,12 +46,12 @@ from inerter.common.locations import scenarios as _shipped_scenarios
 #: The rows: name → (label, effects). Each row is the ideal device plus its effects.
 ROWS = {
     "ideal": ("ideal inerter (flywheel only)", ()),
-    "masses": ("+ transverse inertia and masses", ("masses",)),
+    "masses": ("+ transverse inertia, masses (3D: mount)", ("masses",)),
     "friction": ("+ friction (Coulomb + viscous)", ("friction",)),
     "compliance": ("+ series compliance", ("compliance",)),
     "backlash": ("+ backlash (with the series spring)", ("compliance", "backlash")),
     "end_stops": ("+ end stops", ("end_stops",)),
-    "all": ("all effects together", ("masses", "friction", "compliance", "backlash", "end_stops")),
+    "all": ("all effects together (3D: no mount)", ("masses", "friction", "compliance", "backlash", "end_stops")),
 }
 SCENES = ("two_bar_2d", "braced_frame_3d")
 #: The FMU's communication step (s), the scenes' output interval.
@@ -430,31 +430,41 @@ def parameter_table(data=None, scenes=SCENES) -> str:
 
 
 def plot_changes(rows: list[dict], path: Path) -> Path:
-    """A bar chart of each effect's change from the ideal (%), one panel per scene and metric:
-    bars the solver's, dots the FMU's."""
+    """A bar chart of each effect's change from the ideal (%), one panel per scene (a row of the
+    figure) and metric (a column): bars the solver's, dots the FMU's."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    panels = list(dict.fromkeys((r["scene"], r["metric"]) for r in rows))
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.9), squeeze=False, sharey=True)
-    for ax, (scene, metric) in zip(axes[0], panels):
-        sel = {r["row"]: r for r in rows if (r["scene"], r["metric"]) == (scene, metric) and r["row"] != "ideal"}
-        keys = [k for k in ROWS if k in sel]
-        y = np.arange(len(keys))
-        ax.barh(y, [sel[k]["solver_change_pct"] for k in keys], color="C0", label="solver")
-        fm = [(i, sel[k]["fmu_change_pct"]) for i, k in enumerate(keys) if "fmu_change_pct" in sel[k]]
-        if fm:
-            ax.plot([v for _, v in fm], [i for i, _ in fm], "o", color="C3", ms=4, label="FMU (fmpy)")
-        ax.axvline(0.0, color="0.3", lw=0.8)
-        ax.set_yticks(y, [ROWS[k][0] for k in keys] if ax is axes[0][0] else [""] * len(keys))
-        ax.set_title(f"{scene}\n{metric}", fontsize=9)
-        ax.set_xlabel("change from the ideal inerter (%)")
-        ax.grid(axis="x", alpha=0.3)
-    axes[0][0].invert_yaxis()
-    axes[0][-1].legend(fontsize=8, loc="best")
-    fig.suptitle("Ball-screw device effects against the ideal inerter (device values representative, assumed)",
-                 fontsize=10)
-    fig.tight_layout()
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    metrics = {s: list(dict.fromkeys(r["metric"] for r in rows if r["scene"] == s)) for s in scenes}
+    ncol = max(len(m) for m in metrics.values())
+    fig, axes = plt.subplots(len(scenes), ncol, figsize=(5.2 * ncol + 1.6, 2.9 * len(scenes)), squeeze=False)
+    for i, scene in enumerate(scenes):
+        for j in range(ncol):
+            ax = axes[i][j]
+            if j >= len(metrics[scene]):
+                ax.set_visible(False)
+                continue
+            metric = metrics[scene][j]
+            sel = {r["row"]: r for r in rows if (r["scene"], r["metric"]) == (scene, metric) and r["row"] != "ideal"}
+            keys = [k for k in ROWS if k in sel]
+            y = np.arange(len(keys))
+            ax.barh(y, [sel[k]["solver_change_pct"] for k in keys], color="C0", label="solver")
+            fm = [(n, sel[k]["fmu_change_pct"]) for n, k in enumerate(keys) if "fmu_change_pct" in sel[k]]
+            if fm:
+                ax.plot([v for _, v in fm], [n for n, _ in fm], "o", color="C3", ms=4, label="FMU (fmpy)")
+            ax.axvline(0.0, color="0.3", lw=0.8)
+            ax.set_yticks(y, [ROWS[k][0] for k in keys] if j == 0 else [""] * len(keys), fontsize=8)
+            ax.invert_yaxis()
+            ax.set_title(f"{scene}: {metric}", fontsize=9)
+            ax.grid(axis="x", alpha=0.3)
+            if i == len(scenes) - 1:
+                ax.set_xlabel("change from the ideal inerter (%)", fontsize=9)
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper right", fontsize=8, frameon=False)
+    fig.suptitle("Ball-screw device effects against the ideal inerter (device values mostly representative, "
+                 "assumed)", fontsize=10)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path

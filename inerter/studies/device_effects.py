@@ -63,7 +63,7 @@ class DeviceStudyError(InerterError):
     the field, the value and what was expected."""
 
     def __init__(self, where: str, fld: str, value, expected: str, problem: str = "invalid value"):
-        super().__init__(f"{where}: {fld}: {problem} (got {shown(value)}; expected {expected})")
+        super().__init__(f"{where}: {fld + ': ' if fld else ''}{problem} (got {shown(value)}; expected {expected})")
 
 
 def device_data_path() -> Path:
@@ -111,7 +111,7 @@ def read_device_data(path=None) -> tuple[dict, dict]:
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise DeviceStudyError(str(path), "(file)", str(exc), "a readable TOML file") from None
+        raise DeviceStudyError(str(path), "(file)", str(exc), "a readable TOML file", "cannot be read") from None
     raw_device = data.get("device", {})
     device = {}
     for name in DEVICE_VALUES:
@@ -124,7 +124,13 @@ def read_device_data(path=None) -> tuple[dict, dict]:
         if missing:
             raise DeviceStudyError(str(path), f"scenes.{key}", sorted(raw), "also " + ", ".join(missing), "missing fields")
         values = {k: _value(path, f"scenes.{key}.{k}", v) for k, v in raw.items() if k not in SCENE_KEYS}
-        cases[key] = SceneCase(key, path.parent.parent / raw["scene"], tuple(raw["inerters"]), raw["inertance"],
+        scene = path.parent.parent / raw["scene"]           # scenarios/ for scenarios/devices/*.toml
+        if not scene.is_file():
+            scene = _shipped_scenarios() / raw["scene"]
+        if not scene.is_file():
+            raise DeviceStudyError(str(path), f"scenes.{key}.scene", raw["scene"],
+                                   "a scene file in the folder above the data file or a shipped scene", "not found")
+        cases[key] = SceneCase(key, scene, tuple(raw["inerters"]), raw["inertance"],
                                tuple(raw["metrics"]), values)
     return device, cases
 
@@ -221,29 +227,26 @@ def device_tables(effects, dimension: int, mount_axis=None) -> dict:
     return dev
 
 
-def _terminal_lengths(case: SceneCase) -> dict:
+def _terminal_lengths(model, inerters) -> dict:
     """Each inerter's terminal distance L0 in the scene's initial pose."""
-    import inerter
-    model = inerter.load(case.scene)
     mech = model.mechanism
     q0, v0 = np.asarray(mech.q0, dtype=float), np.asarray(mech.v0, dtype=float)
-    return {name: float(model.signals.function(f"{name}.s_rel")(0.0, q0, v0)) for name in case.inerters}
-
-
-def _scene_inertance(case: SceneCase, data: dict) -> float:
-    raw = data["parameters"][case.inertance]
-    return float(raw["value"] if isinstance(raw, dict) else raw)
+    return {name: float(model.signals.function(f"{name}.s_rel")(0.0, q0, v0)) for name in inerters}
 
 
 def scene_device_values(case: SceneCase, device: dict) -> dict:
     """:func:`device_parameters` for the case's scene: its b and its inerters' distance L0."""
-    from inerter.scene.reader import read_toml
-    _, data = read_toml(case.scene)
-    lengths = _terminal_lengths(case)
+    import inerter
+    model = inerter.load(case.scene)
+    lengths = _terminal_lengths(model, case.inerters)
     if len(set(round(v, 12) for v in lengths.values())) != 1:
         raise DeviceStudyError(str(case.scene), "inerters", lengths, "inerters of one terminal distance "
                                "(the device's geometry is one per scene)")
-    return device_parameters(device, case, _scene_inertance(case, data), next(iter(lengths.values())))
+    if case.inertance not in model.scene.parameters:
+        raise DeviceStudyError(str(device_data_path()), f"scenes.{case.key}.inertance", case.inertance,
+                               f"a parameter of {case.scene.name}", "unknown parameter")
+    b = float(model.scene.parameters[case.inertance].value)
+    return device_parameters(device, case, b, next(iter(lengths.values())))
 
 
 def write_row_scene(case: SceneCase, device: dict, row: str, folder: Path) -> Path:
@@ -497,7 +500,11 @@ def main(argv=None) -> int:
     if args.stop_time is not None and not (args.stop_time > 0 and math.isfinite(args.stop_time)):
         raise DeviceStudyError("--stop-time", "", args.stop_time, "a positive number of seconds", "out of range")
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise DeviceStudyError("--out", "", str(out), "a folder that can be created and written",
+                               f"cannot create the output folder: {exc.strerror or exc}") from None
     t0 = time.perf_counter()
 
     def progress(got):

@@ -297,12 +297,18 @@ def run_row(case: SceneCase, path: Path, stop_time=None, fmu_dir=None) -> list[R
     """One row's metrics by the solver and (with `fmu_dir`) through its FMU."""
     import inerter
     from inerter.api import compute_metrics
-    overrides = {} if stop_time is None else {"experiment.stop_time": float(stop_time)}
+    overrides = {"experiment.output_interval": FMU_STEP}           # the FMU's samples, for _Sampled
+    if stop_time is not None:
+        overrides["experiment.stop_time"] = float(stop_time)
     t0 = time.perf_counter()
     result = inerter.load(path, **overrides).simulate()
     t_solver = time.perf_counter() - t0
     if result.status != "ok":
         raise DeviceStudyError(str(path), "(run)", result.message, "a run to the stop time", "the solver stopped")
+    missing = [m for m in case.metrics if m not in result.metrics]
+    if missing:
+        raise DeviceStudyError(str(path), "metrics", missing, "metrics of the run (--stop-time long enough?)",
+                               "not computed: " + "; ".join(result.metric_errors.values()))
     sampled = compute_metrics(result.model, _Sampled(result))
     fmu_metrics, t_fmu = {}, 0.0
     if fmu_dir is not None:

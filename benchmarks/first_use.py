@@ -13,6 +13,16 @@ Every row is one whole subprocess, timed by the wall clock, with its own empty k
    path, metrics included) to its first result;
 3. the numpy path (no kernels) for reference.
 
+``--warm`` times only the warm rows, against a kernel cache already filled (``--cache``, by default
+the user's: ``$INERTER_CACHE_DIR`` or ``~/.cache/inerter``), so that nothing compiles; each row is
+run ``--repeat`` times (after one untimed run that writes the bytecode) and its median and fastest
+wall times are given. ``--before CHECKOUT`` times the same rows with the package of another checkout
+too (a copy of its ``inerter``), alternating the two, for a side-by-side comparison in one run. The
+CLI run's "first result" is its printed summary (the line ``<scene>: ok ...``): the time until that
+line reaches stdout is its own row; the process then goes on to draw the PNG.
+
+    python benchmarks/first_use.py --warm [--cache DIR] [--before /path/to/checkout] [--repeat 7]
+
 "notice" counts the lines the runs write on stderr while the kernels compile
 (inerter.engine.compiled.CompileNotice); a warm process writes none. Every subprocess runs a copy
 of the package taken at the start (PYTHONPATH), so that an edit of the kernels made meanwhile in the
@@ -25,6 +35,7 @@ import datetime
 import os
 import platform
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -47,23 +58,42 @@ print(result.status, len(result.time))
 """
 
 
-def snapshot(folder: Path) -> Path:
-    """A copy of the package (and links to the scenes warm_up reads and to pyproject.toml, which
-    marks the folder as a checkout for inerter.common.locations) in `folder`."""
-    shutil.copytree(ROOT / "inerter", folder / "inerter", ignore=shutil.ignore_patterns("__pycache__"))
+def snapshot(folder: Path, root: Path = ROOT) -> Path:
+    """A copy of the package of the checkout `root` (and links to the scenes warm_up reads and to
+    pyproject.toml, which marks the folder as a checkout for inerter.common.locations) in `folder`."""
+    shutil.copytree(root / "inerter", folder / "inerter", ignore=shutil.ignore_patterns("__pycache__"))
     (folder / "scenarios").symlink_to(ROOT / "scenarios")
     (folder / "pyproject.toml").symlink_to(ROOT / "pyproject.toml")
     return folder
 
 
-def timed(cmd, cache, source):
-    """(wall seconds, notice lines, exit status) of one subprocess with the kernel cache `cache`,
-    importing the package from `source`."""
-    env = dict(os.environ, INERTER_CACHE_DIR=str(cache),
+def environment(cache, source) -> dict:
+    """The subprocesses' environment: the kernel cache `cache`, the package from `source`; bytecode
+    written and read as in an installed package (pip compiles it), stdout unbuffered so that the
+    time a line reaches it is the time it was printed."""
+    env = dict(os.environ, INERTER_CACHE_DIR=str(cache), PYTHONUNBUFFERED="1",
                PYTHONPATH=os.pathsep.join([str(source)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
+def timed(cmd, cache, source, first_line=None):
+    """(wall seconds, notice lines, exit status) of one subprocess with the kernel cache `cache`,
+    importing the package from `source`; with `first_line`, the wall seconds are those until a
+    line of stdout starting with it was printed (None where none was)."""
     t0 = time.perf_counter()
-    done = subprocess.run(cmd, cwd=source, env=env, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
+    seen = None
+    with subprocess.Popen(cmd, cwd=source, env=environment(cache, source), stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True) as proc:
+        out = []
+        for line in proc.stdout:
+            if seen is None and first_line is not None and line.startswith(first_line):
+                seen = time.perf_counter() - t0
+            out.append(line)
+        stderr = proc.stderr.read()
+        proc.wait()
+    wall = time.perf_counter() - t0 if first_line is None else seen
+    done = subprocess.CompletedProcess(cmd, proc.returncode, "".join(out), stderr)
     said = [line for line in done.stderr.splitlines() if line.startswith("inerter: ")]
     for line in said:
         print("    " + line, file=sys.stderr)
@@ -72,10 +102,103 @@ def timed(cmd, cache, source):
     return wall, sum(line.startswith("inerter: compiling") for line in said), done.returncode
 
 
+def default_cache() -> Path:
+    """The user's kernel cache (inerter.engine.compiled._kernel_cache_dir, without importing it)."""
+    if os.environ.get("INERTER_CACHE_DIR"):
+        return Path(os.environ["INERTER_CACHE_DIR"])
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "inerter"
+
+
+def warm(args) -> int:
+    """The warm rows only, against the filled cache `args.cache`, `args.repeat` times each, for this
+    checkout and (``--before``) another, alternating; prints (and writes) the table."""
+    work = Path(tempfile.mkdtemp(prefix="inerter_first_use_"))
+    sources = {"after": snapshot(work / "after")}
+    if args.before:
+        sources = {"before": snapshot(work / "before", args.before.resolve()), **sources}
+    cache = args.cache or default_cache()
+    rows = [("`import inerter`", [sys.executable, "-c", "import inerter"], None),
+            ("`import inerter; load; simulate` (2D, compiled, metrics)", [sys.executable, "-c", API.format(scene=SCENE_2D)], None),
+            ("`import inerter; load; simulate` (3D, compiled, metrics)", [sys.executable, "-c", API.format(scene=SCENE_3D)], None),
+            ("2D CLI run (`inerter run scenarios/two_bar_2d.toml`), to the printed summary",
+             [INERTER, "run", SCENE_2D, "--out", str(work / "run")], "two_bar_2d: "),
+            ("2D CLI run, whole process (CSV, summary.json, PNG written)",
+             [INERTER, "run", SCENE_2D, "--out", str(work / "run")], None)]
+    walls = {(label, which): [] for label, _, _ in rows for which in sources}
+    load = os.getloadavg()[0]
+    for label, cmd, first_line in rows:
+        for which, source in sources.items():
+            timed(cmd, cache, source, first_line)                  # writes the bytecode; not timed
+        for _ in range(args.repeat):
+            for which, source in sources.items():
+                wall, notices, status = timed(cmd, cache, source, first_line)
+                if notices or status or wall is None:
+                    print(f"{label} ({which}): notice {notices}, exit {status}: the cache {cache} is not warm "
+                          "or the run failed", file=sys.stderr)
+                    return 1
+                walls[label, which].append(wall)
+        print(label, {w: f"{statistics.median(walls[label, w]):.2f}" for w in sources}, file=sys.stderr, flush=True)
+    load_end = os.getloadavg()[0]
+    head = " | ".join(f"{w}: median (s) | {w}: fastest (s)" for w in sources)
+    lines = [f"| warm process, one subprocess each | {head} | target | met ({list(sources)[-1]}, median) |",
+             "| --- |" + " ---: |" * (2 * len(sources) + 1) + " --- |"]
+    for label, _, _ in rows:
+        cells = " | ".join(f"{statistics.median(walls[label, w]):.2f} | {min(walls[label, w]):.2f}" for w in sources)
+        target = TARGETS["warm"] if label.startswith(("`import inerter;", "2D CLI run (")) else None
+        met = "" if target is None else ("yes" if statistics.median(walls[label, "after"]) <= target else "no")
+        lines.append(f"| {label} | {cells} | {f'{target:g} s' if target else ''} | {met} |")
+    return report(args, "\n".join(lines), load, load_end, warm_rows=True)
+
+
+def report(args, table, load, load_end, warm_rows=False) -> int:
+    """Print the table and the machine; with ``--write``, write them with the date and command."""
+    try:
+        import numba
+        numba_version = numba.__version__
+    except ImportError:                                              # pragma: no cover
+        numba_version = "missing"
+    machine = (f"{os.cpu_count()} cores, {platform.python_implementation()} {platform.python_version()}, "
+               f"numba {numba_version}; load average {load:.1f} at the start, {load_end:.1f} at the end")
+    print(table)
+    print(machine)
+    if not args.write:
+        return 0
+    command = "python benchmarks/first_use.py" + (" --warm" if warm_rows else "")
+    if warm_rows:
+        command += f" --repeat {args.repeat}" + (f" --before {args.before}" if args.before else "")
+    command += f" --write {args.write}"
+    args.write.parent.mkdir(parents=True, exist_ok=True)
+    if warm_rows:                  # a dated section after the earlier measurements, which stay
+        earlier = args.write.read_text() if args.write.is_file() else "# First use: time to the first result\n"
+        args.write.write_text(
+            earlier.rstrip("\n") + f"\n\n## Warm process, {datetime.date.today().isoformat()}\n\n"
+            f"- **Command:** `{command}`\n"
+            f"- **Machine:** {machine}\n\n"
+            "Each row is a whole subprocess, wall clock, on a kernel cache filled before (nothing compiles: "
+            f"no notice line); median and fastest of {args.repeat} runs each" +
+            (", the two checkouts alternating" if args.before else "") + ".\n\n" + table + "\n")
+        return 0
+    args.write.write_text(
+        "# First use: time to the first result, with and without ahead-of-time compilation\n\n"
+        f"- **Date:** {datetime.date.today().isoformat()}\n"
+        f"- **Command:** `{command}`\n"
+        f"- **Machine:** {machine}\n\n"
+        "Each row is a whole subprocess, wall clock; \"no AOT\" rows share one empty kernel cache, "
+        "the others another one that `inerter compile` fills first. `inerter run` takes the "
+        "compiled path by default; `--path numpy` compiles nothing.\n\n" + table + "\n")
+    return 0
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--write", type=Path, help="also write the table, with the date and command, here")
+    p.add_argument("--warm", action="store_true", help="only the warm rows, on a filled kernel cache (--cache)")
+    p.add_argument("--cache", type=Path, help="with --warm: the filled kernel cache (default: the user's)")
+    p.add_argument("--before", type=Path, help="with --warm: another checkout to time side by side")
+    p.add_argument("--repeat", type=int, default=5, help="with --warm: runs per row (default 5)")
     args = p.parse_args(argv)
+    if args.warm:
+        return warm(args)
 
     rows = []
     work = Path(tempfile.mkdtemp(prefix="inerter_first_use_"))
@@ -112,29 +235,7 @@ def main(argv=None):
              "| --- | ---: | ---: | ---: | ---: | --- |"]
     lines += [f"| {label} | {wall:.1f} | {notices} | {status} | {target} | {verdict} |"
               for label, wall, notices, status, target, verdict in rows]
-    try:
-        import numba
-        numba_version = numba.__version__
-    except ImportError:                                              # pragma: no cover
-        numba_version = "missing"
-    machine = (f"{os.cpu_count()} cores, {platform.python_implementation()} {platform.python_version()}, "
-               f"numba {numba_version}; load average {load:.1f} at the start, {load_end:.1f} at the end")
-    table = "\n".join(lines)
-    print(table)
-    print(machine)
-    if args.write:
-        command = "python benchmarks/first_use.py" + (f" --write {args.write}" if args.write else "")
-        args.write.parent.mkdir(parents=True, exist_ok=True)
-        args.write.write_text(
-            "# First use: time to the first result, with and without ahead-of-time compilation\n\n"
-            f"- **Date:** {datetime.date.today().isoformat()}\n"
-            f"- **Command:** `{command}`\n"
-            f"- **Machine:** {machine}\n\n"
-            "Each row is a whole subprocess, wall clock; \"no AOT\" rows share one empty kernel cache, "
-            "the others another one that `inerter compile` fills first. `inerter run` takes the "
-            "compiled path by default; `--path numpy` compiles nothing.\n\n" + table + "\n")
-    return 0
-
+    return report(args, "\n".join(lines), load, load_end)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -249,8 +249,47 @@ def _install_notice():
     event.register("numba:compile", NOTICE)
 
 
+def _blas_check_without_scipy_linalg():
+    """Let numba learn that scipy provides BLAS without importing scipy.linalg whole.
+
+    The first kernel a process loads from the cache makes numba load its implementation registries,
+    among them ``numba.np.arraymath``, whose import calls ``numba.np.linalg.ensure_blas()``:
+    ``import scipy.linalg.cython_blas``, which runs ``scipy/linalg/__init__.py`` and with it
+    ``scipy._lib._array_api`` (scipy 1.17 clones the numpy namespace there, importing
+    ``numpy.f2py`` and ``numpy.testing``): about 0.25 s of a warm process's 1 s, for a flag that
+    only selects how ``np.dot`` is compiled (the kernels call no BLAS routine). Here arraymath is
+    imported with the same question answered from the files: scipy's ``linalg/cython_blas``
+    extension module is there and built for numba's LAPACK integer width (numba's own check,
+    ``_check_lapack_int_width``). Any later BLAS use (typing ``np.dot``, calling it) imports
+    scipy.linalg as numba always does. Where numba lacks what this relies on, or has already
+    loaded arraymath, nothing is changed."""
+    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules:
+        return
+    from importlib.machinery import EXTENSION_SUFFIXES
+    try:
+        from numba.np import linalg
+        original, width = linalg.ensure_blas, linalg._check_lapack_int_width
+    except (ImportError, AttributeError):                   # pragma: no cover  (another numba)
+        return
+
+    def ensure_blas():
+        spec = importlib.util.find_spec("scipy")            # the package's location, not imported
+        folder = Path(spec.origin).parent / "linalg" if spec is not None and spec.origin else None
+        if folder is None or not any((folder / f"cython_blas{s}").is_file() for s in EXTENSION_SUFFIXES):
+            raise ImportError("scipy 0.16+ is required for linear algebra")    # numba's words
+        width()
+
+    linalg.ensure_blas = ensure_blas
+    try:
+        from numba.np import arraymath
+        arraymath.ensure_blas = original
+    finally:
+        linalg.ensure_blas = original
+
+
 try:
     import numba  # noqa: F401
+    _blas_check_without_scipy_linalg()
     _k = _import_kernels()
     AVAILABLE = True
     WHY_NOT = ""

@@ -34,6 +34,7 @@ import argparse
 import datetime
 import os
 import platform
+import resource
 import shutil
 import statistics
 import subprocess
@@ -78,28 +79,32 @@ def environment(cache, source) -> dict:
 
 
 def timed(cmd, cache, source, first_line=None):
-    """(wall seconds, notice lines, exit status) of one subprocess with the kernel cache `cache`,
-    importing the package from `source`; with `first_line`, the wall seconds are those until a
-    line of stdout starting with it was printed (None where none was)."""
+    """(wall seconds, notice lines, exit status, CPU seconds) of one subprocess with the kernel
+    cache `cache`, importing the package from `source`; with `first_line`, the wall seconds are
+    those until a line of stdout starting with it was printed (None where none was). The CPU
+    seconds (user + system, the whole process) depend less on what else the machine runs."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     seen = None
-    with subprocess.Popen(cmd, cwd=source, env=environment(cache, source), stdout=subprocess.PIPE,
-                          stderr=subprocess.PIPE, text=True) as proc:
+    with tempfile.TemporaryFile("w+") as err, subprocess.Popen(
+            cmd, cwd=source, env=environment(cache, source), stdout=subprocess.PIPE, stderr=err, text=True) as proc:
         out = []
         for line in proc.stdout:
             if seen is None and first_line is not None and line.startswith(first_line):
                 seen = time.perf_counter() - t0
             out.append(line)
-        stderr = proc.stderr.read()
         proc.wait()
-    wall = time.perf_counter() - t0 if first_line is None else seen
-    done = subprocess.CompletedProcess(cmd, proc.returncode, "".join(out), stderr)
-    said = [line for line in done.stderr.splitlines() if line.startswith("inerter: ")]
+        wall = time.perf_counter() - t0 if first_line is None else seen
+        err.seek(0)
+        stderr = err.read()
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    said = [line for line in stderr.splitlines() if line.startswith("inerter: ")]
     for line in said:
         print("    " + line, file=sys.stderr)
-    if done.returncode != 0:
-        print(done.stdout, done.stderr, file=sys.stderr)
-    return wall, sum(line.startswith("inerter: compiling") for line in said), done.returncode
+    if proc.returncode != 0:
+        print("".join(out), stderr, file=sys.stderr)
+    return wall, sum(line.startswith("inerter: compiling") for line in said), proc.returncode, cpu
 
 
 def default_cache() -> Path:
@@ -117,37 +122,47 @@ def warm(args) -> int:
     if args.before:
         sources = {"before": snapshot(work / "before", args.before.resolve()), **sources}
     cache = args.cache or default_cache()
+    cli = [INERTER, "run", SCENE_2D, "--out", str(work / "run")]
     rows = [("`import inerter`", [sys.executable, "-c", "import inerter"], None),
             ("`import inerter; load; simulate` (2D, compiled, metrics)", [sys.executable, "-c", API.format(scene=SCENE_2D)], None),
             ("`import inerter; load; simulate` (3D, compiled, metrics)", [sys.executable, "-c", API.format(scene=SCENE_3D)], None),
-            ("2D CLI run (`inerter run scenarios/two_bar_2d.toml`), to the printed summary",
-             [INERTER, "run", SCENE_2D, "--out", str(work / "run")], "two_bar_2d: "),
-            ("2D CLI run, whole process (CSV, summary.json, PNG written)",
-             [INERTER, "run", SCENE_2D, "--out", str(work / "run")], None)]
-    walls = {(label, which): [] for label, _, _ in rows for which in sources}
+            ("2D CLI run (`inerter run scenarios/two_bar_2d.toml`) to its printed summary", cli, "two_bar_2d: "),
+            ("2D CLI run, whole process (CSV, summary.json and PNG written)", cli, None)]
+    times = {(label, which): [] for label, _, _ in rows for which in sources}
     load = os.getloadavg()[0]
     for label, cmd, first_line in rows:
-        for which, source in sources.items():
+        for source in sources.values():
             timed(cmd, cache, source, first_line)                  # writes the bytecode; not timed
         for _ in range(args.repeat):
             for which, source in sources.items():
-                wall, notices, status = timed(cmd, cache, source, first_line)
+                wall, notices, status, cpu = timed(cmd, cache, source, first_line)
                 if notices or status or wall is None:
                     print(f"{label} ({which}): notice {notices}, exit {status}: the cache {cache} is not warm "
                           "or the run failed", file=sys.stderr)
                     return 1
-                walls[label, which].append(wall)
-        print(label, {w: f"{statistics.median(walls[label, w]):.2f}" for w in sources}, file=sys.stderr, flush=True)
+                times[label, which].append((wall, cpu))
+        print(label, {w: f"{statistics.median(t[0] for t in times[label, w]):.2f}" for w in sources},
+              file=sys.stderr, flush=True)
     load_end = os.getloadavg()[0]
-    head = " | ".join(f"{w}: median (s) | {w}: fastest (s)" for w in sources)
-    lines = [f"| warm process, one subprocess each | {head} | target | met ({list(sources)[-1]}, median) |",
-             "| --- |" + " ---: |" * (2 * len(sources) + 1) + " --- |"]
-    for label, _, _ in rows:
-        cells = " | ".join(f"{statistics.median(walls[label, w]):.2f} | {min(walls[label, w]):.2f}" for w in sources)
+    return report(args, warm_table(rows, sources, times), load, load_end, warm_rows=True)
+
+
+def warm_table(rows, sources, times) -> str:
+    """The warm rows' table: per checkout the median and fastest wall time and the median CPU time."""
+    head = " | ".join(f"{w}: wall median | {w}: wall fastest | {w}: CPU median" for w in sources)
+    lines = [f"| warm process, one subprocess each (s) | {head} | target | met (after, median wall) |",
+             "| --- |" + " ---: |" * (3 * len(sources) + 1) + " --- |"]
+    for label, _, first_line in rows:
+        cells = []
+        for w in sources:
+            walls, cpus = [t[0] for t in times[label, w]], [t[1] for t in times[label, w]]
+            cpu = "" if first_line else f"{statistics.median(cpus):.2f}"       # CPU: whole processes only
+            cells.append(f"{statistics.median(walls):.2f} | {min(walls):.2f} | {cpu}")
         target = TARGETS["warm"] if label.startswith(("`import inerter;", "2D CLI run (")) else None
-        met = "" if target is None else ("yes" if statistics.median(walls[label, "after"]) <= target else "no")
-        lines.append(f"| {label} | {cells} | {f'{target:g} s' if target else ''} | {met} |")
-    return report(args, "\n".join(lines), load, load_end, warm_rows=True)
+        after = statistics.median(t[0] for t in times[label, "after"])
+        met = "" if target is None else ("yes" if after <= target else "no")
+        lines.append(f"| {label} | {' | '.join(cells)} | {f'{target:g} s' if target else ''} | {met} |")
+    return "\n".join(lines)
 
 
 def report(args, table, load, load_end, warm_rows=False) -> int:
@@ -205,7 +220,7 @@ def main(argv=None):
     source = snapshot(work / "source")
 
     def row(label, cmd, cache, target=None):
-        wall, notices, status = timed(cmd, cache, source)
+        wall, notices, status, _ = timed(cmd, cache, source)
         verdict = "" if target is None else ("yes" if wall <= target else "no")
         rows.append((label, wall, notices, status, f"{target:g} s" if target else "", verdict))
         print(f"{label:72s} {wall:7.1f} s  notice {notices}  exit {status}", file=sys.stderr, flush=True)

@@ -535,7 +535,9 @@ class Kernel:
                        self.perm, dims, ground_t, ground_a, ground_terms) + ((np.ones(1, dtype=np.int64),) if spatial else ())
         self.spatial = spatial                # P has the slot `spatial`: the kernels compile its 3D code
         N = self.n + self.m
-        self._AB = _k.band_storage(self.kl, self.ku, N)
+        # The kernel's own Python (py_func), one np.empty: calling the compiled one from here would
+        # load its machine code from the cache, a few ms of a warm process's first result.
+        self._AB = _k.band_storage.py_func(self.kl, self.ku, N)
         self._rhs = np.empty(N)
         self._gen = np.empty(self.n)
         self._no_inputs = np.zeros(0)
@@ -866,7 +868,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     steps = evals = 0
     h, t0, k, status, t_reached = 0.0, 0.0, 1, 0, 0.0
     tables = None if settings.method == "RK4" else _tables(settings.method)
-    keep = _k.no_keep(len(y0))
+    keep = _k.no_keep.py_func(len(y0))            # three empty arrays: the kernel's Python, as band_storage's
     if dense and tables is not None:          # (nodes, coeffs, kept) of kernels.rk_advance, grown there
         rows = 8 if settings.method == "DOP853" else 1 + tables[6].shape[1]
         room = 256

@@ -198,6 +198,7 @@ def report(args, table, load, load_end, warm_rows=False) -> int:
     if warm_rows:
         command += f" --repeat {args.repeat}" + (f" --before {args.before}" if args.before else "")
         command += f" --nice {args.nice}" if args.nice is not None else ""
+        command += f" --cache {args.cache}" if args.cache else ""
     command += f" --write {args.write}"
     args.write.parent.mkdir(parents=True, exist_ok=True)
     if warm_rows:                  # a dated section after the earlier measurements, which stay
@@ -234,6 +235,8 @@ def main(argv=None):
     args = p.parse_args(argv)
     global PRIORITY
     PRIORITY = args.nice
+    if args.nice is not None:      # this process too: it reads the lines as they are printed, and times them
+        os.setpriority(os.PRIO_PROCESS, 0, args.nice)
     if args.warm:
         return warm(args)
 

@@ -163,3 +163,21 @@ def test_kernel_registries_load_without_scipy_linalg():
     imported, have_blas, difference = done.stdout.split()
     assert imported == "False" and have_blas == "True"
     assert float(difference) <= 1e-15
+
+
+def test_kernels_copy_has_its_bytecode_where_python_writes_none(tmp_path):
+    """The kernels' copy in the cache gets its bytecode once, also under PYTHONDONTWRITEBYTECODE
+    (inerter.engine.compiled._write_bytecode), so that no later process compiles its source; the
+    bytecode is what the import system would have written (importlib.util.cache_from_source)."""
+    import importlib.util
+    env = dict(os.environ, INERTER_CACHE_DIR=str(tmp_path), PYTHONDONTWRITEBYTECODE="1",
+               PYTHONPATH=os.pathsep.join(sys.path))
+    script = "import inerter.engine.compiled as c; print(c._k.__file__)"
+    done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    source = done.stdout.strip()
+    assert source.startswith(str(tmp_path))
+    cached = importlib.util.cache_from_source(source)
+    assert os.path.isfile(cached)
+    with open(cached, "rb") as fh:
+        assert fh.read(4) == importlib.util.MAGIC_NUMBER

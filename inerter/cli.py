@@ -117,8 +117,8 @@ def cmd_run(args):
         print(f"inerter: warning: {warning}", file=sys.stderr)
     stem = result.model.name
     # Every output at every sample first: one undefined at a sample ends the result there, and the
-    # summary says so. Then the result on the terminal, then the files (writing the CSV's text and
-    # drawing the plot, which loads matplotlib, take longer than the run itself).
+    # summary says so. Then the result on the terminal, then the files: the CSV's text and the plot
+    # (matplotlib's import) take about 0.6 s of a warm process (docs/benchmarks/first_use.md).
     result.values()
     summary = result.summary()
     print(f"{stem}: {result.status} ({result.message}); {_span(result)} in {wall:.2f} s wall; "

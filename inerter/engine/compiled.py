@@ -272,8 +272,9 @@ def _blas_check_without_scipy_linalg():
     among them ``numba.np.arraymath``, whose import calls ``numba.np.linalg.ensure_blas()``:
     ``import scipy.linalg.cython_blas``, which runs ``scipy/linalg/__init__.py`` and with it
     ``scipy._lib._array_api`` (scipy 1.17 clones the numpy namespace there, importing
-    ``numpy.f2py`` and ``numpy.testing``): about 0.25 s of a warm process's 1 s, for a flag that
-    only selects how ``np.dot`` is compiled (the kernels call no BLAS routine). Here arraymath is
+    ``numpy.f2py``, ``numpy.ma`` and ``numpy.testing``): 0.2 s of a warm process's first second
+    (docs/benchmarks/first_use.md), for a flag that only selects how ``np.dot`` is compiled (the
+    kernels call no BLAS routine). Here arraymath is
     imported with the same question answered from the files: scipy's ``linalg/cython_blas``
     extension module is there and built for numba's LAPACK integer width (numba's own check,
     ``_check_lapack_int_width``). Any later BLAS use (typing ``np.dot``, calling it) imports

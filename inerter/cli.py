@@ -72,10 +72,11 @@ def _out_dir(path) -> Path:
     return out
 
 
-def _write(result, out: Path, stem: str, label: str | None = None):
+def _write(result, out: Path, stem: str, label: str | None = None, summary: dict | None = None):
+    """Write `result`'s CSV and its summary (`summary`, else ``result.summary()``) to `out`."""
     out.mkdir(parents=True, exist_ok=True)
     result.write_csv(out / f"{stem}.csv")
-    summary = result.summary()
+    summary = summary if summary is not None else result.summary()
     if label:
         summary["label"] = label
     (out / f"{stem}.summary.json").write_text(json.dumps(summary, indent=2))
@@ -115,8 +116,11 @@ def cmd_run(args):
     for warning in result.warnings:
         print(f"inerter: warning: {warning}", file=sys.stderr)
     stem = result.model.name
-    summary = _write(result, out, stem)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    # Every output at every sample first: one undefined at a sample ends the result there, and the
+    # summary says so. Then the result on the terminal, then the files: the CSV's text and the plot
+    # (matplotlib's import) take about 0.6 s of a warm process (docs/benchmarks/first_use.md).
+    result.values()
+    summary = result.summary()
     print(f"{stem}: {result.status} ({result.message}); {_span(result)} in {wall:.2f} s wall; "
           f"path: {summary['statistics']['path']}")
     units = summary.get("metric_units", {})
@@ -124,7 +128,9 @@ def cmd_run(args):
         print(f"  {k} = {_with_unit(v, units.get(k))}")
     for k, v in summary.get("metric_errors", {}).items():
         print(f"  {k}: not computed: {v}")
-    print(f"  max constraint drift = {summary['statistics']['max_constraint_drift']:.3g}")
+    print(f"  max constraint drift = {summary['statistics']['max_constraint_drift']:.3g}", flush=True)
+    _write(result, out, stem, summary=summary)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
     written = [out / (stem + ".csv"), out / "summary.json"]
     if len(result.time):              # the plot after the result is on the terminal (matplotlib loads slowly)
         from inerter.studies.plotting import plot_runs
@@ -310,6 +316,8 @@ DELEGATED = {
     "sweep": ("studies.sweep", "main_sweep", "parameter sweeps on dask, resumable"),
     "study": ("studies.builtin", "main_study", "built-in studies: fig9, two_bar_b, two_bar_f"),
     "sweep-plot": ("studies.sweep", "main_sweep_plot", "plot a metric of a sweep's results against a parameter"),
+    "device-study": ("studies.device_effects", "main_device_study",
+                     "each effect of a ball-screw inerter against the ideal one, by the solver and the FMU"),
 }
 
 

@@ -126,11 +126,12 @@ def _parsers():
     from inerter.cli import DELEGATED, build_parser
     from inerter.studies.bench import bench_parser
     from inerter.studies.builtin import study_parser
+    from inerter.studies.device_effects import device_study_parser
     from inerter.studies.sweep import sweep_parser, sweep_plot_parser
     top = build_parser()
     commands = dict(next(a for a in top._actions if a.dest == "command").choices)
     delegated = {"bench": bench_parser(), "sweep": sweep_parser(), "study": study_parser(),
-                 "sweep-plot": sweep_plot_parser()}
+                 "sweep-plot": sweep_plot_parser(), "device-study": device_study_parser()}
     assert set(delegated) == set(DELEGATED)
     commands.update(delegated)
     return top, commands
@@ -146,7 +147,7 @@ def test_help_lists_every_command_in_plain_text(capsys):
     for name in commands:
         assert re.search(rf"^\s+{re.escape(name)}\s+\S", text, flags=re.M), (name, text)
     assert set(commands) == {"run", "compare", "describe", "build-fmu", "build-system", "paper", "compile", "bench",
-                             "sweep", "study", "sweep-plot"}
+                             "sweep", "study", "sweep-plot", "device-study"}
 
 
 def test_every_option_of_every_command_has_a_help_line():

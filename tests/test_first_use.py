@@ -137,3 +137,47 @@ def test_compile_says_so_when_its_scenes_are_missing(monkeypatch, tmp_path, caps
     assert cli.main(["compile", "--planar"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) >= 1 and "two_bar_2d.toml" in err[-1] and "missing" in err[-1]
+
+
+def test_kernel_registries_load_without_scipy_linalg():
+    """A warm process: the registries numba loads with the first cached kernel
+    (inerter.engine.compiled._blas_check_without_scipy_linalg) leave scipy.linalg unimported, and numba
+    still knows BLAS is there (its flag as numba's own check sets it, from the scipy installed
+    here); np.dot compiled afterwards imports scipy.linalg and agrees with numpy to rounding (1e-15)."""
+    script = textwrap.dedent("""
+        import sys
+        import numpy as np
+        import inerter.engine.compiled
+        from numba.core.registry import cpu_target
+        cpu_target.target_context.refresh()          # what loading the first cached kernel does
+        import numba.np.arraymath as arraymath
+        print("scipy.linalg" in sys.modules, arraymath._HAVE_BLAS)
+        import scipy.linalg.cython_blas               # numba's own check, now
+        from numba import njit
+        a = np.array([[1.0, 2.0], [3.0, 4.0]])
+        b = np.array([[0.5, -1.0], [2.0, 0.25]])
+        print(float(np.max(np.abs(njit(lambda x, y: np.dot(x, y))(a, b) - a @ b))))
+    """)
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    imported, have_blas, difference = done.stdout.split()
+    assert imported == "False" and have_blas == "True"
+    assert float(difference) <= 1e-15
+
+
+def test_kernels_copy_has_its_bytecode_where_python_writes_none(tmp_path):
+    """The kernels' copy in the cache gets its bytecode once, also under PYTHONDONTWRITEBYTECODE
+    (inerter.engine.compiled._write_bytecode), so that no later process compiles its source; the
+    bytecode is what the import system would have written (importlib.util.cache_from_source)."""
+    import importlib.util
+    env = dict(os.environ, INERTER_CACHE_DIR=str(tmp_path), PYTHONDONTWRITEBYTECODE="1",
+               PYTHONPATH=os.pathsep.join(sys.path))
+    script = "import inerter.engine.compiled as c; print(c._k.__file__)"
+    done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    source = done.stdout.strip()
+    assert source.startswith(str(tmp_path))
+    cached = importlib.util.cache_from_source(source)
+    assert os.path.isfile(cached)
+    with open(cached, "rb") as fh:
+        assert fh.read(4) == importlib.util.MAGIC_NUMBER

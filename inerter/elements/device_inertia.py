@@ -67,8 +67,10 @@ Ch. 6). The generalised inertia force of a part is −(∂ċ/∂v)ᵀ m c̈ − 
 
 with G_c = H_a + h G_u (housing, flywheel), H_b − h G_u (rod), c̈₀ = acc_a + h ü₀, acc_b − h ü₀,
 and the terms of J n² (b g_L g_Lᵀ and b L̈₀ g_L) left to the ideal inerter. The parts' weight, in
-a scene with gravity g, adds Q += Σ m G_cᵀ g (potential −Σ m g·c). (A ground motion's inertial
-force on the parts, −m a_g, is not added: the parts are not bodies of the scene.) The oracle
+a scene with gravity g, adds Q += Σ m G_cᵀ g (potential −Σ m g·c). Under a ground motion the
+coordinates are relative to the ground, which accelerates at a_g: every part feels the inertial
+force −m a_g as the scene's bodies do (Q −= Σ m G_cᵀ a_g, the bias accelerations c̈₀ taken absolute),
+which is the weight's term with g − a_g; the potential stays the weight's. The oracle
 (:mod:`inerter.oracle.derivation`) derives the same from the parts' rigid-body kinetic energy with
 their rotations built from the mount's definition, on Jets.
 """
@@ -106,14 +108,14 @@ def _gram(M, Q, G, c0, weight):
 
 
 @njit(cache=True, inline="always")
-def _part(M, Q, m, h, Hend, acc, Gu, udd0, r_end, rdot_end, u, ud, g):
+def _part(M, Q, m, h, Hend, acc, Gu, udd0, r_end, rdot_end, u, ud, g, frame_acc):
     """A part of mass m whose centre is c = r_end + h u: its terms (Gram of G_c = H_end + h G_u with
-    c̈₀ = acc_end + h ü₀, and its weight m G_cᵀ g) and its energy, kinetic ½ m |ċ|² and potential
-    −m g·c."""
+    c̈₀ = acc_end + h ü₀ + a_g, absolute, and its weight m G_cᵀ g) and its energy, kinetic ½ m |ċ|²
+    and potential −m g·c (relative to the ground: a_g does work, it stores none)."""
     if m == 0.0:
         return 0.0, 0.0
     G = Hend + h * Gu
-    _gram(M, Q, G, acc + h * udd0 - g, m)
+    _gram(M, Q, G, acc + h * udd0 + frame_acc - g, m)
     cd = rdot_end + h * ud
     c = r_end + h * u
     return 0.5 * m * (cd[0] * cd[0] + cd[1] * cd[1] + cd[2] * cd[2]), -m * (g[0] * c[0] + g[1] * c[1] + g[2] * c[2])
@@ -167,24 +169,25 @@ def _housing_spin(u, ud, Gu, udd0, a1, a1d, a1dd0, Ga1):
 
 
 @entry
-def block(row, Ha, Hb, ra, rb, ra_dot, rb_dot, acc_a, acc_b, a1, a1d, a1dd0, Ga1, M, Q):
+def block(row, Ha, Hb, ra, rb, ra_dot, rb_dot, acc_a, acc_b, frame_acc, a1, a1d, a1dd0, Ga1, M, Q):
     """The device's terms beyond b g gᵀ (module docstring, "Equations", and its masses' weight):
     M (n × n) and Q (n) over the velocity coordinates v of terminal a's body then terminal b's
     (n = 6 in 2D, 12 in 3D), both overwritten; returns (T − ½ b L̇², V), its kinetic energy beyond
     the ideal inerter's and its masses' gravitational potential (J).
 
     Ha, Hb (3 × n): ṙ_a = H_a v, ṙ_b = H_b v (zero columns for the other body); ra, rb, ra_dot,
-    rb_dot the terminals' positions and velocities, acc_a, acc_b their accelerations at v̇ = 0;
+    rb_dot the terminals' positions and velocities, acc_a, acc_b their accelerations at v̇ = 0
+    (relative to the ground); frame_acc (3) the ground's acceleration a_g (zero without a ground motion);
     a1, a1d, a1dd0, Ga1 the mount's axis a₁ (global), ȧ₁ = G_a₁ v and ä₁ at v̇ = 0 (read only
     where row[MOUNT] is set)."""
     M[:, :] = 0.0
     Q[:] = 0.0
     g = row[DEVICE_GRAVITY:DEVICE_GRAVITY + 3]
     L, u, Ldot, ud, Gr, Gu, gL, Ldd0, udd0 = _axis(rb - ra, rb_dot - ra_dot, Ha, Hb, acc_a, acc_b)
-    T, V = _part(M, Q, row[HOUSING_MASS], row[HOUSING_CENTRE], Ha, acc_a, Gu, udd0, ra, ra_dot, u, ud, g)
-    dT, dV = _part(M, Q, row[FLYWHEEL_MASS], row[FLYWHEEL_CENTRE], Ha, acc_a, Gu, udd0, ra, ra_dot, u, ud, g)
+    T, V = _part(M, Q, row[HOUSING_MASS], row[HOUSING_CENTRE], Ha, acc_a, Gu, udd0, ra, ra_dot, u, ud, g, frame_acc)
+    dT, dV = _part(M, Q, row[FLYWHEEL_MASS], row[FLYWHEEL_CENTRE], Ha, acc_a, Gu, udd0, ra, ra_dot, u, ud, g, frame_acc)
     T, V = T + dT, V + dV
-    dT, dV = _part(M, Q, row[ROD_MASS], -row[ROD_CENTRE], Hb, acc_b, Gu, udd0, rb, rb_dot, u, ud, g)
+    dT, dV = _part(M, Q, row[ROD_MASS], -row[ROD_CENTRE], Hb, acc_b, Gu, udd0, rb, rb_dot, u, ud, g, frame_acc)
     T, V = T + dT, V + dV
     It = row[TRANSVERSE]
     if It != 0.0:

@@ -104,7 +104,8 @@ def _import_kernels():
     try:
         folder = _kernel_cache_dir() / "kernels" / digest
         target = folder / f"{name}.py"
-        if not (target.is_file() and target.read_bytes() == text):
+        wrote = not (target.is_file() and target.read_bytes() == text)
+        if wrote:
             folder.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
             with os.fdopen(fd, "wb") as fh:
@@ -113,6 +114,7 @@ def _import_kernels():
     except OSError:
         from inerter.engine import kernels as compiled_kernels
         return compiled_kernels
+    _write_bytecode(target, wrote)
     spec = importlib.util.spec_from_file_location(name, target)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
@@ -122,6 +124,20 @@ def _import_kernels():
         del sys.modules[name]
         raise
     return module
+
+
+def _write_bytecode(source: Path, fresh: bool):
+    """The bytecode of the kernels' copy `source` next to it, once (again where the copy was just
+    written: `fresh`), even where the import system writes none (``PYTHONDONTWRITEBYTECODE``, set
+    in many containers): compiling its source costs every process about 0.03 s. Where it cannot be
+    written, the source is compiled at each import, as before."""
+    if not fresh and Path(importlib.util.cache_from_source(str(source))).is_file():
+        return
+    import py_compile
+    try:
+        py_compile.compile(str(source), doraise=True)        # written atomically, as the import system does
+    except (OSError, py_compile.PyCompileError):
+        pass
 
 
 # ------------------------------------------------------------------------------------------------
@@ -249,8 +265,48 @@ def _install_notice():
     event.register("numba:compile", NOTICE)
 
 
+def _blas_check_without_scipy_linalg():
+    """Let numba learn that scipy provides BLAS without importing scipy.linalg whole.
+
+    The first kernel a process loads from the cache makes numba load its implementation registries,
+    among them ``numba.np.arraymath``, whose import calls ``numba.np.linalg.ensure_blas()``:
+    ``import scipy.linalg.cython_blas``, which runs ``scipy/linalg/__init__.py`` and with it
+    ``scipy._lib._array_api`` (scipy 1.17 clones the numpy namespace there, importing
+    ``numpy.f2py``, ``numpy.ma`` and ``numpy.testing``): 0.2 s of a warm process's first second
+    (docs/benchmarks/first_use.md), for a flag that only selects how ``np.dot`` is compiled (the
+    kernels call no BLAS routine). Here arraymath is
+    imported with the same question answered from the files: scipy's ``linalg/cython_blas``
+    extension module is there and built for numba's LAPACK integer width (numba's own check,
+    ``_check_lapack_int_width``). Any later BLAS use (typing ``np.dot``, calling it) imports
+    scipy.linalg as numba always does. Where numba lacks what this relies on, or has already
+    loaded arraymath, nothing is changed."""
+    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules:
+        return
+    from importlib.machinery import EXTENSION_SUFFIXES
+    try:
+        from numba.np import linalg
+        original, width = linalg.ensure_blas, linalg._check_lapack_int_width
+    except (ImportError, AttributeError):                   # pragma: no cover  (another numba)
+        return
+
+    def ensure_blas():
+        spec = importlib.util.find_spec("scipy")            # the package's location, not imported
+        folder = Path(spec.origin).parent / "linalg" if spec is not None and spec.origin else None
+        if folder is None or not any((folder / f"cython_blas{s}").is_file() for s in EXTENSION_SUFFIXES):
+            raise ImportError("scipy 0.16+ is required for linear algebra")    # numba's words
+        width()
+
+    linalg.ensure_blas = ensure_blas
+    try:
+        from numba.np import arraymath
+        arraymath.ensure_blas = original
+    finally:
+        linalg.ensure_blas = original
+
+
 try:
     import numba  # noqa: F401
+    _blas_check_without_scipy_linalg()
     _k = _import_kernels()
     AVAILABLE = True
     WHY_NOT = ""
@@ -497,7 +553,9 @@ class Kernel:
                        self.perm, dims, ground_t, ground_a, ground_terms) + ((np.ones(1, dtype=np.int64),) if spatial else ())
         self.spatial = spatial                # P has the slot `spatial`: the kernels compile its 3D code
         N = self.n + self.m
-        self._AB = _k.band_storage(self.kl, self.ku, N)
+        # The kernel's own Python (py_func), one np.empty: calling the compiled one from here would
+        # load its machine code from the cache, a few ms of a warm process's first result.
+        self._AB = _k.band_storage.py_func(self.kl, self.ku, N)
         self._rhs = np.empty(N)
         self._gen = np.empty(self.n)
         self._no_inputs = np.zeros(0)
@@ -837,7 +895,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     steps = evals = 0
     h, t0, k, status, t_reached = 0.0, 0.0, 1, 0, 0.0
     tables = None if settings.method == "RK4" else _tables(settings.method)
-    keep = _k.no_keep(len(y0))
+    keep = _k.no_keep.py_func(len(y0))            # three empty arrays: the kernel's Python, as band_storage's
     if dense and tables is not None:          # (nodes, coeffs, kept) of kernels.rk_advance, grown there
         rows = 8 if settings.method == "DOP853" else 1 + tables[6].shape[1]
         room = 256

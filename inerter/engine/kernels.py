@@ -238,10 +238,11 @@ def _rotational2(q, v, e, rot_int):
 
 
 @njit(cache=True, inline="always")
-def _add_elements2(q, v, z, P, AB, perm, off, gen):
+def _add_elements2(q, v, z, P, AB, perm, off, gen, agx, agy, agz):
     """Translational elements of a 2D scene, each through its law (:mod:`inerter.elements`):
     Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂; F includes the force an
-    element's internal states z carry (a series-compliant device's). Returns a status code."""
+    element's internal states z carry (a series-compliant device's); a device's parts feel the
+    ground's acceleration (agx, agy, agz) as the bodies do. Returns a status code."""
     pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     status = OK
     ga = np.empty(3)
@@ -263,7 +264,7 @@ def _add_elements2(q, v, z, P, AB, perm, off, gen):
             F += law.state_force(kind, el_real[e], L, Ldot, _states(z, el_int, e))
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 3)
         if rarely(el_real[e, INERTIA] != 0.0):
-            _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, 3)
+            _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, 3, agx, agy, agz)
     return status
 
 
@@ -281,7 +282,7 @@ def _add_rotational2(q, v, P, gen):
 
 
 @njit(cache=True, inline="always")
-def _add_point_forces2(t, q, v, inputs, P, gen):
+def _add_point_forces2(t, q, v, inputs, P, gen, agx, agy, agz):
     """Applied point forces with time functions, grounded PD actuators, held inputs and the ground
     motion (−m a_g on every body: coordinates relative to the moving ground) of a 2D scene."""
     mass, pbody, ploc, dims = P[MASS], P[PBODY], P[PLOC], P[DIMS]
@@ -304,7 +305,6 @@ def _add_point_forces2(t, q, v, inputs, P, gen):
             p = in_int[f, FORCE_POINT]
             _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], inputs[2 * f], inputs[2 * f + 1], gen)
     if dims[GROUND_MODE] != GROUND_NONE:
-        agx, agy, agz = ground_acceleration(t, inputs, P)
         for k in range(0, dims[N_VELOCITY], 3):
             gen[k] -= mass[k] * agx
             gen[k + 1] -= mass[k] * agy
@@ -420,9 +420,10 @@ def assemble(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     _start_assembly(AB, gen, gravity, n, dims[HAS_GRAVITY])
     for i in range(n):
         _addK(AB, perm, off, i, i, mass[i])
-    status = _add_elements2(q, v, z, P, AB, perm, off, gen)
+    agx, agy, agz = _ground_frame(t, inputs, P)
+    status = _add_elements2(q, v, z, P, AB, perm, off, gen, agx, agy, agz)
     _add_rotational2(q, v, P, gen)
-    _add_point_forces2(t, q, v, inputs, P, gen)
+    _add_point_forces2(t, q, v, inputs, P, gen, agx, agy, agz)
     for i in range(n):
         rhs[perm[i]] = gen[i]
     # -- joints: C_q (and its transpose) and γ − 2αĊ − α²C
@@ -436,6 +437,15 @@ def assemble(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
                         ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby)
         row += 2
     return status
+
+
+@njit(cache=True, inline="always")
+def _ground_frame(t, inputs, P):
+    """The acceleration of the frame the coordinates are measured in: the ground motion's a_g where
+    the scene declares one, else zero (nothing evaluated)."""
+    if P[DIMS][GROUND_MODE] == GROUND_NONE:
+        return 0.0, 0.0, 0.0
+    return ground_acceleration(t, inputs, P)
 
 
 @njit(cache=True)
@@ -817,9 +827,9 @@ def _mount3(q, v, body, row, G, a1, a1d, a1dd):
 
 
 @njit(cache=True)
-def _device_block(q, v, e, pbody, ploc, el_int, el_real, width, M, Q):
+def _device_block(q, v, e, pbody, ploc, el_int, el_real, width, frame_acc, M, Q):
     """Element e's device block (device_inertia.block) over its terminals' bodies, `width` velocity
-    coordinates each (3 in 2D, 6 in 3D): fills M, Q; returns the block's energy (kinetic beyond
+    coordinates each (3 in 2D, 6 in 3D), frame_acc the ground's acceleration: fills M, Q; returns the block's energy (kinetic beyond
     ½ b L̇², and its masses' weight's potential). The tables are passed, not P: a call that takes
     the scene's tuple makes the loop it sits in materialise it."""
     pa = el_int[e, POINT_A]
@@ -838,18 +848,19 @@ def _device_block(q, v, e, pbody, ploc, el_int, el_real, width, M, Q):
         _terminal3(q, v, pbody[pb], ploc[pb, 0], ploc[pb, 1], ploc[pb, 2], Hb, 6, rb, vb, acc_b)
         if el_real[e, MOUNT] != 0.0:
             _mount3(q, v, pbody[pa], el_real[e], Ga1, a1, a1d, a1dd)
-    T, V = device_inertia.block(el_real[e], Ha, Hb, ra, rb, va, vb, acc_a, acc_b, a1, a1d, a1dd, Ga1, M, Q)
+    T, V = device_inertia.block(el_real[e], Ha, Hb, ra, rb, va, vb, acc_a, acc_b, frame_acc, a1, a1d, a1dd, Ga1, M, Q)
     return T + V
 
 
 @njit(cache=True)
-def _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, width):
+def _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, width, agx, agy, agz):
     """Element e's device block added to Eq. (33): M += its block and Q += its right side, on the
-    coordinates of bodies ba (the block's first `width` rows) and bb (the next), not the ground's."""
+    coordinates of bodies ba (the block's first `width` rows) and bb (the next), not the ground's;
+    its parts feel the ground's acceleration (agx, agy, agz)."""
     n = 2 * width
     M = np.empty((n, n))
     Q = np.empty(n)
-    _device_block(q, v, e, pbody, ploc, el_int, el_real, width, M, Q)
+    _device_block(q, v, e, pbody, ploc, el_int, el_real, width, np.array((agx, agy, agz)), M, Q)
     for i in range(n):
         bi = ba if i < width else bb
         if bi < 0:
@@ -866,7 +877,7 @@ def _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba,
 def _device_energy(q, v, e, pbody, ploc, el_int, el_real, width):
     """Element e's device block's energy (its T beyond ½ b L̇², and its masses' potential)."""
     n = 2 * width
-    return _device_block(q, v, e, pbody, ploc, el_int, el_real, width, np.empty((n, n)), np.empty(n))
+    return _device_block(q, v, e, pbody, ploc, el_int, el_real, width, np.zeros(3), np.empty((n, n)), np.empty(n))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -1344,10 +1355,11 @@ def _add_bodies3(v, P, AB, perm, off, gen):
 
 
 @njit(cache=True, inline="always")
-def _add_elements3(q, v, z, P, AB, perm, off, gen):
+def _add_elements3(q, v, z, P, AB, perm, off, gen, agx, agy, agz):
     """Translational elements of a 3D scene, each through its law (:mod:`inerter.elements`):
     Q −= F g (Eqs. 29, 31) and M_I += b g gᵀ (Eq. 33), g = Hᵀ r̂; F includes the force an
-    element's internal states z carry. Returns a status code."""
+    element's internal states z carry; a device's parts feel the ground's acceleration. Returns a
+    status code."""
     pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     status = OK
     ga = np.empty(6)
@@ -1362,7 +1374,7 @@ def _add_elements3(q, v, z, P, AB, perm, off, gen):
             F += law.state_force(kind, el_real[e], L, Ldot, _states(z, el_int, e))
         _element_terms(AB, perm, off, gen, ba, bb, ga, gb, F, b, 6)
         if rarely(el_real[e, INERTIA] != 0.0):
-            _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, 6)
+            _device_terms(q, v, e, pbody, ploc, el_int, el_real, AB, perm, off, gen, ba, bb, 6, agx, agy, agz)
     return status
 
 
@@ -1387,7 +1399,7 @@ def _add_rotational3(q, v, P, gen):
 
 
 @njit(cache=True, inline="always")
-def _add_point_forces3(t, q, v, inputs, P, gen):
+def _add_point_forces3(t, q, v, inputs, P, gen, agx, agy, agz):
     """Applied point forces with time functions, grounded PD actuators (F = −[kp (d·r − ref) +
     kd d·ṙ] d), held inputs (three components each) and the ground motion (−m a_g on every body's
     Ṙ: coordinates relative to the moving ground) of a 3D scene."""
@@ -1416,7 +1428,6 @@ def _add_point_forces3(t, q, v, inputs, P, gen):
             _point_force3(q, v, pbody[p], ploc[p, 0], ploc[p, 1], ploc[p, 2],
                           inputs[3 * f], inputs[3 * f + 1], inputs[3 * f + 2], gen)
     if dims[GROUND_MODE] != GROUND_NONE:
-        agx, agy, agz = ground_acceleration(t, inputs, P)
         for k in range(0, dims[N_VELOCITY], 6):
             gen[k] -= mass[k] * agx
             gen[k + 1] -= mass[k] * agy
@@ -1559,9 +1570,10 @@ def assemble3(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     off = dims[KL]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
     _start_assembly(AB, gen, gravity, n, dims[HAS_GRAVITY])
     _add_bodies3(v, P, AB, perm, off, gen)
-    status = _add_elements3(q, v, z, P, AB, perm, off, gen)
+    agx, agy, agz = _ground_frame(t, inputs, P)
+    status = _add_elements3(q, v, z, P, AB, perm, off, gen, agx, agy, agz)
     _add_rotational3(q, v, P, gen)
-    _add_point_forces3(t, q, v, inputs, P, gen)
+    _add_point_forces3(t, q, v, inputs, P, gen, agx, agy, agz)
     for i in range(n):
         rhs[perm[i]] = gen[i]
     row = n

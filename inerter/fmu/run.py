@@ -108,9 +108,14 @@ class FmuResult:
     def units(self) -> dict[str, str]:
         return output_units(self)
 
+    def values(self) -> np.ndarray:
+        """Every output at every communication point (samples × outputs, in the order of ``names``), as
+        the solver's (``Result.values``)."""
+        return np.column_stack([self[n] for n in self.names]) if self.names else np.zeros((len(self.time), 0))
+
     def write_csv(self, path):
         """As the solver's (``Result.write_csv``): units in the header, ``time (s),C.r[1] (m),...``."""
-        data = np.column_stack([self.time] + [self[n] for n in self.names])
+        data = np.column_stack((self.time, self.values()))
         np.savetxt(path, data, delimiter=",", header=csv_header(self), comments="", fmt="%.12g")
 
     def to_dataframe(self):

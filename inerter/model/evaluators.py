@@ -160,9 +160,10 @@ class TranslationalElement:
         self._extra(self.row, L, Ldot, an_r, perp2, gq, self._x(z), extra, 0)
         return values + tuple(float(x) for x in extra)
 
-    def block(self, q, v):
+    def block(self, q, v, frame_acc=None):
         """A device's kinetic block (inerter.elements.device_inertia, run uncompiled) over the pair's
-        dofs: (M, Q, T, V: its kinetic and gravitational energy), or None without one. The terminals' kinematics are the points' own; the
+        dofs: (M, Q, T, V: its kinetic and gravitational energy), or None without one; frame_acc: the
+        ground's acceleration, which its parts feel (default none). The terminals' kinematics are the points' own; the
         mount's axis a₁ = A_a a̅₁ is the point a̅₁ on a's body less its origin."""
         if self.device is None or not self.device.inertia():
             return None
@@ -187,7 +188,11 @@ class TranslationalElement:
             if Ht is not None:
                 Ga1[:, :width] = Ht - Ho
         M, Q = np.zeros((n, n)), np.zeros(n)
-        T, V = device_inertia.block.py_func(self.row, Ha, Hb, ra, rb, va, vb, acc_a, acc_b, a1, a1d, a1dd, Ga1, M, Q)
+        frame = np.zeros(3)
+        if frame_acc is not None:
+            frame[:dim] = frame_acc
+        T, V = device_inertia.block.py_func(self.row, Ha, Hb, ra, rb, va, vb, acc_a, acc_b, frame, a1, a1d, a1dd,
+                                            Ga1, M, Q)
         keep = [i for i, p in enumerate((self.pair.a,) * width + (self.pair.b,) * width) if p.dofs is not None]
         return M[np.ix_(keep, keep)], Q[keep], T, V
 
@@ -232,6 +237,12 @@ class TranslationalElement:
         block = self.block(q, v)
         if block is not None:
             Q[self.pair.dofs] += block[1]
+
+    def add_frame_force(self, q, v, Q, frame_acc):
+        """Q += the inertial force −Σ m G_cᵀ a_g of a device's parts under a ground motion (its
+        block's right side with the ground's acceleration less without), like the bodies' −m a_g."""
+        if self.device is not None and self.device.inertia():
+            Q[self.pair.dofs] += self.block(q, v, frame_acc)[1] - self.block(q, v)[1]
 
     def energy(self, q, v) -> float:
         geo = self.geometry(q, v)

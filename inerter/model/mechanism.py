@@ -500,6 +500,8 @@ class Mechanism:
             a_g = self.ground_motion.acceleration(t, inputs, len(self.input_forces) * self.dim)
             for i, m in enumerate(self.masses):            # bodies move relative to the ground frame
                 Q[self.v_index[i]:self.v_index[i] + self.dim] -= m * a_g
+            for e in self.inerters:                         # and so do a device's housing, rod, flywheel
+                e.add_frame_force(q, v, Q, a_g)
         return M, Q
 
     def generalized_forces(self, t, q, v, inputs=None):

@@ -541,9 +541,13 @@ class DeviceBodies:
         origin = point_position(SimpleNamespace(body=point_a.body, local=np.zeros(3)), coords[point_a.body])
         return [a - o for a, o in zip(tip, origin)]
 
-    def terms(self, probe, q, v):
+    def terms(self, probe, q, v, frame_acc=None):
         """(M block, Q block, energy: kinetic T − ½ b L̇² and the parts' weight's potential −Σ m g·c)
-        over the probe's dofs."""
+        over the probe's dofs; frame_acc: the ground's acceleration a_g, under which each part's
+        absolute acceleration is c̈ + a_g (coordinates relative to the ground)."""
+        field = self.gravity.copy()
+        if frame_acc is not None:
+            field[:len(frame_acc)] -= frame_acc
         coords, ra, rb = probe.terminals(q, v)
         n = len(probe.dofs)
         if self.dim == 2:
@@ -557,7 +561,7 @@ class DeviceBodies:
             c = [p + x * e for p, e in zip(ra if end == "a" else rb, u)]
             cv, cd, cdd, cg = _parts(c)
             M += m * cg.T @ cg
-            Q -= m * cg.T @ (cdd - self.gravity)                # inertia and weight
+            Q -= m * cg.T @ (cdd - field)                       # inertia (absolute) and weight
             T += 0.5 * m * float(cd @ cd) - m * float(self.gravity @ cv)
             if self.spin:
                 Rb = R
@@ -669,6 +673,12 @@ class OracleElement:
 
     def length(self, q):
         return self.probe.evaluate(q, np.zeros_like(q))[0].v
+
+    def add_frame_force(self, q, v, Q, frame_acc):
+        """Q += the device parts' inertial force under a ground motion, −Σ m (∂c/∂q)ᵀ a_g."""
+        if self.bodies is not None:
+            Q[self.probe.dofs] += (self.bodies.terms(self.probe, q, v, frame_acc)[1]
+                                   - self.bodies.terms(self.probe, q, v)[1])
 
     def kinetic(self, q, v):
         if self.kind != "inerter":

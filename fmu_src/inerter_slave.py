@@ -168,6 +168,45 @@ def _compile_notice():
     return getattr(compiled, "NOTICE", None)
 
 
+#: The models loaded in this process, by the digest of their scene file: (the digest of the scene
+#: and every file it reads, {overrides: model}). A Model is the compiled description; steppers hold
+#: the state and change nothing in it (MuJoCo's mjModel / mjData). So the later instances of an FMU
+#: in one process (an importer's next run, a parameter sweep) take the models of the first instead
+#: of reading, validating and building the scene again (about half of an instantiation).
+_LOADED: dict[str, tuple[str, dict]] = {}
+#: The most scenes kept in _LOADED (the oldest goes first).
+LOADED_SCENES = 8
+
+
+def _files_digest(scene_path: Path, scene_bytes: bytes, data_files) -> str:
+    """The digest of a scene file and of the files it reads (ground records, beside it)."""
+    h = hashlib.sha256(scene_bytes)
+    for rel in data_files:
+        h.update(b"\0" + str(rel).encode("utf-8") + b"\0" + (scene_path.parent / rel).read_bytes())
+    return h.hexdigest()
+
+
+def _loaded_models(scene_path: Path, scene_bytes: bytes, scene_digest: str) -> dict:
+    """{overrides: model} for the scene at `scene_path`, with at least the scene's own model (key
+    ()): those loaded in this process when the scene and every file it reads are the same bytes,
+    else a fresh load (which raises as ``inerter.load`` does)."""
+    known = _LOADED.get(scene_digest)
+    if known is not None:
+        digest, models = known
+        try:
+            if _files_digest(scene_path, scene_bytes, models[()].scene.data_files) == digest:
+                return models
+        except OSError:
+            pass                                  # a file missing here: the load below says so
+    model = inerter.load(scene_path)
+    models = {(): model}
+    _LOADED.pop(scene_digest, None)
+    while len(_LOADED) >= LOADED_SCENES:
+        del _LOADED[next(iter(_LOADED))]
+    _LOADED[scene_digest] = (_files_digest(scene_path, scene_bytes, model.scene.data_files), models)
+    return models
+
+
 class _LogLines:
     """A text stream that hands each line written to it to `log` (CompileNotice prints to it)."""
 
@@ -224,10 +263,12 @@ class InerterSlave(Fmi2Slave):
         if not self.scene_file:
             raise TypeError(f"{type(self).__name__} does not name its scene file (scene_file)")
         self.scene_path = Path(self.resources or ".") / self.scene_file
-        self.scene_digest = hashlib.sha256(self.scene_path.read_bytes()).hexdigest()
-
-        model = inerter.load(self.scene_path)
-        self._models = {(): model}    # loaded models by their overrides (at most a few)
+        scene_bytes = self.scene_path.read_bytes()
+        self.scene_digest = hashlib.sha256(scene_bytes).hexdigest()
+        # loaded models by their overrides (at most a few), shared with the earlier instances of
+        # the same scene in this process (_loaded_models)
+        self._models = _loaded_models(self.scene_path, scene_bytes, self.scene_digest)
+        model = self._models[()]
         experiment = model.experiment
         if getattr(self.__class__, "description", None) is None:
             self.description = f"inerter scene {model.name}"
@@ -585,8 +626,9 @@ class InerterSlave(Fmi2Slave):
         model = self._models.get(key)
         if model is None:
             model = inerter.load(self.scene_path, **overrides)
-            if len(self._models) > 8:
-                self._models = {(): self._models[()]}
+            if len(self._models) > 8:                 # the scene's own model stays
+                for other in [k for k in self._models if k]:
+                    del self._models[other]
             self._models[key] = model
         return model
 

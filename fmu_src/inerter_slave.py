@@ -66,9 +66,6 @@ import traceback
 import zipfile
 from pathlib import Path
 
-from pythonfmu import Boolean, DefaultExperiment, Fmi2Slave, Integer, Real, String
-from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability, Fmi2Initial
-
 #: The archive of the package's modules beside this file (inerter.fmu.build.write_payload).
 PAYLOAD_FILE = "inerter_payload.zip"
 
@@ -121,7 +118,13 @@ def unpack_payload(resources: Path) -> Path | None:
     if not archive.is_file():
         return None
     folder = _unpacked(archive, (_cache_root() / "fmu-payload", resources / "_payload"))
-    if folder is None or "inerter" in sys.modules:
+    if folder is None:
+        return None
+    if "inerter" in sys.modules:
+        # The package stays the one imported; the folder, last on sys.path, still gives the
+        # pythonfmu the FMU carries where the process has none.
+        if str(folder) not in sys.path:
+            sys.path.append(str(folder))
         return folder
     entries = [str(Path(p).resolve()) if p else p for p in sys.path]
     where = entries.index(str(resources.resolve())) if str(resources.resolve()) in entries else 0
@@ -132,7 +135,10 @@ def unpack_payload(resources: Path) -> Path | None:
 
 SHIPPED_PACKAGE = unpack_payload(Path(__file__).resolve().parent)
 
-import inerter  # noqa: E402  (after its payload is unpacked)
+# After the payload is unpacked: it carries pythonfmu as well as the package.
+from pythonfmu import Boolean, DefaultExperiment, Fmi2Slave, Integer, Real, String  # noqa: E402
+from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability, Fmi2Initial  # noqa: E402
+import inerter  # noqa: E402
 from inerter.fmu import native as fmu_native
 from inerter.common.errors import InerterError, SimulationError
 

@@ -13,6 +13,11 @@ after two runs that load everything (the kernels, the modules, the scene's model
 run of an importer pays). For reference, the solver's whole run and the native steps called
 directly (the FMU binary's own work, benchmarks/fmu_overhead.py's `native_direct`).
 
+Then the native step's cost of entry: the C function (inerter.engine.kernels.native_step_cfunc)
+called through ctypes at a time that is not the current communication point, where it declines at
+its first check (after taking the table apart into its arrays, before any copy or step), against a
+ctypes call of a C function that does nothing.
+
 `--profile` prints cProfile's view of the fixed stages (instantiate to free) of the scene's FMU.
 """
 from __future__ import annotations
@@ -100,6 +105,30 @@ def solver_reference(scene: Path) -> tuple[float, float]:
     return whole, time.process_time() - t0
 
 
+def entry_cost(scene: Path, calls: int = 100_000) -> tuple[float, float]:
+    """Microseconds per ctypes call: (a C function that does nothing, the native step declining at
+    its first check), best of 3."""
+    from numba import cfunc, types
+
+    @cfunc(types.int32(types.voidptr, types.float64, types.float64))
+    def nothing(table, t, h):
+        return 0
+    st = inerter.load(scene).stepper(path="compiled", stop_time=STOP)
+    st.step(STEP)
+    table = st.native_table(1e-9)
+    address = table.ctypes.data
+    out = []
+    for fn in (NATIVE_C(nothing.address), NATIVE_C(st.native_function().address)):
+        best = float("inf")
+        for _ in range(3):
+            t0 = time.process_time()
+            for _ in range(calls):
+                fn(address, STOP / 2, STEP)           # not the current point: declined at once
+            best = min(best, time.process_time() - t0)
+        out.append(1e6 * best / calls)
+    return out[0], out[1]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--scenes", default="lumped_mass_2d,two_bar_2d")
@@ -128,6 +157,9 @@ def main(argv=None):
             print(f"| {key} | {f:.2f} | {c:.2f} | {f - c:.2f} |")
         fixed = sum(1e3 * (best[fmu][k] - best[c_floor][k]) for k in STAGES if k != "further steps + getReal")
         print(f"| all but the further steps | | | {fixed:.2f} |")
+        nothing, declined = entry_cost(scene)
+        print(f"\nctypes call of a C function that does nothing: {nothing:.3f} µs; of the native step "
+              f"declining at its first check: {declined:.3f} µs")
         if args.profile:
             profile = cProfile.Profile()
             for _ in range(20):

@@ -1,10 +1,11 @@
-"""Where an FMU run's time goes, stage by stage, against a C FMU that does nothing.
+"""Where an FMU run's time goes, stage by stage, against FMUs that do nothing.
 
     python benchmarks/fmu_stages.py [--scenes lumped_mass_2d,two_bar_2d] [--repeats 7] [--profile]
 
 The stages of `fmpy.simulate_fmu`, made one by one with fmpy's own calls (as simulate_fmu makes
-them), for the scene's FMU (compiled path, native steps as shipped) and for the C floor of
-benchmarks/fmu_overhead.py (a C binary that does nothing, with as many outputs): reading the model
+them), for the scene's FMU (compiled path, native steps as shipped) and for the two floors of
+benchmarks/fmu_overhead.py (a pythonfmu FMU that does nothing, with as many outputs, and the same
+with a C binary that does nothing): reading the model
 description, extracting the FMU, loading its binary, instantiating, setupExperiment + enter/exit
 initialization mode, the first doStep, the further communication steps (0.01 s up to 20 s) each
 followed by a getReal of every output (as simulate_fmu records them), terminate + freeInstance,
@@ -140,23 +141,25 @@ def main(argv=None):
     for name in args.scenes.split(","):
         scene = ROOT / "scenarios" / f"{name}.toml"
         fmu = str(build(scene, scratch / "fmu"))
-        c_floor = c_floor_fmu(floor_fmu(len(inerter.load(scene).output_info()), scratch), scratch)
-        best = {which: dict.fromkeys(STAGES, float("inf")) for which in (fmu, c_floor)}
+        floor = floor_fmu(len(inerter.load(scene).output_info()), scratch)
+        c_floor = c_floor_fmu(floor, scratch)
+        best = {which: dict.fromkeys(STAGES, float("inf")) for which in (fmu, floor, c_floor)}
         reference = [float("inf")] * 2
         for _ in range(2):
-            stages(fmu), stages(c_floor), solver_reference(scene)
+            stages(fmu), stages(floor), stages(c_floor), solver_reference(scene)
         for _ in range(args.repeats):              # in turn, so that drifting load weighs on all
-            for which in (fmu, c_floor):
+            for which in (fmu, floor, c_floor):
                 for key, value in stages(which).items():
                     best[which][key] = min(best[which][key], value)
             reference = [min(a, b) for a, b in zip(reference, solver_reference(scene))]
         print(f"\n{name}: process ms, best of {args.repeats}; whole run {1e3 * reference[0]:.1f}, native steps "
-              f"called directly {1e3 * reference[1]:.1f}\n\n| stage | FMU | C floor | FMU − C floor |\n|---|---|---|---|")
+              f"called directly {1e3 * reference[1]:.1f}\n\n| stage | FMU | pythonfmu floor | C floor "
+              f"| FMU − C floor |\n|---|---|---|---|---|")
         for key in STAGES:
-            f, c = 1e3 * best[fmu][key], 1e3 * best[c_floor][key]
-            print(f"| {key} | {f:.2f} | {c:.2f} | {f - c:.2f} |")
+            f, p, c = (1e3 * best[which][key] for which in (fmu, floor, c_floor))
+            print(f"| {key} | {f:.2f} | {p:.2f} | {c:.2f} | {f - c:.2f} |")
         fixed = sum(1e3 * (best[fmu][k] - best[c_floor][k]) for k in STAGES if k != "further steps + getReal")
-        print(f"| all but the further steps | | | {fixed:.2f} |")
+        print(f"| all but the further steps | | | | {fixed:.2f} |")
         nothing, declined = entry_cost(scene)
         print(f"\nctypes call of a C function that does nothing: {nothing:.3f} µs; of the native step "
               f"declining at its first check: {declined:.3f} µs")

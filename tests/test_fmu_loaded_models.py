@@ -20,12 +20,16 @@ SCENE = ROOT / "scenarios" / "tid_storey_2d.toml"      # reads a ground record b
 
 @pytest.fixture(scope="module")
 def slave():
+    """fmu_src/inerter_slave.py, imported for these tests only (an FMU run later in the same
+    process must import the slave its FMU carries)."""
     sys.path.insert(0, str(ROOT / "fmu_src"))
     try:
         import inerter_slave
     finally:
         sys.path.remove(str(ROOT / "fmu_src"))
-    return inerter_slave
+    yield inerter_slave
+    inerter_slave._LOADED.clear()
+    sys.modules.pop("inerter_slave", None)
 
 
 def _copy(folder: Path) -> Path:

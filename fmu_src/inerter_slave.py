@@ -66,9 +66,6 @@ import traceback
 import zipfile
 from pathlib import Path
 
-from pythonfmu import Boolean, DefaultExperiment, Fmi2Slave, Integer, Real, String
-from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability, Fmi2Initial
-
 #: The archive of the package's modules beside this file (inerter.fmu.build.write_payload).
 PAYLOAD_FILE = "inerter_payload.zip"
 
@@ -121,7 +118,13 @@ def unpack_payload(resources: Path) -> Path | None:
     if not archive.is_file():
         return None
     folder = _unpacked(archive, (_cache_root() / "fmu-payload", resources / "_payload"))
-    if folder is None or "inerter" in sys.modules:
+    if folder is None:
+        return None
+    if "inerter" in sys.modules:
+        # The package stays the one imported; the folder, last on sys.path, still gives the
+        # pythonfmu the FMU carries where the process has none.
+        if str(folder) not in sys.path:
+            sys.path.append(str(folder))
         return folder
     entries = [str(Path(p).resolve()) if p else p for p in sys.path]
     where = entries.index(str(resources.resolve())) if str(resources.resolve()) in entries else 0
@@ -132,7 +135,10 @@ def unpack_payload(resources: Path) -> Path | None:
 
 SHIPPED_PACKAGE = unpack_payload(Path(__file__).resolve().parent)
 
-import inerter  # noqa: E402  (after its payload is unpacked)
+# After the payload is unpacked: it carries pythonfmu as well as the package.
+from pythonfmu import Boolean, DefaultExperiment, Fmi2Slave, Integer, Real, String  # noqa: E402
+from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability, Fmi2Initial  # noqa: E402
+import inerter  # noqa: E402
 from inerter.fmu import native as fmu_native
 from inerter.common.errors import InerterError, SimulationError
 
@@ -166,6 +172,45 @@ def _compile_notice():
     except Exception:
         return None
     return getattr(compiled, "NOTICE", None)
+
+
+#: The models loaded in this process, by the digest of their scene file: (the digest of the scene
+#: and every file it reads, {overrides: model}). A Model is the compiled description; steppers hold
+#: the state and change nothing in it (MuJoCo's mjModel / mjData). So the later instances of an FMU
+#: in one process (an importer's next run, a parameter sweep) take the models of the first instead
+#: of reading, validating and building the scene again (about half of an instantiation).
+_LOADED: dict[str, tuple[str, dict]] = {}
+#: The most scenes kept in _LOADED (the oldest goes first).
+LOADED_SCENES = 8
+
+
+def _files_digest(scene_path: Path, scene_bytes: bytes, data_files) -> str:
+    """The digest of a scene file and of the files it reads (ground records, beside it)."""
+    h = hashlib.sha256(scene_bytes)
+    for rel in data_files:
+        h.update(b"\0" + str(rel).encode("utf-8") + b"\0" + (scene_path.parent / rel).read_bytes())
+    return h.hexdigest()
+
+
+def _loaded_models(scene_path: Path, scene_bytes: bytes, scene_digest: str) -> dict:
+    """{overrides: model} for the scene at `scene_path`, with at least the scene's own model (key
+    ()): those loaded in this process when the scene and every file it reads are the same bytes,
+    else a fresh load (which raises as ``inerter.load`` does)."""
+    known = _LOADED.get(scene_digest)
+    if known is not None:
+        digest, models = known
+        try:
+            if _files_digest(scene_path, scene_bytes, models[()].scene.data_files) == digest:
+                return models
+        except OSError:
+            pass                                  # a file missing here: the load below says so
+    model = inerter.load(scene_path)
+    models = {(): model}
+    _LOADED.pop(scene_digest, None)
+    while len(_LOADED) >= LOADED_SCENES:
+        del _LOADED[next(iter(_LOADED))]
+    _LOADED[scene_digest] = (_files_digest(scene_path, scene_bytes, model.scene.data_files), models)
+    return models
 
 
 class _LogLines:
@@ -224,10 +269,12 @@ class InerterSlave(Fmi2Slave):
         if not self.scene_file:
             raise TypeError(f"{type(self).__name__} does not name its scene file (scene_file)")
         self.scene_path = Path(self.resources or ".") / self.scene_file
-        self.scene_digest = hashlib.sha256(self.scene_path.read_bytes()).hexdigest()
-
-        model = inerter.load(self.scene_path)
-        self._models = {(): model}    # loaded models by their overrides (at most a few)
+        scene_bytes = self.scene_path.read_bytes()
+        self.scene_digest = hashlib.sha256(scene_bytes).hexdigest()
+        # loaded models by their overrides (at most a few), shared with the earlier instances of
+        # the same scene in this process (_loaded_models)
+        self._models = _loaded_models(self.scene_path, scene_bytes, self.scene_digest)
+        model = self._models[()]
         experiment = model.experiment
         if getattr(self.__class__, "description", None) is None:
             self.description = f"inerter scene {model.name}"
@@ -585,8 +632,9 @@ class InerterSlave(Fmi2Slave):
         model = self._models.get(key)
         if model is None:
             model = inerter.load(self.scene_path, **overrides)
-            if len(self._models) > 8:
-                self._models = {(): self._models[()]}
+            if len(self._models) > 8:                 # the scene's own model stays
+                for other in [k for k in self._models if k]:
+                    del self._models[other]
             self._models[key] = model
         return model
 

@@ -70,8 +70,16 @@ def payload(fmu: Path) -> zipfile.ZipFile:
 
 
 def test_the_fmu_carries_the_modules_the_slave_imports_and_no_other(fmu):
-    names = payload(fmu).namelist()
-    assert all(n.endswith(".py") for n in names), names
+    every_name = payload(fmu).namelist()
+    assert all(n.endswith(".py") for n in every_name), every_name
+    names = [n for n in every_name if n.startswith("inerter/")]
+    # pythonfmu's modules, which its builder embeds in resources/pythonfmu/ (every .py file of the
+    # package's top folder), are in the archive instead.
+    import pythonfmu
+    embedded = {"pythonfmu/" + p.name for p in Path(pythonfmu.__file__).parent.glob("*.py")}
+    assert set(every_name) - set(names) == embedded
+    with zipfile.ZipFile(fmu) as z:
+        assert not [n for n in z.namelist() if n.startswith("resources/pythonfmu/")]
     shipped = {_module(n) for n in names}
     # The kernels' sources, loaded from a copy of their file and listed by inerter.elements,
     # are no import statements: the FMU carries them as the kernels' cache key needs them.
@@ -103,7 +111,7 @@ for compiled in (True, False):
     results[str(compiled)] = {n: r[n].tolist() for n in ["time"] + job["outputs"]}
 print(json.dumps({"results": results, "folder": str(folder),
                   "files": {m: str(getattr(sys.modules[m], "__file__", None)) for m in list(sys.modules)
-                            if m == "inerter" or m.startswith(("inerter.", "inerter_"))}}))
+                            if m in ("inerter", "pythonfmu") or m.startswith(("inerter.", "inerter_", "pythonfmu."))}}))
 """
 
 
@@ -137,6 +145,7 @@ def test_the_fmu_runs_on_what_it_carries_in_a_process_without_the_repository(fmu
     assert not outside, f"imported from outside the FMU: {outside}"
     modules = {m for m, f in out["files"].items() if unpacked[0].resolve() in Path(f).resolve().parents}
     assert "inerter.engine.compiled" in modules, sorted(out["files"])
+    assert "pythonfmu.fmi2slave" in modules, sorted(out["files"])          # from the payload too
     for compiled, result in out["results"].items():
         path = "compiled" if compiled == "True" else "numpy"
         ref = model.simulate(stop_time=RUN_TIME, output_interval=dt, rtol=RTOL, metrics=False,

@@ -73,6 +73,8 @@ SLAVE_FILE = "inerter_slave.py"
 #: same name) and the time stamp of its entries.
 PAYLOAD_FILE = "inerter_payload.zip"
 PAYLOAD_DATE = (2020, 1, 1, 0, 0, 0)
+#: Where pythonfmu's builder embeds pythonfmu in an FMU; the build moves it into the payload.
+EMBEDDED_PYTHONFMU = "resources/pythonfmu/"
 TEMPLATE_FILE = "model_module.py.template"
 SHIM_FILE = "status_shim.c"
 SHIM_HEADER = "fmi2_types.h"
@@ -95,7 +97,7 @@ DISPLAY_UNITS = {"m": "mm", "m/s": "mm/s", "rad": "deg", "rad/s": "deg/s"}
 METHOD_TYPE = "IntegrationMethod"
 HASH_SUFFIX = ".fmu.source-hash"
 #: Bump when the layout of a built FMU changes without any shipped source changing.
-BUILD_FORMAT = "inerter-fmu-build/4"
+BUILD_FORMAT = "inerter-fmu-build/5"
 MODULE_PREFIX = "inerter_fmu_"
 
 
@@ -214,12 +216,27 @@ def write_payload(target: Path) -> None:
     One file instead of some sixty: an importer extracts the whole FMU at every instantiation
     (fmpy: about 6 ms for those files on a 2-core machine), while the slave unpacks the archive
     once per machine (``unpack_payload`` in fmu_src/inerter_slave.py). Entries carry a fixed
-    time stamp, so the archive, and the folder it unpacks to, depend on the files' contents only."""
+    time stamp, so the archive, and the folder it unpacks to, depend on the files' contents only.
+
+    The archive carries pythonfmu's modules too (``pythonfmu/...``, the files pythonfmu's builder
+    would put in ``resources/pythonfmu/``, which the build leaves out of the FMU): twelve files
+    fewer for the importer to extract and delete at every run (about 1.5 ms of fmpy's
+    simulate_fmu, docs/benchmarks/fmu_overhead_paper_scenes.md)."""
+    entries = [("inerter/" + path.relative_to(PACKAGE_DIR).as_posix(), path)
+               for path in _shipped_package_files()]
+    entries += [("pythonfmu/" + path.name, path) for path in _pythonfmu_files()]
     with zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as z:
-        for path in _shipped_package_files():
-            name = "inerter/" + path.relative_to(PACKAGE_DIR).as_posix()
+        for name, path in entries:
             z.writestr(zipfile.ZipInfo(name, date_time=PAYLOAD_DATE), path.read_bytes(),
                        compress_type=zipfile.ZIP_DEFLATED)
+
+
+def _pythonfmu_files() -> list[Path]:
+    """pythonfmu's modules, as its builder embeds them in an FMU (every .py file of the package's
+    top folder), sorted."""
+    import pythonfmu
+
+    return sorted(Path(pythonfmu.__file__).resolve().parent.glob("*.py"))
 
 
 def source_hash(scene_path: Path, data_files=()) -> str:
@@ -244,6 +261,8 @@ def source_hash(scene_path: Path, data_files=()) -> str:
     add("shim", b"compiled" if _shim_compiler()[0] else b"none")
     for path in _shipped_package_files():
         add("inerter/" + path.relative_to(PACKAGE_DIR).as_posix(), path.read_bytes())
+    for path in _pythonfmu_files():
+        add("pythonfmu/" + path.name, path.read_bytes())
     return h.hexdigest()
 
 
@@ -561,6 +580,8 @@ def _complete_model_description(src: Path, dest: Path, units: dict[str, str], di
         # (docs/fmu_overhead.md); the FMU is 1.1 MB instead of 0.36 MB.
         with zipfile.ZipFile(dest, "w", compression=zipfile.ZIP_STORED) as zout:
             for info in zin.infolist():
+                if info.filename.startswith(EMBEDDED_PYTHONFMU):
+                    continue                      # in the payload (write_payload)
                 if info.filename == "modelDescription.xml":
                     zout.writestr(info.filename, xml)
                 elif info.filename == linux_binary and shim is not None:

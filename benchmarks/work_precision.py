@@ -191,12 +191,18 @@ def main(argv=None):
     p.add_argument("--budget", type=float, default=30.0)
     p.add_argument("--out", default=str(ROOT / "docs" / "benchmarks"))
     p.add_argument("--scenes", default="two_bar_2d,lumped_mass_2d")
-    p.add_argument("--paths", default="numpy,compiled,fmu,default",
-                   help="some of numpy, compiled, fmu (the sweeps) and default (the default call against the "
-                        "hand-written ODE, two_bar_2d)")
+    p.add_argument("--paths", default="numpy,compiled,fmu,default,hard",
+                   help="some of numpy, compiled, fmu (the sweeps), default (the default call against the "
+                        "hand-written ODE, two_bar_2d) and hard (the device hard cases' steps, a section of "
+                        "work_precision.md; alone, it replaces that section only)")
     a = p.parse_args(argv)
     out = Path(a.out)
-    paths = [x for x in a.paths.split(",") if x and x != "default"]
+    hard = "hard" in a.paths.split(",")
+    paths = [x for x in a.paths.split(",") if x and x not in ("default", "hard")]
+    if hard and not paths:
+        _replace_hard_section(out / "work_precision.md", hard_section())
+        if "default" not in a.paths.split(","):
+            return
     if "default" in a.paths.split(",") and "two_bar_2d" in a.scenes.split(","):
         scene = ROOT / "scenarios" / "two_bar_2d.toml"
         model = inerter.load(scene)
@@ -266,8 +272,38 @@ def main(argv=None):
                            f"nothing, with as many outputs (benchmarks/c_floor_fmu.c), {floor:.4f} s a run; the "
                            f"FMU costs {'; '.join(extra)} on top of it")
             summary.append("")
+    if hard:
+        summary += hard_section()
     (out / "work_precision.md").write_text("\n".join(summary) + "\n")
     print("\n".join(summary))
+
+
+HARD_TITLE = "## Device hard cases"
+
+
+def hard_section() -> list[str]:
+    """The device hard cases' work-precision (steps, evaluations, events, CPU, error at each tolerance
+    down to the tightest; inerter.studies.bench.hard_case_rows) as a section of work_precision.md."""
+    rows = bench.hard_case_rows(ROOT / "scenarios" / "hard")
+    failed = [f"- {r['case']} {r['method']} rtol {r['rtol']:g}: {r['message']}" for r in rows if r["status"] != "ok"]
+    return [HARD_TITLE, "",
+            f"`python benchmarks/work_precision.py --paths hard` (this section alone), {time.strftime('%Y-%m-%d')}: "
+            "5 s of each scene of scenarios/hard/ (stick-slip of a tanh friction "
+            "with v_s = 1 mm/s, backlash impacts of a 2 mm gap, Hunt-Crossley end stops), atol = rtol/100, "
+            "compiled right-hand side (DOP853: the compiled loop; Radau: scipy's). Error: the largest deviation "
+            "of the points' positions from the same scene's DOP853 run at rtol 1e-13, over the 10 ms samples. "
+            f"CPU: the integration's process time, {bench.REPEATS_TEXT}. Events: end-stop contacts and releases, "
+            "backlash engagements and releases (Result.events). Discussion: [../hard_cases.md](../hard_cases.md).",
+            "", bench.hard_case_table(rows), ""] + (["Failed runs:", ""] + failed + [""] if failed else [])
+
+
+def _replace_hard_section(path: Path, section: list[str]):
+    """work_precision.md with its hard-case section (the last) replaced by `section`."""
+    text = path.read_text(encoding="utf-8") if path.is_file() else "# Work-precision of the paper scenes\n"
+    head = text.split(HARD_TITLE)[0].rstrip("\n")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(head + "\n\n" + "\n".join(section) + "\n", encoding="utf-8")
+    print("\n".join(section))
 
 
 if __name__ == "__main__":

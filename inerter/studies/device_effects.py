@@ -15,9 +15,11 @@ slab along X and Y). Each row is the scene with its inerters built as a device
 - ``backlash``: a dead zone in that series connection (with the same spring: backlash needs one);
 - ``end_stops``: Hunt-Crossley contact past the stroke limits (c_s from e, Lankarani & Nikravesh
   1990);
-- ``all``: every effect above; in 3D without the mount, which the engine refuses beside a series
-  connection (the mount's gyroscopic terms spin the flywheel with the terminal distance, not with
-  the inerter's own stroke).
+- ``efficiency``: the screw's efficiency, forward η_f while the terminals drive the flywheel and
+  backward η_b while it drives them (:mod:`inerter.elements.device`);
+- ``all``: every effect above but the efficiency, which the engine refuses beside a series
+  connection; in 3D without the mount, which it refuses there too (the mount's gyroscopic terms
+  spin the flywheel with the terminal distance, not with the inerter's own stroke).
 
 The device's parameters come from ``scenarios/devices/ballscrew_device.toml``, a source for every
 value (most are representative, assumed: its header says which). Each row is written as a scene
@@ -51,6 +53,7 @@ ROWS = {
     "compliance": ("+ series compliance", ("compliance",)),
     "backlash": ("+ backlash (with the series spring)", ("compliance", "backlash")),
     "end_stops": ("+ end stops", ("end_stops",)),
+    "efficiency": ("+ screw efficiency (η_f, η_b)", ("efficiency",)),
     "all": ("all effects together (3D: no mount)", ("masses", "friction", "compliance", "backlash", "end_stops")),
 }
 SCENES = ("two_bar_2d", "braced_frame_3d")
@@ -100,7 +103,8 @@ def _value(path: Path, fld: str, raw) -> Value:
 
 SCENE_KEYS = ("scene", "inerters", "inertance", "metrics")
 DEVICE_VALUES = ("lead", "specific_inertance", "flywheel_mass_share", "housing_mass_share", "rod_mass_share",
-                 "transverse_ratio", "part_length_share", "velocity_scale", "restitution", "backlash_gap")
+                 "transverse_ratio", "part_length_share", "velocity_scale", "restitution", "backlash_gap",
+                 "efficiency_forward", "efficiency_backward")
 SCENE_VALUES = ("coulomb", "viscous", "series_stiffness", "stroke", "stop_stiffness", "impact_speed")
 
 
@@ -203,6 +207,8 @@ def device_parameters(device: dict, case: SceneCase, b: float, length: float) ->
         "dev_Lmax": (length + s["stroke"], "m", "upper stroke limit"),
         "dev_ks": (k_s, "N/m", "end-stop contact stiffness"),
         "dev_cs": (3.0 * k_s * (1.0 - e * e) / (4.0 * v_i), "N.s/m2", "end-stop damping 3 k_s (1 - e^2)/(4 v)"),
+        "dev_etaf": (d["efficiency_forward"], "1", "screw efficiency, terminals driving the flywheel"),
+        "dev_etab": (d["efficiency_backward"], "1", "screw efficiency, flywheel driving the terminals"),
     }
 
 
@@ -222,6 +228,8 @@ def device_tables(effects, dimension: int, mount_axis=None) -> dict:
         dev["compliance"] = {"stiffness": "dev_kc"}
     if "backlash" in effects:
         dev["backlash"] = {"gap": "dev_gap"}
+    if "efficiency" in effects:
+        dev["efficiency"] = {"forward": "dev_etaf", "backward": "dev_etab"}
     if "end_stops" in effects:
         dev["end_stops"] = {"min": "dev_Lmin", "max": "dev_Lmax", "stiffness": "dev_ks", "damping": "dev_cs"}
     return dev
@@ -406,7 +414,8 @@ def _mm(v) -> str:
 TABLE_HEADER = ("Device values: scenarios/devices/ballscrew_device.toml. Sourced: b = J (2π/p)² (Smith 2002), "
                 "e = 0.5 (Appl. Sci. 13 (2023) 2168), c_s from e (Lankarani & Nikravesh 1990), the device's mass "
                 "m = b/90 (Madhamshetty & Manimala 2018). The lead, mass split, friction, series stiffness, "
-                "backlash, transverse inertia's shape, stroke limits and contact stiffness are REPRESENTATIVE, "
+                "backlash, transverse inertia's shape, stroke limits, contact stiffness and screw efficiencies are "
+                "REPRESENTATIVE, "
                 "ASSUMED, not the identified parameters of a published device.")
 
 

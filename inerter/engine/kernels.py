@@ -679,32 +679,37 @@ def _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey):
 def state_rates2(q, v, z, qdd, P, dz):
     """dz: the rates of the translational elements' internal states of a 2D scene, at the state
     (q, v, z) and its solved accelerations q̈ (each kind's ``state_rates``, with gᵀq̈)."""
-    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    el_int, el_real = P[EL_INT], P[EL_REAL]
     for e in range(el_int.shape[0]):
         if el_int[e, STATES] == 0:
             continue
-        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
-            q, v, e, el_int, el_real, pbody, ploc)
-        Ldot, an, perp2 = axial_scalars(rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
-        gq = _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
+        kind, L, Ldot, an, perp2, gq = _axial2(q, v, qdd, e, P)
         o = el_int[e, STATE]
         c = el_int[e, STATES]
         law.state_rates(kind, el_real[e], L, Ldot, an, perp2, gq, z[o:o + c], dz[o:o + c])
+
+
+@njit(cache=True, inline="always")
+def _axial2(q, v, qdd, e, P):
+    """Element e's axial kinematics in a 2D scene at the solved accelerations q̈: (kind, L, L̇,
+    a_n·r̂, |ṙ⊥|², gᵀq̈), what its laws of the internal states and of the efficiency's mode read."""
+    kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
+        q, v, e, P[EL_INT], P[EL_REAL], P[PBODY], P[PLOC])
+    Ldot, an, perp2 = axial_scalars(rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
+    return kind, L, Ldot, an, perp2, _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
 
 
 @njit(cache=True)
 def settle2(q, v, qdd, P):
     """Set each screw efficiency's mode of a 2D scene from the solved accelerations q̈
     (inerter.elements.inerter.settle); returns how many changed."""
-    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    el_int, el_real = P[EL_INT], P[EL_REAL]
     changed = 0
     for e in range(el_int.shape[0]):
         if el_real[e, EFFICIENCY] == 0.0:
             continue
-        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
-            q, v, e, el_int, el_real, pbody, ploc)
-        Ldot, an, perp2 = axial_scalars(rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
-        changed += settle(el_real[e], L, Ldot, an, perp2, _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey))
+        kind, L, Ldot, an, perp2, gq = _axial2(q, v, qdd, e, P)
+        changed += settle(el_real[e], L, Ldot, an, perp2, gq)
     return changed
 
 
@@ -1678,35 +1683,40 @@ def _gq3(qdd, ba, bb, ga, gb):
 def state_rates3(q, v, z, qdd, P, dz):
     """dz: the rates of the translational elements' internal states of a 3D scene (as
     :func:`state_rates2`)."""
-    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    el_int, el_real = P[EL_INT], P[EL_REAL]
     ga = np.empty(6)
     gb = np.empty(6)
     for e in range(el_int.shape[0]):
         if el_int[e, STATES] == 0:
             continue
-        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
-            q, v, e, el_int, el_real, pbody, ploc, ga, gb)
-        Ldot, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+        kind, L, Ldot, an, perp2, gq = _axial3(q, v, qdd, e, P, ga, gb)
         o = el_int[e, STATE]
         c = el_int[e, STATES]
-        law.state_rates(kind, el_real[e], L, Ldot, an, perp2, _gq3(qdd, ba, bb, ga, gb), z[o:o + c], dz[o:o + c])
+        law.state_rates(kind, el_real[e], L, Ldot, an, perp2, gq, z[o:o + c], dz[o:o + c])
+
+
+@njit(cache=True, inline="always")
+def _axial3(q, v, qdd, e, P, ga, gb):
+    """Element e's axial kinematics in a 3D scene at q̈ (as :func:`_axial2`); ga, gb: work (6)."""
+    kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
+        q, v, e, P[EL_INT], P[EL_REAL], P[PBODY], P[PLOC], ga, gb)
+    Ldot, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+    return kind, L, Ldot, an, perp2, _gq3(qdd, ba, bb, ga, gb)
 
 
 @njit(cache=True)
 def settle3(q, v, qdd, P):
     """Set each screw efficiency's mode of a 3D scene from the solved accelerations q̈ (as
     :func:`settle2`); returns how many changed."""
-    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    el_int, el_real = P[EL_INT], P[EL_REAL]
     ga = np.empty(6)
     gb = np.empty(6)
     changed = 0
     for e in range(el_int.shape[0]):
         if el_real[e, EFFICIENCY] == 0.0:
             continue
-        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
-            q, v, e, el_int, el_real, pbody, ploc, ga, gb)
-        Ldot, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
-        changed += settle(el_real[e], L, Ldot, an, perp2, _gq3(qdd, ba, bb, ga, gb))
+        kind, L, Ldot, an, perp2, gq = _axial3(q, v, qdd, e, P, ga, gb)
+        changed += settle(el_real[e], L, Ldot, an, perp2, gq)
     return changed
 
 

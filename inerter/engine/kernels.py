@@ -589,15 +589,22 @@ def accelerations(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out):
     the modes are checked against the solved L̈ and, where one flipped, solved again
     (:func:`_settle_modes`; inerter.elements.device: exact, two solves for one such element)."""
     P = _unowned(P)                 # entered from Python (_unowned)
+    status = _solve(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out)
+    if rarely(P[DIMS][EFFICIENT] != 0) and status != SINGULAR:
+        return _settle_modes(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out, status)
+    return status
+
+
+@njit(cache=True, inline="always")
+def _solve(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out):
+    """Assemble Eq. (33) and solve it into `out` (original ordering): the assembly's status, or
+    SINGULAR (out untouched)."""
     perm = P[PERM]
-    dims = P[DIMS]
     status = _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
-    if not band_solve(AB, rhs, dims[KL]):
+    if not band_solve(AB, rhs, P[DIMS][KL]):
         return SINGULAR
     for i in range(out.shape[0]):
         out[i] = rhs[perm[i]]
-    if rarely(dims[EFFICIENT] != 0):
-        return _settle_modes(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out, status)
     return status
 
 
@@ -607,18 +614,14 @@ def _settle_modes(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out, status):
     it and, while one changed, solve again in the new modes; after device.MODE_SOLVES such checks
     whose modes still changed, the call is counted (dims[UNSETTLED]) and the solve in the modes
     last set is kept (so that the force and the stored modes agree). Returns the status."""
-    perm = P[PERM]
-    dims = P[DIMS]
     for attempt in range(MODE_SOLVES + 1):
         if attempt == MODE_SOLVES:
-            dims[UNSETTLED] += 1
+            P[DIMS][UNSETTLED] += 1
         elif _settle_of(q, v, out, P) == 0:
             return status
-        status = _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
-        if not band_solve(AB, rhs, dims[KL]):
-            return SINGULAR
-        for i in range(out.shape[0]):
-            out[i] = rhs[perm[i]]
+        status = _solve(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out)
+        if status == SINGULAR:
+            return status
     return status
 
 

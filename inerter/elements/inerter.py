@@ -21,7 +21,7 @@ The inertance is the scene's ``b``, or what the device's flywheel (b = J (2π/p)
 """
 from inerter.elements import device
 from inerter.elements.base import TRANSLATIONAL, ElementKind, Parameter, law, rarely
-from inerter.elements.layout import CENTRIPETAL, COEFFICIENT, DEVICE, EFFICIENCY, SERIES
+from inerter.elements.layout import CENTRIPETAL, COEFFICIENT, DEVICE, SERIES
 
 KIND = ElementKind(
     name="inerter", family=TRANSLATIONAL, equation="Eq. 9 (Eq. 8 without the centripetal term)",
@@ -55,12 +55,8 @@ def force(row, L, Ldot, an, perp2):
     (Eq. 8), plus a declared device's forces. `an` is a_n·r̂, `perp2` is |ṙ|² − L̇² = |ṙ⊥|². With
     series compliance the inertial part is carried by the series connection (:func:`state_force`);
     with a screw efficiency it is b_eff (a_n·r̂ + |ṙ⊥|²/L), b_eff = :func:`inertance`."""
-    F = row[COEFFICIENT] * convective(row, L, an, perp2)
+    F = inertance(row) * convective(row, L, an, perp2)
     if rarely(row[DEVICE] != 0.0):
-        if row[SERIES] != 0.0:
-            F = 0.0
-        elif row[EFFICIENCY] != 0.0:
-            F = device.inertance(row) * convective(row, L, an, perp2)
         F += device.force(row, L, Ldot)
     return F
 

@@ -134,7 +134,7 @@ def linearize(mech, q_star=None, h=1e-6):
         raise SimulationError("the linearisation is of (q, v) only, and this scene's inerter devices have "
                               "internal states (series compliance, backlash): its frequencies would miss their "
                               "modes; give metrics of such a scene an explicit reference")
-    if any(getattr(e, "efficient", None) is not None and e.efficient() for e in mech.elements):
+    if mech.efficient:
         raise SimulationError("the linearisation needs a smooth mass matrix, and this scene's screw efficiency "
                               "(device.efficiency) switches b by the direction of the power flow: give metrics of "
                               "such a scene an explicit reference")

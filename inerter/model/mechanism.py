@@ -106,6 +106,8 @@ class Mechanism:
         self.initial_q = np.array(q0, dtype=float)
         self.elements = [self._element(e, q0) for e in scene.elements.values()]
         self.inerters = [e for e in self.elements if e.kind == "inerter"]
+        #: The elements with a screw efficiency, whose modes each solve settles (:meth:`accelerations`).
+        self.efficient = [e for e in self.inerters if getattr(e, "efficient", None) is not None and e.efficient()]
         # Elements on the same pair of terminals share one evaluation of the pair's geometry (one
         # acting along a fixed direction has geometry of its own).
         groups = {}
@@ -531,10 +533,9 @@ class Mechanism:
         efficiencies, solved again until their modes agree with the solved L̈, as the kernels do
         (inerter.elements.device, ``kernels.accelerations``; after MODE_SOLVES checks, once more in
         the modes last set)."""
-        efficient = [e for e in self.elements if getattr(e, "efficient", None) is not None and e.efficient()]
         for _ in range(MODE_SOLVES):
             a, lam = self._accelerations(t, q, v, inputs, alpha, z)
-            if not sum(e.settle(q, v, a) for e in efficient):
+            if not sum(e.settle(q, v, a) for e in self.efficient):
                 return a, lam
         return self._accelerations(t, q, v, inputs, alpha, z)       # unsettled: the modes last set
 

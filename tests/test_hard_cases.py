@@ -444,6 +444,46 @@ def test_a_trial_step_into_an_unevaluable_state_is_retried_shorter(tmp_path, mon
     assert max(np.max(np.abs(runs["compiled"][n] - runs["numpy"][n])) for n in tip) <= 1e-9
 
 
+STICK_SLIP = HARD / "stick_slip_device_2d.toml"
+
+
+@needs_numba
+def test_radau_runs_the_stick_slip_case_at_a_tight_tolerance():
+    """Radau (scipy's, compiled right-hand side) at rtol 1e-10 on the stick-slip device: in a
+    sticking phase (tanh friction, v_s = 1 mm/s: stiff) a Newton iterate of too long a step brings
+    the device's terminals together, where the accelerations cannot be evaluated. That trial step is
+    rejected and tried again shorter (simulation._step), as an explicit method's is; the run used to
+    stop at t = 2.56 s. Reference: the same scene by DOP853 at rtol 1e-13 (the hard cases' own
+    reference, docs/benchmarks/work_precision.md); the Radau run agrees to 1e-10 m over 3 s (7e-13 m
+    observed), far inside its tolerance's error."""
+    model = inerter.load(STICK_SLIP)
+    ref = model.simulate(stop_time=3.0, method="DOP853", rtol=1e-13, atol=1e-15, metrics=False)
+    r = model.simulate(stop_time=3.0, method="Radau", rtol=1e-10, atol=1e-12, metrics=False, path="compiled")
+    assert r.status == "ok", r.message
+    assert r.time[-1] == 3.0
+    assert worst_difference(r, ref) <= 1e-10
+
+
+@pytest.mark.parametrize("value", [math.inf, math.nan])
+def test_a_state_that_is_not_finite_is_a_recoverable_error_on_the_numpy_path(value):
+    """A Newton iterate that diverged reaches the right-hand side as a non-finite state: the numpy
+    path says so with a recoverable SimulationError (the trial step is then tried shorter), as the
+    compiled right-hand side reports NOT_FINITE, instead of a ValueError from math.cos deep in the
+    kinematics (which reached the user as a traceback from Radau at rtol 1e-10 on the stick-slip
+    case)."""
+    from inerter.common.errors import SimulationError
+    from inerter.engine import simulation
+    model = inerter.load(STICK_SLIP)
+    mech = model.mechanism
+    fun = simulation.derivative(mech, None, 0.0)
+    y = np.concatenate((mech.q0, mech.v0, getattr(mech, "z0", np.zeros(0))))
+    assert np.all(np.isfinite(fun(0.0, y)))
+    y[0] = value
+    with pytest.raises(SimulationError) as info:
+        fun(0.0, y)
+    assert info.value.recoverable and "not finite" in info.value.message
+
+
 # ----------------------------------------------------------------------------------------------
 # 5. Long runs (compiled path)
 # ----------------------------------------------------------------------------------------------

@@ -328,6 +328,11 @@ def _monitor(method) -> np.ndarray:
                      sim.COLLAPSE_RELATIVE, sim.COLLAPSE_STEPS, sim.TRIAL_SHRINK], dtype=float)
 
 
+#: The statuses of an evaluation at a state where the accelerations cannot be evaluated (a singular
+#: or non-finite solve, terminals that meet): raised inside a trial step, a shorter step may avoid
+#: them (``simulation._step``), as the numpy path's.
+_STATE_FAILURES = (_k.SINGULAR, _k.NOT_FINITE, _k.TERMINALS_MEET)
+
 _STATUS_TEXT = {
     1: "more than max_steps integrator steps: the scene may be stiff; try method = \"Radau\" or \"BDF\"",
     2: "the step size became too small (below 10 ulp of t)",
@@ -616,7 +621,7 @@ class Kernel:
             dy = np.empty(ny)
             st = rhs_fn(float(t), np.ascontiguousarray(y, dtype=float), inp, alpha, P, AB, rhs, gen, acc, dy)
             if st:
-                raise SimulationError(_STATUS_TEXT[st], t)
+                raise SimulationError(_STATUS_TEXT[st], t, recoverable=st in _STATE_FAILURES)
             return dy
         return fun
 

@@ -83,10 +83,19 @@ def derivative(mech, inputs, alpha, jump=None):
     def fun(t, y):
         if before is not None and t > before:
             t = before
+        _check_finite(y, t)
         q, v = y[:nq], y[nq:]
         a, _ = mech.accelerations(t, q, v, inputs, alpha)
         return np.concatenate((mech.qdot(q, v, t), a))
     return fun
+
+
+def _check_finite(y, t):
+    """A state that is not finite (an implicit method's Newton iterate that diverged, a step that
+    overflowed) cannot be evaluated: a recoverable SimulationError, so that the trial step is tried
+    again shorter (:func:`_step`), as the compiled right-hand side reports it (NOT_FINITE)."""
+    if not np.isfinite(y).all():
+        raise SimulationError("the state is not finite", t, recoverable=True)
 
 
 def _derivative_with_states(mech, inputs, alpha, jump=None):
@@ -97,6 +106,7 @@ def _derivative_with_states(mech, inputs, alpha, jump=None):
     def fun(t, y):
         if before is not None and t > before:
             t = before
+        _check_finite(y, t)
         q, v, z = y[:nq], y[nq:nv], y[nv:]
         a, _ = mech.accelerations(t, q, v, inputs, alpha, z=z)
         return np.concatenate((mech.qdot(q, v, t), a, mech.state_rates(q, v, z, a)))
@@ -245,15 +255,21 @@ class StepMonitor:
 #: A trial step of an explicit Runge-Kutta method that reaches a state where the accelerations cannot
 #: be evaluated is rejected and tried again this much shorter (scipy's smallest step-size factor).
 TRIAL_SHRINK = 0.2
+#: The methods whose trial step is tried again shorter where an evaluation fails (:func:`_step`):
+#: their whole state between steps is y, f and the step size (BDF's differences are scaled to its
+#: step size, and LSODA's state is Fortran's: neither is shortened from outside).
+SHRINK_ON_FAILURE = ("DOP853", "RK45", "Radau")
 
 
 def _step(solver, method):
     """solver.step(), its failures as SimulationError at the last good time.
 
-    DOP853 and RK45: a stage of the trial step that cannot be evaluated (a recoverable
-    SimulationError: a wild stage of too long a step, say) rejects the step, which is tried again
+    DOP853, RK45 and Radau: a stage or a Newton iterate of the trial step that cannot be evaluated
+    (a recoverable SimulationError: a wild stage of too long a step, an iterate far from the
+    solution that brings an element's terminals together) rejects the step, which is tried again
     TRIAL_SHRINK times as long, until it is shorter than 10 ulp of t; scipy's step leaves the
-    solver's state as it was when a stage raises."""
+    solver's state as it was when an evaluation raises (Radau's factorisations, made for the old
+    step size, are dropped so that it makes them anew, as it does after a step it rejects)."""
     t = solver.t
     while True:
         try:
@@ -261,9 +277,11 @@ def _step(solver, method):
                 message = solver.step()
             break
         except SimulationError as exc:
-            shrinkable = exc.recoverable and hasattr(solver, "h_abs") and method in ("DOP853", "RK45")
+            shrinkable = exc.recoverable and hasattr(solver, "h_abs") and method in SHRINK_ON_FAILURE
             if shrinkable and solver.h_abs * TRIAL_SHRINK >= 10 * abs(np.nextafter(t, np.inf) - t):
                 solver.h_abs *= TRIAL_SHRINK
+                if method == "Radau":
+                    solver.LU_real = solver.LU_complex = None
                 continue
             if exc.time is None:
                 raise type(exc)(exc.message, t) from None

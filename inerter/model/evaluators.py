@@ -117,7 +117,7 @@ class TranslationalElement:
         if not length > MIN_LENGTH:
             raise TerminalsMeet(
                 f"element '{self.name}': its terminals {self.labels[0]} and {self.labels[1]} meet "
-                f"(distance {length:.3g} m < {MIN_LENGTH:g} m), so its direction is undefined")
+                f"(distance {length:.3g} m < {MIN_LENGTH:g} m), so its direction is undefined", recoverable=True)
         rhat = r / length if self.fixed_direction is None else self.fixed_direction
         return r, rdot, a_n, H, length, rhat
 

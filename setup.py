@@ -1,7 +1,7 @@
-"""Packaging hook: the wheel carries the FMU sources and the shipped scenes.
+"""Packaging hook: the wheel carries the FMU sources, the shipped scenes and the device data.
 
-``fmu_src/`` and ``scenarios/`` stay at the top of the repository, their one source. Building the
-package copies both into ``inerter/_data/``, where an installed inerter, which has no repository
+``fmu_src/``, ``scenarios/`` and ``devices/`` stay at the top of the repository, their one source.
+Building the package copies them into ``inerter/_data/``, where an installed inerter, which has no repository
 beside it, finds them (``inerter/common/locations.py``). An editable install reads the originals.
 """
 import shutil
@@ -12,7 +12,7 @@ from setuptools.command.build_py import build_py
 
 HERE = Path(__file__).resolve().parent
 #: Folders of the repository the installed package reads.
-DATA = ("fmu_src", "scenarios")
+DATA = ("fmu_src", "scenarios", "devices")
 
 
 class build_py_with_data(build_py):

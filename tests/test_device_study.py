@@ -1,6 +1,6 @@
 """The device study (inerter/studies/device_effects.py, ``inerter device-study``) on short runs.
 
-The study's scenes are written from the paper's scenes and scenarios/devices/ballscrew_device.toml;
+The study's scenes are written from the paper's scenes and devices/ballscrew_device.toml;
 its ideal row is checked against the paper's scene itself (an independent path: the plain inerter
 b, no device), each row's FMU against its solver run, and the device's geometry against
 b = J (2π/p)² (Smith 2002). The runs are shortened to STOP seconds (10 periods of the two-bar's

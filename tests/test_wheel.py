@@ -76,15 +76,16 @@ def installed(tmp_path_factory):
 def test_the_installed_package_reads_nothing_from_the_repository(installed):
     python, env, work = installed
     code = ("import json, inerter; from inerter.common import locations as l; "
-            "print(json.dumps([inerter.__file__, str(l.fmu_sources()), str(l.scenarios())]))")
-    package, sources, scenes = map(Path, json.loads(_run([python, "-c", code], work, env).stdout))
+            "print(json.dumps([inerter.__file__, str(l.fmu_sources()), str(l.scenarios()), str(l.devices())]))")
+    package, sources, scenes, devices = map(Path, json.loads(_run([python, "-c", code], work, env).stdout))
     site = python.parents[1].resolve()
-    for path in (package, sources, scenes):
+    for path in (package, sources, scenes, devices):
         assert site in path.resolve().parents, f"{path} is not in the new environment"
     assert (sources / "inerter_slave.py").read_bytes() == (ROOT / "fmu_src" / "inerter_slave.py").read_bytes()
     shipped = sorted(p.relative_to(scenes).as_posix() for p in scenes.rglob("*.toml"))
     assert shipped == sorted(p.relative_to(ROOT / "scenarios").as_posix()
                              for p in (ROOT / "scenarios").rglob("*.toml"))
+    assert sorted(p.name for p in devices.glob("*.toml")) == sorted(p.name for p in (ROOT / "devices").glob("*.toml"))
 
 
 def test_the_installed_package_builds_and_runs_an_fmu(installed, tmp_path):

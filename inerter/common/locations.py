@@ -1,8 +1,10 @@
-"""Where the package finds the files it reads but does not import: the FMU sources and the scenes.
+"""Where the package finds the files it reads but does not import: the FMU sources, the scenes and
+the inerter devices' data.
 
-Their one source is the repository's ``fmu_src/`` and ``scenarios/``, which a source checkout (an
-editable install included) reads in place. Building a wheel copies both into ``inerter/_data/``
-(``setup.py``), where an installed package, which has no repository beside it, finds them.
+Their one source is the repository's ``fmu_src/``, ``scenarios/`` and ``devices/``, which a source
+checkout (an editable install included) reads in place. Building a wheel copies them into
+``inerter/_data/`` (``setup.py``), where an installed package, which has no repository beside it,
+finds them.
 """
 from __future__ import annotations
 
@@ -28,3 +30,9 @@ def fmu_sources() -> Path:
 def scenarios() -> Path:
     """The folder of the shipped scenes (``two_bar_2d.toml``, ``hard/``, ``records/``, ...)."""
     return _folder("scenarios")
+
+
+def devices() -> Path:
+    """The folder of the inerter devices' data (``ballscrew_device.toml``: each value with its unit and
+    source), which the device study reads; not scenes."""
+    return _folder("devices")

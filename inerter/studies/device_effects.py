@@ -21,7 +21,7 @@ slab along X and Y). Each row is the scene with its inerters built as a device
   connection; in 3D without the mount, which it refuses there too (the mount's gyroscopic terms
   spin the flywheel with the terminal distance, not with the inerter's own stroke).
 
-The device's parameters come from ``scenarios/devices/ballscrew_device.toml``, a source for every
+The device's parameters come from ``devices/ballscrew_device.toml``, a source for every
 value (most are representative, assumed: its header says which). Each row is written as a scene
 file (``DIR/scenes/``), run by the solver (``inerter.load(...).simulate()``) and through its FMU
 (fmpy, communication step = output interval 0.01 s, :func:`inerter.fmu.run.simulate_fmu`).
@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from inerter.common.errors import InerterError, shown
+from inerter.common.locations import devices as shipped_devices
 from inerter.common.locations import scenarios as _shipped_scenarios
 
 #: The rows: name → (label, effects). Each row is the ideal device plus its effects.
@@ -70,7 +71,7 @@ class DeviceStudyError(InerterError):
 
 
 def device_data_path() -> Path:
-    return _shipped_scenarios() / "devices" / "ballscrew_device.toml"
+    return shipped_devices() / "ballscrew_device.toml"
 
 
 @dataclass(frozen=True)
@@ -128,12 +129,12 @@ def read_device_data(path=None) -> tuple[dict, dict]:
         if missing:
             raise DeviceStudyError(str(path), f"scenes.{key}", sorted(raw), "also " + ", ".join(missing), "missing fields")
         values = {k: _value(path, f"scenes.{key}.{k}", v) for k, v in raw.items() if k not in SCENE_KEYS}
-        scene = path.parent.parent / raw["scene"]           # scenarios/ for scenarios/devices/*.toml
+        scene = path.parent / raw["scene"]                  # a scene beside the data file, else a shipped one
         if not scene.is_file():
             scene = _shipped_scenarios() / raw["scene"]
         if not scene.is_file():
             raise DeviceStudyError(str(path), f"scenes.{key}.scene", raw["scene"],
-                                   "a scene file in the folder above the data file or a shipped scene", "not found")
+                                   "a scene file beside the data file or a shipped scene", "not found")
         cases[key] = SceneCase(key, scene, tuple(raw["inerters"]), raw["inertance"],
                                tuple(raw["metrics"]), values)
     return device, cases
@@ -411,7 +412,7 @@ def _mm(v) -> str:
     return "–" if v is None else f"{1e3 * v:.4f}"
 
 
-TABLE_HEADER = ("Device values: scenarios/devices/ballscrew_device.toml. Sourced: b = J (2π/p)² (Smith 2002), "
+TABLE_HEADER = ("Device values: devices/ballscrew_device.toml. Sourced: b = J (2π/p)² (Smith 2002), "
                 "e = 0.5 (Appl. Sci. 13 (2023) 2168), c_s from e (Lankarani & Nikravesh 1990), the device's mass "
                 "m = b/90 (Madhamshetty & Manimala 2018). The lead, mass split, friction, series stiffness, "
                 "backlash, transverse inertia's shape, stroke limits, contact stiffness and screw efficiencies are "
@@ -506,7 +507,7 @@ def device_study_parser() -> argparse.ArgumentParser:
                    help="a shorter run than the scenes' own (60 s two-bar, 15 s braced frame)")
     p.add_argument("--no-fmu", action="store_true", help="the solver only")
     p.add_argument("--data", default=None, metavar="TOML",
-                   help="the device's values (default: scenarios/devices/ballscrew_device.toml)")
+                   help="the device's values (default: devices/ballscrew_device.toml)")
     return p
 
 

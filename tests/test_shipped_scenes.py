@@ -303,6 +303,9 @@ def test_its_fmu_discards_the_step_where_the_scene_stops(scene, fmu_run):
 
 
 def test_every_shipped_scene_is_here():
-    """The glob finds both folders' scenes, and every scene named above exists."""
+    """The glob finds both folders' scenes, every scene named above exists, and no TOML file under
+    scenarios/ escapes the glob (a file there is a scene a user may run: data that is not a scene,
+    such as the devices' values, lives in devices/)."""
     assert {p.parent.name for p in SCENES} == {"scenarios", "hard"}
+    assert sorted(SCENARIOS.rglob("*.toml")) == sorted(SCENES)
     assert set(DESIGNED_TO_STOP) <= {p.stem for p in SCENES}

@@ -62,7 +62,7 @@ def test_the_inerter_law_is_b_times_the_second_derivative_of_the_length(t):
         assert run(_row(b), L, Ldot, an, perp2) == pytest.approx(b * Ldd, rel=1e-13, abs=1e-13)
         assert run(_row(b, centripetal=False), L, Ldot, an, perp2) == pytest.approx(
             b * float(rdd @ rhat), rel=1e-13)
-    assert law.inertance.py_func(_row(b)) == b
+    assert law.inertance.py_func(_row(b), Ldot) == b
     assert law.energy.py_func(_row(b), L, Ldot) == pytest.approx(0.5 * b * Ld * Ld, rel=1e-13)
 
 

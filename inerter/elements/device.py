@@ -93,9 +93,11 @@ Where L̈ changes sign (s flips) the force is continuous: b_eff stays bounded an
 both sides. A turnaround, L̇ = 0 with L̈ ≠ 0, keeps s, so b_eff is a smooth function of L̇ there
 for v_s > 0: near L̇ = 0 the law is b L̈ + b (α+β)/2 |L̈| L̇/v_s, a viscous damper of coefficient
 b (α+β)|L̈|/(2 v_s), and the change of b_eff takes the time ~ v_s/|L̈|, which the integrator's
-steps resolve without collapsing (docs/benchmarks/efficiency_steps.md). The regularised run
-converges to the exact switch's as v_s → 0 (tests/test_device_efficiency.py measures the order on
-the 1-DOF closed form). With v_s = 0 (the default) b_eff jumps from b η_b to b/η_f at a turnaround,
+steps resolve without collapsing (the tanh regularisation of the friction above, Pennestrì et al.
+2016; docs/benchmarks/efficiency_steps.md: the smallest step near a peak ≥ 1e-2 of the median).
+The regularised run converges to the exact switch's as v_s → 0, at first order on the 1-DOF closed
+form (error ≈ 0.037 s · v_s there: the change of b_eff lags the turnaround by ~v_s/|L̈|, a phase
+shift of order v_s; tests/test_device_efficiency.py). With v_s = 0 (the default) b_eff jumps from b η_b to b/η_f at a turnaround,
 and F and q̈ jump, as at an unregularised Coulomb reversal: the integrator meets the jump by its
 error control alone, which rejects and shrinks the steps that straddle it (to ~1e-11 s at rtol
 1e-10; no event: the state stays continuous, only q̈ jumps). Neither series compliance nor a mount
@@ -628,7 +630,8 @@ BACKLASH_EFFECT = Effect(
     (Parameter("gap", "m", "total free play Δ of the series connection", minimum=0.0),))
 
 EFFICIENCY_EFFECT = Effect(
-    "efficiency", "screw efficiency by the power flow's direction: b/η_f driven (L̇·L̈ ≥ 0), b η_b back-driving",
+    "efficiency", "screw efficiency by the power flow's direction: b/η_f driven (L̇·L̈ > 0), b η_b back-driving, "
+    "switched at a turnaround or smoothed over tanh(L̇/v_s)",
     "Wen et al. 2017, J. Vibroeng. 19(6) (ball-screw inerter losses); Smith 2020, The inerter: a retrospective "
     "(back-driving)",
     (Parameter("forward", "1", "η_f: the part of the force that reaches the flywheel when the terminals drive it",

@@ -224,10 +224,10 @@ class TranslationalElement:
         block = self.block(q, v)
         if block is not None:
             M[np.ix_(self.pair.dofs, self.pair.dofs)] += block[0]
+        if self.inertance(0.0) == 0.0:       # none at any L̇ (a screw efficiency's b_eff is > 0 at every L̇)
+            return
         geo = geo or self.geometry(q, v)
         b = self.inertance(self._scalars(geo)[1])
-        if b == 0.0:
-            return
         g = geo[3].T @ geo[5]                                     # Hᵀ r̂
         idx = self.pair.dofs
         M[np.ix_(idx, idx)] += b * np.outer(g, g)                # M_I, Eq. (33)

@@ -281,7 +281,7 @@ def table_tunable(scene: Path) -> set[str]:
         device = list(range(layout.DEVICE, layout.FLUID_QUADRATIC + 1))
         device += list(range(layout.INERTIA, layout.MOUNT_AXIS + 3))       # its masses, inertias and mount
         device += list(range(layout.SERIES, layout.LOSS + 1))             # its series connection
-        device += list(range(layout.EFFICIENCY, layout.EFFICIENCY_MODE + 1))  # its screw efficiency
+        device += list(range(layout.EFFICIENCY, layout.EFFICIENCY_SCALE + 1))  # its screw efficiency
         tunable_columns = {"el_real": [layout.COEFFICIENT, layout.CENTRIPETAL] + device,
                            "rot_real": [layout.COEFFICIENT],
                            "fa_real": [dim + layout.F_VALUE, dim + layout.F_AMPLITUDE, dim + layout.F_FREQUENCY],

@@ -22,7 +22,7 @@ Adding a kind, e.g. a linear spring with a preload F0 (``elements.NAME.type = "p
                           free=Parameter("length", "m", "free length", minimum=0.0, required=False))
 
        @law
-       def inertance(row):
+       def inertance(row, Ldot):
            return 0.0
 
        @law
@@ -50,8 +50,9 @@ An element may also have internal states x, its slice of z in the engine's state
 ``state_energy(row, L, Ldot, x)`` and ``state_rates(row, L, Ldot, an, perp2, gq, x, dx)`` (ẋ once
 q̈ is solved, gq = gᵀq̈), which the kernels call only for an element that has states.
 
-A translational law returns the axial force less its inertance times gᵀq̈: ``inertance(row)`` is
-the factor that goes into the mass matrix (M += b g gᵀ, Eq. 33; zero for all but the inerter) and
+A translational law returns the axial force less its inertance times gᵀq̈: ``inertance(row, Ldot)``
+is the factor that goes into the mass matrix (M += b g gᵀ, Eq. 33; zero for all but the inerter, a
+law of L̇ only for a screw efficiency's b_eff, :mod:`.device`) and
 ``force(row, L, Ldot, an, perp2)`` the rest (Q −= F g, Eqs. 29 and 31).
 """
 from __future__ import annotations

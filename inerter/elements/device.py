@@ -47,44 +47,62 @@ only a part of the force through: η_f of it reaches the flywheel when the termi
 the flywheel's reaches the terminals when it drives them (0 < η ≤ 1). With the flywheel's kinetic
 energy kept at ½ b L̇², the terminal force is
 
-    F = b_eff L̈,   b_eff = b/η_f  where L̇·L̈ ≥ 0 (flywheel driven: speeding up; also at L̇ = 0),
+    F = b_eff L̈,   b_eff = b/η_f  where L̇·L̈ > 0 (flywheel driven: speeding up),
                    b_eff = b η_b  where L̇·L̈ < 0 (flywheel back-driving the terminals: slowing down),
 
-L̈ that of Eq. 9 (or Eq. 8, without the centripetal term). The work the terminals do, F L̇ = b_eff
-L̈ L̇, exceeds the flywheel's d(½ b L̇²)/dt = b L̈ L̇ by the lost power (b_eff − b) L̈ L̇ ≥ 0 in both
-modes: part of p_loss (:func:`efficiency_loss`), and of e_loss where ``dissipated_energy`` is
-declared. The mode is stored in the element's row (``EFFICIENCY_MODE``) and b_eff is the inertance
-the mass matrix of Eq. (33) takes (:func:`inertance`).
+L̈ that of Eq. 9 (or Eq. 8, without the centripetal term). The switch between the two is written
+with the stored mode s = sign(L̈) (``EFFICIENCY_MODE``) and the direction
+
+    τ = s tanh(L̇/v_s)    (v_s > 0: ``velocity_scale``),    τ = s sgn(L̇), and +1 at L̇ = 0   (v_s = 0),
+    α = 1/η_f − 1 ≥ 0,  β = 1 − η_b ≥ 0,  λ(τ) = τ ((α+β)/2 + τ (α−β)/2),  b_eff = b (1 + λ(τ))
+
+(:func:`efficiency_factor`): λ(1) = α, λ(−1) = −β, so |L̇| ≫ v_s gives b/η_f (τ → sgn(L̇L̈) = 1) and
+b η_b (τ → −1), and L̇ = 0 gives b (v_s > 0; b/η_f, driven, with the exact switch of v_s = 0).
+For |τ| ≤ 1 the bracket is ≥ (α+β)/2 − |α−β|/2 = min(α, β) ≥ 0, so sign λ = sign τ = sign(L̇ L̈),
+and 1 + λ ≥ 1 − β = η_b > 0. The work the terminals do, F L̇ = b_eff L̈ L̇, exceeds the flywheel's
+d(½ b L̇²)/dt = b L̈ L̇ by the lost power
+
+    (b_eff − b) L̈ L̇ = b λ(τ) L̈ L̇ ≥ 0
+
+at every L̇ and every v_s (passive): part of p_loss (:func:`efficiency_loss`), and of e_loss where
+``dissipated_energy`` is declared. b_eff is the inertance the mass matrix of Eq. (33) takes
+(:func:`inertance`, a law of the row and L̇).
 
 The mode depends on L̈ = gᵀq̈ + a_n·r̂ + |ṙ⊥|²/L, which holds the unknown accelerations: an
 algebraic loop, resolved exactly. Write the augmented system of Eq. (33) without the element as
 K₀ x = f₀ and G = [g; 0]; with it, (K₀ + b_eff G Gᵀ) x = f₀ − b_eff c G, c = L̈ − gᵀq̈. Then
 x = x₀ − b_eff K₀⁻¹G L̈ with x₀ = K₀⁻¹f₀, and L̈ = Gᵀx + c gives
 
-    L̈ (1 + b_eff s) = r,   s = Gᵀ K₀⁻¹ G = gᵀ P g ≥ 0,   r = Gᵀx₀ + c,
+    L̈ (1 + b_eff s_P) = r,   s_P = Gᵀ K₀⁻¹ G = gᵀ P g ≥ 0,   r = Gᵀx₀ + c,
 
 P the velocity block of K₀⁻¹, the inverse mass matrix projected on the joints' tangent space
 (positive semidefinite; where K₀ is singular, the element's own inertance holding a coordinate,
-the same follows in the limit of a small mass added there). So sign(L̈) = sign(r) does not depend
-on b_eff: the engine solves once in
-the mode of the last call, computes the element's L̈, and where the mode disagrees with sign(L̇·L̈)
-it flips it (:func:`settle`) and solves again, which then agrees: at most two solves for one such
-element. For several, each solve flips every element that disagrees; the signs are coupled through
-P, so the engine checks and solves again up to :data:`MODE_SOLVES` times and, if the modes still
-do not settle, solves once more in the modes last set, keeps that solve (its force and the stored
-modes agree; its L̈ may ask for other modes) and counts the call (``Kernel.unsettled``; a run's
-count is in ``run.extra["unsettled"]``, and its result warns of it). The numpy path
-(``Mechanism.accelerations``) does the same. A scene without an
+the same follows in the limit of a small mass added there). So, b_eff > 0 in either mode (at the
+state's L̇), sign(L̈) = sign(r) does not depend on it: the engine solves once in the mode of the
+last call, computes the element's L̈, and where s disagrees with sign(L̈) it flips it
+(:func:`settle`; kept where L̈ = 0, where b_eff L̈ = 0 in either) and solves again, which then
+agrees: at most two solves for one such element. For several, each solve flips every element that
+disagrees; the signs are coupled through P, so the engine checks and solves again up to
+:data:`MODE_SOLVES` times and, if the modes still do not settle, solves once more in the modes last
+set, keeps that solve (its force and the stored modes agree; its L̈ may ask for other modes) and
+counts the call (``Kernel.unsettled``; a run's count is in ``run.extra["unsettled"]``, and its
+result warns of it). The numpy path (``Mechanism.accelerations``) does the same. A scene without an
 efficiency takes no extra solve (the engine tests a count of such elements, ``dims[EFFICIENT]``).
 
-The force is continuous where L̈ changes sign at L̇ ≠ 0 (b_eff L̈ → 0 from both sides). Where L̇
-changes sign with L̈ ≠ 0 (a turnaround) b_eff jumps from b η_b to b/η_f, and F and q̈ jump, as at a
-Coulomb friction's reversal: the integrator meets the jump by its error control, which shortens the
-steps that straddle it (no event: the state stays continuous, only q̈ jumps; the steps are measured
-in docs/benchmarks/efficiency_steps.md: at rtol 1e-10 on the 1-DOF case, 303 steps in 3 s against
-64 for the ideal inerter, the smallest 4e-11 s, the error still at the tolerance). Neither series
-compliance nor a mount goes with it (:func:`check_device`); the oracle and the linearisation
-refuse it (no energy or dissipation function gives it; b_eff is not smooth).
+Where L̈ changes sign (s flips) the force is continuous: b_eff stays bounded and b_eff L̈ → 0 from
+both sides. A turnaround, L̇ = 0 with L̈ ≠ 0, keeps s, so b_eff is a smooth function of L̇ there
+for v_s > 0: near L̇ = 0 the law is b L̈ + b (α+β)/2 |L̈| L̇/v_s, a viscous damper of coefficient
+b (α+β)|L̈|/(2 v_s), and the change of b_eff takes the time ~ v_s/|L̈|, which the integrator's
+steps resolve without collapsing (the tanh regularisation of the friction above, Pennestrì et al.
+2016; docs/benchmarks/efficiency_steps.md: the smallest step near a peak ≥ 1e-2 of the median).
+The regularised run converges to the exact switch's as v_s → 0, at first order on the 1-DOF closed
+form (error ≈ 0.037 s · v_s there: the change of b_eff lags the turnaround by ~v_s/|L̈|, a phase
+shift of order v_s; tests/test_device_efficiency.py). With v_s = 0 (the default) b_eff jumps from b η_b to b/η_f at a turnaround,
+and F and q̈ jump, as at an unregularised Coulomb reversal: the integrator meets the jump by its
+error control alone, which rejects and shrinks the steps that straddle it (to ~1e-11 s at rtol
+1e-10; no event: the state stays continuous, only q̈ jumps). Neither series compliance nor a mount
+goes with the efficiency (:func:`check_device`); the oracle and the linearisation refuse it (no
+energy or dissipation function gives the mode's dependence on sign(L̈)).
 
 **End stops** (``device.end_stops``): stroke limits L_min and L_max. Past one, by the penetration
 δ = L_min − L (or L − L_max) > 0 at the rate δ̇, a Hunt-Crossley contact force pushes back:
@@ -167,7 +185,7 @@ from numba import njit
 
 from inerter.elements.base import Parameter, law
 from inerter.elements.layout import (BACKLASH, COEFFICIENT, COULOMB, DEVICE, EFFICIENCY, EFFICIENCY_MODE,
-                                     ETA_BACKWARD, ETA_FORWARD, FLUID, FLUID_LINEAR,
+                                     EFFICIENCY_SCALE, ETA_BACKWARD, ETA_FORWARD, FLUID, FLUID_LINEAR,
                                      FLUID_QUADRATIC, FLYWHEEL_AXIAL, FLYWHEEL_CENTRE, FLYWHEEL_MASS,
                                      FLYWHEEL_RATIO, FRICTION, GAP, HOUSING_AXIAL, HOUSING_CENTRE,
                                      HOUSING_MASS, INERTIA, LOSS, MOUNT, MOUNT_AXIS, ROD_CENTRE, ROD_MASS,
@@ -237,26 +255,47 @@ def stop_energy(row, L):
 
 
 @law
-def efficiency_factor(row):
-    """b_eff / b in the mode the last solve settled on (row[EFFICIENCY_MODE]): 1/η_f where the
-    terminals drive the flywheel, η_b where it drives them."""
-    if row[EFFICIENCY_MODE] != 0.0:
-        return 1.0 / row[ETA_FORWARD]
-    return row[ETA_BACKWARD]
+def efficiency_direction(row, Ldot):
+    """τ = s tanh(L̇/v_s), s = row[EFFICIENCY_MODE] = sign(L̈) the last solve settled on: +1 where the
+    terminals drive the flywheel (L̇·L̈ > 0), −1 where it drives them, between inside the
+    regularisation |L̇| ≲ v_s; with v_s = 0 the exact switch τ = s sign(L̇), and τ = +1 (driven) at
+    L̇ = 0."""
+    scale = row[EFFICIENCY_SCALE]
+    if scale > 0.0:
+        return row[EFFICIENCY_MODE] * math.tanh(Ldot / scale)
+    if Ldot == 0.0:
+        return 1.0
+    return row[EFFICIENCY_MODE] if Ldot > 0.0 else -row[EFFICIENCY_MODE]
 
 
 @law
-def efficiency_mode(Ldot, Lddot):
-    """The mode the power flow asks for: 1.0 (flywheel driven: L̇·L̈ ≥ 0, speeding up, and at
-    L̇ = 0), 0.0 (back-driving: L̇·L̈ < 0, slowing down)."""
-    return 1.0 if Ldot * Lddot >= 0.0 else 0.0
+def efficiency_factor(row, Ldot):
+    """b_eff / b = 1 + λ(τ), λ(τ) = τ ((α+β)/2 + τ (α−β)/2), α = 1/η_f − 1, β = 1 − η_b, τ =
+    :func:`efficiency_direction`: 1/η_f driven (τ = 1), η_b back-driving (τ = −1); with v_s = 0
+    those two numbers as such (the exact switch)."""
+    tau = efficiency_direction(row, Ldot)
+    if row[EFFICIENCY_SCALE] == 0.0:
+        return 1.0 / row[ETA_FORWARD] if tau > 0.0 else row[ETA_BACKWARD]
+    alpha = 1.0 / row[ETA_FORWARD] - 1.0
+    beta = 1.0 - row[ETA_BACKWARD]
+    return 1.0 + tau * (0.5 * (alpha + beta) + tau * 0.5 * (alpha - beta))
+
+
+@law
+def efficiency_sign(row, Lddot):
+    """The mode s the solved L̈ asks for: sign(L̈), the stored one where L̈ = 0."""
+    if Lddot > 0.0:
+        return 1.0
+    if Lddot < 0.0:
+        return -1.0
+    return row[EFFICIENCY_MODE]
 
 
 @law
 def efficiency_loss(row, Ldot, Lddot):
-    """The power the screw loses, (b_eff − b) L̈ L̇ (W): ≥ 0 where the mode agrees with the sign of
-    L̇·L̈ (b_eff > b driven, < b back-driving)."""
-    return (efficiency_factor(row) - 1.0) * row[COEFFICIENT] * Lddot * Ldot
+    """The power the screw loses, (b_eff − b) L̈ L̇ = b λ(τ) L̈ L̇ (W): ≥ 0 where the stored s is
+    sign(L̈) (sign λ = sign τ = sign(L̇ L̈))."""
+    return (efficiency_factor(row, Ldot) - 1.0) * row[COEFFICIENT] * Lddot * Ldot
 
 
 @law
@@ -339,26 +378,28 @@ def force(row, L, Ldot):
 
 
 @entry
-def inertance(row):
+def inertance(row, Ldot):
     """The factor of gᵀq̈ in the element's force: 0 with series compliance (the series connection
-    carries the force), b/η_f or b η_b with an efficiency (:func:`efficiency_factor`), else b."""
+    carries the force), b_eff = b (1 + λ) with an efficiency (:func:`efficiency_factor`, at the
+    stroke rate L̇), else b."""
     if row[SERIES] != 0.0:
         return 0.0
     if row[EFFICIENCY] != 0.0:
-        return row[COEFFICIENT] * efficiency_factor(row)
+        return row[COEFFICIENT] * efficiency_factor(row, Ldot)
     return row[COEFFICIENT]
 
 
 @entry
 def settle(row, Ldot, Lddot):
-    """Set the efficiency's mode to the one the power flow L̇·L̈ asks for (:func:`efficiency_mode`;
-    `Lddot` = L̈ from the solved accelerations); 1 where it changed (the solve is to be repeated),
-    else 0."""
-    mode = efficiency_mode(Ldot, Lddot)
+    """Set the efficiency's mode s to sign(L̈) (:func:`efficiency_sign`; `Lddot` = L̈ from the solved
+    accelerations); 1 where that changed b_eff (the solve is to be repeated), else 0 (at L̇ = 0
+    b_eff does not depend on s)."""
+    mode = efficiency_sign(row, Lddot)
     if mode == row[EFFICIENCY_MODE]:
         return 0
+    before = efficiency_factor(row, Ldot)
     row[EFFICIENCY_MODE] = mode
-    return 1
+    return 1 if efficiency_factor(row, Ldot) != before else 0
 
 
 @entry
@@ -433,7 +474,7 @@ def outputs(row, L, Ldot, Lddot, x, out, k):
             out[k] = series_force(row, x[0], x[1])[1]
             k += 1
     if row[EFFICIENCY] != 0.0:
-        out[k] = row[EFFICIENCY_MODE]
+        out[k] = 0.5 * (1.0 + efficiency_direction(row, Ldot))
         k += 1
     if row[LOSS] != 0.0:
         out[k] = x[2 if row[SERIES] != 0.0 else 0]
@@ -589,13 +630,16 @@ BACKLASH_EFFECT = Effect(
     (Parameter("gap", "m", "total free play Δ of the series connection", minimum=0.0),))
 
 EFFICIENCY_EFFECT = Effect(
-    "efficiency", "screw efficiency by the power flow's direction: b/η_f driven (L̇·L̈ ≥ 0), b η_b back-driving",
+    "efficiency", "screw efficiency by the power flow's direction: b/η_f driven (L̇·L̈ > 0), b η_b back-driving, "
+    "switched at a turnaround or smoothed over tanh(L̇/v_s)",
     "Wen et al. 2017, J. Vibroeng. 19(6) (ball-screw inerter losses); Smith 2020, The inerter: a retrospective "
     "(back-driving)",
     (Parameter("forward", "1", "η_f: the part of the force that reaches the flywheel when the terminals drive it",
                minimum=0.0, strict=True, maximum=1.0),
      Parameter("backward", "1", "η_b: the part that reaches the terminals when the flywheel drives them",
-               minimum=0.0, strict=True, maximum=1.0)))
+               minimum=0.0, strict=True, maximum=1.0),
+     Parameter("velocity_scale", "m/s", "v_s: the switch at a turnaround smoothed as tanh(L̇/v_s); 0 (default): "
+               "the exact switch", minimum=0.0, required=False)))
 
 DISSIPATED_ENERGY = Effect(
     "dissipated_energy", "the device's dissipated energy integrated as a state (output e_loss)",
@@ -686,7 +730,7 @@ class Device:
         if self.has("efficiency"):
             v = self.values("efficiency")
             cols.update({EFFICIENCY: 1.0, ETA_FORWARD: v["forward"], ETA_BACKWARD: v["backward"],
-                         EFFICIENCY_MODE: 1.0})
+                         EFFICIENCY_MODE: 1.0, EFFICIENCY_SCALE: v["velocity_scale"] or 0.0})
         if self.has("dissipated_energy"):
             cols[LOSS] = 1.0
         if self.inertia():
@@ -751,7 +795,8 @@ class Device:
             if self.has("backlash"):
                 out.append(("engaged", "1", "1 where the backlash gap is closed (the spring carries force), 0 in it"))
         if self.has("efficiency"):
-            out.append(("mode", "1", "screw efficiency's mode: 1 flywheel driven (b/eta_f), 0 back-driving (b eta_b)"))
+            out.append(("mode", "1", "screw efficiency's mode (1 + tau)/2: 1 flywheel driven (b/eta_f), 0 back-driving "
+                                     "(b eta_b), between inside the regularisation |dL/dt| < ~velocity_scale"))
         if self.has("dissipated_energy"):
             out.append(("e_loss", "J", "energy dissipated in the device since t = 0 (integral of p_loss)"))
         return tuple(out)

@@ -9,12 +9,12 @@ from inerter.elements import spring as kind_spring
 
 
 @law
-def inertance(kind, row):
+def inertance(kind, row, Ldot):
     if kind == 0:
-        return kind_damper.inertance(row)
+        return kind_damper.inertance(row, Ldot)
     if kind == 1:
-        return kind_inerter.inertance(row)
-    return kind_spring.inertance(row)  # kind == 4
+        return kind_inerter.inertance(row, Ldot)
+    return kind_spring.inertance(row, Ldot)  # kind == 4
 
 
 @law

@@ -10,7 +10,7 @@ from inerter.elements import MODULES, ROTATIONAL, TRANSLATIONAL
 TARGET = Path(__file__).with_name("dispatch.py")
 
 _FUNCTIONS = {
-    TRANSLATIONAL: (("inertance", "row"), ("force", "row, L, Ldot, an, perp2"), ("energy", "row, L, Ldot"),
+    TRANSLATIONAL: (("inertance", "row, Ldot"), ("force", "row, L, Ldot, an, perp2"), ("energy", "row, L, Ldot"),
                     ("extra_outputs", "row, L, Ldot, an, perp2, gq, x, out, k"), ("state_force", "row, L, Ldot, x"),
                     ("state_energy", "row, L, Ldot, x"), ("state_rates", "row, L, Ldot, an, perp2, gq, x, dx")),
     ROTATIONAL: (("torque", "row, phi, w"), ("rotational_energy", "row, phi, w")),

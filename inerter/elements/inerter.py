@@ -1,7 +1,7 @@
 """Inerter: F = b d²L/dt², tension positive (paper Eq. 9), or, without the centripetal term,
 the 1D law F = b r̈·r̂ (Eq. 8); with a device (:mod:`inerter.elements.device`), plus its friction,
 channel damping and end-stop forces, and b replaced by b/η_f or b η_b where it declares a screw
-efficiency.
+efficiency (smoothed at a turnaround over the velocity scale it declares).
 
 With r = r_b − r_a, L = |r|, r̂ = r/L and r̈ = H q̈ + a_n (Eqs. 18-19):
 
@@ -31,12 +31,13 @@ KIND = ElementKind(
 
 
 @law
-def inertance(row):
+def inertance(row, Ldot):
     """b: the factor of gᵀ q̈ in F, which goes into the mass matrix (Eq. 33); with a device
     :func:`device.inertance`: 0 where a series connection carries the force (device.compliance: the
-    force is a law of the state), b/η_f or b η_b with a screw efficiency (device.efficiency)."""
+    force is a law of the state), b_eff = b (1 + λ) at the stroke rate L̇ with a screw efficiency
+    (device.efficiency: b/η_f driven, b η_b back-driving)."""
     if rarely(row[DEVICE] != 0.0):
-        return device.inertance(row)
+        return device.inertance(row, Ldot)
     return row[COEFFICIENT]
 
 
@@ -55,7 +56,7 @@ def force(row, L, Ldot, an, perp2):
     (Eq. 8), plus a declared device's forces. `an` is a_n·r̂, `perp2` is |ṙ|² − L̇² = |ṙ⊥|². With
     series compliance the inertial part is carried by the series connection (:func:`state_force`);
     with a screw efficiency it is b_eff (a_n·r̂ + |ṙ⊥|²/L), b_eff = :func:`inertance`."""
-    F = inertance(row) * convective(row, L, an, perp2)
+    F = inertance(row, Ldot) * convective(row, L, an, perp2)
     if rarely(row[DEVICE] != 0.0):
         F += device.force(row, L, Ldot)
     return F

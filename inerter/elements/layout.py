@@ -66,9 +66,10 @@ LOSS = 46                # 1.0: the dissipated energy integrated as a state (dev
 EFFICIENCY = 47          # 1.0: an efficiency that depends on the power flow's direction (device.efficiency)
 ETA_FORWARD = 48         # η_f: the part of the force that reaches the flywheel when the terminals drive it
 ETA_BACKWARD = 49        # η_b: the part that reaches the terminals when the flywheel drives them
-EFFICIENCY_MODE = 50     # the mode the last solve of Eq. (33) settled on: 1.0 flywheel driven (b/η_f), 0.0
-                         # back-driving (b η_b); written by the engine (kernels.accelerations), 1.0 at the start
-ELEMENT_REAL_COLUMNS = 51
+EFFICIENCY_MODE = 50     # the mode the last solve of Eq. (33) settled on: s = sign(L̈), +1.0 or −1.0 (kept where
+                         # L̈ = 0); written by the engine (kernels.accelerations), +1.0 at the start
+EFFICIENCY_SCALE = 51    # the switch's velocity scale v_s (m/s): b_eff smooth in tanh(L̇/v_s); 0.0: the exact switch
+ELEMENT_REAL_COLUMNS = 52
 
 # -- rot_int: a rotational element's integers
 ROT_KIND = 0             # its code: its place in inerter.elements.KINDS

@@ -15,7 +15,7 @@ KIND = ElementKind(
 
 
 @law
-def inertance(row):
+def inertance(row, Ldot):
     return 0.0
 
 

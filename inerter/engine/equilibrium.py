@@ -136,7 +136,7 @@ def linearize(mech, q_star=None, h=1e-6):
                               "modes; give metrics of such a scene an explicit reference")
     if mech.efficient:
         raise SimulationError("the linearisation needs a smooth mass matrix, and this scene's screw efficiency "
-                              "(device.efficiency) switches b by the direction of the power flow: give metrics of "
+                              "(device.efficiency) makes b depend on the direction of the power flow: give metrics of "
                               "such a scene an explicit reference")
     q_star = static_equilibrium(mech) if q_star is None else q_star
     q_of, T_of, k = _tangent_chart(mech, q_star)

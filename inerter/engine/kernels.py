@@ -171,9 +171,9 @@ def _addK(AB, perm, off, i, j, x):
 @njit(cache=True, inline="always")
 def _element_law(kind, row, L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez):
     """A translational element's law (:mod:`inerter.elements`): (F without the inertance part,
-    the inertance b, L̇)."""
+    the inertance b at L̇, L̇)."""
     Ldot, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
-    return law.force(kind, row, L, Ldot, an, perp2), law.inertance(kind, row), Ldot
+    return law.force(kind, row, L, Ldot, an, perp2), law.inertance(kind, row, Ldot), Ldot
 
 
 @njit(cache=True, inline="always")

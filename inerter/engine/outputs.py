@@ -40,7 +40,7 @@ class Signals:
         for e in mech.elements:
             spec = elements.outputs(mech.scene.elements[e.name])
             # an element whose law has an inertance reports a force that depends on q̈
-            needs_a = e.kind == "inerter" or getattr(e, "inertance", 0.0) != 0.0
+            needs_a = e.kind == "inerter" or (hasattr(e, "inertance") and e.inertance(0.0) != 0.0)
             # of its three outputs, only the force reads q̈ (the distance and its rate do not); a screw
             # efficiency's mode and loss are those of the solved L̈ (inerter.elements.device)
             efficient = getattr(e, "efficient", None) is not None and e.efficient()

@@ -71,10 +71,10 @@ def rotational_row(e, body_a, body_b, free_angle, extra=()) -> tuple[tuple, tupl
 
 
 def adds_mass(row_int, row_real) -> bool:
-    """Whether a translational element adds to the mass matrix (its law's inertance is not 0, or
-    its device has a kinetic block, inerter.elements.device_inertia): its bodies' coordinates are
-    coupled in the sparsity pattern."""
-    return (elements.MODULES[row_int[layout.KIND]].inertance.py_func(row_real) != 0.0
+    """Whether a translational element adds to the mass matrix (its law's inertance is not 0, read
+    at L̇ = 0: a screw efficiency's b_eff is > 0 at every L̇; or its device has a kinetic block,
+    inerter.elements.device_inertia): its bodies' coordinates are coupled in the sparsity pattern."""
+    return (elements.MODULES[row_int[layout.KIND]].inertance.py_func(row_real, 0.0) != 0.0
             or row_real[layout.INERTIA] != 0.0)
 
 

@@ -85,10 +85,10 @@ class TranslationalElement:
             self._state_force, self._state_energy, self._state_rates = (
                 law.state_force.py_func, law.state_energy.py_func, law.state_rates.py_func)
 
-    @property
-    def inertance(self) -> float:
-        """The factor of gᵀq̈ in its law (b; a screw efficiency's b/η_f or b η_b in its current mode)."""
-        return self._inertance(self.row)
+    def inertance(self, Ldot: float) -> float:
+        """The factor of gᵀq̈ in its law at the stroke rate L̇ (b; a screw efficiency's b_eff in its
+        current mode, inerter.elements.device)."""
+        return self._inertance(self.row, Ldot)
 
     def efficient(self) -> bool:
         """Whether it has a screw efficiency, whose mode the solve settles (:meth:`settle`)."""
@@ -141,8 +141,9 @@ class TranslationalElement:
         internal states z."""
         geo = geo or self.geometry(q, v)
         F, Ldot = self._law_force(geo)
-        if self.inertance != 0.0:
-            F += self.inertance * float((geo[3] @ a[self.pair.dofs]) @ geo[5])   # b gᵀq̈, Eq. (9)
+        b = self.inertance(Ldot)
+        if b != 0.0:
+            F += b * float((geo[3] @ a[self.pair.dofs]) @ geo[5])   # b gᵀq̈, Eq. (9)
         if self.n_states:
             F += self._state_force(self.row, geo[4], Ldot, self._x(z))
         return F
@@ -223,12 +224,13 @@ class TranslationalElement:
         block = self.block(q, v)
         if block is not None:
             M[np.ix_(self.pair.dofs, self.pair.dofs)] += block[0]
-        if self.inertance == 0.0:
+        if self.inertance(0.0) == 0.0:       # none at any L̇ (a screw efficiency's b_eff is > 0 at every L̇)
             return
         geo = geo or self.geometry(q, v)
+        b = self.inertance(self._scalars(geo)[1])
         g = geo[3].T @ geo[5]                                     # Hᵀ r̂
         idx = self.pair.dofs
-        M[np.ix_(idx, idx)] += self.inertance * np.outer(g, g)   # M_I, Eq. (33)
+        M[np.ix_(idx, idx)] += b * np.outer(g, g)                # M_I, Eq. (33)
 
     def add_force(self, q, v, Q, geo=None):
         geo = geo or self.geometry(q, v)

@@ -10,6 +10,7 @@ or the initial energy.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -607,6 +608,9 @@ def _series(tmp_path, dim=2, vs=0.0, gap=0.0, loss=False, etaf=ETA_F, etab=ETA_B
                                      'position = ["(1 + x0)/3", "2*(1 + x0)/3", "2*(1 + x0)/3"]\n'
                                      'velocity = ["v0/3", "2*v0/3", "2*v0/3"]\n')
         text = text.replace("x0 = 0.25\n", f"x0 = 0.25\nv0 = {V0!r}\n")
+    # a name of its own: an FMU's model identifier is its scene's name, and a process loads one
+    # binary per identifier (the FMU of test_the_fmu_validates_... is device_1dof's)
+    text = re.sub(r'name = "(device_1dof[^"]*)"', r'name = "series_\1"', text, count=1)
     params = f"kc = {KC!r}\ncc = {CC!r}\netaf = {etaf!r}\netab = {etab!r}\nvs = {vs!r}\ngap = {gap!r}\n"
     text = text.replace("[parameters]\n", "[parameters]\n" + params)
     device = COMPLIANCE + (BACKLASH if gap > 0.0 else "") + (EFFICIENCY + SCALE if efficiency else "") \

@@ -667,7 +667,8 @@ def test_in_series_the_efficiency_follows_the_explicit_ode(tmp_path, dim, vs, pa
     3 s (7 turnarounds of u̇). The scene (2D, and 3D along u = (1, 2, 2)/3) at DOP853 rtol
     1e-12 gives x and the series deflection s = x − u to 1e-8 m, the series force f = F to k_c · 1e-8 m
     = 4e-6 N, and E.mode takes just 0 and 1 on the exact switch; on the compiled path and the numpy
-    path (Mechanism's evaluators running the same laws uncompiled). No mode is
+    path (Mechanism's evaluators running the same laws uncompiled). Measured: x within 3e-11 m in
+    every case (the largest, 2D compiled with the exact switch, 3.3e-11 m). No mode is
     stored and no solve repeated: the engine counts no such element (dims[EFFICIENT] = 0) and
     Mechanism.efficient is empty."""
     model = _series(tmp_path, dim, vs=vs)
@@ -695,7 +696,8 @@ def test_in_series_with_backlash_the_efficiency_follows_the_explicit_ode(tmp_pat
     the gap of Δ = 4 mm, k_c d + c_c ṡ beyond it, clipped where it would pull the engaged sides
     apart), engagement and u̇'s turnarounds located as events; same parameters as above, v_s = 0,
     over 3 s. The scene at DOP853 rtol 1e-12 (compiled path and numpy path) gives x and s = x − u
-    to 1e-8 m, and E.engaged 0 where the reference's |s| < Δ/2 − 1e-6 m, 1 beyond Δ/2 + 1e-6 m."""
+    to 1e-8 m (measured 3e-12 m compiled, 6e-11 m numpy), and E.engaged 0 where the reference's
+    |s| < Δ/2 − 1e-6 m, 1 beyond Δ/2 + 1e-6 m."""
     gap = 4e-3
     r = _series(tmp_path, gap=gap).simulate(metrics=False, **({"path": "numpy"} if path == "numpy" else {}))
     assert r.status == "ok", r.message
@@ -709,12 +711,13 @@ def test_in_series_with_backlash_the_efficiency_follows_the_explicit_ode(tmp_pat
 
 
 def test_in_series_the_efficiency_loss_balances_the_energy(tmp_path):
-    """Reference: the initial energy ½ k x0² + ½ m v0² + ½ b u̇(0)² = 3.25 J. With dissipated_energy
-    declared and v_s = 1e-2 m/s, energy + E.e_loss stays 3.25 J to 100·rtol = 1e-10 relative over
+    """Reference: the initial energy ½ k x0² + ½ m v0² + ½ b u̇(0)² = 3.375 J. With dissipated_energy
+    declared and v_s = 1e-2 m/s, energy + E.e_loss stays 3.375 J to 100·rtol = 1e-10 relative over
     3 s at DOP853 rtol 1e-12 (the bound of test_device_states' balance: each step's local error below
-    rtol); E.p_loss ≥ 0 at every sample and E.e_loss never decreases (by more than 1e-15 J between
-    samples, round-off); the screw's part of p_loss, p_loss − c_c ṡ², is the explicit ODE's b λ ü u̇
-    (series_reference) to 1e-6 W, and its integral is a real part of e_loss (above 10 %)."""
+    rtol; measured 3e-13); E.p_loss ≥ 0 at every sample and E.e_loss never decreases (by more than
+    1e-15 J between samples, round-off); the screw's part of p_loss, p_loss − c_c ṡ², is the explicit
+    ODE's b λ ü u̇ (series_reference) to 1e-8 W (measured 5e-10 W), and its integral is most of
+    e_loss (above half; measured 93 %)."""
     r = _series(tmp_path, vs=SERIES_VS, loss=True).simulate(metrics=False)
     assert r.status == "ok", r.message
     E0 = 0.5 * K * X0 ** 2 + 0.5 * M * V0 ** 2 + 0.5 * B * V0 ** 2
@@ -725,9 +728,9 @@ def test_in_series_the_efficiency_loss_balances_the_energy(tmp_path):
     Y, screw = series_reference(r.time, vs=SERIES_VS)
     damper = CC * (Y[:, 1] - Y[:, 3]) ** 2
     assert np.min(screw) >= 0.0
-    assert np.max(np.abs(r["inerter.p_loss"] - damper - screw)) <= 1e-6
+    assert np.max(np.abs(r["inerter.p_loss"] - damper - screw)) <= 1e-8
     from scipy.integrate import trapezoid
-    assert trapezoid(screw, r.time) > 0.1 * r["inerter.e_loss"][-1]
+    assert trapezoid(screw, r.time) > 0.5 * r["inerter.e_loss"][-1]
 
 
 @pytest.mark.parametrize("vs", [0.0, SERIES_VS], ids=["switch", "vs"])
@@ -735,7 +738,7 @@ def test_in_series_the_efficiency_loss_balances_the_energy(tmp_path):
 def test_in_series_efficiencies_of_one_are_the_compliance_alone(tmp_path, vs, gap):
     """Reference: the same scene's run without the efficiency (compliance, and backlash). η_f = η_b
     = 1 gives b_eff = b exactly (1 + λ = 1), so every output the two share agrees to 1e-12 of its
-    range, and the screw's loss is 0 (p_loss is then the series damping's alone)."""
+    range (measured: bit for bit), p_loss and e_loss included: the screw's loss is 0."""
     ref = _series(tmp_path, gap=gap, efficiency=False, loss=True).simulate(metrics=False)
     real = _series(tmp_path, gap=gap, vs=vs, etaf=1.0, etab=1.0, loss=True).simulate(metrics=False)
     assert real.status == ref.status == "ok", real.message

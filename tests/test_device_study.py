@@ -22,7 +22,8 @@ pytest.importorskip("pythonfmu")
 
 STOP = 12.0
 #: masses (with the 3D mount), all (every effect of a ball-screw device: in 2D with the masses,
-#: friction, series spring, backlash and stops; in 3D the same without the mount).
+#: friction, series spring, backlash, stops and the screw's efficiency, in series; in 3D the same
+#: without the mount).
 ROWS = ("ideal", "masses", "all")
 BRACED = SCENARIOS / "braced_frame_3d.toml"
 
@@ -86,6 +87,22 @@ def test_the_device_is_scaled_to_the_scenes_inertance(study):
             assert p["dev_J"].value * (2 * math.pi / p["dev_lead"].value) ** 2 == pytest.approx(b, rel=1e-14)
             mass = p["dev_m_fw"].value + p["dev_m_h"].value + p["dev_m_r"].value
             assert mass == pytest.approx(b / 90.0, rel=1e-14)
+
+
+def test_the_all_row_has_the_efficiency_in_series(study):
+    """The "all" row's inerters declare the screw efficiency beside the series spring and its
+    backlash (the efficiency then acts on the inerter's own stroke, inerter.elements.device), with
+    friction and end stops; in 3D without the mount, which the engine refuses beside a series
+    connection; and the row reports the efficiency's mode."""
+    out, _ = study
+    cases = de.read_device_data()[1]
+    for scene in de.SCENES:
+        model = inerter.load(out / "scenes" / f"{scene}_dev_all.toml")
+        for name in cases[scene].inerters:
+            device = model.scene.elements[name].device
+            assert all(device.has(e) for e in ("efficiency", "compliance", "backlash", "friction", "end_stops")), name
+            assert not device.has("mount"), name
+            assert f"{name}.mode" in [o["name"] for o in model.output_info()], name
 
 
 def test_every_device_value_has_a_source_and_assumed_ones_say_so():

@@ -56,8 +56,9 @@ with the stored mode s = sign(L̈) (``EFFICIENCY_MODE``) and the direction
     τ = s tanh(L̇/v_s)    (v_s > 0: ``velocity_scale``),    τ = s sgn(L̇), and +1 at L̇ = 0   (v_s = 0),
     α = 1/η_f − 1 ≥ 0,  β = 1 − η_b ≥ 0,  λ(τ) = τ ((α+β)/2 + τ (α−β)/2),  b_eff = b (1 + λ(τ))
 
-(:func:`efficiency_factor`): λ(1) = α, λ(−1) = −β, so |L̇| ≫ v_s gives b/η_f (τ → sgn(L̇L̈) = 1) and
-b η_b (τ → −1), and L̇ = 0 gives b (v_s > 0; b/η_f, driven, with the exact switch of v_s = 0).
+(:func:`efficiency_direction`, :func:`efficiency_factor`): λ(1) = α, λ(−1) = −β, so |L̇| ≫ v_s
+gives b/η_f (τ → sgn(L̇L̈) = 1) and b η_b (τ → −1), and L̇ = 0 gives b (v_s > 0; b/η_f, driven,
+with the exact switch of v_s = 0).
 For |τ| ≤ 1 the bracket is ≥ (α+β)/2 − |α−β|/2 = min(α, β) ≥ 0, so sign λ = sign τ = sign(L̇ L̈),
 and 1 + λ ≥ 1 − β = η_b > 0. The work the terminals do, F L̇ = b_eff L̈ L̇, exceeds the flywheel's
 d(½ b L̇²)/dt = b L̈ L̇ by the lost power
@@ -100,9 +101,31 @@ form (error ≈ 0.037 s · v_s there: the change of b_eff lags the turnaround by
 shift of order v_s; tests/test_device_efficiency.py). With v_s = 0 (the default) b_eff jumps from b η_b to b/η_f at a turnaround,
 and F and q̈ jump, as at an unregularised Coulomb reversal: the integrator meets the jump by its
 error control alone, which rejects and shrinks the steps that straddle it (to ~1e-11 s at rtol
-1e-10; no event: the state stays continuous, only q̈ jumps). Neither series compliance nor a mount
-goes with the efficiency (:func:`check_device`); the oracle and the linearisation refuse it (no
-energy or dissipation function gives the mode's dependence on sign(L̈)).
+1e-10; no event: the state stays continuous, only q̈ jumps). A mount does not go with the
+efficiency (:func:`check_device`: its gyroscopic block spins the flywheel with b, not b_eff); the
+oracle and the linearisation refuse it (no energy or dissipation function gives the mode's
+dependence on sign(L̈)).
+
+*In series* (with ``device.compliance``, and so with backlash): the screw turns with the inerter's
+own stroke u (u̇ = L̇ − ṡ, a state), driven by the series force F less the drag F_d(u̇) on it. The
+same law, on u instead of L, reads
+
+    b_eff ü = F − F_d(u̇),   b_eff = b (1 + λ(τ)),   τ = σ tanh(u̇/v_s)  (v_s = 0: σ sgn(u̇), +1 at u̇ = 0),
+    σ = sign(F − F_d(u̇)) = sign(ü)
+
+(:func:`series_drive`; σ = +1 where F − F_d = 0, where ü = 0 in either mode). It is explicit: F
+and F_d are laws of the state, and b_eff > 0, so the sign of ü is that of the known right side, and
+no algebraic loop arises; no mode is stored and no solve repeated (the element leaves the mass
+matrix, inertance 0, and ``dims[EFFICIENT]`` counts only the rigid ones, :func:`mode_solved`).
+The flywheel keeps ½ b u̇²; the power the series node hands the screw, (F − F_d) u̇ = b_eff ü u̇,
+exceeds d(½ b u̇²)/dt = b ü u̇ by
+
+    b λ(τ) ü u̇ ≥ 0
+
+(sign λ = sign τ = sign(u̇ ü), as in the rigid case: passive at every u̇ and v_s), part of p_loss
+and e_loss (:func:`efficiency_power`). The terminals carry F, as without the efficiency, and
+``E.mode`` = (1 + τ)/2 takes this τ. η_f = η_b = 1 gives b_eff = b exactly, so the compliance
+alone.
 
 **End stops** (``device.end_stops``): stroke limits L_min and L_max. Past one, by the penetration
 δ = L_min − L (or L − L_max) > 0 at the rate δ̇, a Hunt-Crossley contact force pushes back:
@@ -147,7 +170,8 @@ derivative less s̈), gives
 
     s̈ = L̈ − (F − F_d(u̇)) / b,
 
-evaluated once q̈ is solved (:func:`state_rates`). The device's other effects on the stroke act on
+evaluated once q̈ is solved (:func:`state_rates`; b_eff for b with a screw efficiency, "Efficiency"
+above, the series case). The device's other effects on the stroke act on
 the inerter's own stroke rate u̇ = L̇ − ṡ: the flywheel spins at n u̇, friction and channel damping
 are F_d(u̇) = F_f(u̇) + F_fluid(u̇) (they resist the screw's motion, not the terminals'); the end
 stops stay on the terminal distance L (the housing's stroke limits), in parallel with the whole
@@ -255,25 +279,32 @@ def stop_energy(row, L):
 
 
 @law
-def efficiency_direction(row, Ldot):
-    """τ = s tanh(L̇/v_s), s = row[EFFICIENCY_MODE] = sign(L̈) the last solve settled on: +1 where the
-    terminals drive the flywheel (L̇·L̈ > 0), −1 where it drives them, between inside the
-    regularisation |L̇| ≲ v_s; with v_s = 0 the exact switch τ = s sign(L̇), and τ = +1 (driven) at
-    L̇ = 0."""
+def efficiency_direction(row, sign, rate):
+    """τ = sign · tanh(rate/v_s): +1 where the screw drives the flywheel (rate and acceleration of
+    one sign, `sign` the acceleration's), −1 where the flywheel drives it, between inside the
+    regularisation |rate| ≲ v_s; with v_s = 0 the exact switch τ = sign · sgn(rate), and τ = +1
+    (driven) at rate = 0. Rigid: the stroke rate L̇ and the stored mode s = sign(L̈)
+    (:func:`rigid_direction`); in series: the inerter's own u̇ and σ = sign(ü) (:func:`series_drive`)."""
     scale = row[EFFICIENCY_SCALE]
     if scale > 0.0:
-        return row[EFFICIENCY_MODE] * math.tanh(Ldot / scale)
-    if Ldot == 0.0:
+        return sign * math.tanh(rate / scale)
+    if rate == 0.0:
         return 1.0
-    return row[EFFICIENCY_MODE] if Ldot > 0.0 else -row[EFFICIENCY_MODE]
+    return sign if rate > 0.0 else -sign
 
 
 @law
-def efficiency_factor(row, Ldot):
-    """b_eff / b = 1 + λ(τ), λ(τ) = τ ((α+β)/2 + τ (α−β)/2), α = 1/η_f − 1, β = 1 − η_b, τ =
-    :func:`efficiency_direction`: 1/η_f driven (τ = 1), η_b back-driving (τ = −1); with v_s = 0
-    those two numbers as such (the exact switch)."""
-    tau = efficiency_direction(row, Ldot)
+def rigid_direction(row, Ldot):
+    """τ of a rigid device: :func:`efficiency_direction` at L̇ with the stored mode
+    s = row[EFFICIENCY_MODE], the sign of L̈ the last solve settled on."""
+    return efficiency_direction(row, row[EFFICIENCY_MODE], Ldot)
+
+
+@law
+def efficiency_factor(row, tau):
+    """b_eff / b = 1 + λ(τ), λ(τ) = τ ((α+β)/2 + τ (α−β)/2), α = 1/η_f − 1, β = 1 − η_b, at the
+    direction τ (:func:`efficiency_direction`): 1/η_f driven (τ = 1), η_b back-driving (τ = −1);
+    with v_s = 0 those two numbers as such (the exact switch)."""
     if row[EFFICIENCY_SCALE] == 0.0:
         return 1.0 / row[ETA_FORWARD] if tau > 0.0 else row[ETA_BACKWARD]
     alpha = 1.0 / row[ETA_FORWARD] - 1.0
@@ -292,10 +323,24 @@ def efficiency_sign(row, Lddot):
 
 
 @law
+def efficiency_power(row, tau, rate, accel):
+    """The power the screw loses, (b_eff − b) ẍ ẋ = b λ(τ) ẍ ẋ (W), ẋ, ẍ the screw's stroke rate and
+    acceleration (L̇, L̈ rigid; u̇, ü in series): ≥ 0 where sign τ = sign(ẋ ẍ) (sign λ = sign τ)."""
+    return (efficiency_factor(row, tau) - 1.0) * row[COEFFICIENT] * accel * rate
+
+
+@law
 def efficiency_loss(row, Ldot, Lddot):
-    """The power the screw loses, (b_eff − b) L̈ L̇ = b λ(τ) L̈ L̇ (W): ≥ 0 where the stored s is
-    sign(L̈) (sign λ = sign τ = sign(L̇ L̈))."""
-    return (efficiency_factor(row, Ldot) - 1.0) * row[COEFFICIENT] * Lddot * Ldot
+    """A rigid device's :func:`efficiency_power` at L̇, L̈ in the stored mode (W): ≥ 0 where the
+    stored s is sign(L̈)."""
+    return efficiency_power(row, rigid_direction(row, Ldot), Ldot, Lddot)
+
+
+@law
+def mode_solved(row):
+    """Whether the element has a screw efficiency whose mode the solves of Eq. (33) settle: a rigid
+    one (in series the mode is a law of the state, :func:`series_drive`)."""
+    return row[EFFICIENCY] != 0.0 and row[SERIES] == 0.0
 
 
 @law
@@ -346,10 +391,25 @@ def stroke_rate(row, Ldot, x):
 
 
 @law
+def series_drive(row, Ldot, x):
+    """(ü, τ) in a series connection: the inerter's own stroke acceleration from b_eff ü = F − F_d(u̇)
+    (F = :func:`series_force`, u̇ = L̇ − ṡ), b_eff = b without an efficiency (τ = 1 then), and with
+    one b (1 + λ(τ)) at τ = :func:`efficiency_direction` of u̇ and σ = sign(F − F_d(u̇)) = sign(ü)
+    (b_eff > 0, so no loop; σ = +1 where F − F_d = 0, ü = 0 in either mode)."""
+    ud = Ldot - x[1]
+    push = series_force(row, x[0], x[1])[0] - drag(row, ud)
+    if row[EFFICIENCY] == 0.0:
+        return push / row[COEFFICIENT], 1.0
+    tau = efficiency_direction(row, 1.0 if push >= 0.0 else -1.0, ud)
+    return push / (row[COEFFICIENT] * efficiency_factor(row, tau)), tau
+
+
+@law
 def loss(row, L, Ldot, Lddot, x):
     """The power the device dissipates (W, ≥ 0): friction and channel damping F_d(u̇) u̇, the
     contacts' damping, the series connection's (F − k_c d) ṡ (c_c ṡ², or the stored energy a
-    clipped contact lets go) and the screw's efficiency loss (b_eff − b) L̈ L̇ (`Lddot` = L̈)."""
+    clipped contact lets go) and the screw's efficiency loss b λ ẍ ẋ, on L̇, L̈ rigid (`Lddot` = L̈)
+    and on u̇, ü in series (:func:`efficiency_power`)."""
     p = 0.0
     ud = Ldot
     if row[SERIES] != 0.0:
@@ -360,7 +420,11 @@ def loss(row, L, Ldot, Lddot, x):
     if row[STOPS] != 0.0:
         p += end_stop(row, L, Ldot)[1]
     if row[EFFICIENCY] != 0.0:
-        p += efficiency_loss(row, Ldot, Lddot)
+        if row[SERIES] != 0.0:
+            udd, tau = series_drive(row, Ldot, x)
+            p += efficiency_power(row, tau, ud, udd)
+        else:
+            p += efficiency_loss(row, Ldot, Lddot)
     return p
 
 
@@ -385,7 +449,7 @@ def inertance(row, Ldot):
     if row[SERIES] != 0.0:
         return 0.0
     if row[EFFICIENCY] != 0.0:
-        return row[COEFFICIENT] * efficiency_factor(row, Ldot)
+        return row[COEFFICIENT] * efficiency_factor(row, rigid_direction(row, Ldot))
     return row[COEFFICIENT]
 
 
@@ -393,13 +457,16 @@ def inertance(row, Ldot):
 def settle(row, Ldot, Lddot):
     """Set the efficiency's mode s to sign(L̈) (:func:`efficiency_sign`; `Lddot` = L̈ from the solved
     accelerations); 1 where that changed b_eff (the solve is to be repeated), else 0 (at L̇ = 0
-    b_eff does not depend on s)."""
+    b_eff does not depend on s). In series nothing is stored (0: the mode is a law of the state,
+    :func:`series_drive`)."""
+    if not mode_solved(row):
+        return 0
     mode = efficiency_sign(row, Lddot)
     if mode == row[EFFICIENCY_MODE]:
         return 0
-    before = efficiency_factor(row, Ldot)
+    before = efficiency_factor(row, rigid_direction(row, Ldot))
     row[EFFICIENCY_MODE] = mode
-    return 1 if efficiency_factor(row, Ldot) != before else 0
+    return 1 if efficiency_factor(row, rigid_direction(row, Ldot)) != before else 0
 
 
 @entry
@@ -432,13 +499,12 @@ def state_energy(row, Ldot, x):
 @entry
 def state_rates(row, L, Ldot, Lddot, x, dx):
     """dx = ż of the element's internal states, once q̈ is known (`Lddot` = L̈ = gᵀq̈ + a_n·r̂ +
-    |ṙ⊥|²/L): with series compliance (s, ṡ) ↦ (ṡ, L̈ − (F − F_d(u̇))/b); the dissipated energy's
-    rate p_loss."""
+    |ṙ⊥|²/L): with series compliance (s, ṡ) ↦ (ṡ, L̈ − ü), ü = (F − F_d(u̇))/b_eff
+    (:func:`series_drive`: b_eff = b without an efficiency); the dissipated energy's rate p_loss."""
     k = 0
     if row[SERIES] != 0.0:
-        F, engaged = series_force(row, x[0], x[1])
         dx[0] = x[1]
-        dx[1] = Lddot - (F - drag(row, Ldot - x[1])) / row[COEFFICIENT]
+        dx[1] = Lddot - series_drive(row, Ldot, x)[0]
         k = 2
     if row[LOSS] != 0.0:
         dx[k] = loss(row, L, Ldot, Lddot, x)
@@ -474,7 +540,8 @@ def outputs(row, L, Ldot, Lddot, x, out, k):
             out[k] = series_force(row, x[0], x[1])[1]
             k += 1
     if row[EFFICIENCY] != 0.0:
-        out[k] = 0.5 * (1.0 + efficiency_direction(row, Ldot))
+        tau = series_drive(row, Ldot, x)[1] if row[SERIES] != 0.0 else rigid_direction(row, Ldot)
+        out[k] = 0.5 * (1.0 + tau)
         k += 1
     if row[LOSS] != 0.0:
         out[k] = x[2 if row[SERIES] != 0.0 else 0]
@@ -658,14 +725,12 @@ def check_device(effects: dict):
         return ("mount", "axis", effects["mount"].get("axis"), "no device.mount beside device.compliance (the "
                 "gyroscopic terms take the flywheel's spin from the terminal distance, not from the inerter's "
                 "own stroke in a series connection)", "mount and compliance together")
-    for other in ("compliance", "mount"):
-        if "efficiency" in effects and other in effects:
-            # the mode test reads the terminal distance's L̈; in series the screw turns with the
-            # inerter's own stroke (a state), and the mount's gyroscopic block spins the flywheel with
-            # b, not b_eff
-            return ("efficiency", "forward", effects["efficiency"].get("forward"), f"no device.efficiency beside "
-                    f"device.{other} (the efficiency acts on the terminal distance's own inertial force)",
-                    f"efficiency and {other} together")
+    if "efficiency" in effects and "mount" in effects:
+        # the mount's gyroscopic block spins the flywheel with b, not b_eff: the screw's loss would
+        # not reach the housing's reaction moments
+        return ("efficiency", "forward", effects["efficiency"].get("forward"), "no device.efficiency beside "
+                "device.mount (the gyroscopic terms take the flywheel's inertial force without the screw's "
+                "efficiency)", "efficiency and mount together")
     if "backlash" in effects and "compliance" not in effects:
         return ("backlash", "gap", effects["backlash"].get("gap"),
                 "device.compliance beside it (the gap is in the series connection)", "backlash without compliance")
@@ -796,7 +861,8 @@ class Device:
                 out.append(("engaged", "1", "1 where the backlash gap is closed (the spring carries force), 0 in it"))
         if self.has("efficiency"):
             out.append(("mode", "1", "screw efficiency's mode (1 + tau)/2: 1 flywheel driven (b/eta_f), 0 back-driving "
-                                     "(b eta_b), between inside the regularisation |dL/dt| < ~velocity_scale"))
+                                     "(b eta_b), between inside the regularisation |dL/dt| < ~velocity_scale (in series: of "
+                                     "the inerter's own stroke)"))
         if self.has("dissipated_energy"):
             out.append(("e_loss", "J", "energy dissipated in the device since t = 0 (integral of p_loss)"))
         return tuple(out)

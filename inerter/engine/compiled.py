@@ -56,7 +56,7 @@ from inerter.common.errors import SimulationError
 from inerter.engine.simulation import Run, Stepper, jumps
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
-from inerter.elements import layout
+from inerter.elements import device, layout
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
 
@@ -549,7 +549,9 @@ class Kernel:
         self.perm, self.kl, self.ku = ordering(sparsity3(flat) if spatial else sparsity(flat))
         mode, offset, ground_t, ground_a, ground_terms = ground_arrays(mech)
         euler_axes = EULER_SEQUENCES[mech.scene.euler_sequence]
-        efficient = int(np.count_nonzero(flat["el_real"][:, layout.EFFICIENCY])) if len(flat["el_real"]) else 0
+        # the screw efficiencies whose modes each solve settles: the rigid ones (in series the mode is
+        # a law of the state, device.series_drive, and needs no solve again)
+        efficient = sum(1 for row in flat["el_real"] if device.mode_solved.py_func(row))
         dims = np.array([self.n, self.m, self.kl, self.ku, int(flat["has_gravity"]), flat["dim"], self.nq, mode,
                          offset, *euler_axes, efficient, 0], dtype=np.int64)
         self.params = (flat["mass"], flat["pbody"], flat["ploc"], flat["el_int"], flat["el_real"],
@@ -670,9 +672,9 @@ class Kernel:
         for e, (row_int, row_real) in enumerate(zip(flat["el_int"], flat["el_real"])):
             if name == f"{flat['el_names'][e]}.f":
                 need = adds_mass(row_int, row_real)
-            elif row_real[layout.EFFICIENCY] != 0.0 and name in (f"{flat['el_names'][e]}.p_loss",
-                                                                 f"{flat['el_names'][e]}.mode"):
-                need = True             # a screw efficiency's mode and loss: those of the solved L̈
+            elif device.mode_solved.py_func(row_real) and name in (f"{flat['el_names'][e]}.p_loss",
+                                                                   f"{flat['el_names'][e]}.mode"):
+                need = True             # a rigid screw efficiency's mode and loss: those of the solved L̈
         return need, np.arange(ny, dtype=np.int64)
 
     def signal_column(self, index, times, states, inputs=None, alpha=0.0):

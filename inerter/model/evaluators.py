@@ -17,7 +17,7 @@ import numpy as np
 
 from inerter import elements
 from inerter.common.errors import MIN_LENGTH, TerminalsMeet  # noqa: F401  (re-exported)
-from inerter.elements import device_inertia, layout
+from inerter.elements import device, device_inertia, layout
 from inerter.elements.base import axial_scalars as _compiled_axial_scalars
 from inerter.model.planar import PointPair
 
@@ -91,8 +91,9 @@ class TranslationalElement:
         return self._inertance(self.row, Ldot)
 
     def efficient(self) -> bool:
-        """Whether it has a screw efficiency, whose mode the solve settles (:meth:`settle`)."""
-        return self.row[layout.EFFICIENCY] != 0.0
+        """Whether it has a screw efficiency whose mode the solve settles (:meth:`settle`): a rigid one
+        (in series the mode is a law of the state, inerter.elements.device.series_drive)."""
+        return bool(device.mode_solved.py_func(self.row))
 
     def _scalars(self, geo, a=None):
         """(L, L̇, a_n·r̂, |ṙ⊥|², gᵀq̈) of the geometry `geo` at accelerations `a` (gᵀq̈ = 0 without)."""

@@ -17,9 +17,10 @@ slab along X and Y). Each row is the scene with its inerters built as a device
   1990);
 - ``efficiency``: the screw's efficiency, forward η_f while the terminals drive the flywheel and
   backward η_b while it drives them (:mod:`inerter.elements.device`);
-- ``all``: every effect above but the efficiency, which the engine refuses beside a series
-  connection; in 3D without the mount, which it refuses there too (the mount's gyroscopic terms
-  spin the flywheel with the terminal distance, not with the inerter's own stroke).
+- ``all``: every effect above, the efficiency acting in the series connection on the inerter's
+  own stroke (inerter.elements.device, "Efficiency", the series case); in 3D without the mount,
+  which the engine refuses beside a series connection (the mount's gyroscopic terms spin the
+  flywheel with the terminal distance, not with the inerter's own stroke).
 
 The device's parameters come from ``devices/ballscrew_device.toml``, a source for every
 value (most are representative, assumed: its header says which). Each row is written as a scene
@@ -55,7 +56,8 @@ ROWS = {
     "backlash": ("+ backlash (with the series spring)", ("compliance", "backlash")),
     "end_stops": ("+ end stops", ("end_stops",)),
     "efficiency": ("+ screw efficiency (η_f, η_b)", ("efficiency",)),
-    "all": ("all effects together (3D: no mount)", ("masses", "friction", "compliance", "backlash", "end_stops")),
+    "all": ("all effects together (3D: no mount)", ("masses", "friction", "compliance", "backlash", "end_stops",
+                                                     "efficiency")),
 }
 SCENES = ("two_bar_2d", "braced_frame_3d")
 #: The FMU's communication step (s), the scenes' output interval.

@@ -1038,6 +1038,7 @@ class CompiledStepper(Stepper):
         self._kinks = np.array(getattr(mech, "kinks", ()), dtype=float)
         self._tol = (float(settings.rtol), float(settings.atol), int(settings.max_steps))
         self._raw = np.empty(len(signal_layout(kernel.flat)))
+        self._scratch = _k.cosim_scratch(kernel.params, kernel.ny)   # shared with the native steps' table
         self._values = None                   # the outputs at self.time, when the last step made them
         self._rk = None                       # the running integration: [hdr, y, f, y_prev, dense]
         self._rk_inputs = None                # the inputs it runs with
@@ -1126,10 +1127,11 @@ class CompiledStepper(Stepper):
         rtol, atol, max_steps = self._tol
         hdr = rk[0]
         total_before = hdr[_k.RK_TOTAL]
+        self._scratch[2][0] = 0.0             # the terminals' gaps at rk's y: computed afresh here
         status, signal_status = _k.cosim_step(
             _RK_CODE[s.method], hdr, rk[1], rk[2], rk[3], rk[4], t_end, np.zeros(1), out, bound, rtol, atol,
             max_steps, self._rk_inputs, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm, self._monitor,
-            self._work, self._need_acc, self._raw, order, values, self._jumps, self._kinks)
+            self._work, self._need_acc, self._raw, order, values, self._jumps, self._kinks, self._scratch)
         if status:
             why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk[1], hdr[_k.RK_T], int(s.max_steps))
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(hdr[_k.RK_T]))
@@ -1203,6 +1205,7 @@ class CompiledStepper(Stepper):
             native = self._native
             if native is None or native["rk"] is not self._rk:
                 native = self._native = self._native_arrays(self._rk, self._rk_inputs, 1, self._tables, self._work)
+        self._scratch[2][0] = 0.0             # the first native step computes the gaps at rk's y
         clock = native["clock"]
         clock[_k.CLOCK_TIME] = self.time
         clock[_k.CLOCK_BOUND] = self.t_bound
@@ -1228,6 +1231,8 @@ class CompiledStepper(Stepper):
             arrays.update(zip((name for name, _ in group), values, strict=True))
         arrays["spatial"] = kernel.params[-1] if kernel.spatial else np.zeros(0, dtype=np.int64)
         arrays.update(zip(("b_" + name for name, _ in _k.RK_STATE), native["backup"], strict=True))
+        gaps, z, fresh, (nodes, _, kept) = self._scratch
+        arrays.update(zip((name for name, _ in _k.COSIM), (gaps, z, fresh, nodes, kept), strict=True))
         arrays.update(ts=native["ts"], out=native["out"], inputs=inputs, monitor=self._monitor,
                       raw=self._raw, order=self._order, values=native["values"], clock=clock, jumps=self._jumps,
                       kinks=self._kinks)

@@ -1003,14 +1003,19 @@ def terminal_gaps(y, P):
     """(gaps, z): r_b − r_a at y of each translational element whose terminals are checked
     (``el_real[e, MEET_LIMIT]`` > 0: one element per pair of terminals), for :func:`terminals_meet`, and the
     zero velocities it evaluates them with."""
-    el_int = P[EL_INT]
+    gaps = np.zeros((P[EL_INT].shape[0], 3))
     z = np.zeros(P[DIMS][N_VELOCITY])
-    gaps = np.zeros((el_int.shape[0], 3))
+    gaps_at(y, P, gaps, z)
+    return gaps, z
+
+
+@njit(cache=True)
+def gaps_at(y, P, gaps, z):
+    """The gaps of :func:`terminal_gaps` at y into `gaps` (`z`: zero velocities)."""
     q = y[:P[DIMS][N_COORD]]
-    for e in range(el_int.shape[0]):
+    for e in range(gaps.shape[0]):
         if P[EL_REAL][e, MEET_LIMIT] > 0.0:
             gaps[e, 0], gaps[e, 1], gaps[e, 2] = _gap_of(q, z, e, P)
-    return gaps, z
 
 
 @njit(cache=True)
@@ -2051,6 +2056,17 @@ def no_keep(ny):
     return np.empty(1), np.empty((0, 1, ny)), np.zeros(2, dtype=np.int64)
 
 
+def cosim_scratch(P, ny):
+    """The arrays a running co-simulation integration keeps besides its state and
+    :func:`work_arrays`, allocated once instead of at every communication step: (gaps, z, fresh,
+    keep): the terminals' gaps at y and the zero velocities they are evaluated with
+    (:func:`terminal_gaps`), fresh[0] = 1 where `gaps` are those at the integration's y (the last
+    accepted step moved them there, :func:`terminals_meet`; 0: computed at the next step's start),
+    and a `keep` that keeps nothing (:func:`no_keep`), see :func:`cosim_rk`."""
+    return (np.zeros((P[EL_INT].shape[0], 3)), np.zeros(P[DIMS][N_VELOCITY]), np.zeros(1),
+            no_keep.py_func(ny))
+
+
 @njit(cache=True, inline="always")
 def _rk_shape(method):
     """(stages of the step, order of its error estimate's lower solution + 1 = the exponent's base)
@@ -2284,7 +2300,7 @@ def _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k, out):
 
 @njit(cache=True)
 def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-               A, B, C, E, E3, Dm, Pm, monitor, work, kinks, keep):
+               A, B, C, E, E3, Dm, Pm, monitor, work, kinks, keep, gaps, z):
     """Advance an adaptive explicit Runge-Kutta integration until its last step covers the last of
     the increasing times `ts`, writing out[k] = y(ts[k]) for k ≥ k0 as the steps cover them: the step's own
     solution at a node (within 1e-12·max(1 s, t)), its dense output inside a step. Steps are
@@ -2320,8 +2336,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     solution at its start and coeffs[i, 1:] its coefficients (:func:`_dop853_at`, :func:`_rk45_at`).
     When coeffs is full the call returns DENSE_FULL before the next step, resumable once the caller
     gave it room (:func:`integrate_rk`). Keeping them changes neither the steps nor the samples.
-    Returns (status, the first k not written); on failure y, f and the last step's data are those of
-    the last good node."""
+    `gaps`, `z`: the terminals' gaps at y (:func:`terminal_gaps`), moved on with every accepted
+    step (:func:`terminals_meet`), so that a call resuming the integration need not evaluate them
+    again. Returns (status, the first k not written); on failure y, f and the last step's data are
+    those of the last good node (`gaps` may be the failed step's)."""
     work = _unowned(work)
     K, y_new, f_new = work[4], work[5], work[6]
     n_stages, order = _rk_shape(method)
@@ -2336,7 +2354,6 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     steps_before = hdr[RK_STEPS]
     status = OK
     k = _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k0, out)
-    gaps, z = terminal_gaps(y, P)
     ik = np.searchsorted(kinks, t, side="right")             # the next kink: kinks[ik] > t
     while k < ts.shape[0] and status == OK:
         if keeping and keep[2][KEPT_COUNT] >= keep[1].shape[0]:
@@ -2406,13 +2423,14 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     y_prev = y0.copy()
     dense = np.zeros((7, ny))
     work = work_arrays(P, ny, rk_stages(A))
+    gaps, z = terminal_gaps(y, P)
     nodes, coeffs, kept = keep
     k = np.int64(1)                     # not a literal: a literal k0 would compile rk_advance once more
     while True:
         # the step budget is the whole integration's, over the calls
         st, k = rk_advance(method, hdr, y, f, y_prev, dense, grid, out, k, t_end, rtol, atol,
                            max_steps - int(hdr[RK_STEPS]), inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor,
-                           work, kinks, (nodes, coeffs, kept))
+                           work, kinks, (nodes, coeffs, kept), gaps, z)
         if st != DENSE_FULL:
             break
         room = coeffs.shape[0]
@@ -2565,17 +2583,29 @@ def dense_states(method, nodes, coeffs, count, times, out):
                 out[j, k] = block[k - start, j]
 
 
+# rk_advance inlined where a co-simulation step enters it (one call per communication step instead of
+# one per integration: the call's dozens of arrays are passed, and reference-counted, once less).
+_rk_advance_inlined = njit(inline="always")(rk_advance.py_func)
+
+
 @njit(cache=True)
 def cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-             A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, kinks):
+             A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, kinks, scratch):
     """One co-simulation step on the compiled path: :func:`rk_advance` to the one time in `ts`
     (out[0] = y there), running on through the `kinks`, then every output signal there: `raw` in the layout of
-    :func:`signal_values`, `values[i] = raw[order[i]]`. Returns (integrator status, signal status);
-    NOT_FINITE where the state is not finite."""
-    st, k = rk_advance(method, hdr, y, f, y_prev, dense, ts, out, np.int64(0), t_bound, rtol, atol, max_steps,
-                       inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work, kinks,
-                       no_keep(y.shape[0]))   # np.int64: as integrate_rk
+    :func:`signal_values`, `values[i] = raw[order[i]]`. `scratch`: (gaps, z, fresh, keep) of
+    :func:`cosim_scratch`; the gaps are computed at y where fresh[0] is 0, and fresh[0] is 0 again
+    after a failed step (its gaps may be the rejected node's). Returns (integrator status, signal
+    status); NOT_FINITE where the state is not finite."""
+    gaps, z, fresh, keep = scratch
+    if fresh[0] == 0.0:
+        gaps_at(y, P, gaps, z)
+        fresh[0] = 1.0
+    st, k = _rk_advance_inlined(method, hdr, y, f, y_prev, dense, ts, out, np.int64(0), t_bound, rtol, atol,
+                                max_steps, inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work, kinks, keep,
+                                gaps, z)   # np.int64: as integrate_rk
     if st != OK:
+        fresh[0] = 0.0
         return st, OK
     y_out = out[0]
     for i in range(y_out.shape[0]):
@@ -2596,15 +2626,16 @@ def next_jump(jumps, t):
 
 @njit(cache=True)
 def cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-               A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, jumps, kinks):
+               A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, jumps, kinks, scratch):
     """A co-simulation step to t_end on the running integration (:func:`cosim_rk`), segment by
     segment: a segment ends at its discontinuity (RK_JUMP: a step force's switch, a ground record's
     end on a value other than zero, of the increasing `jumps`), where the integration starts
     afresh, with the step size chosen as scipy does, from the state there, as :func:`integrate_rk`
     over the segments of a whole run; through the `kinks` (a ground record's samples) it runs on
     (:func:`rk_advance`). Steps are clipped to the segment's end, to the kinks and to `t_bound`.
-    `ts` (one slot) and `out` (one row) take the sample. Returns (integrator status, signal
-    status)."""
+    `ts` (one slot) and `out` (one row) take the sample; `scratch`: :func:`cosim_scratch`, whose
+    gaps hold on where a segment starts afresh (the state does not change there). Returns
+    (integrator status, signal status)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     while True:
         jump = hdr[RK_JUMP]
@@ -2623,9 +2654,9 @@ def cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol, 
             y_prev[:] = y
             continue
         ts[0] = min(t_end, jump) if jump > 0.0 else t_end
-        st, sst = cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, min(t_bound, jump) if jump > 0.0 else t_bound,
-                           rtol, atol, max_steps, inputs, alpha, P, A, B, C, E, E3, Dm, Pm, monitor, work, need_acc,
-                           raw, order, values, kinks)
+        bound = min(t_bound, jump) if jump > 0.0 else t_bound
+        st, sst = cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, bound, rtol, atol, max_steps, inputs, alpha,
+                           P, A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, kinks, scratch)
         if st != OK or ts[0] == t_end:
             return st, sst
 
@@ -2775,11 +2806,15 @@ PARAMS = (("mass", "f1"), ("pbody", "i1"), ("ploc", "f2"), ("el_int", "i2"), ("e
 TABLEAU = (("A", "f2"), ("B", "f1"), ("C", "f1"), ("E", "f1"), ("E3", "f1"), ("D", "f2"), ("Pm", "f2"))
 WORK = (("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), ("y_new", "f1"), ("f_new", "f1"),
         ("ys", "f1"), ("sig_acc", "f1"))
+#: cosim_scratch (gaps, z, fresh, keep), keep's coefficients (a (0, 1, ny) array) left out: native_step
+#: makes them an empty view of `nodes`.
+COSIM = (("gaps", "f2"), ("z", "f1"), ("fresh", "f1"), ("nodes", "f1"), ("kept", "i1"))
 NATIVE_SLOTS = (RK_STATE + (("ts", "f1"), ("out", "f2"), ("inputs", "f1")) + PARAMS + TABLEAU
                 + (("monitor", "f1"),) + WORK
                 + (("raw", "f1"), ("order", "i1"), ("values", "f1"), ("clock", "f1"))
                 + tuple(("b_" + name, kind) for name, kind in RK_STATE)
-                + (("jumps", "f1"), ("kinks", "f1"), ("spatial", "i1")))
+                + (("jumps", "f1"), ("kinks", "f1"), ("spatial", "i1"))
+                + COSIM)
 CLOCK_TIME, CLOCK_BOUND, CLOCK_RTOL, CLOCK_ATOL, CLOCK_ALPHA, CLOCK_BUSY, CLOCK_TOLERANCE, CLOCK_TAKEN, \
     CLOCK_STEP = range(9)
 CLOCK_SIZE = 9
@@ -2789,8 +2824,8 @@ NATIVE_TOOK_STEP = 1
 _SLOT = {name: i for i, (name, _) in enumerate(NATIVE_SLOTS)}
 # Where native_step finds each block of NATIVE_SLOTS (the RK state, its backup, the scene's P, the
 # tableau, the scratch) and each single slot: numba takes these module constants as literals.
-S_RK, S_BACKUP, S_PARAMS, S_TABLEAU, S_WORK = (_SLOT["hdr"], _SLOT["b_hdr"], _SLOT["mass"], _SLOT["A"],
-                                               _SLOT["AB"])
+S_RK, S_BACKUP, S_PARAMS, S_TABLEAU, S_WORK, S_COSIM = (_SLOT["hdr"], _SLOT["b_hdr"], _SLOT["mass"], _SLOT["A"],
+                                                        _SLOT["AB"], _SLOT["gaps"])
 S_TS, S_OUT, S_INPUTS, S_MONITOR, S_RAW, S_ORDER, S_VALUES, S_CLOCK, S_JUMPS, S_KINKS, S_SPATIAL = (
     _SLOT["ts"], _SLOT["out"], _SLOT["inputs"], _SLOT["monitor"], _SLOT["raw"], _SLOT["order"], _SLOT["values"],
     _SLOT["clock"], _SLOT["jumps"], _SLOT["kinks"], _SLOT["spatial"])
@@ -2863,6 +2898,15 @@ def _i2(tab, s):
 
 
 @njit(cache=True, inline="always")
+def _native_scratch(tab, ny):
+    """:func:`cosim_scratch` from the table (its COSIM block, from slot S_COSIM on)."""
+    s = S_COSIM
+    nodes = _f1(tab, s + 3)
+    coeffs = carray(_pointer(tab[TABLE_HEAD + 3 * (s + 3)], np.float64), (0, 1, ny))   # empty: nothing kept
+    return _f2(tab, s), _f1(tab, s + 1), _f1(tab, s + 2), (nodes, coeffs, _i1(tab, s + 4))
+
+
+@njit(cache=True, inline="always")
 def _native_params(tab):
     """P of a 2D scene from the table (its PARAMS block, from slot S_PARAMS on)."""
     s = S_PARAMS
@@ -2895,7 +2939,8 @@ def native_step_on(tab, t, h, P):
     not the current one, a step size that is not finite and > 0, a failed step or outputs the
     kernels cannot evaluate. A declined step leaves CLOCK_BUSY set and the integration's state as
     it was in the backup arrays (b_*), which the Python path restores before it takes the step
-    itself, so that it gives the messages and the results the Python path always gives."""
+    itself, so that it gives the messages and the results the Python path always gives; it also
+    marks the terminals' gaps (:func:`cosim_scratch`) as not current."""
     clock = _f1(tab, S_CLOCK)
     now = clock[CLOCK_TIME]
     if not (math.isfinite(t) and math.isfinite(h) and h > 0.0):
@@ -2937,13 +2982,15 @@ def native_step_on(tab, t, h, P):
     else:
         if t_end > bound:                       # the importer went past its stop time
             bound = np.inf
+        scratch = _native_scratch(tab, y.shape[0])
         st, sst = cosim_step(tab[TABLE_METHOD], hdr, y, f, y_prev, dense, t_end, ts, out, bound,
                              clock[CLOCK_RTOL], clock[CLOCK_ATOL], tab[TABLE_MAX_STEPS], inputs, alpha, P,
                              _f2(tab, S_TABLEAU), _f1(tab, S_TABLEAU + 1), _f1(tab, S_TABLEAU + 2),
                              _f1(tab, S_TABLEAU + 3), _f1(tab, S_TABLEAU + 4), _f2(tab, S_TABLEAU + 5),
                              _f2(tab, S_TABLEAU + 6), _f1(tab, S_MONITOR), work, tab[TABLE_NEED_ACC] != 0, raw, order,
-                             values, _f1(tab, S_JUMPS), _f1(tab, S_KINKS))
+                             values, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), scratch)
         if st != OK or sst != OK:
+            scratch[2][0] = 0.0                 # the Python path restores y from the backup
             return 0
     clock[CLOCK_TIME] = t_end
     clock[CLOCK_BOUND] = bound

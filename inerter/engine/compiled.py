@@ -145,10 +145,10 @@ def _write_bytecode(source: Path, fresh: bool):
 # ------------------------------------------------------------------------------------------------
 #: Seconds a run's first compilation of the kernels takes on a 2-core machine, by dimension (its
 #: integrator loop and outputs, docs/benchmarks/first_use.md), for the notice.
-COMPILE_SECONDS = {2: 45, 3: 95}
+COMPILE_SECONDS = {2: 95, 3: 140}
 #: Seconds ``inerter compile`` takes on a 2-core machine with an empty cache, by dimension (every kernel:
 #: the three integrator loops, outputs, co-simulation steps and the FMU's native step).
-AOT_SECONDS = {2: 90, 3: 120}
+AOT_SECONDS = {2: 160, 3: 260}
 #: The kernels entered from Python, in the notice's words (others by their own name).
 _WHAT = {"integrate_rk": "the DOP853/RK45 loop", "integrate_rk4": "the RK4 loop",
          "signal_history": "the outputs", "signal_column": "the outputs", "dense_signal": "the outputs",

@@ -1301,6 +1301,7 @@ class CompiledStepper(Stepper):
         self.y = np.array(y)
         self.inputs = np.array(inputs)
         self._values = None
+        self._scratch[2][0] = 0.0             # the terminals' gaps are those of the state left behind
 
 
 def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> str:

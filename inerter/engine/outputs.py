@@ -43,7 +43,7 @@ class Signals:
             needs_a = e.kind == "inerter" or (hasattr(e, "inertance") and e.inertance(0.0) != 0.0)
             # of its three outputs, only the force reads q̈ (the distance and its rate do not); a screw
             # efficiency's mode and loss are those of the solved L̈ (inerter.elements.device)
-            efficient = getattr(e, "efficient", None) is not None and e.efficient()
+            efficient = e in mech.efficient
             self._group([(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}") for suffix, unit, text in spec],
                         needs_a, lambda t, q, v, a, z, e=e, k=len(spec): (
                             e.outputs(q, v, a, z) if getattr(e, "n_states", 0) else e.outputs(q, v, a))[:k],

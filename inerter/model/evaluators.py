@@ -127,10 +127,7 @@ class TranslationalElement:
 
     def _law_force(self, geo):
         """The law's force without the inertance part (:mod:`inerter.elements`), and L̇."""
-        r, rdot, a_n, H, L, rhat = geo
-        rd, an, e = np.zeros(3), np.zeros(3), np.zeros(3)       # 2D vectors padded with z = 0
-        rd[:len(rdot)], an[:len(a_n)], e[:len(rhat)] = rdot, a_n, rhat
-        Ldot, an_r, perp2 = axial_scalars(*rd, *an, *e)
+        L, Ldot, an_r, perp2, _ = self._scalars(geo)
         return self._force(self.row, L, Ldot, an_r, perp2), Ldot
 
     def _x(self, z):

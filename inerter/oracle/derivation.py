@@ -30,7 +30,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from inerter.common.errors import MIN_LENGTH, TerminalsMeet
+from inerter.common.errors import MIN_LENGTH, InerterError, TerminalsMeet
 
 
 class Jet:
@@ -347,12 +347,10 @@ class OracleDevice:
         self.spec = device
         states = [n for n in ("compliance", "backlash", "dissipated_energy") if device.has(n)]
         if states:
-            from inerter.common.errors import InerterError
             raise InerterError(f"the oracle derives an inerter device from L(q) and its rate only; "
                                f"device.{states[0]} has internal states (series deflection, dissipated "
                                f"energy), which it does not derive: check such a scene against closed forms")
         if device.has("efficiency"):
-            from inerter.common.errors import InerterError
             raise InerterError("the oracle derives an inerter device from its energies and dissipation function; "
                                "device.efficiency makes b depend on the sign of L̈ (and on L̇, switched or "
                                "smoothed), which no such function gives: check such a scene against closed forms")

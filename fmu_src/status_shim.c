@@ -16,8 +16,9 @@
  *
  * The native doStep (inerter/fmu/native.py says the protocol). After fmi2Instantiate the shim reads
  * the slave's context address through the private Integer value references NATIVE_LINK_VR and
- * NATIVE_LINK_VR + 1. After a doStep the slave took and returned fmi2OK, it arms itself where the
- * context says so, and then takes the next doStep by calling the context's C function on the
+ * NATIVE_LINK_VR + 1. After a doStep the slave took and returned fmi2OK, and after an
+ * fmi2ExitInitializationMode that returned fmi2OK, it arms itself where the context says so, and
+ * then takes the next doStep by calling the context's C function on the
  * context's table without entering Python, and serves every getter from the context's map until a
  * call enters Python (outputs from the values the function wrote, every other variable from arrays
  * the slave filled when it armed the link). A step the function declines goes to the slave. Before
@@ -501,8 +502,14 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
+    struct instance *w = c;
+    fmi2Status status;
+
     ENTER
-    return checked(INNER(c), original.ExitInitializationMode(INNER(c)));
+    status = checked(w->inner, original.ExitInitializationMode(w->inner));
+    /* The slave arms the link at the end of initialisation too: the first step may be native. */
+    w->armed = status == fmi2OK && w->ctx != NULL && w->ctx[CTX_ARMED];
+    return status;
 }
 
 fmi2Status fmi2Terminate(fmi2Component c)

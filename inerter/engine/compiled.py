@@ -1180,12 +1180,16 @@ class CompiledStepper(Stepper):
 
     # The native doStep (inerter.fmu.native): compiled_kernels.native_step takes steps on the running
     # integration's arrays without entering Python; native_sync takes over what it did.
-    def native_table(self, tolerance: float):
+    def native_table(self, tolerance: float, start: bool = False):
         """The int64 table of :func:`compiled_kernels.native_step` for the next step, its clock at the
         current time (`tolerance`: communication points closer than tolerance·max(1 s, |t|) are
         equal); None where the next step must be taken here: no running integration (DOP853, RK45:
-        before the first step, after a failed one), an input changed, outputs the kernels do not
-        evaluate. Valid until the next call of :meth:`step` or :meth:`set_state`."""
+        before the first step, after a failed one) unless `start`, an input changed, outputs the
+        kernels do not evaluate. Valid until the next call of :meth:`step` or :meth:`set_state`.
+
+        `start`: where no integration runs, start one at (time, y) with the held inputs, as the
+        next :meth:`step` would (:meth:`_start_rk`; it finds it running and goes on with it), so
+        that the first step after initialisation can be native too."""
         if self._order is None or self._input_moved:
             return None
         if self.settings.method == "RK4":
@@ -1201,7 +1205,9 @@ class CompiledStepper(Stepper):
             native["inputs"][:] = self.kernel._inputs(self.inputs)
         else:
             if self._rk is None:
-                return None
+                if not start:
+                    return None
+                self._rk = self._start_rk()
             native = self._native
             if native is None or native["rk"] is not self._rk:
                 native = self._native = self._native_arrays(self._rk, self._rk_inputs, 1, self._tables, self._work)

@@ -1243,16 +1243,16 @@ class CompiledStepper(Stepper):
                       raw=self._raw, order=self._order, values=native["values"], clock=clock, jumps=self._jumps,
                       kinks=self._kinks)
         code = _k.NATIVE_RK4 if s.method == "RK4" else _RK_CODE[s.method]
-        table = np.zeros(_k.TABLE_HEAD + 3 * len(_k.NATIVE_SLOTS), dtype=np.int64)
-        table[:_k.TABLE_HEAD] = (len(table), code, int(s.max_steps), int(self._need_acc))
-        for slot, (name, kind) in enumerate(_k.NATIVE_SLOTS):
-            a = arrays[name]
+        size = _k.TABLE_HEAD + 3 * len(_k.NATIVE_SLOTS)
+        words = [size, code, int(s.max_steps), int(self._need_acc)]
+        for name, kind in _k.NATIVE_SLOTS:       # the words gathered first, written at once: the
+            a = arrays[name]                      # table is built at every arming of the FMU's link
             dtype = np.float64 if kind[0] == "f" else np.int64
-            if a.dtype != dtype or a.ndim != int(kind[1]) or not a.flags.c_contiguous or not a.flags.writeable:
+            flags = a.flags
+            if a.dtype != dtype or a.ndim != int(kind[1]) or not flags.c_contiguous or not flags.writeable:
                 raise TypeError(f"native step: array {name} is {a.dtype} {a.shape}, expected {kind}")
-            j = _k.TABLE_HEAD + 3 * slot
-            table[j:j + 3] = (a.ctypes.data, a.shape[0], a.shape[1] if a.ndim == 2 else 0)
-        native["table"] = table
+            words += (a.ctypes.data, a.shape[0], a.shape[1] if a.ndim == 2 else 0)
+        native["table"] = np.array(words, dtype=np.int64)
         native["arrays"] = arrays                 # keeps every array the table points to alive
         return native
 

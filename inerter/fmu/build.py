@@ -537,10 +537,11 @@ def _declare(root: ET.Element, units: dict[str, str], extra: Declarations | None
             node = ET.SubElement(structure, tag)
             for name in outputs:
                 knowns = sorted(index[k] for k in dependencies[name])
-                attrib = {"index": str(index[name]), "dependencies": " ".join(map(str, knowns))}
-                if knowns:
-                    attrib["dependenciesKind"] = " ".join("dependent" for _ in knowns)
-                ET.SubElement(node, "Unknown", attrib)
+                # No dependenciesKind: every kind is "dependent", which FMI 2.0 (2.2.8) assumes
+                # where the attribute is absent; it was a fifth of the two-bar description, which
+                # an importer reads and validates at every run (docs/benchmarks).
+                ET.SubElement(node, "Unknown", {"index": str(index[name]),
+                                                "dependencies": " ".join(map(str, knowns))})
     return used
 
 

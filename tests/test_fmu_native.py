@@ -244,6 +244,16 @@ def before_first_step(inst, case: str, solver: str | None) -> Transcript:
         tr.call("solver", inst.fmu.getInteger, [inst.vr["solver"]])
     elif case == "input":                                # the slave takes the first step
         tr.call("set input", inst.set, INPUT, 3.0)
+    elif case == "reset":                                # native steps, then a fresh start
+        for n in range(2):
+            tr.step(n * h, h)
+            tr.outputs()
+        inst.fmu.reset()                                 # a new slave object, a new context
+        inst.fmu.setupExperiment(startTime=0.0, stopTime=0.3)
+        inst.fmu.enterInitializationMode()
+        if solver is not None:
+            inst.fmu.setInteger([inst.vr["solver"]], [inst.item("solver", solver)])
+        inst.fmu.exitInitializationMode()
     elif case == "state":                                # native steps, rolled back to t = 0
         state = inst.fmu.getFMUstate()
         first = [(tr.step(n * h, h), tr.outputs()) for n in range(2)]
@@ -259,17 +269,21 @@ def before_first_step(inst, case: str, solver: str | None) -> Transcript:
 
 
 @pytest.mark.parametrize("solver", [None, "RK4"])
-@pytest.mark.parametrize("case, natively", [("read", 3), ("input", 2), ("state", 6)])
+@pytest.mark.parametrize("case, natively", [("read", 3), ("input", 2), ("state", 6), ("reset", 3)])
 def test_the_first_step_is_native_and_what_comes_before_it_is_the_slaves(fmus, pair, case, natively,
-                                                                          solver):
+                                                                          solver, monkeypatch):
     """The slave arms the link at the end of initialisation, the integration started as its first
     step would start it: the first step is native, and every call between initialisation and it
     gives what the slave gives (outputs and a parameter read at t = 0, an input set before the
-    first step, the FMU state got at t = 0 and set back after native steps), bit for bit, with the
-    scene's method (DOP853) and with RK4."""
+    first step, the FMU state got at t = 0 and set back after native steps, a reset after native
+    steps and a new initialisation: the shim links to the new slave object's context), bit for
+    bit, with the scene's method (DOP853) and with RK4. The count of native steps is the slave
+    object's (a reset starts it again)."""
     native_scene(INPUT_SCENE)
     native, slave = pair(fmus[INPUT_SCENE])
+    monkeypatch.setenv(fmu_native.SWITCH, "1")          # as each was made: a reset reads it again
     a = before_first_step(native, case, solver)
+    monkeypatch.setenv(fmu_native.SWITCH, "0")
     b = before_first_step(slave, case, solver)
     assert a.entries == b.entries
     assert a.messages() == b.messages()

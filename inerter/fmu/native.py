@@ -14,7 +14,8 @@ entering Python, whenever the slave has *armed* it:
   variable (parameters, inputs, the solver settings, ``fmi_status``) in arrays the slave fills
   when it arms the link (none of them can change between native steps: fixed parameters are
   refused after initialisation, and a set disarms the link);
-- the shim asks for the context's address once, after fmi2Instantiate, by reading the Integer
+- the shim asks for the context's address after fmi2Instantiate, and again after fmi2Reset
+  (pythonfmu replaces the slave object, and its context with it), by reading the Integer
   value references LINK_VR and LINK_VR + 1 (not in modelDescription.xml; the slave answers 0
   when the link is off: numba missing, or ``INERTER_FMU_NATIVE=0`` in the environment);
 - after a doStep that the slave took and returned fmi2OK, and after an exitInitializationMode
@@ -35,7 +36,8 @@ entering Python, whenever the slave has *armed* it:
   getters disarms the shim until the next doStep the slave takes (or exitInitializationMode,
   after a reset).
 
-The same context carries the shim's live logger: after fmi2Instantiate the shim writes the address
+The same context carries the shim's live logger: after fmi2Instantiate (and fmi2Reset) the shim
+writes the address
 of its ``live_log`` function and of its instance into CTX_LOG_FUNCTION and CTX_LOG_TARGET, so that
 the slave can hand a message to the importer's logger during a long call (the kernels' first
 compilation, inside exitInitializationMode) instead of when it returns (:meth:`NativeLink.live_log`).

@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import base64
 import contextlib
+import functools
 import hashlib
 import io
 import json
@@ -211,6 +212,21 @@ def _loaded_models(scene_path: Path, scene_bytes: bytes, scene_digest: str) -> d
         del _LOADED[next(iter(_LOADED))]
     _LOADED[scene_digest] = (_files_digest(scene_path, scene_bytes, model.scene.data_files), models)
     return models
+
+
+@functools.cache
+def _foreign_package() -> str:
+    """The warning for a process that had imported another ``inerter`` than the one this FMU ships
+    ("" where it runs the shipped one): the same for every instance in the process (both folders
+    are fixed once this module is imported), so it is found once, not at every instantiation."""
+    if SHIPPED_PACKAGE is None:
+        return ""
+    shipped = (SHIPPED_PACKAGE / "inerter").resolve()
+    used = Path(inerter.__file__).resolve().parent
+    if used == shipped:
+        return ""
+    return (f"this process had already imported the inerter package from {used}; the FMU runs "
+            f"with it, not with the copy shipped in {shipped}")
 
 
 class _LogLines:
@@ -692,6 +708,8 @@ class InerterSlave(Fmi2Slave):
         self.log(f"initialised at t = 0 s with solver {used.method}, "
                  f"rtol {used.rtol:g}, atol {used.atol:g}, {stepper.path} path; "
                  f"changed from the scene: {changed or 'nothing'}", Fmi2Status.ok)
+        if not self._rejected:                    # else the first doStep reports them (_refusal)
+            self._arm_native(stepper, start=True)   # the first step may be native too
 
     def _preview_stepper(self, settings: dict):
         """A stepper at t = 0 for `settings` with the inputs set so far: the one initialization
@@ -850,10 +868,11 @@ class InerterSlave(Fmi2Slave):
                 self.log(f"outputs.derived.{self._output_names[i]}: no value at t = {t!r} s (NaN): its "
                          f"expression is undefined there", Fmi2Status.warning)
 
-    def _arm_native(self, stepper):
-        """Let the FMU's binary take the next step natively where it can (inerter/fmu/native.py)."""
+    def _arm_native(self, stepper, start: bool = False):
+        """Let the FMU's binary take the next step natively where it can (inerter/fmu/native.py);
+        `start`: at the end of initialisation, where the integration is not running yet."""
         try:
-            self._native.arm(stepper, TIME_TOLERANCE)
+            self._native.arm(stepper, TIME_TOLERANCE, start=start)
         except Exception as exc:  # the steps go on here, as without the link
             self._native.turn_off(repr(exc))
             self.log(f"native doStep turned off, the steps go on in Python: {exc!r}",
@@ -972,11 +991,6 @@ class InerterSlave(Fmi2Slave):
 
     # ------------------------------------------------------------------------------------------
     def _warn_if_foreign_package(self):
-        if SHIPPED_PACKAGE is None:
-            return
-        shipped = (SHIPPED_PACKAGE / "inerter").resolve()
-        used = Path(inerter.__file__).resolve().parent
-        if used != shipped:
-            self.log(f"this process had already imported the inerter package from {used}; the "
-                     f"FMU runs with it, not with the copy shipped in {shipped}",
-                     Fmi2Status.warning)
+        message = _foreign_package()
+        if message:
+            self.log(message, Fmi2Status.warning)

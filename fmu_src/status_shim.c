@@ -14,10 +14,11 @@
  * every call is forwarded with the original's component, and the slave's messages reach the
  * importer through the original's logger calls as before.
  *
- * The native doStep (inerter/fmu/native.py says the protocol). After fmi2Instantiate the shim reads
- * the slave's context address through the private Integer value references NATIVE_LINK_VR and
- * NATIVE_LINK_VR + 1. After a doStep the slave took and returned fmi2OK, it arms itself where the
- * context says so, and then takes the next doStep by calling the context's C function on the
+ * The native doStep (inerter/fmu/native.py says the protocol). After fmi2Instantiate and after
+ * fmi2Reset (which replaces the slave object) the shim reads the slave's context address through the private Integer value references NATIVE_LINK_VR and
+ * NATIVE_LINK_VR + 1. After a doStep the slave took and returned fmi2OK, and after an
+ * fmi2ExitInitializationMode that returned fmi2OK, it arms itself where the context says so, and
+ * then takes the next doStep by calling the context's C function on the
  * context's table without entering Python, and serves every getter from the context's map until a
  * call enters Python (outputs from the values the function wrote, every other variable from arrays
  * the slave filled when it armed the link). A step the function declines goes to the slave. Before
@@ -297,6 +298,21 @@ static const int64_t *native_context(fmi2Component inner)
     return ctx;
 }
 
+/* The slave's context, disarmed, with the live logger written into it: after fmi2Instantiate, and
+ * after fmi2Reset, where pythonfmu replaces the slave object, and its context with it (the old one
+ * may be freed: it must not be read again). */
+static void link_context(struct instance *w)
+{
+    w->ctx = native_context(w->inner);
+    w->armed = 0;
+    w->dirty = 0;
+    if (w->ctx != NULL && w->name != NULL) {
+        int64_t *ctx = (int64_t *)(uintptr_t)w->ctx;
+        ctx[CTX_LOG_TARGET] = (int64_t)(uintptr_t)w;
+        ctx[CTX_LOG_FUNCTION] = (int64_t)(uintptr_t)&live_log;
+    }
+}
+
 /* The slave takes over the native steps (before any call that enters Python after them). */
 static fmi2Status sync(struct instance *w)
 {
@@ -436,18 +452,13 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return NULL;
     }
     w->inner = inner;
-    w->ctx = native_context(inner);
     if (functions != NULL) {
         w->logger = functions->logger;
         w->environment = functions->componentEnvironment;
     }
     w->logging_on = loggingOn == fmi2True;
     w->name = strdup(instanceName != NULL ? instanceName : "");
-    if (w->ctx != NULL && w->name != NULL) {
-        int64_t *ctx = (int64_t *)(uintptr_t)w->ctx;
-        ctx[CTX_LOG_TARGET] = (int64_t)(uintptr_t)w;
-        ctx[CTX_LOG_FUNCTION] = (int64_t)(uintptr_t)&live_log;
-    }
+    link_context(w);
     return w;
 }
 
@@ -501,8 +512,14 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
+    struct instance *w = c;
+    fmi2Status status;
+
     ENTER
-    return checked(INNER(c), original.ExitInitializationMode(INNER(c)));
+    status = checked(w->inner, original.ExitInitializationMode(w->inner));
+    /* The slave arms the link at the end of initialisation too: the first step may be native. */
+    w->armed = status == fmi2OK && w->ctx != NULL && w->ctx[CTX_ARMED];
+    return status;
 }
 
 fmi2Status fmi2Terminate(fmi2Component c)
@@ -513,8 +530,14 @@ fmi2Status fmi2Terminate(fmi2Component c)
 
 fmi2Status fmi2Reset(fmi2Component c)
 {
+    struct instance *w = c;
+    fmi2Status status;
+
     ENTER
-    return original.Reset(INNER(c));
+    w->ctx = NULL; /* the slave object and its context are replaced */
+    status = original.Reset(w->inner);
+    link_context(w);
+    return status;
 }
 
 /* After native steps, the getters are served from the context (see served); else by the slave. */

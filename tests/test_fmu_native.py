@@ -88,7 +88,7 @@ def replay(inst, scene_has_input: bool, stop_time: float, solver: str | None = N
     h, t = 0.01, 0.0
     parameter = next(v.name for v in inst.md.modelVariables if v.causality == "parameter"
                      and v.type == "Real")
-    for k in range(12):                                  # native after the first step
+    for k in range(12):                                  # native from the first step on
         tr.step(t, h)
         t += h
         tr.outputs()
@@ -226,7 +226,70 @@ def test_a_step_that_fails_natively_is_taken_and_reported_by_the_slave(fmus, pai
     t_fail = float(failed[0][len("doStep("):].split(",")[0])
     assert t_fail <= math.pi * math.sqrt(2) / 4 < t_fail + 0.01
     assert "terminals O and P meet" in a.messages()[-1][1]
-    assert native_steps(native) == 110
+    assert native_steps(native) == 111                  # every step before the one that fails
+
+
+def before_first_step(inst, case: str, solver: str | None) -> Transcript:
+    """Initialise, then one of the call sequences that hand over to the slave between
+    exitInitializationMode and the first step, then steps."""
+    tr = Transcript(inst)
+    inst.fmu.setupExperiment(startTime=0.0, stopTime=0.3)
+    inst.fmu.enterInitializationMode()
+    if solver is not None:
+        inst.fmu.setInteger([inst.vr["solver"]], [inst.item("solver", solver)])
+    inst.fmu.exitInitializationMode()
+    h = 0.01
+    if case == "read":                                   # the slave answers; the link stays armed
+        tr.outputs()
+        tr.call("solver", inst.fmu.getInteger, [inst.vr["solver"]])
+    elif case == "input":                                # the slave takes the first step
+        tr.call("set input", inst.set, INPUT, 3.0)
+    elif case == "reset":                                # native steps, then a fresh start
+        for n in range(2):
+            tr.step(n * h, h)
+            tr.outputs()
+        inst.fmu.reset()                                 # a new slave object, a new context
+        inst.fmu.setupExperiment(startTime=0.0, stopTime=0.3)
+        inst.fmu.enterInitializationMode()
+        if solver is not None:
+            inst.fmu.setInteger([inst.vr["solver"]], [inst.item("solver", solver)])
+        inst.fmu.exitInitializationMode()
+    elif case == "state":                                # native steps, rolled back to t = 0
+        state = inst.fmu.getFMUstate()
+        first = [(tr.step(n * h, h), tr.outputs()) for n in range(2)]
+        inst.fmu.setFMUstate(state)
+        inst.fmu.freeFMUstate(state)
+        assert [(tr.step(n * h, h), tr.outputs()) for n in range(2)] == first
+    t = 2 * h if case == "state" else 0.0
+    for _ in range(3):
+        tr.step(t, h)
+        t += h
+        tr.outputs()
+    return tr
+
+
+@pytest.mark.parametrize("solver", [None, "RK4"])
+@pytest.mark.parametrize("case, natively", [("read", 3), ("input", 2), ("state", 6), ("reset", 3)])
+def test_the_first_step_is_native_and_what_comes_before_it_is_the_slaves(fmus, pair, case, natively,
+                                                                          solver, monkeypatch):
+    """The slave arms the link at the end of initialisation, the integration started as its first
+    step would start it: the first step is native, and every call between initialisation and it
+    gives what the slave gives (outputs and a parameter read at t = 0, an input set before the
+    first step, the FMU state got at t = 0 and set back after native steps, a reset after native
+    steps and a new initialisation: the shim links to the new slave object's context), bit for
+    bit, with the scene's method (DOP853) and with RK4. The count of native steps is the slave
+    object's (a reset starts it again)."""
+    native_scene(INPUT_SCENE)
+    native, slave = pair(fmus[INPUT_SCENE])
+    monkeypatch.setenv(fmu_native.SWITCH, "1")          # as each was made: a reset reads it again
+    a = before_first_step(native, case, solver)
+    monkeypatch.setenv(fmu_native.SWITCH, "0")
+    b = before_first_step(slave, case, solver)
+    assert a.entries == b.entries
+    assert a.messages() == b.messages()
+    assert not any(status for _, status, _ in a.entries)
+    # Native: every step but the first after an input set or the state set back (the slave's).
+    assert native_steps(native) == natively and native_steps(slave) == 0
 
 
 def test_outputs_and_inputs_read_between_native_steps_are_the_slaves(fmus, pair):

@@ -1180,12 +1180,16 @@ class CompiledStepper(Stepper):
 
     # The native doStep (inerter.fmu.native): compiled_kernels.native_step takes steps on the running
     # integration's arrays without entering Python; native_sync takes over what it did.
-    def native_table(self, tolerance: float):
+    def native_table(self, tolerance: float, start: bool = False):
         """The int64 table of :func:`compiled_kernels.native_step` for the next step, its clock at the
         current time (`tolerance`: communication points closer than tolerance·max(1 s, |t|) are
         equal); None where the next step must be taken here: no running integration (DOP853, RK45:
-        before the first step, after a failed one), an input changed, outputs the kernels do not
-        evaluate. Valid until the next call of :meth:`step` or :meth:`set_state`."""
+        before the first step, after a failed one) unless `start`, an input changed, outputs the
+        kernels do not evaluate. Valid until the next call of :meth:`step` or :meth:`set_state`.
+
+        `start`: where no integration runs, start one at (time, y) with the held inputs, as the
+        next :meth:`step` would (:meth:`_start_rk`; it finds it running and goes on with it), so
+        that the first step after initialisation can be native too."""
         if self._order is None or self._input_moved:
             return None
         if self.settings.method == "RK4":
@@ -1201,7 +1205,9 @@ class CompiledStepper(Stepper):
             native["inputs"][:] = self.kernel._inputs(self.inputs)
         else:
             if self._rk is None:
-                return None
+                if not start:
+                    return None
+                self._rk = self._start_rk()
             native = self._native
             if native is None or native["rk"] is not self._rk:
                 native = self._native = self._native_arrays(self._rk, self._rk_inputs, 1, self._tables, self._work)
@@ -1237,16 +1243,16 @@ class CompiledStepper(Stepper):
                       raw=self._raw, order=self._order, values=native["values"], clock=clock, jumps=self._jumps,
                       kinks=self._kinks)
         code = _k.NATIVE_RK4 if s.method == "RK4" else _RK_CODE[s.method]
-        table = np.zeros(_k.TABLE_HEAD + 3 * len(_k.NATIVE_SLOTS), dtype=np.int64)
-        table[:_k.TABLE_HEAD] = (len(table), code, int(s.max_steps), int(self._need_acc))
-        for slot, (name, kind) in enumerate(_k.NATIVE_SLOTS):
-            a = arrays[name]
+        size = _k.TABLE_HEAD + 3 * len(_k.NATIVE_SLOTS)
+        words = [size, code, int(s.max_steps), int(self._need_acc)]
+        for name, kind in _k.NATIVE_SLOTS:       # the words gathered first, written at once: the
+            a = arrays[name]                      # table is built at every arming of the FMU's link
             dtype = np.float64 if kind[0] == "f" else np.int64
-            if a.dtype != dtype or a.ndim != int(kind[1]) or not a.flags.c_contiguous or not a.flags.writeable:
+            flags = a.flags
+            if a.dtype != dtype or a.ndim != int(kind[1]) or not flags.c_contiguous or not flags.writeable:
                 raise TypeError(f"native step: array {name} is {a.dtype} {a.shape}, expected {kind}")
-            j = _k.TABLE_HEAD + 3 * slot
-            table[j:j + 3] = (a.ctypes.data, a.shape[0], a.shape[1] if a.ndim == 2 else 0)
-        native["table"] = table
+            words += (a.ctypes.data, a.shape[0], a.shape[1] if a.ndim == 2 else 0)
+        native["table"] = np.array(words, dtype=np.int64)
         native["arrays"] = arrays                 # keeps every array the table points to alive
         return native
 

@@ -14,12 +14,15 @@ entering Python, whenever the slave has *armed* it:
   variable (parameters, inputs, the solver settings, ``fmi_status``) in arrays the slave fills
   when it arms the link (none of them can change between native steps: fixed parameters are
   refused after initialisation, and a set disarms the link);
-- the shim asks for the context's address once, after fmi2Instantiate, by reading the Integer
+- the shim asks for the context's address after fmi2Instantiate, and again after fmi2Reset
+  (pythonfmu replaces the slave object, and its context with it), by reading the Integer
   value references LINK_VR and LINK_VR + 1 (not in modelDescription.xml; the slave answers 0
   when the link is off: numba missing, or ``INERTER_FMU_NATIVE=0`` in the environment);
-- after a doStep that the slave took and returned fmi2OK, the shim arms itself when the
-  context says so: the slave arms it after every step on the compiled path (DOP853, RK45, RK4)
-  whose outputs the kernels evaluate, and disarms it otherwise;
+- after a doStep that the slave took and returned fmi2OK, and after an exitInitializationMode
+  that returned fmi2OK, the shim arms itself when the context says so: the slave arms it after
+  every step on the compiled path (DOP853, RK45, RK4) whose outputs the kernels evaluate, and at
+  the end of initialisation (the integration started as the first step would start it, so that
+  the first step is native too), and disarms it otherwise;
 - an armed shim calls the C function for the next doStep. It returns 1 when it took the step
   (fmi2OK; the outputs are in the values array, and every fmi2GetReal/Integer/Boolean/String is
   served from the map until a call enters Python), and 0 when it declines: not the current
@@ -30,9 +33,11 @@ entering Python, whenever the slave has *armed* it:
 - before any other call enters Python after native steps, the shim sets the Integer SYNC_VR:
   the slave takes over the time, state, counters and outputs the native steps left
   (:meth:`~inerter.engine.compiled.CompiledStepper.native_sync`). Every call but a doStep and the
-  getters disarms the shim until the next doStep the slave takes.
+  getters disarms the shim until the next doStep the slave takes (or exitInitializationMode,
+  after a reset).
 
-The same context carries the shim's live logger: after fmi2Instantiate the shim writes the address
+The same context carries the shim's live logger: after fmi2Instantiate (and fmi2Reset) the shim
+writes the address
 of its ``live_log`` function and of its instance into CTX_LOG_FUNCTION and CTX_LOG_TARGET, so that
 the slave can hand a message to the importer's logger during a long call (the kernels' first
 compilation, inside exitInitializationMode) instead of when it returns (:meth:`NativeLink.live_log`).
@@ -68,7 +73,8 @@ SWITCH = "INERTER_FMU_NATIVE"
 
 
 class NativeLink:
-    """The slave's end of the link: the context, armed after a step the slave took."""
+    """The slave's end of the link: the context, armed after a step the slave took and at the end
+    of initialisation."""
 
     def __init__(self, outputs: dict[int, int], others: dict[int, tuple[int, object]]):
         """`outputs`: value reference -> index of the output in the stepper's output values;
@@ -121,12 +127,14 @@ class NativeLink:
         address = int(self.ctx.ctypes.data)
         return [address & 0x7FFFFFFF, address >> 31]
 
-    def arm(self, stepper, tolerance: float) -> None:
-        """Arm the link for the stepper's next step, where it can be taken natively."""
+    def arm(self, stepper, tolerance: float, start: bool = False) -> None:
+        """Arm the link for the stepper's next step, where it can be taken natively (`start`: also
+        where no integration runs yet, at the end of initialisation:
+        :meth:`~inerter.engine.compiled.CompiledStepper.native_table` starts it)."""
         self.ctx[CTX_ARMED] = 0
         table = None
         if not self.why_off and hasattr(stepper, "native_table"):
-            table = stepper.native_table(tolerance)
+            table = stepper.native_table(tolerance, start=start)
         if table is None:
             return
         if self.stale:

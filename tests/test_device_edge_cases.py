@@ -1,0 +1,138 @@
+"""Inerter devices on cases at the edge of their range: a Hooke mount at its singularity, devices
+on very heavy bodies held by joints, and scenes that combine effects.
+
+References, each named in its test:
+
+* the geometry of the mount (inerter.elements.device_inertia, "The mount"): it is singular where
+  the device's axis lies along the Hooke joint's first axis a₁;
+* closed forms: a storey of mass m on a joint, a spring k and a fluid inerter b along its one
+  freedom, x(t) = x₀ cos(ωt) with ω = √(k/(m + b)) (the inerter adds b to the mass; Smith 2002);
+* the energy: with no applied force, the energy plus the device's dissipated energy (its state
+  e_loss) stays at the initial energy.
+"""
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import inerter
+from inerter.common.errors import SceneError
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "tests" / "data"
+PEND_COMPACT = DATA / "device_pendulum_3d_compact.toml"
+
+
+# ------------------------------------------------------------------------------------------------
+# The Hooke mount's singularity
+# ------------------------------------------------------------------------------------------------
+def test_a_mount_along_the_initial_axis_is_a_one_line_scene_error(tmp_path):
+    """Geometry: at alpha = π/2 the pendulum's rod lies along +X, the mount's first axis a₁ = X, so
+    the housing's spin (a division by |a₁ × u|) is undefined at t = 0: the scene is refused, naming
+    the mount's axis, through the API and through `inerter describe` (exit status 2, one line)."""
+    with pytest.raises(SceneError) as err:
+        inerter.load(PEND_COMPACT, alpha="pi/2")
+    text = str(err.value)
+    assert "elements.device.device.mount.axis" in text and "along the device's axis at t = 0" in text
+    assert str(PEND_COMPACT.name) in text
+    proc = subprocess.run([sys.executable, "-m", "inerter.cli", "describe", str(PEND_COMPACT), "--set",
+                           "alpha=pi/2"], capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 2
+    lines = [line for line in proc.stderr.splitlines() if not line.startswith("inerter: compiling")
+             and not line.startswith("inerter: ...")]
+    assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert lines[0].startswith("inerter: error: ") and "mount.axis" in lines[0]
+
+
+@pytest.mark.parametrize("path", ["compiled", "numpy"])
+def test_a_run_through_the_mount_singularity_names_the_mount(path):
+    """Geometry: the pendulum starts 0.3 rad above the horizontal +X, the mount's first axis, at rest,
+    so it swings down through it (u ∥ a₁ in the XZ plane): the run stops there, and its message
+    names the device and the mount's singularity (not only a singular mass matrix)."""
+    model = inerter.load(PEND_COMPACT, alpha="pi/2 + 0.3", F=0.0)
+    r = model.simulate(stop_time=1.0, path=path, metrics=False)
+    assert r.status == "failed"
+    assert "device mount near its singularity" in r.message and "device (its axis" in r.message, r.message
+    # it stopped where the rod passes the horizontal: |u_z| small (the rod from O to P)
+    uz = r["P.r[3]"][-1] / math.hypot(r["P.r[1]"][-1], r["P.r[3]"][-1])
+    assert abs(uz) < 0.1, uz
+
+
+# ------------------------------------------------------------------------------------------------
+# Heavy bodies on joints
+# ------------------------------------------------------------------------------------------------
+STOREY = """
+[scene]
+name = "heavy_storey"
+dimension = DIM
+
+[parameters]
+m = { value = 1.0e6, unit = "kg", description = "the storey's mass" }
+k = { value = 4.0e7, unit = "N/m", description = "the storey's lateral stiffness" }
+x0 = { value = 0.05, unit = "m", description = "initial drift" }
+
+[ground.points]
+O = ZERO
+
+[bodies.floor]
+mass = "m"
+inertia = INERTIA
+position = POSITION
+points = { P = ZERO }
+
+[joints.slide]
+type = "prismatic"
+between = ["O", "P"]
+axis = XAXIS
+
+[elements.spring]
+type = "spring"
+between = ["O", "P"]
+k = "k"
+length = 5.0
+
+[elements.brace]
+type = "inerter"
+between = ["O", "P"]
+
+[elements.brace.device.fluid]      # b = ρ ℓ A_p²/A_c = 1000 · 50 · 0.15² / 1e-3 = 1.125e6 kg
+density = 1000.0
+channel_length = 50.0
+channel_area = 1.0e-3
+piston_area = 0.15
+
+[experiment]
+stop_time = 3.0
+output_interval = 0.01
+rtol = 1e-11
+atol = 1e-13
+"""
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_heavy_storey_on_a_joint_loads_and_follows_the_closed_form(tmp_path, dim):
+    """Closed form: a 1e6 kg storey on a prismatic joint, k = 4e7 N/m and a fluid inerter of
+    b = 1.125e6 kg along it: x(t) = x₀ cos(ωt), ω = √(k/(m + b)), to 1e-9 of x₀. Its mass matrix with
+    the joint's rows has singular values from ~1e7 to ~1e-7 (‖M‖ and ‖C‖²/‖M‖), which the check at
+    t = 0 took for a singular matrix before it was scaled."""
+    text = STOREY.replace("DIM", str(dim))
+    if dim == 2:
+        text = (text.replace("ZERO", "[0, 0]").replace("INERTIA", "1.0e7").replace("XAXIS", "[1, 0]")
+                .replace("POSITION", '["x0", 0]').replace("O = [0, 0]", "O = [-5, 0]", 1))
+    else:
+        text = (text.replace("ZERO", "[0, 0, 0]").replace("INERTIA", "[1.0e7, 1.0e7, 1.0e7]")
+                .replace("XAXIS", "[1, 0, 0]").replace("POSITION", '["x0", 0, 0]')
+                .replace("O = [0, 0, 0]", "O = [-5, 0, 0]", 1))
+    path = tmp_path / "storey.toml"
+    path.write_text(text, encoding="utf-8")
+    r = inerter.load(path).simulate(metrics=False)
+    assert r.status == "ok", r.message
+    b = 1000.0 * 50.0 * 0.15 ** 2 / 1.0e-3
+    w = math.sqrt(4.0e7 / (1.0e6 + b))
+    x = r["P.r[1]"]
+    assert np.max(np.abs(x - 0.05 * np.cos(w * r.time))) <= 1e-9 * 0.05

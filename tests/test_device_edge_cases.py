@@ -136,3 +136,19 @@ def test_a_heavy_storey_on_a_joint_loads_and_follows_the_closed_form(tmp_path, d
     w = math.sqrt(4.0e7 / (1.0e6 + b))
     x = r["P.r[1]"]
     assert np.max(np.abs(x - 0.05 * np.cos(w * r.time))) <= 1e-9 * 0.05
+
+
+# ------------------------------------------------------------------------------------------------
+# Bad input
+# ------------------------------------------------------------------------------------------------
+def test_an_empty_friction_table_is_an_error(tmp_path):
+    """`[...device.friction]` with no field would run as no friction at all (viscous defaults to 0):
+    it is refused, naming the effect and its fields, as an effect with a missing field is."""
+    text = PEND_COMPACT.read_text(encoding="utf-8") + "\n[elements.device.device.friction]\n"
+    path = tmp_path / "empty_friction.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(SceneError) as err:
+        inerter.load(path)
+    text = str(err.value)
+    assert "empty_friction.toml: elements.device.device.friction: empty effect" in text
+    assert "coulomb, viscous, velocity_scale" in text

@@ -119,8 +119,11 @@ class TranslationalElement:
             raise TerminalsMeet(
                 f"element '{self.name}': its terminals {self.labels[0]} and {self.labels[1]} meet "
                 f"(distance {length:.3g} m < {MIN_LENGTH:g} m), so its direction is undefined", recoverable=True)
-        rhat = r / length if self.fixed_direction is None else self.fixed_direction
-        return r, rdot, a_n, H, length, rhat
+        if self.fixed_direction is None:
+            return r, rdot, a_n, H, length, r / length
+        # the small-displacement law acts along ê0 on the stroke s = ê0·r, whose rate is ê0·ṙ: the
+        # device's laws of L read s (the oracle's DistanceProbe; its output s_rel stays |r|)
+        return r, rdot, a_n, H, float(r @ self.fixed_direction), self.fixed_direction
 
     def length(self, q):
         return self.geometry(q, np.zeros_like(q))[4]
@@ -151,7 +154,8 @@ class TranslationalElement:
         outputs (a device's)."""
         geo = self.geometry(q, v)
         L, Ldot = geo[4], float(geo[1] @ geo[5])
-        values = (L, Ldot, self.force(q, v, a, geo, z))
+        distance = L if self.fixed_direction is None else math.sqrt(float(geo[0] @ geo[0]))
+        values = (distance, Ldot, self.force(q, v, a, geo, z))
         if self._extra is None:
             return values
         extra = np.zeros(self.extra)

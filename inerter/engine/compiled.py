@@ -1314,7 +1314,16 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
     """What a compiled loop's failure `status` means, in the words of the numpy path: the step size
     `h` it ended with (and the step budget `max_steps` it ran out of); for terminals meeting, the
     element whose terminals were closest in the last good state `y_last` (at `t_last`), the loop
-    having stopped within a step of it."""
+    having stopped within a step of it; where the solve or the step size failed, what in that state
+    may have stalled it (``Mechanism.diagnose``: terminals nearly meeting, a device mount near its
+    singularity)."""
+    text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)
+    if status in (2, 3, 4, 7) and y_last is not None:         # as the numpy path: what may have stalled it
+        text += kernel.mech.diagnose(kernel.split(y_last)[0].copy())
+    return text
+
+
+def _status_text(kernel, status, method, h, y_last, t_last, max_steps):
     from inerter.engine import simulation as sim
     text = _STATUS_TEXT[status]
     if status == 1 and max_steps is not None:

@@ -146,6 +146,8 @@ def _element(q, v, e, el_int, el_real, pbody, ploc):
     if meets:
         L = MIN_LENGTH
     ex, ey, _ = _direction(row, rx / L, ry / L, 0.0)
+    if row[FIXED_DIRECTION] != 0.0:
+        L = ex * rx + ey * ry       # the small-displacement stroke s = ê0·r its device's laws read
     return el_int[e, KIND], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets
 
 
@@ -767,6 +769,9 @@ def signal_values2(q, v, z, qdd, P, out):
         if rarely(el_real[e, INERTIA] != 0.0):
             energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 3)
         out[k] = L
+        if rarely(el_real[e, FIXED_DIRECTION] != 0.0):           # s_rel: the terminal distance |r|
+            _, _, rx, ry, _, _, _, _, _, _, _, _ = _row_pair(q, v, el_int, e, pbody, ploc)
+            out[k] = math.hypot(rx, ry)
         out[k + 1] = along
         out[k + 2] = F
         k += 3
@@ -1229,6 +1234,8 @@ def _element3(q, v, e, el_int, el_real, pbody, ploc, ga, gb):
         if meets:
             L = MIN_LENGTH
         ex, ey, ez = _direction(row, rx / L, ry / L, rz / L)
+        if row[FIXED_DIRECTION] != 0.0:
+            L = ex * rx + ey * ry + ez * rz     # the small-displacement stroke s = ê0·r its device's laws read
     # g = Hᵀ r̂ = [−r̂, −ū_a × (A_aᵀ r̂), r̂, ū_b × (A_bᵀ r̂)] (H = [−H_a, H_b], Eq. 18)
     wx, wy, wz = _wcol(Aa, ploc[pa, 0], ploc[pa, 1], ploc[pa, 2], ex, ey, ez)
     ga[0] = -ex
@@ -1786,6 +1793,10 @@ def signal_values3(q, v, z, qdd, P, out):
         if rarely(el_real[e, INERTIA] != 0.0):
             energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 6)
         out[k] = L
+        if rarely(el_real[e, FIXED_DIRECTION] != 0.0):           # s_rel: the terminal distance |r|
+            _, _, _, _, rx, ry, rz, _, _, _, _, _, _ = _pair3(q, v, el_int[e, POINT_A], el_int[e, POINT_B], pbody,
+                                                              ploc)
+            out[k] = math.sqrt(rx * rx + ry * ry + rz * rz)
         out[k + 1] = along
         out[k + 2] = F
         k += 3

@@ -119,8 +119,11 @@ class TranslationalElement:
             raise TerminalsMeet(
                 f"element '{self.name}': its terminals {self.labels[0]} and {self.labels[1]} meet "
                 f"(distance {length:.3g} m < {MIN_LENGTH:g} m), so its direction is undefined", recoverable=True)
-        rhat = r / length if self.fixed_direction is None else self.fixed_direction
-        return r, rdot, a_n, H, length, rhat
+        if self.fixed_direction is None:
+            return r, rdot, a_n, H, length, r / length
+        # the small-displacement law acts along ê0 on the stroke s = ê0·r, whose rate is ê0·ṙ: the
+        # device's laws of L read s (the oracle's DistanceProbe; its output s_rel stays |r|)
+        return r, rdot, a_n, H, float(r @ self.fixed_direction), self.fixed_direction
 
     def length(self, q):
         return self.geometry(q, np.zeros_like(q))[4]
@@ -151,7 +154,8 @@ class TranslationalElement:
         outputs (a device's)."""
         geo = self.geometry(q, v)
         L, Ldot = geo[4], float(geo[1] @ geo[5])
-        values = (L, Ldot, self.force(q, v, a, geo, z))
+        distance = L if self.fixed_direction is None else math.sqrt(float(geo[0] @ geo[0]))
+        values = (distance, Ldot, self.force(q, v, a, geo, z))
         if self._extra is None:
             return values
         extra = np.zeros(self.extra)
@@ -178,11 +182,7 @@ class TranslationalElement:
         (ra, va, acc_a), (rb, vb, acc_b) = kin
         a1, a1d, a1dd, Ga1 = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros((3, n))
         if self.row[layout.MOUNT] != 0.0:
-            a = self.pair.a
-            axis = self.row[layout.MOUNT_AXIS:layout.MOUNT_AXIS + 3]
-            tip, origin = (type(a)(a.body, local, a.qi, a.dofs[0] if a.dofs is not None else 0, a.orientation, a.cache)
-                           for local in (axis, np.zeros(3)))
-            (rt, vt, Ht, at), (ro, vo, Ho, ao) = tip.evaluate(q, v), origin.evaluate(q, v)
+            (rt, vt, Ht, at), (ro, vo, Ho, ao) = self._mount_points(q, v)
             a1, a1d, a1dd = rt - ro, vt - vo, at - ao
             if Ht is not None:
                 Ga1[:, :width] = Ht - Ho
@@ -194,6 +194,27 @@ class TranslationalElement:
                                             Ga1, M, Q)
         keep = [i for i, p in enumerate((self.pair.a,) * width + (self.pair.b,) * width) if p.dofs is not None]
         return M[np.ix_(keep, keep)], Q[keep], T, V
+
+    def _mount_points(self, q, v):
+        """The kinematics of the mount's axis tip a̅₁ and of the origin of terminal a's body (the
+        axis a₁ is their difference, a direction fixed in that body)."""
+        a = self.pair.a
+        axis = self.row[layout.MOUNT_AXIS:layout.MOUNT_AXIS + 3]
+        return tuple(type(a)(a.body, local, a.qi, a.dofs[0] if a.dofs is not None else 0, a.orientation,
+                             a.cache).evaluate(q, v) for local in (axis, np.zeros(3)))
+
+    def mount_sine(self, q) -> float | None:
+        """|a₁ × u| at q, the sine of the angle between the device's axis u and its Hooke mount's
+        first axis a₁ (None without a mount): the mount is singular where it is 0
+        (inerter.elements.device_inertia, "The mount")."""
+        if self.device is None or self.row[layout.MOUNT] == 0.0:
+            return None
+        z = np.zeros(len(q))                    # at rest: only the positions are read (len(v) ≤ len(q))
+        (rt, *_), (ro, *_) = self._mount_points(q, z)
+        a1 = np.asarray(rt - ro, dtype=float)
+        r = np.asarray(self.pair.evaluate(q, z)[0], dtype=float)
+        u = r / np.linalg.norm(r)
+        return float(np.linalg.norm(np.cross(a1 / np.linalg.norm(a1), u)))
 
     def add_state_force(self, q, v, Q, z, geo=None):
         """Q −= F g for the force its internal states carry (a series connection's)."""

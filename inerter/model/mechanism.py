@@ -36,6 +36,15 @@ ASSEMBLY_TOLERANCE = 1e-6
 #: singular value is below this fraction of its largest.
 SINGULAR_RATIO = 1e-14
 
+#: A device's Hooke mount (inerter.elements.device_inertia, "The mount") is refused at t = 0 where
+#: the sine of the angle between its first axis a₁ and the device's axis is below this: its spin
+#: divides by that sine, and the housing's frame is undefined where it is 0.
+MOUNT_SINGULAR = 1e-6
+
+#: A run that stops names a device mount whose axis is within this sine (about 3°) of the device's:
+#: its spin and the mass-matrix block grow as 1/sine² there, which the integrator cannot follow.
+MOUNT_NEAR = 0.05
+
 #: A translational element's terminals count as meeting when, within an integrator step, they come
 #: closer than this fraction of the element's initial length (or MIN_LENGTH, whichever is larger):
 #: its direction is then lost in round-off, and an adaptive integrator would shrink its step there
@@ -139,6 +148,7 @@ class Mechanism:
             raise SceneError(scene.source, "elements", None, "elements whose internal states this model "
                              "derives", "internal states not derived")
         self._meet_limits(groups)
+        self.check_mounts(self.q0)
         self.check_mass_matrix(self.q0, self.v0)
 
     def _bodies(self, scene):
@@ -366,8 +376,24 @@ class Mechanism:
                     f"the direction is undefined; stopped at the last good time",
                     t_old if t_old is not None else t)
 
+    def mount_sines(self, q) -> list[tuple[str, float]]:
+        """(element, |a₁ × u|) for each inerter device with a Hooke mount, at q."""
+        sines = ((e.name, getattr(e, "mount_sine", lambda q: None)(q)) for e in self.inerters)
+        return [(name, sine) for name, sine in sines if sine is not None]
+
+    def check_mounts(self, q):
+        """At t = 0: no device's mount axis a₁ may lie along the device's axis (MOUNT_SINGULAR)."""
+        for name, sine in self.mount_sines(q):
+            if sine < MOUNT_SINGULAR:
+                field = f"elements.{name}.device.mount.axis"
+                raise SceneError(self.scene.source, field, self.scene.elements[name].device.values("mount")["axis"],
+                                 "an axis at an angle to the device's axis at t = 0 (the Hooke mount is singular "
+                                 "where they are parallel: the housing's spin is undefined)",
+                                 f"along the device's axis at t = 0 (sine of the angle {sine:.2g})")
+
     def diagnose(self, q) -> str:
-        """Why a run may have stalled at q: the translational elements that are nearly closed."""
+        """Why a run may have stalled at q: the translational elements that are nearly closed, and
+        the device mounts near their singularity."""
         z = np.zeros(self.n)
         short = []
         for pair, names, (a, b), limit in self._meet:
@@ -375,7 +401,14 @@ class Mechanism:
             L = math.sqrt(float(r @ r))
             if L < 1e3 * limit:
                 short.append(f"{'/'.join(names)} ({a}-{b}: {L:.3g} m)")
-        return ("; terminals nearly meeting: " + ", ".join(short)) if short else ""
+        text = ("; terminals nearly meeting: " + ", ".join(short)) if short else ""
+        near = [f"{name} (its axis {math.degrees(math.asin(min(1.0, s))):.3g}° from mount.axis)"
+                for name, s in self.mount_sines(q) if s < MOUNT_NEAR]
+        if near:
+            text += ("; device mount near its singularity, the device's axis along the Hooke joint's first "
+                     "axis (the housing's spin is undefined there; declare mount.axis away from the "
+                     "device's path): " + ", ".join(near))
+        return text
 
     def check_mass_matrix(self, q, v):
         """At t = 0: the augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]] must be non-singular, or some
@@ -384,7 +417,12 @@ class Mechanism:
         M = self.mass_matrix(q, v)
         if self.m:
             Cq = self.constraints(q, np.zeros(self.n))[1]
-            K = np.block([[M, Cq.T], [Cq, np.zeros((self.m, self.m))]])
+            # Scaled by the congruence diag(√s I, I/√s), s = ‖C_v‖/‖M‖, which keeps the rank: the
+            # singular values of [[M, C_vᵀ], [C_v, 0]] span about ‖M‖ to ‖C_v‖²/‖M‖, so heavy bodies
+            # on joints (a 1e6 kg storey) would otherwise read as singular.
+            norm_m, norm_c = np.linalg.norm(M, 2), np.linalg.norm(Cq, 2)
+            s = norm_c / norm_m if norm_m > 0.0 and norm_c > 0.0 else 1.0
+            K = np.block([[s * M, Cq.T], [Cq, np.zeros((self.m, self.m))]])
         else:
             K = M
         U, sv, Vt = np.linalg.svd(K)

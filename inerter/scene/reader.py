@@ -941,6 +941,9 @@ def _read_device(r: _Reader, raw, fld, kind: "elements.ElementKind", dimension: 
         if dimension not in effect.dimensions:
             raise r.error(efld, raw[effect.name], f"no {effect.name} in a {dimension}D scene", effect.why_not_2d)
         table = r.table(raw[effect.name], efld, {p.key: p.required for p in effect.parameters})
+        if effect.parameters and not table:      # its defaults alone (friction's viscous = 0) do nothing
+            raise r.error(efld, table, "at least one of its fields: " + ", ".join(p.key for p in effect.parameters),
+                          "empty effect")
         values = {p.key: _read_parameter(r, table, efld, p) for p in effect.parameters}
         problem = effect.check(values) if effect.check is not None else None
         if problem is not None:

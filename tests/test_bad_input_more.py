@@ -157,3 +157,24 @@ def test_two_metrics_whose_values_share_a_name(tmp_path, capsys, second, clash):
     scene.write_text(text + f"\n[[metrics]]\n{second}\n")
     assert main(["describe", str(scene)]) == 2
     one_line(capsys, str(scene), ".prefix", "name clash", repr(clash))
+
+
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
+def test_a_mechanism_at_a_change_point_stops_and_says_why(tmp_path, capsys, path):
+    """tests/data/parallelogram_2d.toml turns at a constant crank rate θ̇0 (the loader's projection
+    of the given velocities; no force acts and the coupler translates, so the kinetic energy
+    ½(2(J + m/4) + m)θ̇² fixes θ̇) from θ = π/2 to the change point θ = π at t* = (π/2)/|θ̇0|
+    (closed form), where all four pivots lie on a line. The run stops just before t* (status 3) and
+    names the dependent joints; its samples up to there are kept and finite. It said only
+    "Required step size is less than spacing between numbers" (numpy path)."""
+    import inerter
+    from conftest import ROOT
+    scene = ROOT / "tests" / "data" / "parallelogram_2d.toml"
+    mech = inerter.load(scene).mechanism
+    t_star = (math.pi / 2) / abs(mech.v0[2])
+    out = tmp_path / "out"
+    assert main(["run", str(scene), "--path", path, "--out", str(out)]) == 3
+    one_line(capsys, str(scene), "joints a, b, c, d", "change point")
+    data = rows(out / "parallelogram_2d.csv")
+    assert all(math.isfinite(float(x)) for row in data for x in row)
+    assert t_star - 0.02 <= float(data[-1][0]) <= t_star

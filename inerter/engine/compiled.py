@@ -1317,7 +1317,9 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
     if status == 6:
         return text.format(method=method, h=h, hits=sim.STIFFNESS_HITS)
     if status == 7:
-        return text.format(method=method, h=h, steps=sim.COLLAPSE_STEPS, relative=sim.COLLAPSE_RELATIVE)
+        text = text.format(method=method, h=h, steps=sim.COLLAPSE_STEPS, relative=sim.COLLAPSE_RELATIVE)
+    if status in (2, 3, 4, 7):              # why it may have stalled there: the numpy path's words
+        return text + kernel.mech.diagnose(y_last)
     if status == 8:
         return _gimbal_lock_text(kernel, y_last, t_last)
     names = kernel.flat["el_names"]

@@ -159,7 +159,14 @@ def test_two_metrics_whose_values_share_a_name(tmp_path, capsys, second, clash):
     one_line(capsys, str(scene), ".prefix", "name clash", repr(clash))
 
 
-@pytest.mark.parametrize("path", ["numpy", "compiled"])
+#: Open: the compiled loop's steps pass the change point (the banded solve of Eq. 33 does not fail
+#: at a state near it) and the run goes on along the anti-parallelogram branch without a word
+#: (measured: the rocker's angle leaves the crank's, 1.58 rad apart at t = 3 s; energy and joints
+#: are kept). Which branch a real linkage takes there is not determined; the run should say so.
+COMPILED_PASSES = pytest.mark.xfail(strict=True, reason="the compiled path passes the change point silently")
+
+
+@pytest.mark.parametrize("path", ["numpy", pytest.param("compiled", marks=COMPILED_PASSES)])
 def test_a_mechanism_at_a_change_point_stops_and_says_why(tmp_path, capsys, path):
     """tests/data/parallelogram_2d.toml turns at a constant crank rate θ̇0 (the loader's projection
     of the given velocities; no force acts and the coupler translates, so the kinetic energy

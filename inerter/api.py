@@ -5,6 +5,7 @@ the same scene compiled with ``oracle=True`` and solved at tight tolerance.
 """
 from __future__ import annotations
 
+import math
 import time as _time
 from pathlib import Path
 from typing import Any
@@ -304,6 +305,7 @@ class Result:
             notes.append(f"{self.model.source}: device.efficiency: {unsettled} evaluations of the equations of "
                          f"motion kept a solve whose efficiency modes did not settle in {MODE_SOLVES} checks "
                          f"(several efficiency elements whose modes are coupled; inerter.elements.device)")
+        notes += half_turn_warnings(self)
         for d in self.model.signals.derived:
             try:
                 column = self[d.name]
@@ -439,6 +441,32 @@ class Result:
     def to_dataframe(self):
         """The time history as a pandas DataFrame (pandas is optional: ``pip install pandas``)."""
         return to_dataframe(self)
+
+
+def half_turn_warnings(result) -> list[str]:
+    """Warnings of a run (`result`: the solver's or an FMU's), one per 3D rotational spring whose
+    angle passed ±π between two samples: it is measured within (−π, π] from the initial pose (the
+    relative rotation's angle about the axis), so there it jumps by 2π and so does the torque,
+    unlike a spring wound further."""
+    mech = result.model.mechanism
+    if mech.dim != 3 or not len(result.time):
+        return []
+    notes = []
+    for e in mech.elements:
+        if e.kind != "rotational_spring" or e.coefficient == 0.0:
+            continue
+        try:
+            phi = result[f"{e.name}.phi_rel"]
+        except KeyError:                      # an FMU run that did not record it
+            continue
+        jumps = np.flatnonzero(np.abs(np.diff(phi)) > math.pi)
+        if jumps.size:
+            notes.append(f"{result.model.source}: elements.{e.name}: its angle passed ±π (half a turn from the "
+                         f"initial pose) between t = {result.time[jumps[0]]:.6g} s and "
+                         f"{result.time[jumps[0] + 1]:.6g} s, where a 3D rotational spring's angle (within "
+                         f"(−π, π]) and its torque jump: the results after it are not those of a spring "
+                         f"wound further")
+    return notes
 
 
 def output_units(result) -> dict[str, str]:

@@ -104,6 +104,18 @@ def _span(result) -> str:
     return f"{len(result.time)} samples to t = {result.time[-1]:.6g} s"
 
 
+def _report_stop(result, scene, out, label: str = "") -> int:
+    """Exit status of a run: 0 if it reached its stop time; else 3, with one line on stderr saying
+    where and why it stopped and where its results up to then are (the full report is on stdout)."""
+    if result.status == "ok":
+        return 0
+    reached = f"t = {result.time[-1]:.6g} s" if len(result.time) else "no sample"
+    reason = " ".join(str(result.message).split())           # one line, whatever the message holds
+    print(f"inerter: error: {scene}: {label}the run stopped before its stop time ({reason}); "
+          f"results up to {reached} written in {out}", file=sys.stderr)
+    return 3
+
+
 def cmd_run(args):
     from inerter.api import load
     _animation(args)                                  # its options checked before the run
@@ -138,7 +150,7 @@ def cmd_run(args):
     print("wrote " + ", ".join(str(w) for w in written))
     if len(result.time):
         _animation(args, result, out / f"{stem}.{args.animate}")
-    return 0 if result.status == "ok" else 3
+    return _report_stop(result, args.scene, out)
 
 
 # -- run --animate --------------------------------------------------------------------------------
@@ -216,7 +228,11 @@ def cmd_compare(args):
     print(f"  largest |{args.model} − oracle| over point positions: "
           + (f"{diff:.3g} m" if math.isfinite(diff) else "not computed (the runs' time grids differ)"))
     print(f"wrote {png} and {out / 'summary.json'}")
-    return 0 if all(r.status == "ok" for _, r, _ in runs) else 3
+    stopped = [(label.split(" (")[0], result) for label, result, _ in runs if result.status != "ok"]
+    if not stopped:
+        return 0
+    more = f" (and {', '.join(label for label, _ in stopped[1:])})" if len(stopped) > 1 else ""
+    return _report_stop(stopped[0][1], args.scene, out, f"{stopped[0][0]}{more}: ")
 
 
 def max_difference(a, b) -> float:

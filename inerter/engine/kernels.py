@@ -140,6 +140,14 @@ def _element(q, v, e, el_int, el_real, pbody, ploc):
             c = math.cos(q[3 * ba + 2])
             s = math.sin(q[3 * ba + 2])
             ex, ey = c * ex - s * ey, s * ex + c * ey
+            # ê turns with θ_a: ∂L/∂θ_a gains ê⊥·r and L̇ gains θ̇_a ê⊥·r (zero on the joint's line,
+            # so that off it the force is the gradient of ½k(L − L0)²), carried by H's θ_a column and ṙ
+            pe = ex * ry - ey * rx
+            tax -= pe * ex
+            tay -= pe * ey
+            wpe = v[3 * ba + 2] * pe
+            rdx += wpe * ex
+            rdy += wpe * ey
         return el_int[e, KIND], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, ex * rx + ey * ry, ex, ey, False
     L = math.hypot(rx, ry)
     meets = not L > MIN_LENGTH
@@ -1251,6 +1259,22 @@ def _element3(q, v, e, el_int, el_real, pbody, ploc, ga, gb):
     gb[3] = wx
     gb[4] = wy
     gb[5] = wz
+    if row[SLIDER] != 0.0 and ba >= 0:
+        # ê = A_a n̄ turns with a: ∂L/∂ω̄_a gains n̄ × (A_aᵀ r) and L̇ gains ω̄_a·(n̄ × A_aᵀ r) (zero on
+        # the joint's line, so that off it the force is the gradient of ½k(L − L0)²)
+        sx = Aa[0] * rx + Aa[3] * ry + Aa[6] * rz
+        sy = Aa[1] * rx + Aa[4] * ry + Aa[7] * rz
+        sz = Aa[2] * rx + Aa[5] * ry + Aa[8] * rz
+        nx, ny, nz = row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2]
+        cx, cy, cz = ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
+        ga[3] += cx
+        ga[4] += cy
+        ga[5] += cz
+        k = 6 * ba + 3
+        we = v[k] * cx + v[k + 1] * cy + v[k + 2] * cz
+        rdx += we * ex
+        rdy += we * ey
+        rdz += we * ez
     return el_int[e, KIND], ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets
 
 

@@ -113,6 +113,7 @@ class TranslationalElement:
         r, rdot, a_n, H = self.pair.evaluate(q, v)
         if self.slider_axis is not None:
             axis = slider_direction(self.pair.a, self.slider_axis, q)
+            H, rdot = self._turning_axis(q, v, r, rdot, H, axis)
             return r, rdot, a_n, H, float(r @ axis), axis
         length = math.sqrt(float(r @ r))
         if not length > MIN_LENGTH:
@@ -124,6 +125,23 @@ class TranslationalElement:
         # the small-displacement law acts along ê0 on the stroke s = ê0·r, whose rate is ê0·ṙ: the
         # device's laws of L read s (the oracle's DistanceProbe; its output s_rel stays |r|)
         return r, rdot, a_n, H, float(r @ self.fixed_direction), self.fixed_direction
+
+    def _turning_axis(self, q, v, r, rdot, H, axis):
+        """A prismatic joint's spring or damper: L = ê·r with ê = A_a n̄ turning with a's body, so
+        ∂L/∂(a's rotation) gains ∂ê/∂θ_a·r (2D: ê⊥·r; 3D, over body-frame ω: n̄ × A_aᵀr) and L̇ the
+        same times a's rate: zero on the joint's line, and off it the force is the gradient of
+        ½k(L − L0)² (added to H along ê, so that g = Hᵀê and ê·ṙ carry it)."""
+        a = self.pair.a
+        if a.dofs is None:
+            return H, rdot
+        H = np.array(H, dtype=float)
+        if len(axis) == 2:
+            extra, cols = np.array([axis[0] * r[1] - axis[1] * r[0]]), [2]
+        else:
+            A = a.cache.matrix(a.orientation, q[a.qi + 3:a.qi + 3 + a.orientation.size])
+            extra, cols = np.cross(self.slider_axis, A.T @ r), [3, 4, 5]
+        H[:, cols] += np.outer(axis, extra)
+        return H, rdot + float(v[a.dofs[cols]] @ extra) * axis
 
     def length(self, q):
         return self.geometry(q, np.zeros_like(q))[4]

@@ -35,6 +35,9 @@ ASSEMBLY_TOLERANCE = 1e-6
 #: The augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]] counts as singular at t = 0 when its smallest
 #: singular value is below this fraction of its largest.
 SINGULAR_RATIO = 1e-14
+#: A run that stops where the joints' C_v has a smallest singular value below this fraction of its largest
+#: names them as nearly dependent (:meth:`Mechanism.diagnose`).
+DEPENDENT_RATIO = 1e-4
 
 #: A device's Hooke mount (inerter.elements.device_inertia, "The mount") is refused at t = 0 where
 #: the sine of the angle between its first axis a₁ and the device's axis is below this: its spin
@@ -392,8 +395,10 @@ class Mechanism:
                                  f"along the device's axis at t = 0 (sine of the angle {sine:.2g})")
 
     def diagnose(self, q) -> str:
-        """Why a run may have stalled at q: the translational elements that are nearly closed, and
-        the device mounts near their singularity."""
+        """Why a run may have stalled at q (or a state starting with q): the translational elements
+        that are nearly closed, the device mounts near their singularity, and joint constraints that
+        are nearly dependent."""
+        q = np.asarray(q, dtype=float)[:self.nq]
         z = np.zeros(self.n)
         short = []
         for pair, names, (a, b), limit in self._meet:
@@ -408,7 +413,30 @@ class Mechanism:
             text += ("; device mount near its singularity, the device's axis along the Hooke joint's first "
                      "axis (the housing's spin is undefined there; declare mount.axis away from the "
                      "device's path): " + ", ".join(near))
-        return text
+        return text + self._dependent_joints(q)
+
+    def _dependent_joints(self, q) -> str:
+        """The joints whose constraint rows are nearly dependent at q (the smallest singular value of
+        C_v below DEPENDENT_RATIO of the largest), named by their share of the left singular vector:
+        a change point (a parallelogram's four pivots in a line), where the mechanism may go on in
+        more than one way and Eq. (33) has no unique solution (Nikravesh 1988)."""
+        if not self.m:
+            return ""
+        Cq = self.constraints(q, np.zeros(self.n))[1]
+        if not np.all(np.isfinite(Cq)):
+            return ""
+        U, sv, _ = np.linalg.svd(Cq, full_matrices=False)
+        if sv[-1] > DEPENDENT_RATIO * sv[0]:
+            return ""
+        share, row = np.abs(U[:, -1]), 0
+        names = []
+        for j in self.joints:
+            if np.max(share[row:row + j.rows]) > 0.1 * np.max(share):
+                names.append(j.name)
+            row += j.rows
+        return (f"; the joints' constraints are nearly dependent there (joints {', '.join(names)}: smallest/largest "
+                f"singular value {sv[-1] / sv[0]:.2g}): a change point, where the mechanism may move on in more "
+                f"than one way and its accelerations are not determined")
 
     def check_mass_matrix(self, q, v):
         """At t = 0: the augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]] must be non-singular, or some

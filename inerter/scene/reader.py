@@ -53,6 +53,11 @@ FORCE_FUNCTIONS = ("constant", "sine", "step", "input", "pd")
 FORCE_UNITS = {"value": "N", "amplitude": "N", "frequency": "Hz", "phase": "rad", "offset": "N", "time": "s",
                "initial": "N", "kp": "N/m", "kd": "N.s/m", "reference": "m"}
 METRIC_KINDS = ("natural_frequency", "free_oscillation", "harmonics", "steady_state", "peak")
+#: The names of the values each kind of metric gives (before its prefix): two metrics whose names
+#: meet would overwrite one another in ``result.metrics`` and summary.json.
+METRIC_VALUES = {"natural_frequency": ("natural_frequency", "natural_frequencies"), "peak": ("peak",),
+                 "free_oscillation": ("fundamental_frequency", "fundamental_amplitude", "mean_offset"),
+                 "harmonics": ("mean", "amplitude"), "steady_state": ("peak_to_peak", "mean_offset")}
 METHODS = ("DOP853", "RK45", "Radau", "BDF", "LSODA", "RK4")
 CONSTRAINT_TREATMENTS = ("baumgarte", "projection")
 #: The relative tolerances the integrators take (inclusive).
@@ -363,7 +368,7 @@ def read_toml(path) -> tuple[str, dict]:
     source = str(path)
     text = read_capped(path, MAX_SCENE_BYTES, source, "(file)", "scene file (TOML)")
     try:
-        data = tomllib.loads(text.decode("utf-8"))
+        data = tomllib.loads(text.decode("utf-8-sig"))      # -sig: a byte-order mark some editors write
     except UnicodeDecodeError:
         raise SceneError(source, "(file)", "binary data", "a UTF-8 TOML text", "not UTF-8 text") from None
     except tomllib.TOMLDecodeError as exc:
@@ -435,7 +440,9 @@ def _build_scene(source: str, data: dict, overrides: Mapping[str, Any], reading:
                          f"a name of at most {MAX_SCENE_NAME} characters (it names the output files and the FMU)",
                          f"too long ({len(name)} characters)")
     dimension = head.get("dimension", 2)
-    if dimension not in (2, 3) or isinstance(dimension, bool):
+    if not isinstance(dimension, int) or isinstance(dimension, bool):     # 2.0 too: it counts components
+        raise base.error("scene.dimension", dimension, "2 or 3 (an integer)", "wrong type")
+    if dimension not in (2, 3):
         raise base.error("scene.dimension", dimension, "2 or 3", "unsupported dimension")
     orientation = head.get("orientation", "quaternion")
     p_names = set(data.get("parameters", {})) if isinstance(data.get("parameters", {}), dict) else set()
@@ -583,7 +590,7 @@ def _read_record(r: _Reader, spec, fld, dimension, folder, single_axis=False):
         import io
         data = read_capped(path, MAX_RECORD_BYTES, r.source, f"{fld}.file", "CSV record (time, a_1 ... a_dim)")
         try:
-            table = np.loadtxt(io.StringIO(data.decode("utf-8")), delimiter=",", comments="#", ndmin=2)
+            table = np.loadtxt(io.StringIO(data.decode("utf-8-sig")), delimiter=",", comments="#", ndmin=2)
         except UnicodeDecodeError:
             raise r.error(f"{fld}.file", str(path), "a CSV text (time, a_1 ... a_dim)", "not UTF-8 text") from None
         except ValueError as exc:
@@ -886,6 +893,11 @@ def _read_elements(r: _Reader, raw, points, bodies, dimension):
             raise r.error(f"{fld}.{kind.coefficient.key}", coef, f"an inertance > 0 ({kind.coefficient.unit}) with "
                           "device.compliance (the series node's law divides by it)", "out of range")
         free = _read_parameter(r, spec, fld, kind.free) if kind.free is not None else None
+        if rotational and dimension == 3 and free is not None and not abs(free) < math.pi:
+            # a 3D relative rotation's angle is measured in (−π, π] from the initial pose: a spring
+            # whose free angle lies outside could never reach it, and its torque would jump at ±π
+            raise r.error(f"{fld}.{kind.free.key}", free, "a free angle in (−π, π) rad (in 3D the angle is "
+                          "measured from the initial pose, within a half turn either way)", "out of range")
         if rotational:
             axis = r.vector(spec, "axis", fld, 3, unit_length=True) if dimension == 3 else None
             out[ename] = Element(ename, etype, body_a=a, body_b=b, coefficient=coef, free_length=free, axis=axis)
@@ -1135,6 +1147,7 @@ def _read_metrics(r: _Reader, raw, signals):
     if not isinstance(raw, list):
         raise r.error("metrics", raw, "an array of tables ([[metrics]])", "not an array")
     metrics = []
+    named: dict[str, int] = {}                # each value's name (prefixed), by the metric giving it
     for i, spec in enumerate(raw):
         fld = f"metrics[{i + 1}]"
         if not isinstance(spec, dict):
@@ -1149,6 +1162,12 @@ def _read_metrics(r: _Reader, raw, signals):
             allowed.update({"period_of": True})
         r.table(spec, fld, allowed)
         prefix = r.string(spec, "prefix", fld, default="")
+        for value in METRIC_VALUES[kind]:
+            key = f"{prefix}_{value}" if prefix else value
+            if key in named:
+                raise r.error(f"{fld}.prefix", prefix, f"a prefix that keeps this metric's values apart from "
+                              f"metrics[{named[key] + 1}]'s (both would give {key!r})", "name clash")
+            named[key] = i
         signal = None
         if "signal" in spec:
             signal = r.string(spec, "signal", fld)

@@ -1,0 +1,200 @@
+"""Bad input and runs that stop, found by mutating the shipped scenes and options: each gives one
+line on stderr (naming the file, the field, the value and what was expected, or where and why the
+run stopped), exit status 2 (3 for a run that stopped early), no traceback, and a stopped run keeps
+the samples it finished, without NaN."""
+from __future__ import annotations
+
+import csv
+import math
+
+import pytest
+
+from inerter.cli import main
+from conftest import LUMPED, SCENARIOS
+
+TERMINALS_MEET = SCENARIOS / "hard" / "terminals_meet_2d.toml"
+
+
+def one_line(capsys, *fragments):
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err
+    assert "\n" not in err and err.startswith("inerter: error: "), err
+    for fragment in fragments:
+        assert fragment in err, (fragment, err)
+    return err
+
+
+def rows(path):
+    with open(path, newline="") as f:
+        return list(csv.reader(f))[1:]
+
+
+@pytest.mark.parametrize("value", ["2.0", "3.0", "2.5"])
+def test_a_dimension_that_is_not_an_integer(tmp_path, capsys, value):
+    """`dimension = 2.0` was a TypeError traceback (it counts vector components)."""
+    scene = tmp_path / "scene.toml"
+    text = LUMPED.read_text()
+    scene.write_text(text.replace("[scene]\n", f"[scene]\ndimension = {value}\n", 1))
+    assert "dimension" not in text and scene.read_text() != text
+    assert main(["describe", str(scene)]) == 2
+    one_line(capsys, str(scene), "scene.dimension", value, "2 or 3 (an integer)")
+
+
+def test_a_scene_with_a_byte_order_mark_reads_as_without(tmp_path, capsys):
+    """A UTF-8 byte-order mark (some editors write one) was the parse error 'Invalid statement (at
+    line 1, column 1)'; the scene is the same with or without it (same parameters and bodies)."""
+    import inerter
+    scene = tmp_path / "bom.toml"
+    scene.write_bytes(b"\xef\xbb\xbf" + LUMPED.read_bytes())
+    a, b = inerter.load(scene).scene, inerter.load(LUMPED).scene
+    assert {n: p.value for n, p in a.parameters.items()} == {n: p.value for n, p in b.parameters.items()}
+    assert a.bodies == b.bodies
+
+
+def test_a_run_that_stops_says_so_on_stderr_and_keeps_its_samples(tmp_path, capsys):
+    """terminals_meet_2d's terminals meet at t = 1.1107 s (its closed form: the mass falls from
+    rest onto the anchor, docs/hard_cases.md): status 3, one line on stderr naming the file, the
+    time and the reason (the full report stays on stdout), and the CSV holds the samples to 1.11 s
+    (every 0.01 s: 112 rows), all finite."""
+    out = tmp_path / "out"
+    assert main(["run", str(TERMINALS_MEET), "--out", str(out)]) == 3
+    err = one_line(capsys, str(TERMINALS_MEET), "the run stopped before its stop time", "t = 1.1107",
+                   "terminals O and P meet", str(out))
+    assert "results up to t = 1.11 s" in err
+    data = rows(out / "terminals_meet_2d.csv")
+    assert len(data) == 112 and float(data[-1][0]) == pytest.approx(1.11)
+    assert all(math.isfinite(float(x)) for row in data for x in row)
+
+
+def test_compare_that_stops_says_so_in_one_line(tmp_path, capsys):
+    assert main(["compare", str(TERMINALS_MEET), "--out", str(tmp_path)]) == 3
+    one_line(capsys, str(TERMINALS_MEET), "corrected (and uncorrected, oracle): the run stopped", "meet")
+
+
+def test_max_steps_exhausted(tmp_path, capsys):
+    """max_steps = 50 of DOP853 on lumped_mass_2d (rtol 1e-10 takes about 50 steps per second):
+    status 3, the reason names max_steps, the samples before the stop are kept and finite."""
+    out = tmp_path / "out"
+    assert main(["run", str(LUMPED), "--set", "experiment.max_steps=50", "--stop-time", "5", "--out", str(out)]) == 3
+    one_line(capsys, str(LUMPED), "max_steps = 50")
+    data = rows(out / "lumped_mass_2d.csv")
+    assert 1 < len(data) < 1001
+    assert all(math.isfinite(float(x)) for row in data for x in row)
+
+
+ROTOR_3D = """
+[scene]
+dimension = 3
+
+[bodies.rotor]
+mass = 1.0
+inertia = [0.1, 0.1, 0.1]
+position = [0, 0, 0]
+angular_velocity = [0, 0, {w}]
+points = {{ P = [0, 0, 0] }}
+
+[ground.points]
+O = [0, 0, 0]
+
+[joints.hub]
+type = "revolute"
+between = ["O", "P"]
+axis = [0, 0, 1]
+
+[elements.torsion]
+type = "rotational_spring"
+bodies = ["ground", "rotor"]
+axis = [0, 0, 1]
+k = {k}
+{angle}
+
+[experiment]
+stop_time = 1.0
+output_interval = 0.01
+"""
+
+
+@pytest.mark.parametrize("angle", ["3.5", "-3.2", "4*pi"])
+def test_a_3d_rotational_spring_free_angle_beyond_half_a_turn(tmp_path, capsys, angle):
+    """In 3D the angle is measured within (−π, π] from the initial pose: a free angle outside could
+    never be reached (the torque would jump at ±π instead); it was accepted silently."""
+    scene = tmp_path / "rotor.toml"
+    scene.write_text(ROTOR_3D.format(w=0.0, k=1.0, angle=f'angle = "{angle}"'))
+    assert main(["describe", str(scene)]) == 2
+    one_line(capsys, str(scene), "elements.torsion.angle", "a free angle in (−π, π) rad")
+
+
+def test_a_3d_rotational_spring_passing_half_a_turn_is_reported(tmp_path, capsys):
+    """A rotor spinning at ω = 10 rad/s on a spring too weak to slow it (k = 1e-9 N·m/rad) turns by
+    π at t = π/10 s (closed form: uniform rotation), where its 3D angle jumps from π to −π: the
+    run says so on stderr and in summary.json, naming the element and the samples around 0.314 s."""
+    import json
+    scene = tmp_path / "rotor.toml"
+    scene.write_text(ROTOR_3D.format(w=10.0, k=1e-9, angle=""))
+    out = tmp_path / "out"
+    assert main(["run", str(scene), "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "elements.torsion: its angle passed ±π" in err and "between t = 0.31 s and 0.32 s" in err, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert any("elements.torsion" in w for w in summary["warnings"])
+    scene.write_text(ROTOR_3D.format(w=3.0, k=1e-9, angle=""))      # 3 rad in 1 s: no warning
+    assert main(["run", str(scene), "--out", str(out)]) == 0
+    assert "passed ±π" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("second, clash", [
+    ('kind = "natural_frequency"', "natural_frequency"),
+    ('kind = "peak"\nsignal = "C.r[1]"', "peak"),
+    ('kind = "free_oscillation"\nsignal = "C.r[1]"\nprefix = "C_y"', "C_y_mean_offset"),
+])
+def test_two_metrics_whose_values_share_a_name(tmp_path, capsys, second, clash):
+    """Two metrics giving a value of the same name (the same kind without prefixes, or a steady
+    state's and a free oscillation's mean_offset under one prefix) overwrote one another silently
+    in result.metrics and summary.json."""
+    from conftest import TWO_BAR
+    text = TWO_BAR.read_text() + '\n[[metrics]]\nkind = "peak"\nsignal = "C.r[2]"\n'
+    scene = tmp_path / "scene.toml"
+    scene.write_text(text + f"\n[[metrics]]\n{second}\n")
+    assert main(["describe", str(scene)]) == 2
+    one_line(capsys, str(scene), ".prefix", "name clash", repr(clash))
+
+
+#: Open: the compiled loop's steps pass the change point (the banded solve of Eq. 33 does not fail
+#: at a state near it) and the run goes on along the anti-parallelogram branch without a word
+#: (measured: the rocker's angle leaves the crank's, 1.58 rad apart at t = 3 s; energy and joints
+#: are kept). Which branch a real linkage takes there is not determined; the run should say so.
+COMPILED_PASSES = pytest.mark.xfail(strict=True, reason="the compiled path passes the change point silently")
+
+
+@pytest.mark.parametrize("path", ["numpy", pytest.param("compiled", marks=COMPILED_PASSES)])
+def test_a_mechanism_at_a_change_point_stops_and_says_why(tmp_path, capsys, path):
+    """tests/data/parallelogram_2d.toml turns at a constant crank rate θ̇0 (the loader's projection
+    of the given velocities; no force acts and the coupler translates, so the kinetic energy
+    ½(2(J + m/4) + m)θ̇² fixes θ̇) from θ = π/2 to the change point θ = π at t* = (π/2)/|θ̇0|
+    (closed form), where all four pivots lie on a line. The run stops just before t* (status 3) and
+    names the dependent joints; its samples up to there are kept and finite. It said only
+    "Required step size is less than spacing between numbers" (numpy path)."""
+    import inerter
+    from conftest import ROOT
+    scene = ROOT / "tests" / "data" / "parallelogram_2d.toml"
+    mech = inerter.load(scene).mechanism
+    t_star = (math.pi / 2) / abs(mech.v0[2])
+    out = tmp_path / "out"
+    assert main(["run", str(scene), "--path", path, "--out", str(out)]) == 3
+    one_line(capsys, str(scene), "joints a, b, c, d", "change point")
+    data = rows(out / "parallelogram_2d.csv")
+    assert all(math.isfinite(float(x)) for row in data for x in row)
+    assert t_star - 0.02 <= float(data[-1][0]) <= t_star
+
+
+@pytest.mark.parametrize("path", ["numpy", pytest.param("compiled", marks=pytest.mark.xfail(
+    strict=True, reason="open: the compiled loop's meeting check fires on the first step of a 1e15 N/m spring"))])
+def test_a_stiff_spring_does_not_read_as_terminals_meeting(tmp_path, capsys, path):
+    """double_pendulum_3d with k = 1e15 N/m between D and E (1.24 m apart at t = 0, their meeting
+    limit 1e-6 of that): DOP853 needs steps of ~1e-11 s and runs out of max_steps = 2000; the
+    compiled path stopped at t = 0 saying the terminals meet "where they were 1.24 m apart"."""
+    scene = SCENARIOS / "double_pendulum_3d.toml"
+    assert main(["run", str(scene), "--set", "k=1e15", "--set", "experiment.max_steps=2000", "--stop-time", "0.2",
+                 "--path", path, "--out", str(tmp_path)]) == 3
+    err = one_line(capsys, str(scene), "the run stopped before its stop time")
+    assert "meet" not in err and "max_steps = 2000" in err, err

@@ -13,6 +13,16 @@ LUMPED = SCENARIOS / "lumped_mass_2d.toml"
 TWO_BAR = SCENARIOS / "two_bar_2d.toml"
 
 
+def one_line_error(capsys, *fragments):
+    """A command's stderr: one line, starting as every error does, holding each fragment."""
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err
+    assert "\n" not in err and err.startswith("inerter: error: "), err
+    for fragment in fragments:
+        assert fragment in err, (fragment, err)
+    return err
+
+
 def _cached(cache, key, fn):
     if key not in cache:
         cache[key] = fn()

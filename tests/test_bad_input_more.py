@@ -10,18 +10,10 @@ import math
 import pytest
 
 from inerter.cli import main
-from conftest import LUMPED, SCENARIOS
+from conftest import LUMPED, SCENARIOS, one_line_error as one_line
 
 TERMINALS_MEET = SCENARIOS / "hard" / "terminals_meet_2d.toml"
 
-
-def one_line(capsys, *fragments):
-    err = capsys.readouterr().err.strip()
-    assert "Traceback" not in err
-    assert "\n" not in err and err.startswith("inerter: error: "), err
-    for fragment in fragments:
-        assert fragment in err, (fragment, err)
-    return err
 
 
 def rows(path):

@@ -12,19 +12,10 @@ import sys
 import pytest
 
 from inerter.cli import main
-from conftest import LUMPED, ROOT, SCENARIOS, TWO_BAR
+from conftest import LUMPED, ROOT, SCENARIOS, TWO_BAR, one_line_error
 
 BRACED = SCENARIOS / "braced_frame_3d.toml"
 
-
-def one_line_error(capsys, *fragments):
-    """The command's stderr: one line, starting as every error does, holding each fragment."""
-    err = capsys.readouterr().err.strip()
-    assert "Traceback" not in err
-    assert "\n" not in err and err.startswith("inerter: error: "), err
-    for fragment in fragments:
-        assert fragment in err, (fragment, err)
-    return err
 
 
 def scene_with(tmp_path, text, name="scene.toml"):

@@ -2212,8 +2212,8 @@ def _rk_attempt(method, hdr, t, h_abs, kink, t_bound, y, f, rtol, atol, inputs, 
                 monitor, work, before):
     """Trial steps from (t, y) until the error control accepts one, as scipy's ``_step_impl``: each
     clipped to `t_bound` and to end on the next `kink`; a trial whose stages cannot be evaluated
-    (singular, not finite: a wild stage of too long a step) is tried again `monitor[5]` times as
-    long, as inerter.engine.simulation does with scipy's integrators. Returns (status, t_new, h,
+    (singular, not finite, terminals that meet: a wild stage of too long a step) is tried again
+    `monitor[5]` times as long, as inerter.engine.simulation does with scipy's integrators. Returns (status, t_new, h,
     the step size proposed next): STEP_TOO_SMALL (or the failing stage's status) below 10 ulp of t.
     A clipped step accepted at its first trial proposes the size proposed before the clip (see
     :func:`rk_advance`)."""
@@ -2235,7 +2235,7 @@ def _rk_attempt(method, hdr, t, h_abs, kink, t_bound, y, f, rtol, atol, inputs, 
         h = t_new - t
         h_abs = abs(h)
         st = _rk_trial(n_stages, hdr, t, h, y, f, inputs, alpha, P, A, B, C, work, before)
-        if st == SINGULAR or st == NOT_FINITE:
+        if st == SINGULAR or st == NOT_FINITE or st == TERMINALS_MEET:
             trial_failure = st
             h_abs *= monitor[5]
             rejected = True

@@ -1319,7 +1319,7 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
     singularity)."""
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)
     if status in (2, 3, 4, 7) and y_last is not None:         # as the numpy path: what may have stalled it
-        text += kernel.mech.diagnose(kernel.split(y_last)[0].copy())
+        text += kernel.mech.diagnose(y_last)        # it reads the state's q
     return text
 
 

@@ -38,7 +38,7 @@ body a, independently.)
 from __future__ import annotations
 
 from inerter.common.errors import MIN_LENGTH
-from inerter.elements.base import law
+from inerter.elements.base import law, rarely
 from inerter.elements.layout import DIRECTION, FIXED_DIRECTION, SLIDER
 
 #: The rotation of the ground (and what an element that does not turn with a is given).
@@ -64,12 +64,13 @@ def acting_line(row, A, rx, ry, rz, distance):
     along (module docstring), from r and its length `distance` = |r|; `meets`: the terminals are
     too close for r̂ (|r| ≤ MIN_LENGTH; L is then held at MIN_LENGTH). A: terminal a's rotation,
     read only where :func:`turns_with_a`."""
-    if row[SLIDER] != 0.0:
+    # the two fixed lines are rare: marked so, the kernels lay the r̂ line out as their straight path
+    if rarely(row[SLIDER] != 0.0):
         ex, ey, ez = body_axis(A, row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2])
         return ex * rx + ey * ry + ez * rz, ex, ey, ez, False
     meets = not distance > MIN_LENGTH
     L = MIN_LENGTH if meets else distance
-    if row[FIXED_DIRECTION] != 0.0:
+    if rarely(row[FIXED_DIRECTION] != 0.0):
         # the small-displacement law: along ê₀ on the stroke s = ê₀·r its device's laws read
         ex, ey, ez = row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2]
         return ex * rx + ey * ry + ez * rz, ex, ey, ez, meets

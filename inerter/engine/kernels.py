@@ -124,7 +124,7 @@ def _element(q, v, e, el_int, el_real, pbody, ploc):
     :mod:`inerter.elements.terminals` (L is held at MIN_LENGTH where the terminals meet)."""
     ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, v, el_int, e, pbody, ploc)
     row = el_real[e]
-    turns = ba >= 0 and terminals.turns_with_a(row)
+    turns = ba >= 0 and rarely(terminals.turns_with_a(row))
     A = planar_matrix9(q[3 * ba + 2]) if turns else terminals.IDENTITY
     distance = math.hypot(rx, ry)
     L, ex, ey, _, meets = terminals.acting_line(row, A, rx, ry, 0.0, distance)
@@ -1223,7 +1223,7 @@ def _element3(q, v, e, el_int, el_real, pbody, ploc, ga, gb):
     gb[3] = wx
     gb[4] = wy
     gb[5] = wz
-    if ba >= 0 and terminals.turns_with_a(row):
+    if ba >= 0 and rarely(terminals.turns_with_a(row)):
         # ê = A_a n̄ turns with a: H's ω̄_a columns gain ê c̄ᵀ (so g's gain c̄), ṙ gains (ω̄_a·c̄) ê
         wx, wy, wz = _omega(v, ba)
         cx, cy, cz, rdx, rdy, rdz = terminals.turning_axis(Aa, ex, ey, ez, rx, ry, rz, wx, wy, wz, rdx, rdy, rdz)

@@ -129,8 +129,7 @@ class TranslationalElement:
         ṙ and H with a turning axis' terms)."""
         r, rdot, a_n, H = self.pair.evaluate(q, v)
         dim = len(r)
-        rx, ry, *rz = r.tolist()
-        rz = rz[0] if rz else 0.0
+        rx, ry, rz = (r.tolist() + [0.0])[:3]                   # 2D: z = 0
         A = rotation(self.pair.a, q) if self.turns else terminals.IDENTITY
         distance = math.sqrt(float(r @ r))
         L, *e, meets = acting_line(self.row, A, rx, ry, rz, distance)

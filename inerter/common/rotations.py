@@ -33,6 +33,16 @@ def skew(u):
     return np.array(((0.0, -u[2], u[1]), (u[2], 0.0, -u[0]), (-u[1], u[0], 0.0)))
 
 
+# -- planar bodies (Sec. 3.1) -----------------------------------------------------------------------
+@_scalar
+def planar_matrix9(theta):
+    """A planar body's rotation A(θ) about the normal (Eq. 15) as a 3D rotation matrix (row-major
+    9-tuple), for the geometry written once for 2D and 3D (inerter.elements.terminals)."""
+    c = math.cos(theta)
+    s = math.sin(theta)
+    return (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+
+
 # -- quaternions ---------------------------------------------------------------------------------
 @_scalar
 def quaternion_matrix9(w, x, y, z):

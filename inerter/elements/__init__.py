@@ -9,6 +9,13 @@ translational element, of the terminal distance L, its rate L̇ = ṙ·r̂, a_n�
 evaluators run the same functions uncompiled. The scene reader takes each kind's parameters from
 here, so a kind is declared, validated, simulated and reported from its one module.
 
+Beside the kinds: :mod:`.base` (what a kind is, :func:`~inerter.elements.base.law`), :mod:`.layout`
+(the named columns of the engine's element tables), :mod:`.terminals` (a translational element's
+terminal geometry, whatever its kind: the line it acts along, r̂, a fixed ê₀ or a prismatic joint's
+axis turning with a body, the L its law reads and whether its terminals meet), :mod:`.device` and
+:mod:`.device_inertia` (an inerter's device effects), :mod:`.dispatch` and :mod:`.generate` (the
+kernels' dispatch over the kinds, generated).
+
 Adding a kind, e.g. a linear spring with a preload F0 (``elements.NAME.type = "preloaded_spring"``):
 
 1. ``inerter/elements/preloaded_spring.py``::
@@ -62,7 +69,7 @@ import pkgutil
 
 from inerter.elements.base import ROTATIONAL, TRANSLATIONAL, ElementKind, Parameter  # noqa: F401
 
-_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device", "device_inertia"}
+_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device", "device_inertia", "terminals"}
 
 
 def _kind_modules():

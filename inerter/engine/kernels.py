@@ -16,13 +16,13 @@ from numba import carray, cfunc, njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic, overload
 
-from inerter.common.errors import MIN_LENGTH
 from inerter.scene.ground_motion import (TERM_AMPLITUDE, TERM_AXIS, TERM_FREQUENCY, TERM_PHASE, TERM_START,
                                          TERM_STOP, burst)
 from inerter.common.rotations import (EULER_SINGULARITY, euler_angles9, euler_matrix9, euler_rates,
-                                       quaternion_matrix9, quaternion_of_matrix9, quaternion_rates)
+                                       planar_matrix9, quaternion_matrix9, quaternion_of_matrix9,
+                                       quaternion_rates)
 
-from inerter.elements import device_inertia
+from inerter.elements import device_inertia, terminals
 from inerter.elements import dispatch as law
 from inerter.elements.base import axial_scalars, rarely
 from inerter.elements.device import MODE_SOLVES
@@ -30,8 +30,8 @@ from inerter.elements.inerter import settle
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, DEVICE, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY,
                                      F_INITIAL, F_OFFSET, F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA, KIND,
                                      MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B,
-                                     REL0, ROT_KIND, FIXED_DIRECTION, DIRECTION, SCREW, SCREW_ADVANCE0,
-                                     SCREW_RATIO, SCREW_REL0, SCREW_ROW, SLIDER, STATE,
+                                     REL0, ROT_KIND, SCREW, SCREW_ADVANCE0,
+                                     SCREW_RATIO, SCREW_REL0, SCREW_ROW, STATE,
                                      STATES)
 
 # Joint kinds.
@@ -118,45 +118,23 @@ def _row_pair(q, v, table, row, pbody, ploc):
 
 
 @njit(cache=True, inline="always")
-def _direction(row, ex, ey, ez):
-    """The direction an element acts along: r̂ = (ex, ey, ez), or its fixed initial direction under
-    the small-displacement law (``row[FIXED_DIRECTION]``)."""
-    if row[FIXED_DIRECTION] != 0.0:
-        return row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2]
-    return ex, ey, ez
-
-
-@njit(cache=True, inline="always")
 def _element(q, v, e, el_int, el_real, pbody, ploc):
     """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, the θ-columns of H, L, the
-    direction it acts along (:func:`_direction`), whether the terminals meet); L is held at
-    MIN_LENGTH where they do."""
+    direction it acts along, whether the terminals meet, |r|), the element's geometry from
+    :mod:`inerter.elements.terminals` (L is held at MIN_LENGTH where the terminals meet)."""
     ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, v, el_int, e, pbody, ploc)
     row = el_real[e]
-    if row[SLIDER] != 0.0:
-        # along a prismatic joint's axis ê = A_a n̄ (fixed in a's body); L = ê·r, the signed slide
-        ex, ey = row[DIRECTION], row[DIRECTION + 1]
-        if ba >= 0:
-            c = math.cos(q[3 * ba + 2])
-            s = math.sin(q[3 * ba + 2])
-            ex, ey = c * ex - s * ey, s * ex + c * ey
-            # ê turns with θ_a: ∂L/∂θ_a gains ê⊥·r and L̇ gains θ̇_a ê⊥·r (zero on the joint's line,
-            # so that off it the force is the gradient of ½k(L − L0)²), carried by H's θ_a column and ṙ
-            pe = ex * ry - ey * rx
-            tax -= pe * ex
-            tay -= pe * ey
-            wpe = v[3 * ba + 2] * pe
-            rdx += wpe * ex
-            rdy += wpe * ey
-        return el_int[e, KIND], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, ex * rx + ey * ry, ex, ey, False
-    L = math.hypot(rx, ry)
-    meets = not L > MIN_LENGTH
-    if meets:
-        L = MIN_LENGTH
-    ex, ey, _ = _direction(row, rx / L, ry / L, 0.0)
-    if row[FIXED_DIRECTION] != 0.0:
-        L = ex * rx + ey * ry       # the small-displacement stroke s = ê0·r its device's laws read
-    return el_int[e, KIND], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets
+    turns = ba >= 0 and rarely(terminals.turns_with_a(row))
+    A = planar_matrix9(q[3 * ba + 2]) if turns else terminals.IDENTITY
+    distance = math.hypot(rx, ry)
+    L, ex, ey, _, meets = terminals.acting_line(row, A, rx, ry, 0.0, distance)
+    if turns:
+        # ê = A_a n̄ turns with θ_a: H's θ_a column gains ê c_z, ṙ gains θ̇_a c_z ê
+        _, _, cz, rdx, rdy, _ = terminals.turning_axis(A, ex, ey, 0.0, rx, ry, 0.0, 0.0, 0.0, v[3 * ba + 2],
+                                                       rdx, rdy, 0.0)
+        tax -= cz * ex
+        tay -= cz * ey
+    return el_int[e, KIND], ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets, distance
 
 
 # ------------------------------------------------------------------------------------------------
@@ -258,7 +236,7 @@ def _add_elements2(q, v, z, P, AB, perm, off, gen, agx, agy, agz):
     ga = np.empty(3)
     gb = np.empty(3)
     for e in range(el_int.shape[0]):
-        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
+        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets, distance = _element(
             q, v, e, el_int, el_real, pbody, ploc)
         if meets:
             status = TERMINALS_MEET
@@ -706,7 +684,7 @@ def state_rates2(q, v, z, qdd, P, dz):
 def _axial2(q, v, qdd, e, P):
     """Element e's axial kinematics in a 2D scene at the solved accelerations q̈: (kind, L, L̇,
     a_n·r̂, |ṙ⊥|², gᵀq̈), what its laws of the internal states and of the efficiency's mode read."""
-    kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
+    kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets, distance = _element(
         q, v, e, P[EL_INT], P[EL_REAL], P[PBODY], P[PLOC])
     Ldot, an, perp2 = axial_scalars(rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
     return kind, L, Ldot, an, perp2, _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
@@ -760,7 +738,7 @@ def signal_values2(q, v, z, qdd, P, out):
         for i in range(0, n, 3):
             energy -= gravity[i] * q[i] + gravity[i + 1] * q[i + 1]
     for e in range(el_int.shape[0]):
-        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets = _element(
+        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets, distance = _element(
             q, v, e, el_int, el_real, pbody, ploc)
         if meets:
             status = TERMINALS_MEET
@@ -776,10 +754,7 @@ def signal_values2(q, v, z, qdd, P, out):
         energy += law.energy(kind, el_real[e], L, along)
         if rarely(el_real[e, INERTIA] != 0.0):
             energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 3)
-        out[k] = L
-        if rarely(el_real[e, FIXED_DIRECTION] != 0.0):           # s_rel: the terminal distance |r|
-            _, _, rx, ry, _, _, _, _, _, _, _, _ = _row_pair(q, v, el_int, e, pbody, ploc)
-            out[k] = math.hypot(rx, ry)
+        out[k] = terminals.reported_distance(el_real[e], L, distance)
         out[k + 1] = along
         out[k + 2] = F
         k += 3
@@ -1224,27 +1199,16 @@ def _pair3(q, v, pa, pb, pbody, ploc):
 @njit(cache=True, inline="always")
 def _element3(q, v, e, el_int, el_real, pbody, ploc, ga, gb):
     """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, L, the direction ê it acts
-    along (:func:`_direction`: r̂, or its fixed initial one), whether the terminals meet), with
-    g = Hᵀ ê written to ga (a's six coordinates) and gb (b's); L is held at MIN_LENGTH where the
-    terminals meet."""
+    along, whether the terminals meet, |r|), the element's geometry from
+    :mod:`inerter.elements.terminals` (L is held at MIN_LENGTH where the terminals meet), with
+    g = Hᵀ ê written to ga (a's six coordinates) and gb (b's)."""
     pa = el_int[e, POINT_A]
     pb = el_int[e, POINT_B]
     ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
     row = el_real[e]
-    if row[SLIDER] != 0.0:
-        # along a prismatic joint's axis ê = A_a n̄ (fixed in a's body); L = ê·r, the signed slide
-        ex, ey, ez = _mul(Aa, row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2])
-        L = ex * rx + ey * ry + ez * rz
-        meets = False
-    else:
-        L = math.sqrt(rx * rx + ry * ry + rz * rz)
-        meets = not L > MIN_LENGTH
-        if meets:
-            L = MIN_LENGTH
-        ex, ey, ez = _direction(row, rx / L, ry / L, rz / L)
-        if row[FIXED_DIRECTION] != 0.0:
-            L = ex * rx + ey * ry + ez * rz     # the small-displacement stroke s = ê0·r its device's laws read
-    # g = Hᵀ r̂ = [−r̂, −ū_a × (A_aᵀ r̂), r̂, ū_b × (A_bᵀ r̂)] (H = [−H_a, H_b], Eq. 18)
+    distance = math.sqrt(rx * rx + ry * ry + rz * rz)
+    L, ex, ey, ez, meets = terminals.acting_line(row, Aa, rx, ry, rz, distance)
+    # g = Hᵀ ê = [−ê, −ū_a × (A_aᵀ ê), ê, ū_b × (A_bᵀ ê)] (H = [−H_a, H_b], Eq. 18)
     wx, wy, wz = _wcol(Aa, ploc[pa, 0], ploc[pa, 1], ploc[pa, 2], ex, ey, ez)
     ga[0] = -ex
     ga[1] = -ey
@@ -1259,23 +1223,14 @@ def _element3(q, v, e, el_int, el_real, pbody, ploc, ga, gb):
     gb[3] = wx
     gb[4] = wy
     gb[5] = wz
-    if row[SLIDER] != 0.0 and ba >= 0:
-        # ê = A_a n̄ turns with a: ∂L/∂ω̄_a gains n̄ × (A_aᵀ r) and L̇ gains ω̄_a·(n̄ × A_aᵀ r) (zero on
-        # the joint's line, so that off it the force is the gradient of ½k(L − L0)²)
-        sx = Aa[0] * rx + Aa[3] * ry + Aa[6] * rz
-        sy = Aa[1] * rx + Aa[4] * ry + Aa[7] * rz
-        sz = Aa[2] * rx + Aa[5] * ry + Aa[8] * rz
-        nx, ny, nz = row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2]
-        cx, cy, cz = ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
+    if ba >= 0 and rarely(terminals.turns_with_a(row)):
+        # ê = A_a n̄ turns with a: H's ω̄_a columns gain ê c̄ᵀ (so g's gain c̄), ṙ gains (ω̄_a·c̄) ê
+        wx, wy, wz = _omega(v, ba)
+        cx, cy, cz, rdx, rdy, rdz = terminals.turning_axis(Aa, ex, ey, ez, rx, ry, rz, wx, wy, wz, rdx, rdy, rdz)
         ga[3] += cx
         ga[4] += cy
         ga[5] += cz
-        k = 6 * ba + 3
-        we = v[k] * cx + v[k + 1] * cy + v[k + 2] * cz
-        rdx += we * ex
-        rdy += we * ey
-        rdz += we * ez
-    return el_int[e, KIND], ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets
+    return el_int[e, KIND], ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance
 
 
 @njit(cache=True, inline="always")
@@ -1409,7 +1364,7 @@ def _add_elements3(q, v, z, P, AB, perm, off, gen, agx, agy, agz):
     ga = np.empty(6)
     gb = np.empty(6)
     for e in range(el_int.shape[0]):
-        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
+        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element3(
             q, v, e, el_int, el_real, pbody, ploc, ga, gb)
         if meets:
             status = TERMINALS_MEET
@@ -1737,7 +1692,7 @@ def state_rates3(q, v, z, qdd, P, dz):
 @njit(cache=True, inline="always")
 def _axial3(q, v, qdd, e, P, ga, gb):
     """Element e's axial kinematics in a 3D scene at q̈ (as :func:`_axial2`); ga, gb: work (6)."""
-    kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
+    kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element3(
         q, v, e, P[EL_INT], P[EL_REAL], P[PBODY], P[PLOC], ga, gb)
     Ldot, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
     return kind, L, Ldot, an, perp2, _gq3(qdd, ba, bb, ga, gb)
@@ -1800,7 +1755,7 @@ def signal_values3(q, v, z, qdd, P, out):
     ga = np.empty(6)
     gb = np.empty(6)
     for e in range(el_int.shape[0]):
-        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets = _element3(
+        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element3(
             q, v, e, el_int, el_real, pbody, ploc, ga, gb)
         if meets:
             status = TERMINALS_MEET
@@ -1816,11 +1771,7 @@ def signal_values3(q, v, z, qdd, P, out):
         energy += law.energy(kind, el_real[e], L, along)
         if rarely(el_real[e, INERTIA] != 0.0):
             energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 6)
-        out[k] = L
-        if rarely(el_real[e, FIXED_DIRECTION] != 0.0):           # s_rel: the terminal distance |r|
-            _, _, _, _, rx, ry, rz, _, _, _, _, _, _ = _pair3(q, v, el_int[e, POINT_A], el_int[e, POINT_B], pbody,
-                                                              ploc)
-            out[k] = math.sqrt(rx * rx + ry * ry + rz * rz)
+        out[k] = terminals.reported_distance(el_real[e], L, distance)
         out[k + 1] = along
         out[k + 2] = F
         k += 3

@@ -17,7 +17,8 @@ import numpy as np
 
 from inerter import elements
 from inerter.common.errors import MIN_LENGTH, TerminalsMeet  # noqa: F401  (re-exported)
-from inerter.elements import device, device_inertia, layout
+from inerter.common.rotations import planar_matrix9
+from inerter.elements import device, device_inertia, layout, terminals
 from inerter.elements.base import axial_scalars as _compiled_axial_scalars
 from inerter.model.planar import PointPair
 
@@ -25,16 +26,28 @@ from inerter.model.planar import PointPair
 axial_scalars = _compiled_axial_scalars.py_func     # the kernels' definition, run uncompiled
 
 
+acting_line = terminals.acting_line.py_func         # the element's geometry, as the kernels inline it
+turning_axis = terminals.turning_axis.py_func
+reported_distance = terminals.reported_distance.py_func
+
+
+def rotation(point, q):
+    """The rotation of the body carrying `point` as a row-major 9-tuple (the ground's: the identity),
+    what :mod:`inerter.elements.terminals` takes: 2D A(θ) about the normal, 3D the body's matrix."""
+    if point.body < 0:
+        return terminals.IDENTITY
+    if len(point.local) == 2:
+        return planar_matrix9.py_func(q[point.qi + 2])
+    o = point.orientation
+    return tuple(point.cache.matrix(o, q[point.qi + 3:point.qi + 3 + o.size]).ravel().tolist())
+
+
 def slider_direction(point, axis, q) -> np.ndarray:
     """A prismatic joint's axis in the global frame, ê = A n̄, n̄ fixed in the body of `point` (the
-    joint's first point; the ground's axis is global): 2D A(θ), 3D the body's rotation matrix."""
-    if point.body < 0:
-        return axis
-    if len(axis) == 2:
-        c, s = math.cos(q[point.qi + 2]), math.sin(q[point.qi + 2])
-        return np.array((c * axis[0] - s * axis[1], s * axis[0] + c * axis[1]))
-    o = point.orientation
-    return point.cache.matrix(o, q[point.qi + 3:point.qi + 3 + o.size]) @ axis
+    joint's first point; the ground's axis is global)."""
+    n = np.zeros(3)
+    n[:len(axis)] = axis
+    return np.array(terminals.body_axis.py_func(rotation(point, q), *n)[:len(axis)])
 
 
 class TranslationalElement:
@@ -73,6 +86,7 @@ class TranslationalElement:
             row[layout.SLIDER] = 1.0
             row[layout.DIRECTION:layout.DIRECTION + len(self.slider_axis)] = self.slider_axis
         self.row = row
+        self.turns = bool(terminals.turns_with_a.py_func(row))     # its line turns with a's body
         # the kind's outputs beyond s_rel, v_rel, f (a device's), by its law extra_outputs
         self.extra = len(device.outputs()) if device is not None else 0
         self._extra = getattr(law, "extra_outputs", None)
@@ -110,38 +124,38 @@ class TranslationalElement:
         return elements.MODULE[self.kind].settle.py_func(self.row, *self._scalars(self.geometry(q, v), a))
 
     def geometry(self, q, v):
+        """(r, ṙ, a_n, H, L, ê): the terminals' kinematics (:class:`PointPair`) and the element's
+        geometry, L and the direction ê it acts along (:mod:`inerter.elements.terminals`, uncompiled;
+        ṙ and H with a turning axis' terms)."""
         r, rdot, a_n, H = self.pair.evaluate(q, v)
-        if self.slider_axis is not None:
-            axis = slider_direction(self.pair.a, self.slider_axis, q)
-            H, rdot = self._turning_axis(q, v, r, rdot, H, axis)
-            return r, rdot, a_n, H, float(r @ axis), axis
-        length = math.sqrt(float(r @ r))
-        if not length > MIN_LENGTH:
+        dim = len(r)
+        rx, ry, rz = (r.tolist() + [0.0])[:3]                   # 2D: z = 0
+        A = rotation(self.pair.a, q) if self.turns else terminals.IDENTITY
+        distance = math.sqrt(float(r @ r))
+        L, *e, meets = acting_line(self.row, A, rx, ry, rz, distance)
+        if meets:
             raise TerminalsMeet(
                 f"element '{self.name}': its terminals {self.labels[0]} and {self.labels[1]} meet "
-                f"(distance {length:.3g} m < {MIN_LENGTH:g} m), so its direction is undefined", recoverable=True)
-        if self.fixed_direction is None:
-            return r, rdot, a_n, H, length, r / length
-        # the small-displacement law acts along ê0 on the stroke s = ê0·r, whose rate is ê0·ṙ: the
-        # device's laws of L read s (the oracle's DistanceProbe; its output s_rel stays |r|)
-        return r, rdot, a_n, H, float(r @ self.fixed_direction), self.fixed_direction
+                f"(distance {distance:.3g} m < {MIN_LENGTH:g} m), so its direction is undefined", recoverable=True)
+        axis = np.array(e[:dim])
+        if self.turns and self.pair.a.dofs is not None:
+            H, rdot = self._turning_axis(v, (rx, ry, rz), rdot, H, A, e)
+        return r, rdot, a_n, H, L, axis
 
-    def _turning_axis(self, q, v, r, rdot, H, axis):
-        """A prismatic joint's spring or damper: L = ê·r with ê = A_a n̄ turning with a's body, so
-        ∂L/∂(a's rotation) gains ∂ê/∂θ_a·r (2D: ê⊥·r; 3D, over body-frame ω: n̄ × A_aᵀr) and L̇ the
-        same times a's rate: zero on the joint's line, and off it the force is the gradient of
-        ½k(L − L0)² (added to H along ê, so that g = Hᵀê and ê·ṙ carry it)."""
+    def _turning_axis(self, v, r, rdot, H, A, e):
+        """A prismatic joint's spring or damper, ê = A_a n̄ turning with a's body: H's columns of a's
+        rotation (2D θ_a, 3D ω̄_a) gain ê c̄ᵀ and ṙ gains (ω̄_a·c̄) ê (terminals.turning_axis)."""
         a = self.pair.a
-        if a.dofs is None:
-            return H, rdot
+        dim = len(rdot)
+        cols = [2] if dim == 2 else [3, 4, 5]
+        w = np.zeros(3)
+        w[3 - len(cols):] = v[a.dofs[cols]]
+        rd = np.zeros(3)
+        rd[:dim] = rdot
+        c0, c1, c2, *rd = turning_axis(A, *e, *r, *w, *rd)
         H = np.array(H, dtype=float)
-        if len(axis) == 2:
-            extra, cols = np.array([axis[0] * r[1] - axis[1] * r[0]]), [2]
-        else:
-            A = a.cache.matrix(a.orientation, q[a.qi + 3:a.qi + 3 + a.orientation.size])
-            extra, cols = np.cross(self.slider_axis, A.T @ r), [3, 4, 5]
-        H[:, cols] += np.outer(axis, extra)
-        return H, rdot + float(v[a.dofs[cols]] @ extra) * axis
+        H[:, cols] += np.outer(e[:dim], (c0, c1, c2)[3 - len(cols):])
+        return H, np.array(rd[:dim])
 
     def length(self, q):
         return self.geometry(q, np.zeros_like(q))[4]
@@ -172,7 +186,7 @@ class TranslationalElement:
         outputs (a device's)."""
         geo = self.geometry(q, v)
         L, Ldot = geo[4], float(geo[1] @ geo[5])
-        distance = L if self.fixed_direction is None else math.sqrt(float(geo[0] @ geo[0]))
+        distance = reported_distance(self.row, L, math.sqrt(float(geo[0] @ geo[0])))
         values = (distance, Ldot, self.force(q, v, a, geo, z))
         if self._extra is None:
             return values

@@ -59,7 +59,8 @@ def _option_for(args, exc: SceneError) -> str | None:
     (an error of the FMU's start values): ``--stop-time`` for ``experiment.stop_time``, ``--set b=2``
     for ``parameters.b`` (and ``parameters.b.unit``)."""
     origins = origins_of(args)
-    if any(str(exc).startswith(origin + ":") for origin in origins.values()):
+    head = str(exc).split(f"{exc.field}:", 1)[0]
+    if any(origin in head for origin in origins.values()):
         return None                                   # the scene reader named it
     for key, origin in origins.items():
         for path in (key, f"parameters.{key}"):

@@ -32,17 +32,22 @@ DENSE_METRICS = ("free_oscillation", "harmonics", "steady_state", "peak")
 
 def load(path, **overrides) -> "Model":
     """Load a scene file. Overrides, Modelica-modifier style: a parameter by name (``b=20``), an
-    effect (``**{"effects.centripetal": False}``) or an experiment setting (``experiment.rtol``)."""
+    effect (``**{"effects.centripetal": False}``) or an experiment setting (``experiment.rtol``).
+    A value the scene refuses is named with the override that gave it (``override b=-1: ...``)."""
     return Model(path, overrides)
 
 
 class Model:
     methods = METHODS
 
-    def __init__(self, path, overrides: dict[str, Any] | None = None, oracle: bool = False):
+    def __init__(self, path, overrides: dict[str, Any] | None = None, oracle: bool = False,
+                 origins: dict[str, str] | None = None):
+        """`origins`: where each override came from, as its errors name it (``{"b": "--set b=20"}``;
+        default ``override b=20``)."""
         self.path = Path(path)
         self.overrides = dict(overrides or {})
-        self.scene = load_scene(self.path, self.overrides)
+        self.origins = dict(origins or {})
+        self.scene = load_scene(self.path, self.overrides, self.origins)
         self.mechanism = Mechanism(self.scene, element_factory=OracleElement if oracle else None)
         self.signals = Signals(self.mechanism)
         self.is_oracle = oracle
@@ -125,11 +130,11 @@ class Model:
     def with_overrides(self, **more) -> "Model":
         merged = dict(self.overrides)
         merged.update(more)
-        return Model(self.path, merged, oracle=self.is_oracle)
+        return Model(self.path, merged, oracle=self.is_oracle, origins=self.origins)
 
     def oracle(self) -> "Model":
         """The same scene with element forces from the definitions (module `oracle`)."""
-        return Model(self.path, self.overrides, oracle=True)
+        return Model(self.path, self.overrides, oracle=True, origins=self.origins)
 
     # -- analysis ----------------------------------------------------------------------------
     def static_equilibrium(self):

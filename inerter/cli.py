@@ -11,9 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
-from inerter.common.errors import InerterError, SceneError, shown
-from inerter.scene.overrides import parse_set, read_value
+from inerter.common.errors import InerterError, SceneError
+from inerter.common.options import OptionError, output_path
+from inerter.scene.overrides import parse_set, read_value, set_origins
 from inerter.scene.reader import METHODS
+from inerter.scene.units import for_reading
 
 PAPER_SCENES = ("lumped_mass_2d", "two_bar_2d")
 
@@ -23,14 +25,6 @@ OPTIONS = {"stop_time": ("--stop-time", "experiment.stop_time"),
            "method": ("--method", "experiment.method"),
            "rtol": ("--rtol", "experiment.rtol"),
            "step": ("--step", "experiment.communication_step")}
-
-
-class OptionError(InerterError):
-    """A command-line option has a value the command cannot use; the message reads
-    ``<option>: <problem> (got <value>; expected <expected>)``, like a scene error's."""
-
-    def __init__(self, option: str, value, expected: str, problem: str = "out of range"):
-        super().__init__(f"{option}: {problem} (got {shown(value)}; expected {expected})")
 
 
 def overrides_of(args) -> dict:
@@ -44,23 +38,40 @@ def overrides_of(args) -> dict:
     return overrides
 
 
-def _option_for(args, field: str) -> str | None:
-    """The option that gave the field `field` its value, if one did: ``--stop-time`` for
-    ``experiment.stop_time``, ``--set b`` for ``parameters.b`` (and ``parameters.b.unit``)."""
+def origins_of(args) -> dict:
+    """Where each override of :func:`overrides_of` came from, as an error names it: ``--set
+    lead=0`` as typed, ``--stop-time`` for ``experiment.stop_time`` (its value is the field's)."""
+    origins = set_origins(getattr(args, "set", None))
     for attr, (option, key) in OPTIONS.items():
-        if key == field and getattr(args, attr, None) is not None:
-            return option
-    for item in getattr(args, "set", None) or []:
-        key = item.split("=", 1)[0].strip()
+        if getattr(args, attr, None) is not None:
+            origins[key] = option
+    return origins
+
+
+def _load(args, overrides: dict | None = None):
+    """The scene of `args` with its overrides, a refused value named by the option that gave it."""
+    from inerter.api import Model
+    return Model(args.scene, overrides_of(args) if overrides is None else overrides, origins=origins_of(args))
+
+
+def _option_for(args, exc: SceneError) -> str | None:
+    """The option that gave the field of `exc` its value, where the scene reader did not name it
+    (an error of the FMU's start values): ``--stop-time`` for ``experiment.stop_time``, ``--set b=2``
+    for ``parameters.b`` (and ``parameters.b.unit``)."""
+    origins = origins_of(args)
+    head = str(exc).split(f"{exc.field}:", 1)[0]
+    if any(origin in head for origin in origins.values()):
+        return None                                   # the scene reader named it
+    for key, origin in origins.items():
         for path in (key, f"parameters.{key}"):
-            if field == path or field.startswith((path + ".", path + "[")):
-                return f"--set {key}"
+            if exc.field == path or exc.field.startswith((path + ".", path + "[")):
+                return origin
     return None
 
 
 def _out_dir(path) -> Path:
     """The output folder, made before anything is computed."""
-    out = Path(path)
+    out = output_path(path)
     if out.exists() and not out.is_dir():
         raise OptionError("--out", str(path), "a folder (or a path where one can be made)",
                           "names an existing file")
@@ -117,10 +128,9 @@ def _report_stop(result, scene, out, label: str = "") -> int:
 
 
 def cmd_run(args):
-    from inerter.api import load
     _animation(args)                                  # its options checked before the run
     overrides = overrides_of(args)
-    model = load(args.scene, **overrides)            # every value checked before --out is made
+    model = _load(args, overrides)                   # every value checked before --out is made
     out = _out_dir(args.out)
     t0 = time.perf_counter()
     result = simulate(args.scene, overrides, args.model, args.path, model)
@@ -188,14 +198,13 @@ def _animation(args, result=None, path: Path | None = None):
 
 def _with_unit(value, unit) -> str:
     """A metric's value for the console, with its unit (none for a dimensionless one)."""
-    return f"{value} {unit}" if unit and unit != "1" else str(value)
+    return f"{value} {for_reading(unit)}" if for_reading(unit) else str(value)
 
 
 def cmd_compare(args):
     """With and without the centripetal correction (and the oracle, and the FMU with --model fmu)."""
-    from inerter.api import load
     overrides = overrides_of(args)
-    load(args.scene, **overrides)                    # every value checked before --out is made
+    _load(args, overrides)                           # every value checked before --out is made
     out = _out_dir(args.out)
     runs, summaries = [], {}
     variants = [("corrected", True), ("uncorrected", False)]
@@ -223,7 +232,7 @@ def cmd_compare(args):
         vals = [summaries[v]["metrics"].get(k) for v in ("corrected", "uncorrected", "oracle")]
         if any(isinstance(v, list) for v in vals):
             continue
-        print(f"  {k:32s} {units.get(k, ''):>6s} "
+        print(f"  {k:32s} {for_reading(units.get(k)):>6s} "
               + " ".join(f"{v:16.6g}" if v is not None else f"{'-':>16s}" for v in vals))
     print(f"  largest |{args.model} − oracle| over point positions: "
           + (f"{diff:.3g} m" if math.isfinite(diff) else "not computed (the runs' time grids differ)"))
@@ -245,8 +254,7 @@ def max_difference(a, b) -> float:
 
 
 def cmd_describe(args):
-    from inerter.api import load
-    model = load(args.scene, **parse_set(args.set))
+    model = _load(args, parse_set(args.set))
     print(f"{model.name}: {model.scene.description}")
     print("compiled terms:")
     for line in model.terms():
@@ -254,7 +262,8 @@ def cmd_describe(args):
     print("parameters:")
     for p in model.parameter_info():
         given = f" (given as {p['given']})" if p.get("given") else ""
-        print(f"  {p['name']} = {p['value']:g} {p['unit']}{given}  {p['description']}")
+        unit = for_reading(p["unit"])
+        print(f"  {p['name']} = {p['value']:g}{' ' + unit if unit else ''}{given}  {p['description']}")
     print("inputs: " + (", ".join(i["name"] for i in model.input_info()) or "none"))
     print("outputs: " + ", ".join(o["name"] for o in model.output_info()))
     return 0
@@ -270,6 +279,7 @@ def cmd_build_fmu(args):
 def cmd_build_system(args):
     """The coupled example as system-structure files beside its two FMUs."""
     from inerter.fmu.cosim import build_system
+    output_path(args.out_dir, "--out-dir")
     paths = build_system(args.out_dir, step=args.step or 0.01)
     for role in ("plant", "controller", "osp", "ssd"):
         print(f"{role}: {paths[role]}")
@@ -292,6 +302,7 @@ def paper_scenes(folder=None) -> list[Path]:
 def cmd_paper(args):
     """The main job: both paper scenes end to end, with and without the correction."""
     status = 0
+    output_path(args.out)
     for scene in paper_scenes(args.scenarios):
         ns = argparse.Namespace(scene=str(scene), set=[], out=str(Path(args.out) / scene.stem),
                                 model=args.model, stop_time=None, method=None, rtol=None, step=None,
@@ -436,7 +447,7 @@ def main(argv=None):
     try:
         return args.func(args)
     except SceneError as exc:
-        option = _option_for(args, exc.field)
+        option = _option_for(args, exc)
         print(f"inerter: error: {option + ': ' if option else ''}{exc}", file=sys.stderr)
         return 2
     except InerterError as exc:

@@ -105,7 +105,7 @@ def test_bad_arguments_are_errors_of_the_whole_sweep(tmp_path, capsys):
                                          ("effects.centripetal=true,maybe", "effects.centripetal")])
 def test_a_value_the_scene_refuses_stops_the_sweep_before_any_worker(tmp_path, monkeypatch, capsys, vary, field):
     """Each varied value goes through the scene's validator first: the sweep stops with the error
-    that validator gives for it (after the option that gave it), one line, exit 2, before any
+    that validator gives for it (after the option and value that gave it), one line, exit 2, before any
     worker (or dask client) starts and before the output folder is made."""
     monkeypatch.setattr(sw, "run_sweep", lambda *a, **k: pytest.fail("the sweep started"))
     out = tmp_path / "never"
@@ -115,7 +115,9 @@ def test_a_value_the_scene_refuses_stops_the_sweep_before_any_worker(tmp_path, m
     bad = next(v for v in values if _refused(name, v))
     with pytest.raises(SceneError) as scene_error:
         inerter.load(LUMPED.resolve(), **{name: bad})
-    assert err == f"inerter: error: --vary {name}: {scene_error.value}\n"
+    origin, rest = str(scene_error.value).split(": ", 1)        # inerter.load names the override itself
+    assert origin == f"override {name}={bad if isinstance(bad, str) else repr(bad)}", origin
+    assert err == f"inerter: error: --vary {name}={origin[len('override ' + name + '='):]}: {rest}\n"
     assert f": {field}:" in err and not out.exists()
 
 

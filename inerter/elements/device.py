@@ -581,9 +581,19 @@ def _flywheel_ratio(values) -> float:
     return 2.0 * math.pi / values["lead"] if values.get("lead") is not None else values["ratio"]
 
 
+#: The fields that give a friction force (velocity_scale only shapes the Coulomb part).
+FRICTION_FORCES = "coulomb (N) with its velocity_scale (m/s), or viscous (N.s/m)"
+
+
 def _check_friction(values):
     if values.get("coulomb") is None and values.get("viscous") is None:
-        return ("coulomb", None, "coulomb (N) and its velocity_scale (m/s), or viscous (N.s/m)", "no friction given")
+        if values.get("velocity_scale") is not None:       # v_s alone: a scale of no force
+            return ("velocity_scale", values["velocity_scale"], FRICTION_FORCES,
+                    "no friction given (velocity_scale alone adds none)")
+        return ("coulomb", None, FRICTION_FORCES, "no friction given")
+    if values.get("coulomb") is None and values.get("velocity_scale") is not None:
+        return ("velocity_scale", values["velocity_scale"], "coulomb (N) beside it (v_s regularises the Coulomb "
+                "friction only), or no velocity_scale", "velocity_scale without coulomb")
     if values.get("coulomb") is not None and values.get("velocity_scale") is None:
         return ("velocity_scale", None, "the regularisation's velocity scale v_s > 0 (m/s) with coulomb",
                 "missing field")
@@ -619,7 +629,8 @@ FRICTION_EFFECT = Effect(
     "friction", "Coulomb and viscous friction on dL/dt, F_c tanh(v/v_s) + c_f v",
     "Pennestrì et al. 2016, Nonlinear Dyn. 83, Sec. 2 (tanh regularisation); Wang & Su 2008",
     (Parameter("coulomb", "N", "Coulomb friction force F_c", minimum=0.0, required=False),
-     Parameter("viscous", "N.s/m", "viscous friction coefficient c_f", minimum=0.0, required=False, default=0.0),
+     Parameter("viscous", "N.s/m", "viscous friction coefficient c_f (0 where not given)", minimum=0.0,
+               required=False),
      Parameter("velocity_scale", "m/s", "velocity scale v_s of the tanh regularisation", minimum=0.0,
                strict=True, required=False)),
     check=_check_friction)

@@ -191,6 +191,15 @@ COLLAPSE_RELATIVE = 1e-11
 COLLAPSE_STEPS = 200
 
 
+class StepCollapse(SimulationError):
+    """The integrator's step size collapsed: the solution changes faster than the method can follow
+    (a stiff effect, a switch narrower than the steps) or approaches a singularity."""
+
+
+#: scipy's words when an implicit method's step size reaches the spacing of floating-point numbers.
+SCIPY_COLLAPSE = "Required step size is less than spacing between numbers."
+
+
 class StepMonitor:
     """Watches an integration after every accepted step: the mechanism's own checks (terminals
     meeting, Euler-angle singularity), the explicit methods' stiffness (Hairer's test), a step size
@@ -218,7 +227,7 @@ class StepMonitor:
         if h < COLLAPSE_RELATIVE * max(1.0, abs(t)):
             self.small += 1
             if self.small >= COLLAPSE_STEPS:
-                raise SimulationError(
+                raise StepCollapse(
                     f"the {self.method} step size collapsed ({self.small} steps in a row below "
                     f"{COLLAPSE_RELATIVE:g}·max(1 s, t), the last {h:.3g} s): the solution is approaching a "
                     f"singularity" + self.mech.diagnose(solver.y), t_old)
@@ -287,6 +296,9 @@ def _step(solver, method):
                 raise type(exc)(exc.message, t) from None
             raise
     if solver.status == "failed":
+        if message == SCIPY_COLLAPSE:                 # Radau's and BDF's: said in the project's words
+            raise StepCollapse(f"the {method} step size collapsed (the step it asked for, after "
+                               f"{solver.h_abs:.3g} s, is below the spacing of floating-point numbers at t)", t)
         raise SimulationError(f"the {method} integrator failed: {message}", t)
 
 
@@ -383,6 +395,8 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
         message = str(exc)
         if solver is not None and not isinstance(exc, TerminalsMeet) and "terminals" not in message:
             message += mech.diagnose(solver.y)
+        if isinstance(exc, StepCollapse):
+            message += mech.stiffest()
     cpu = _time.process_time() - start
     for i in range(1, k):
         max_drift = max(max_drift, mech.constraint_residual(out[i, :n]))

@@ -27,6 +27,7 @@ from inerter.common.errors import SceneError, SimulationError
 from inerter.model.joints import make_joint
 from inerter.model.planar import PointKinematics, PointPair
 from inerter.scene.reader import GROUND, Scene
+from inerter.scene.units import for_reading
 from inerter.model.spatial import EULER_SINGULARITY, Orientation, RotationCache, SpatialPoint, cross
 
 #: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
@@ -415,6 +416,35 @@ class Mechanism:
                      "device's path): " + ", ".join(near))
         return text + self._dependent_joints(q)
 
+    def stiffest(self) -> str:
+        """What sets the scene's fastest time scale, for a run whose step size collapsed: the
+        devices' series modes ω = √(k_c/(b η_b)) (the node between the compliance and the inerter
+        has no mass, so the mode's inertia is the inerter's own, at its smallest, back-driven: Wang &
+        Su 2008, Sec. 3; the efficiency, Wen et al. 2017), the fastest named with its values, and the
+        narrowest tanh switch, a friction's or a screw efficiency's velocity_scale v_s (a switch the
+        steps must resolve: Pennestrì et al. 2016)."""
+        modes, switches = [], []
+        for spec in self.scene.elements.values():
+            dev = spec.device
+            if dev is None:
+                continue
+            if dev.has("compliance"):
+                kc = dev.values("compliance")["stiffness"]
+                eta = dev.values("efficiency")["backward"] if dev.has("efficiency") else 1.0
+                mass = (dev.inertance() or spec.coefficient) * eta
+                if kc > 0.0 and mass > 0.0:
+                    w = math.sqrt(kc / mass)
+                    modes.append((w, f"element '{spec.name}': series compliance k_c = {kc:g} N/m on b η_b = "
+                                     f"{mass:.3g} kg (η_b = {eta:g}): its mode √(k_c/(b η_b)) = {w:.3g} rad/s, a "
+                                     f"period of {2.0 * math.pi / w:.3g} s"))
+            for effect in ("friction", "efficiency"):
+                scale = dev.values(effect).get("velocity_scale")
+                if scale:
+                    switches.append((scale, f"element '{spec.name}': {effect}.velocity_scale = {scale:g} m/s"))
+        parts = ([f"the stiffest effect, {max(modes)[1]}"] if modes else []) + \
+            ([f"the narrowest switch, {min(switches)[1]}"] if switches else [])
+        return "; likely cause: " + "; ".join(parts) if parts else ""
+
     def _dependent_joints(self, q) -> str:
         """The joints whose constraint rows are nearly dependent at q (the smallest singular value of
         C_v below DEPENDENT_RATIO of the largest), named by their share of the left singular vector:
@@ -689,5 +719,6 @@ class Mechanism:
         if not self.inerters:
             lines.append("inerters: none, no inerter term computed")
         for d in s.derived:
-            lines.append(f"derived output {d.name} ({d.unit}) = {d.expression.text}")
+            unit = for_reading(d.unit)
+            lines.append(f"derived output {d.name}{f' ({unit})' if unit else ''} = {d.expression.text}")
         return lines

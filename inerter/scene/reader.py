@@ -25,6 +25,7 @@ from inerter.elements.device import Device, check_device
 from inerter.scene import units
 from inerter.scene.expressions import (RESERVED_NAMES, UnitError, ambiguous_units, evaluate, output_expression,
                                        parameter_meta, read_parameters)
+from inerter.scene.overrides import attributed, origin_of
 from inerter.scene.files import MAX_RECORD_BYTES, MAX_RECORD_SAMPLES, MAX_SCENE_BYTES, read_capped
 
 GROUND = "ground"
@@ -376,14 +377,16 @@ def read_toml(path) -> tuple[str, dict]:
     return source, data
 
 
-def load_scene(path, overrides: Mapping[str, Any] | None = None) -> Scene:
-    """Read, validate and evaluate a scene file; `overrides` as from ``--set`` (see split_overrides)."""
+def load_scene(path, overrides: Mapping[str, Any] | None = None, origins: Mapping[str, str] | None = None) -> Scene:
+    """Read, validate and evaluate a scene file; `overrides` as from ``--set`` (see split_overrides),
+    `origins` where each came from, for errors (``{"b": "--set b=20"}``; see build_scene)."""
     source, data = read_toml(path)
-    return build_scene(source, data, overrides or {})
+    return build_scene(source, data, overrides or {}, origins)
 
 
-def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, what="--set"):
-    """Sort overrides into parameters, effects and experiment settings; unknown names are errors."""
+def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, origins=None):
+    """Sort overrides into parameters, effects and experiment settings; unknown names are errors,
+    named by where they came from (:func:`inerter.scene.overrides.origin_of`)."""
     params, effects, experiment = {}, {}, {}
     for key, value in overrides.items():
         if key == "scene.orientation":
@@ -391,7 +394,7 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
         elif key.startswith("effects."):
             name = key[len("effects."):]
             if name not in KNOWN_EFFECTS:
-                raise SceneError(what, key, value, "an effect: " + ", ".join(f"effects.{e}" for e in KNOWN_EFFECTS),
+                raise SceneError(origin_of(key, value, origins), key, value, "an effect: " + ", ".join(f"effects.{e}" for e in KNOWN_EFFECTS),
                                  "unknown effect")
             effects[name] = value
         elif key.startswith("experiment."):
@@ -399,14 +402,16 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
         elif key in parameter_names:
             params[key] = value          # read as the scene's entry is (evaluate_parameters)
         else:
-            raise SceneError(what, key, value,
+            raise SceneError(origin_of(key, value, origins), key, value,
                              "a parameter of " + source + ": " + _listing(parameter_names)
                              + ", or effects.NAME, experiment.NAME, scene.orientation", "unknown name")
     return params, effects, experiment
 
 
-def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
-    """The scene of the TOML `data`. A parameter in a unit with two readings (``"g"``: the gram
+def build_scene(source: str, data: dict, overrides: Mapping[str, Any], origins: Mapping[str, str] | None = None) -> Scene:
+    """The scene of the TOML `data` with `overrides`. An error in a value an override gave names
+    the override first (`origins`: where each came from, ``{"lead": "--set lead=0"}``; else
+    ``override lead=0``): :func:`inerter.scene.overrides.attributed`. A parameter in a unit with two readings (``"g"``: the gram
     or standard gravity) is read as the one whose dimension fits every field it reaches: first
     as the first reading; a parameter a unit error names is read the other way and the scene
     read again (each at most once, so at most one read more than there are such parameters)."""
@@ -418,16 +423,20 @@ def build_scene(source: str, data: dict, overrides: Mapping[str, Any]) -> Scene:
     first: dict[str, UnitError] = {}          # the error that made a parameter be read the other way
     while True:
         try:
-            return _build_scene(source, data, overrides, reading)
+            return _build_scene(source, data, overrides, reading, origins)
         except UnitError as exc:
             flip = [n for n in exc.parameters if n in choices and n not in reading]
             if not flip:       # fits neither reading: the error its first reading gave
-                raise next((first[n] for n in exc.parameters if n in first), exc) from None
+                error = next((first[n] for n in exc.parameters if n in first), exc)
+                raise attributed(error, source, data, overrides, origins) from None
             reading.update({n: 1 for n in flip})
             first.update({n: exc for n in flip})
+        except SceneError as exc:
+            raise attributed(exc, source, data, overrides, origins) from None
 
 
-def _build_scene(source: str, data: dict, overrides: Mapping[str, Any], reading: Mapping[str, int]) -> Scene:
+def _build_scene(source: str, data: dict, overrides: Mapping[str, Any], reading: Mapping[str, int],
+                 origins: Mapping[str, str] | None = None) -> Scene:
     base = _Reader(source, {})
     base.table(data, "", TOP_LEVEL)
 
@@ -446,10 +455,11 @@ def _build_scene(source: str, data: dict, overrides: Mapping[str, Any], reading:
         raise base.error("scene.dimension", dimension, "2 or 3", "unsupported dimension")
     orientation = head.get("orientation", "quaternion")
     p_names = set(data.get("parameters", {})) if isinstance(data.get("parameters", {}), dict) else set()
-    orientation_override = split_overrides(source, overrides, p_names)[2].get("__orientation__")
+    orientation_override = split_overrides(source, overrides, p_names, origins)[2].get("__orientation__")
     if orientation_override is not None:
         if dimension != 3:
-            raise SceneError("--set", "scene.orientation", orientation_override, "a 3D scene", "no orientation in 2D")
+            raise SceneError(origin_of("scene.orientation", orientation_override, origins), "scene.orientation",
+                             orientation_override, "a 3D scene", "no orientation in 2D")
         orientation = orientation_override
     if orientation not in ORIENTATIONS:
         raise base.error("scene.orientation", orientation, "one of: " + ", ".join(ORIENTATIONS), "unknown value")
@@ -471,7 +481,7 @@ def _build_scene(source: str, data: dict, overrides: Mapping[str, Any], reading:
     raw_params = data.get("parameters", {})
     if not isinstance(raw_params, dict):
         raise base.error("parameters", raw_params, "a table of named values", "not a table")
-    p_over, e_over, x_over = split_overrides(source, overrides, set(raw_params))
+    p_over, e_over, x_over = split_overrides(source, overrides, set(raw_params), origins)
     x_over.pop("__orientation__", None)
     read = read_parameters(raw_params, source, fixed=p_over, reading=reading)
     meta = parameter_meta(raw_params)

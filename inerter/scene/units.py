@@ -273,3 +273,9 @@ def si_name(dimension: Dimension) -> str:
         if parse(name).dimension == dimension:
             return name
     return base_name(dimension)
+
+
+def for_reading(unit) -> str:
+    """A unit as text for a reader: ``"1"`` (dimensionless; the FMU declares it so, as FMI's
+    ``unit="1"``) and no unit as nothing, so that ``e = 0.5`` is not printed ``e = 0.5 1``."""
+    return "" if unit is None or str(unit).strip() in ("", "1") else str(unit)

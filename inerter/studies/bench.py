@@ -27,6 +27,8 @@ from typing import Callable
 
 import numpy as np
 
+from inerter.common.options import output_path
+
 TARGETS = (1e-3, 1e-6, 1e-9)
 
 #: Tolerances (adaptive methods: rtol, with atol = rtol / 100) and steps (RK4) swept by default.
@@ -426,9 +428,11 @@ def main_bench(argv=None) -> int:
 
 
 def _bench(a, paths, methods, overrides) -> int:
+    if a.out is not None:
+        output_path(a.out)                     # before the runs
     study, model, _, _ = run_study(a.scene, a.stop_time, a.signal, paths, methods, QUICK if a.quick else SWEEPS,
                                    a.budget, overrides)
-    out = Path(a.out or Path("out") / "bench" / model.name)
+    out = Path(a.out) if a.out is not None else Path("out") / "bench" / model.name
     md = write_outputs(study, out, ratio_to="compiled DOP853" if "compiled" in paths else None)
     print(md.read_text().split("## All runs")[0])
     print(f"wrote {md}, {md.with_suffix('.csv')}, {md.with_suffix('.png')}")

@@ -26,6 +26,7 @@ from inerter.studies.sweep import (SweepError, Sweep, _number, add_run_arguments
                     run_sweep, status_code)
 
 from inerter.common.locations import scenarios as _shipped_scenarios
+from inerter.common.options import output_path
 
 #: The shipped scenes: the repository's scenarios/, or their copy in an installed package.
 REPO_SCENARIOS = _shipped_scenarios()
@@ -190,7 +191,7 @@ def main(argv=None) -> int:
         span = (a, b)
     if args.points is not None and args.points < 2:
         raise SweepError(f"--points {args.points}: expected at least 2")
-    out = Path(args.out or Path("out") / "study" / study.name)
+    out = output_path(args.out) if args.out is not None else Path("out") / "study" / study.name
     sweep = make_sweep(study, args.scenarios, args.points, span, parse_set(args.set), args.model,
                        args.stop_time, args.step, args.path)
     report = run_sweep(sweep, out, workers=args.workers, scheduler=args.scheduler,

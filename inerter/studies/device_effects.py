@@ -45,6 +45,7 @@ import numpy as np
 
 from inerter.common.errors import InerterError, shown
 from inerter.common.locations import devices as shipped_devices
+from inerter.common.options import output_path
 from inerter.common.locations import scenarios as _shipped_scenarios
 
 #: The rows: name → (label, effects). Each row is the ideal device plus its effects.
@@ -517,7 +518,7 @@ def main(argv=None) -> int:
     args = device_study_parser().parse_args(argv)
     if args.stop_time is not None and not (args.stop_time > 0 and math.isfinite(args.stop_time)):
         raise DeviceStudyError("--stop-time", "", args.stop_time, "a positive number of seconds", "out of range")
-    out = Path(args.out)
+    out = output_path(args.out)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -7,6 +7,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from inerter.scene.units import for_reading  # noqa: E402
+
 
 def plotted_signals(model) -> list[str]:
     """The signals a scene's metrics look at (a point coordinate first), or its first point."""
@@ -28,8 +30,8 @@ def _relative(model, name, values):
             return values - model.static_value(name), f"{name} − static (m)"
         except Exception:  # no equilibrium: plot the raw signal
             pass
-    unit = model.signals.units[model.signals.index[name]]
-    return values, f"{name} ({unit})"
+    unit = for_reading(model.signals.units[model.signals.index[name]])
+    return values, f"{name} ({unit})" if unit else name
 
 
 def plot_runs(runs, path, title):

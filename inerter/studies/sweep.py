@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 
 from inerter.common.errors import InerterError, SceneError
+from inerter.common.options import output_path
 
 try:  # POSIX: one sweep at a time writes a results file
     import fcntl
@@ -163,9 +164,10 @@ class Sweep:
     stop_time: float | None = None
     step: float | None = None            # FMU communication step (--model fmu)
     path: str = "compiled"               # the solver's path (--model solver): compiled or numpy
+    origins: dict = field(default_factory=dict)   # where each fixed value came from ("--set b=3"), for errors
 
     def __post_init__(self):
-        from inerter.api import load
+        from inerter.api import Model
         from inerter.scene.reader import EXPERIMENT_FIELDS, KNOWN_EFFECTS
 
         self.scene = Path(self.scene).resolve()
@@ -179,7 +181,7 @@ class Sweep:
             raise SweepError("nothing to sweep: give at least one --vary NAME=START:STOP:NUM")
         self.content = self.scene.read_bytes()
         self.digest = hashlib.sha256(self.content).hexdigest()
-        base = load(self.scene, **self.fixed)          # a bad --set is an error of the whole sweep
+        base = Model(self.scene, self.fixed, origins=self.origins)    # a bad --set is an error of the whole sweep
         self.name = base.name
         params = list(base.scene.parameters)
         names = [n for n, _ in self.axes]
@@ -210,7 +212,8 @@ class Sweep:
     def _check_values(self):
         """Every varied value read by the scene's validator (:func:`inerter.scene.reader.build_scene`,
         with the --set values), before any worker starts: a value the scene refuses is the error the
-        scene gives, after the option that gave it (``--vary y0: scene.toml: parameters.y0: ...``)."""
+        scene gives, after the option that gave it (``--vary y0=0: scene.toml: parameters.y0: ...``)."""
+        from inerter.scene.overrides import origin_of
         from inerter.scene.reader import build_scene, read_toml
         source, data = read_toml(self.scene)
         for name, values in self.axes:
@@ -219,10 +222,12 @@ class Sweep:
                 if repr(value) in seen:
                     continue
                 seen.add(repr(value))
+                origin = f"--vary {origin_of(name, value)[len('override '):]}"
                 try:
-                    build_scene(source, data, {**self.fixed, name: value})
-                except SceneError as exc:
-                    raise SweepError(f"--vary {name}: {exc}") from None
+                    build_scene(source, data, {**self.fixed, name: value}, {**self.origins, name: origin})
+                except SceneError as exc:           # named by its option, by the scene reader or here
+                    text = str(exc)
+                    raise SweepError(text if text.startswith(origin + ":") else f"{origin}: {text}") from None
 
     @property
     def settings(self) -> dict:
@@ -956,10 +961,11 @@ def sweep_parser() -> argparse.ArgumentParser:
 
 
 def _sweep(argv) -> int:
-    from inerter.scene.overrides import parse_set
+    from inerter.scene.overrides import parse_set, set_origins
     args = sweep_parser().parse_args(argv)
+    output_path(args.out)
     sweep = Sweep(args.scene, [parse_vary(v) for v in args.vary], parse_set(args.set), args.model,
-                  args.stop_time, args.step, args.path)
+                  args.stop_time, args.step, args.path, origins=set_origins(args.set))
     report = run_sweep(sweep, args.out, workers=args.workers, scheduler=args.scheduler,
                        progress=not args.no_progress, max_runs=args.max_runs, retry_failed=args.retry_failed,
                        dashboard=args.dashboard)
@@ -983,6 +989,8 @@ def sweep_plot_parser() -> argparse.ArgumentParser:
 
 def _sweep_plot(argv) -> int:
     args = sweep_plot_parser().parse_args(argv)
+    if args.out is not None:
+        output_path(args.out, expected="a PNG file path, such as out/sweep/plot.png")
     out = args.out or Path(args.results).parent / f"{_file_part(args.y)}_vs_{_file_part(args.x)}.png"
     out = plot_results(args.results, args.x, args.y, out, hue=args.hue, title=args.title)
     print(f"wrote {out}")

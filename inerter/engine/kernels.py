@@ -2708,7 +2708,9 @@ def _cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol,
 #: The co-simulation step entered from Python (``CompiledStepper.step``), and inlined into the FMU's
 #: native step (:func:`native_step_on`): each kernel call that is not inlined passes every array of
 #: its arguments field by field (P alone is some 150 words), which cost the native step about
-#: 0.8 µs of each communication step through two such calls (lumped_mass_2d, 2026-11-26).
+#: 0.8 µs of each communication step through two such calls (lumped_mass_2d, 2026-11-26). An
+#: inlined kernel's calls keep to 30 arguments: Python compiles a call of more to CALL_FUNCTION_EX
+#: (the arguments as one tuple), which numba's inliner refuses ("Calling a closure with *args").
 cosim_step = njit(cache=True)(_cosim_step)
 _cosim_step_inlined = njit(inline="always")(_cosim_step)
 

@@ -665,13 +665,15 @@ class InerterSlave(Fmi2Slave):
             raise ValueError(f"{self.scene_file}: solver: no such item (got {settings['solver']!r}; "
                              f"expected one of {items})")
         model = self._model_for(self._overrides(settings))
+        path = "compiled" if settings[PATH_SETTING] else "numpy"
+        changed = {field: settings[name] for name, field in SOLVER_SETTINGS.items()
+                   if not _same(settings[name], self._defaults[name])}
+        if not changed:                               # the scene's own solver settings
+            return model.stepper(path=path, stop_time=self._stop_time)
         # The solver settings that differ from the scene's, read and checked as a load with
         # experiment.method/rtol/atol overrides would read them (same defaults, same errors).
-        experiment = model.scene.experiment_with(
-            {field: settings[name] for name, field in SOLVER_SETTINGS.items()
-             if not _same(settings[name], self._defaults[name])})
-        return model.stepper(method=experiment.method, rtol=experiment.rtol, atol=experiment.atol,
-                             path="compiled" if settings[PATH_SETTING] else "numpy",
+        experiment = model.scene.experiment_with(changed)
+        return model.stepper(method=experiment.method, rtol=experiment.rtol, atol=experiment.atol, path=path,
                              stop_time=self._stop_time)
 
     def _initialise(self):

@@ -1123,14 +1123,13 @@ class CompiledStepper(Stepper):
         out = np.empty((1, kernel.ny))
         order = self._order if self._order is not None else _NO_ORDER
         values = np.empty(len(order))
-        A, B, C, E, E3, D, Pm = self._tables
         rtol, atol, max_steps = self._tol
         hdr = rk[0]
         total_before = hdr[_k.RK_TOTAL]
         self._scratch[2][0] = 0.0             # the terminals' gaps at rk's y: computed afresh here
         status, signal_status = _k.cosim_step(
             _RK_CODE[s.method], hdr, rk[1], rk[2], rk[3], rk[4], t_end, np.zeros(1), out, bound, rtol, atol,
-            max_steps, self._rk_inputs, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm, self._monitor,
+            max_steps, self._rk_inputs, float(s.alpha), kernel.params, self._tables, self._monitor,
             self._work, self._need_acc, self._raw, order, values, self._jumps, self._kinks, self._scratch)
         if status:
             why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk[1], hdr[_k.RK_T], int(s.max_steps))

@@ -1053,9 +1053,16 @@ def work_arrays(P, ny, stages):
             np.zeros((stages, ny)), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros(N))
 
 
-@njit(cache=True)
+#: signal_values inlined where the outputs of one state at a time are evaluated (:func:`_signals_at`:
+#: a whole run's samples, a co-simulation step, the FMU's native step), so that its arrays are not
+#: passed field by field once more per sample.
+_signal_values_inlined = njit(inline="always")(signal_values.py_func)
+
+
+@njit(cache=True, inline="always")
 def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
-    """`signal_values` at one state y = [q, v, z]; accelerations from Eq. (33) only when `need_acc`."""
+    """`signal_values` at one state y = [q, v, z]; accelerations from Eq. (33) only when `need_acc`.
+    Inlined where it is called."""
     nq = P[DIMS][N_COORD]
     nv = nq + P[DIMS][N_VELOCITY]
     AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
@@ -1063,7 +1070,7 @@ def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
         st = accelerations(t, y[:nq], y[nq:nv], y[nv:], inputs, alpha, P, AB, rhs, gen, sig_acc)
         if st != OK:
             return st
-    return signal_values(y[:nq], y[nq:nv], y[nv:], sig_acc, P, out)
+    return _signal_values_inlined(y[:nq], y[nq:nv], y[nv:], sig_acc, P, out)
 
 
 @njit(cache=True)
@@ -2574,16 +2581,18 @@ def dense_states(method, nodes, coeffs, count, times, out):
 _rk_advance_inlined = njit(inline="always")(rk_advance.py_func)
 
 
-@njit(cache=True)
+@njit(inline="always")
 def cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-             A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, kinks, scratch):
+             tableau, monitor, work, need_acc, raw, order, values, kinks, scratch):
     """One co-simulation step on the compiled path: :func:`rk_advance` to the one time in `ts`
     (out[0] = y there), running on through the `kinks`, then every output signal there: `raw` in the layout of
-    :func:`signal_values`, `values[i] = raw[order[i]]`. `scratch`: (gaps, z, fresh, keep) of
-    :func:`cosim_scratch`; the gaps are computed at y where fresh[0] is 0, and fresh[0] is 0 again
-    after a failed step (its gaps may be the rejected node's). Returns (integrator status, signal
-    status); NOT_FINITE where the state is not finite."""
+    :func:`signal_values`, `values[i] = raw[order[i]]`. `tableau`: (A, B, C, E, E3, D, P) of the
+    method. `scratch`: (gaps, z, fresh, keep) of :func:`cosim_scratch`; the gaps are computed at y
+    where fresh[0] is 0, and fresh[0] is 0 again after a failed step (its gaps may be the rejected
+    node's). Returns (integrator status, signal status); NOT_FINITE where the state is not finite.
+    Inlined where it is called (:func:`cosim_step`)."""
     gaps, z, fresh, keep = scratch
+    A, B, C, E, E3, Dm, Pm = tableau
     if fresh[0] == 0.0:
         gaps_at(y, P, gaps, z)
         fresh[0] = 1.0
@@ -2610,41 +2619,51 @@ def next_jump(jumps, t):
     return jumps[i] if i < jumps.shape[0] else 0.0
 
 
-@njit(cache=True)
-def cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol, atol, max_steps, inputs, alpha, P,
-               A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, jumps, kinks, scratch):
+@njit(cache=True, inline="always")
+def _restart_at_jump(hdr, y, y_prev, jumps, jump):
+    """Start the integration afresh at the discontinuity `jump` it stands on (RK_STARTED = 0: the
+    next step chooses its size as scipy does, from the state there), the next discontinuity after
+    it becoming RK_JUMP."""
+    for slot in (RK_H, RK_STARTED, RK_DENSE, RK_H_LAST, RK_STEPS, RK_EVALS, RK_HITS, RK_CALM, RK_SMALL):
+        hdr[slot] = 0.0
+    hdr[RK_T_PREV] = hdr[RK_T]
+    hdr[RK_JUMP] = next_jump(jumps, jump)
+    y_prev[:] = y
+
+
+def _cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol, atol, max_steps, inputs, alpha, P,
+                tableau, monitor, work, need_acc, raw, order, values, jumps, kinks, scratch):
     """A co-simulation step to t_end on the running integration (:func:`cosim_rk`), segment by
     segment: a segment ends at its discontinuity (RK_JUMP: a step force's switch, a ground record's
     end on a value other than zero, of the increasing `jumps`), where the integration starts
     afresh, with the step size chosen as scipy does, from the state there, as :func:`integrate_rk`
     over the segments of a whole run; through the `kinks` (a ground record's samples) it runs on
     (:func:`rk_advance`). Steps are clipped to the segment's end, to the kinks and to `t_bound`.
-    `ts` (one slot) and `out` (one row) take the sample; `scratch`: :func:`cosim_scratch`, whose
-    gaps hold on where a segment starts afresh (the state does not change there). Returns
-    (integrator status, signal status)."""
-    P = _unowned(P)                 # entered from Python (_unowned)
+    `ts` (one slot) and `out` (one row) take the sample; `tableau`: (A, B, C, E, E3, D, P) of the
+    method; `scratch`: :func:`cosim_scratch`, whose gaps hold on where a segment starts afresh (the
+    state does not change there). Returns (integrator status, signal status)."""
+    P = _unowned(P)                 # entered from Python (_unowned); a no-op where P is unowned already
     while True:
         jump = hdr[RK_JUMP]
         if jump > 0.0 and hdr[RK_T] >= jump and t_end > jump:
-            hdr[RK_H] = 0.0
-            hdr[RK_STARTED] = 0.0
-            hdr[RK_DENSE] = 0.0
-            hdr[RK_T_PREV] = hdr[RK_T]
-            hdr[RK_H_LAST] = 0.0
-            hdr[RK_STEPS] = 0.0
-            hdr[RK_EVALS] = 0.0
-            hdr[RK_HITS] = 0.0
-            hdr[RK_CALM] = 0.0
-            hdr[RK_SMALL] = 0.0
-            hdr[RK_JUMP] = next_jump(jumps, jump)
-            y_prev[:] = y
+            _restart_at_jump(hdr, y, y_prev, jumps, jump)
             continue
         ts[0] = min(t_end, jump) if jump > 0.0 else t_end
         bound = min(t_bound, jump) if jump > 0.0 else t_bound
         st, sst = cosim_rk(method, hdr, y, f, y_prev, dense, ts, out, bound, rtol, atol, max_steps, inputs, alpha,
-                           P, A, B, C, E, E3, Dm, Pm, monitor, work, need_acc, raw, order, values, kinks, scratch)
+                           P, tableau, monitor, work, need_acc, raw, order, values, kinks, scratch)
         if st != OK or ts[0] == t_end:
             return st, sst
+
+
+#: The co-simulation step entered from Python (``CompiledStepper.step``), and inlined into the FMU's
+#: native step (:func:`native_step_on`): each kernel call that is not inlined passes every array of
+#: its arguments field by field (P alone is some 150 words), which cost the native step about
+#: 0.8 µs of each communication step through two such calls (lumped_mass_2d, 2026-11-26). An
+#: inlined kernel's calls keep to 30 arguments: Python compiles a call of more to CALL_FUNCTION_EX
+#: (the arguments as one tuple), which numba's inliner refuses ("Calling a closure with *args").
+cosim_step = njit(cache=True)(_cosim_step)
+_cosim_step_inlined = njit(inline="always")(_cosim_step)
 
 
 @njit(cache=True)
@@ -2915,7 +2934,7 @@ def native_step3(tab, t, h):
     return native_step_on(tab, t, h, _native_params(tab) + (_i1(tab, S_SPATIAL),))
 
 
-@njit(cache=True)
+@njit(inline="always")
 def native_step_on(tab, t, h, P):
     """One co-simulation step (t, t + h] of the running integration whose arrays `tab` lists: what
     ``CompiledStepper.step`` does while the inputs hold (:func:`cosim_step` with the step bound,
@@ -2969,12 +2988,12 @@ def native_step_on(tab, t, h, P):
         if t_end > bound:                       # the importer went past its stop time
             bound = np.inf
         scratch = _native_scratch(tab, y.shape[0])
-        st, sst = cosim_step(tab[TABLE_METHOD], hdr, y, f, y_prev, dense, t_end, ts, out, bound,
-                             clock[CLOCK_RTOL], clock[CLOCK_ATOL], tab[TABLE_MAX_STEPS], inputs, alpha, P,
-                             _f2(tab, S_TABLEAU), _f1(tab, S_TABLEAU + 1), _f1(tab, S_TABLEAU + 2),
-                             _f1(tab, S_TABLEAU + 3), _f1(tab, S_TABLEAU + 4), _f2(tab, S_TABLEAU + 5),
-                             _f2(tab, S_TABLEAU + 6), _f1(tab, S_MONITOR), work, tab[TABLE_NEED_ACC] != 0, raw, order,
-                             values, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), scratch)
+        tableau = (_f2(tab, S_TABLEAU), _f1(tab, S_TABLEAU + 1), _f1(tab, S_TABLEAU + 2), _f1(tab, S_TABLEAU + 3),
+                   _f1(tab, S_TABLEAU + 4), _f2(tab, S_TABLEAU + 5), _f2(tab, S_TABLEAU + 6))
+        st, sst = _cosim_step_inlined(tab[TABLE_METHOD], hdr, y, f, y_prev, dense, t_end, ts, out, bound,
+                                      clock[CLOCK_RTOL], clock[CLOCK_ATOL], tab[TABLE_MAX_STEPS], inputs, alpha, P,
+                                      tableau, _f1(tab, S_MONITOR), work, tab[TABLE_NEED_ACC] != 0, raw, order,
+                                      values, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), scratch)
         if st != OK or sst != OK:
             scratch[2][0] = 0.0                 # the Python path restores y from the backup
             return 0

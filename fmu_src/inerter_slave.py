@@ -646,8 +646,9 @@ class InerterSlave(Fmi2Slave):
     def _model_for(self, overrides: dict):
         key = tuple(sorted(overrides.items(), key=lambda kv: kv[0]))
         model = self._models.get(key)
-        if model is None:
-            model = inerter.load(self.scene_path, **overrides)
+        if model is None:                             # a value the scene refuses is named as the FMU's
+            model = inerter.Model(self.scene_path, overrides,
+                                  origins={k: f"FMU parameter {k} = {v!r}" for k, v in overrides.items()})
             if len(self._models) > 8:                 # the scene's own model stays
                 for other in [k for k in self._models if k]:
                     del self._models[other]

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import re
 
+import numpy as np
 import pytest
 
 import inerter
@@ -225,3 +226,20 @@ def test_a_run_whose_radau_step_collapses_says_so_and_keeps_its_samples(tmp_path
     assert "spacing between numbers" not in err
     rows = (out / "device_combo_efficiency_series_3d.csv").read_text().splitlines()
     assert len(rows) == 1 + 6                  # the header, t = 0 ... 0.5 ms every 0.1 ms
+
+
+@pytest.mark.parametrize("status", [6, 7])
+def test_the_compiled_loops_stiff_and_collapse_failures_name_the_stiffest_effect_too(tmp_path, status):
+    """The compiled loop's failures 6 (held at DOP853's stability limit) and 7 (step size collapsed)
+    end with the same likely cause as the numpy path's: the series mode √(k_c/(b η_b)) =
+    √(1e9/0.02) = 2.24e5 rad/s (closed form) of the device scene above."""
+    from inerter.engine import compiled
+    model = inerter.load(_efficiency_series_with_parameters(tmp_path), J=1e-5, kc=1e9, eta=0.05, vs=1e-6)
+    kernel = compiled._kernel_for(model.mechanism)
+    mech = model.mechanism
+    y = np.concatenate([mech.q0, mech.v0, mech.z0])       # the state the loop stopped at: t = 0 here
+    text = compiled.failure_text(kernel, status, "DOP853", 1e-9, y, 0.0)
+    assert text.endswith("; the narrowest switch, element 'dev': efficiency.velocity_scale = 1e-06 m/s"), text
+    assert "; likely cause: the stiffest effect, element 'dev': series compliance k_c = 1e+09 N/m on b η_b = 0.02 kg " \
+           "(η_b = 0.05): its mode √(k_c/(b η_b)) = 2.24e+05 rad/s" in text, text
+    assert ("stiff for DOP853" if status == 6 else "DOP853 step size collapsed") in text, text

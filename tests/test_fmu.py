@@ -776,6 +776,8 @@ def test_an_invalid_setting_fails_initialisation_with_fmi2error(fmus, scene, ins
     # The message names the scene's field and the FMU variable with the value set.
     errors = inst.errors()
     assert len(errors) == 1 and field in errors[0] and f"{setting} = {value!r}" in errors[0]
+    if setting in ("b", "M1"):                  # a scene parameter: the value is named as the FMU's
+        assert f"FMU parameter {setting} = {value!r}: " in errors[0], errors[0]
     assert all(math.isnan(v) for v in inst.get(inst.outputs))
     inst.messages.clear()
     raises_status(FMI_DISCARD, inst.fmu.doStep, 0.0, 0.01)    # as before: steps are refused

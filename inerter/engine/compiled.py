@@ -1315,10 +1315,13 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
     element whose terminals were closest in the last good state `y_last` (at `t_last`), the loop
     having stopped within a step of it; where the solve or the step size failed, what in that state
     may have stalled it (``Mechanism.diagnose``: terminals nearly meeting, a device mount near its
-    singularity)."""
+    singularity); where the step size collapsed or the steps read as stiff, the scene's fastest time
+    scale (``Mechanism.stiffest``: a device's series mode, the narrowest tanh switch)."""
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)
     if status in (2, 3, 4, 7) and y_last is not None:         # as the numpy path: what may have stalled it
         text += kernel.mech.diagnose(y_last)        # it reads the state's q
+    if status in (6, 7):                            # as the numpy path: StiffForMethod, StepCollapse
+        text += kernel.mech.stiffest()
     return text
 
 

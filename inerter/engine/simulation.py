@@ -196,6 +196,10 @@ class StepCollapse(SimulationError):
     (a stiff effect, a switch narrower than the steps) or approaches a singularity."""
 
 
+class StiffForMethod(SimulationError):
+    """An explicit method's step size is held at its stability limit (Hairer's test): a stiff effect."""
+
+
 #: scipy's words when an implicit method's step size reaches the spacing of floating-point numbers.
 SCIPY_COLLAPSE = "Required step size is less than spacing between numbers."
 
@@ -250,7 +254,7 @@ class StepMonitor:
             self.calm = 0
             self.hits += 1
             if self.hits >= STIFFNESS_HITS:
-                raise SimulationError(
+                raise StiffForMethod(
                     f"the scene is stiff for {self.method}: its step size ({h:.3g} s) is held at the method's "
                     f"stability limit (h·|λ| ≈ {hlam:.3g} > {self.bound:g} in {self.hits} steps in a row, "
                     f"Hairer's test) after {self.steps} steps; use method = \"Radau\" or \"BDF\" (implicit)",
@@ -395,7 +399,7 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
         message = str(exc)
         if solver is not None and not isinstance(exc, TerminalsMeet) and "terminals" not in message:
             message += mech.diagnose(solver.y)
-        if isinstance(exc, StepCollapse):
+        if isinstance(exc, (StepCollapse, StiffForMethod)):
             message += mech.stiffest()
     cpu = _time.process_time() - start
     for i in range(1, k):

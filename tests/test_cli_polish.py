@@ -243,3 +243,14 @@ def test_the_compiled_loops_stiff_and_collapse_failures_name_the_stiffest_effect
     assert "; likely cause: the stiffest effect, element 'dev': series compliance k_c = 1e+09 N/m on b η_b = 0.02 kg " \
            "(η_b = 0.05): its mode √(k_c/(b η_b)) = 2.24e+05 rad/s" in text, text
     assert ("stiff for DOP853" if status == 6 else "DOP853 step size collapsed") in text, text
+
+
+@pytest.mark.parametrize("command", [["bench", str(SCENARIOS / "two_bar_2d.toml")], ["study", "two_bar_b"]])
+def test_bench_and_study_name_the_set_that_gave_a_refused_value(tmp_path, capsys, command):
+    """k = -1 N/m is out of the spring's range: the error is the field's, with the --set in front (it
+    read 'override k=-1'); nothing runs."""
+    out = tmp_path / "out"
+    assert main(command + ["--set", "k=-1", "--out", str(out)]) == 2
+    err = one_line_error(capsys, "inerter: error: --set k=-1: ", "elements.", "out of range (got -1.0")
+    assert "override k=-1" not in err
+    assert not out.exists()

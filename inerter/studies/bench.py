@@ -114,11 +114,12 @@ def signal_extractor(mech, signal: str | None) -> Callable[[np.ndarray], np.ndar
     return extract
 
 
-def reference_states(path, overrides, stop_time, output_interval):
-    """The oracle's samples at rtol 1e-12, atol 1e-14 (DOP853)."""
-    from inerter.api import load
+def reference_states(path, overrides, stop_time, output_interval, origins=None):
+    """The oracle's samples at rtol 1e-12, atol 1e-14 (DOP853). `origins`: where each override came
+    from, as errors name it (``{"b": "--set b=20"}``)."""
+    from inerter.api import Model
 
-    oracle = load(path, **overrides).oracle()
+    oracle = Model(path, overrides, origins=origins).oracle()
     result = oracle.simulate(stop_time=stop_time, output_interval=output_interval, rtol=1e-12, atol=1e-14,
                              metrics=False)
     if result.status != "ok":
@@ -324,16 +325,17 @@ def write_outputs(study: Study, out: Path, ratio_to: str | None = None, title: s
 
 
 def run_study(scene, stop_time=None, signal=None, paths=("numpy", "compiled"), methods=tuple(SWEEPS),
-              sweeps=None, budget=30.0, overrides=None, log=print):
-    """Reference + sweeps for one scene. Returns (study, model, reference states, extractor)."""
-    from inerter.api import load
+              sweeps=None, budget=30.0, overrides=None, log=print, origins=None):
+    """Reference + sweeps for one scene. Returns (study, model, reference states, extractor).
+    `origins`: where each override came from, as errors name it (:func:`reference_states`)."""
+    from inerter.api import Model
 
     overrides = dict(overrides or {})
-    model = load(scene, **overrides)
+    model = Model(scene, overrides, origins=origins)
     stop = float(stop_time if stop_time is not None else model.scene.experiment.stop_time)
     interval = model.scene.experiment.output_interval
     t0 = time.perf_counter()
-    reference = reference_states(scene, overrides, stop, interval)
+    reference = reference_states(scene, overrides, stop, interval, origins)
     log(f"{model.name}: oracle reference over 0-{stop:g} s in {time.perf_counter() - t0:.1f} s")
     extract = signal_extractor(model.mechanism, signal)
     study = Study(model.name, stop, signal or "every point's position")
@@ -410,7 +412,7 @@ def bench_parser() -> argparse.ArgumentParser:
 
 def main_bench(argv=None) -> int:
     from inerter.common.errors import InerterError
-    from inerter.scene.overrides import parse_set
+    from inerter.scene.overrides import parse_set, set_origins
     p = bench_parser()
     a = p.parse_args(argv)
     methods = [m.strip() for m in a.methods.split(",") if m.strip()]
@@ -421,17 +423,17 @@ def main_bench(argv=None) -> int:
     if any(x not in ("numpy", "compiled", "fmu") for x in paths):
         p.error("--paths: expected some of numpy, compiled, fmu")
     try:
-        return _bench(a, paths, methods, parse_set(a.set))
+        return _bench(a, paths, methods, parse_set(a.set), set_origins(a.set))
     except InerterError as exc:
         print(f"inerter: error: {exc}", file=sys.stderr)
         return 2
 
 
-def _bench(a, paths, methods, overrides) -> int:
+def _bench(a, paths, methods, overrides, origins=None) -> int:
     if a.out is not None:
         output_path(a.out)                     # before the runs
     study, model, _, _ = run_study(a.scene, a.stop_time, a.signal, paths, methods, QUICK if a.quick else SWEEPS,
-                                   a.budget, overrides)
+                                   a.budget, overrides, origins=origins)
     out = Path(a.out) if a.out is not None else Path("out") / "bench" / model.name
     md = write_outputs(study, out, ratio_to="compiled DOP853" if "compiled" in paths else None)
     print(md.read_text().split("## All runs")[0])

@@ -87,12 +87,12 @@ def scene_path(study: Study, scenarios=None) -> Path:
 
 
 def make_sweep(study: Study, scenarios=None, points=None, span=None, fixed=None, model="solver",
-               stop_time=None, step=None, path="compiled") -> Sweep:
+               stop_time=None, step=None, path="compiled", origins=None) -> Sweep:
     n = points or study.points
     start, stop = span or (study.start, study.stop)
     _, xs = parse_vary(f"{study.x}={start}:{stop}:{n}")
     return Sweep(scene_path(study, scenarios), [(study.x, xs), (CORRECTION, [True, False])],
-                 {**study.fixed, **(fixed or {})}, model, stop_time, step, path)
+                 {**study.fixed, **(fixed or {})}, model, stop_time, step, path, origins=dict(origins or {}))
 
 
 def study_table(study: Study, sweep: Sweep, results_csv) -> dict:
@@ -179,7 +179,7 @@ def study_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    from inerter.scene.overrides import parse_set
+    from inerter.scene.overrides import parse_set, set_origins
     args = study_parser().parse_args(argv)
     study = STUDIES[args.study]
     span = None
@@ -193,7 +193,7 @@ def main(argv=None) -> int:
         raise SweepError(f"--points {args.points}: expected at least 2")
     out = output_path(args.out) if args.out is not None else Path("out") / "study" / study.name
     sweep = make_sweep(study, args.scenarios, args.points, span, parse_set(args.set), args.model,
-                       args.stop_time, args.step, args.path)
+                       args.stop_time, args.step, args.path, origins=set_origins(args.set))
     report = run_sweep(sweep, out, workers=args.workers, scheduler=args.scheduler,
                        progress=not args.no_progress, max_runs=args.max_runs, retry_failed=args.retry_failed,
                        dashboard=args.dashboard)

@@ -254,3 +254,29 @@ def test_bench_and_study_name_the_set_that_gave_a_refused_value(tmp_path, capsys
     err = one_line_error(capsys, "inerter: error: --set k=-1: ", "elements.", "out of range (got -1.0")
     assert "override k=-1" not in err
     assert not out.exists()
+
+
+PEND_COMPACT = ROOT / "tests" / "data" / "device_pendulum_3d_compact.toml"
+
+
+@pytest.mark.parametrize("edit, field, expected", [
+    # without a mount the model holds the housing's and the rod's spin about the device's axis at
+    # zero: their axial inertias would act on nothing
+    (lambda t: t.replace("[elements.device.device.mount]\naxis = [1, 0, 0]", ""),
+     "elements.device.device.housing.axial_inertia", "axial inertia without a mount"),
+    (lambda t: t.replace("[elements.device.device.mount]\naxis = [1, 0, 0]", "").replace(
+        'transverse_inertia = "It_h"\naxial_inertia = "Ja_h"', 'transverse_inertia = "It_h"'),
+     "elements.device.device.rod.axial_inertia", "axial inertia without a mount"),
+    # a centre places the flywheel's mass: without one it places nothing
+    (lambda t: t.replace('mass = "m_fw"\n', ""), "elements.device.device.flywheel.centre", "centre without mass")])
+def test_a_device_field_that_would_act_on_nothing_is_refused(tmp_path, edit, field, expected):
+    """tests/data/device_pendulum_3d_compact.toml (loads as it is) with its mount, or its flywheel's
+    mass, taken out: the field that then does nothing is refused, named with its value."""
+    inerter.load(PEND_COMPACT)
+    text = PEND_COMPACT.read_text(encoding="utf-8")
+    changed = edit(text)
+    assert changed != text
+    with pytest.raises(SceneError) as info:
+        inerter.load(scene_with(tmp_path, changed))
+    message = str(info.value)
+    assert f": {field}: {expected} (got " in message and "\n" not in message, message

@@ -745,6 +745,17 @@ def check_device(effects: dict):
     if "backlash" in effects and "compliance" not in effects:
         return ("backlash", "gap", effects["backlash"].get("gap"),
                 "device.compliance beside it (the gap is in the series connection)", "backlash without compliance")
+    for part in ("housing", "rod"):
+        spin = effects.get(part, {}).get("axial_inertia")
+        if spin and "mount" not in effects:
+            # without a mount the model holds the parts' spin about the device's axis at zero (the
+            # terminals take the screw's reaction moment): an axial inertia there acts on nothing
+            return (part, "axial_inertia", spin, "device.mount beside it (only a mount lets the housing and the "
+                    "rod spin about the device's axis; 3D only), or no axial_inertia", "axial inertia without a mount")
+    flywheel = effects.get("flywheel", {})
+    if flywheel.get("centre") is not None and not flywheel.get("mass"):
+        return ("flywheel", "centre", flywheel["centre"], "flywheel.mass > 0 beside it (the centre places the "
+                "flywheel's mass along the device), or no centre", "centre without mass")
     if "dissipated_energy" in effects and not any(n in effects for n in ("friction", "end_stops", "fluid",
                                                                           "compliance", "efficiency")):
         return ("dissipated_energy", "", {}, "a dissipative effect beside it (friction, end_stops, fluid, "

@@ -280,3 +280,17 @@ def test_a_device_field_that_would_act_on_nothing_is_refused(tmp_path, edit, fie
         inerter.load(scene_with(tmp_path, changed))
     message = str(info.value)
     assert f": {field}: {expected} (got " in message and "\n" not in message, message
+
+
+def test_a_collapse_the_step_monitor_finds_says_what_may_have_stalled_it_once(monkeypatch):
+    """The monitor's own collapse (COLLAPSE_STEPS steps in a row below COLLAPSE_RELATIVE·max(1 s, t),
+    made to fire after 3 steps here) carries what Mechanism.diagnose found; the run's message gives
+    it once (it was appended a second time)."""
+    from inerter.engine import simulation as sim
+    model = inerter.load(LUMPED)
+    monkeypatch.setattr(sim, "COLLAPSE_RELATIVE", 1e3)
+    monkeypatch.setattr(sim, "COLLAPSE_STEPS", 3)
+    monkeypatch.setattr(type(model.mechanism), "diagnose", lambda self, y: "; MARK: what may have stalled it")
+    result = model.simulate(stop_time=1.0, path="numpy", metrics=False)
+    assert result.status == "failed" and "step size collapsed" in result.message, result.message
+    assert result.message.count("; MARK: what may have stalled it") == 1, result.message

@@ -398,7 +398,8 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
         status = "failed"
         message = str(exc)
         if solver is not None and not isinstance(exc, TerminalsMeet) and "terminals" not in message:
-            message += mech.diagnose(solver.y)
+            found = mech.diagnose(solver.y)
+            message += found if found not in message else ""    # the monitor's collapse says it already
         if isinstance(exc, (StepCollapse, StiffForMethod)):
             message += mech.stiffest()
     cpu = _time.process_time() - start

@@ -33,13 +33,6 @@ def skew(u):
     return np.array(((0.0, -u[2], u[1]), (u[2], 0.0, -u[0]), (-u[1], u[0], 0.0)))
 
 
-@_scalar
-def matrix9_apply(A, x, y, z):
-    """A (x, y, z) for a rotation A given as a row-major 9-tuple: a direction fixed in a body, in
-    the global frame."""
-    return A[0] * x + A[1] * y + A[2] * z, A[3] * x + A[4] * y + A[5] * z, A[6] * x + A[7] * y + A[8] * z
-
-
 # -- planar bodies (Sec. 3.1) -----------------------------------------------------------------------
 @_scalar
 def planar_matrix9(theta):

@@ -38,7 +38,6 @@ body a, independently.)
 from __future__ import annotations
 
 from inerter.common.errors import MIN_LENGTH
-from inerter.common.rotations import matrix9_apply
 from inerter.elements.base import law, rarely
 from inerter.elements.layout import DIRECTION, FIXED_DIRECTION, SLIDER
 
@@ -54,6 +53,12 @@ def turns_with_a(row):
 
 
 @law
+def body_axis(A, nx, ny, nz):
+    """ê = A n̄: a direction n̄ fixed in a body of rotation A (row-major), in the global frame."""
+    return A[0] * nx + A[1] * ny + A[2] * nz, A[3] * nx + A[4] * ny + A[5] * nz, A[6] * nx + A[7] * ny + A[8] * nz
+
+
+@law
 def acting_line(row, A, rx, ry, rz, distance):
     """(L, ê, meets): the L the element's law reads and the unit vector ê = (ex, ey, ez) it acts
     along (module docstring), from r and its length `distance` = |r|; `meets`: the terminals are
@@ -61,7 +66,7 @@ def acting_line(row, A, rx, ry, rz, distance):
     read only where :func:`turns_with_a`."""
     # the two fixed lines are rare: marked so, the kernels lay the r̂ line out as their straight path
     if rarely(row[SLIDER] != 0.0):
-        ex, ey, ez = matrix9_apply(A, row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2])
+        ex, ey, ez = body_axis(A, row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2])
         return ex * rx + ey * ry + ez * rz, ex, ey, ez, False
     meets = not distance > MIN_LENGTH
     L = MIN_LENGTH if meets else distance

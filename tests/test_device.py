@@ -20,6 +20,7 @@ import pytest
 import inerter
 from inerter import elements
 from inerter.common.errors import SceneError
+from inerter.common.inlined import compiled_copy
 from inerter.elements import device as dev
 from inerter.elements import dispatch, layout
 from inerter.elements import inerter as inerter_law
@@ -58,7 +59,7 @@ def test_friction_is_regularised_coulomb_plus_viscous(v):
     """Closed form: F_c tanh(v/v_s) + c_f v, within 2 F_c e^{−2|v|/v_s} of F_c sgn v + c_f v."""
     Fc, cf, vs = 3.0, 0.5, 1e-3
     row = _row(_device(friction=dict(coulomb=Fc, viscous=cf, velocity_scale=vs)))
-    for law in (dev.friction, dev.friction.py_func):
+    for law in (compiled_copy(dev.friction), dev.friction.py_func):
         F = law(row, v)
         assert F == pytest.approx(Fc * math.tanh(v / vs) + cf * v, rel=1e-15, abs=1e-300)
         assert abs(F - (Fc * np.sign(v) + cf * v)) <= 2.0 * Fc * math.exp(-2.0 * abs(v) / vs) + 1e-15
@@ -127,16 +128,16 @@ def test_inerter_law_adds_the_device_and_its_outputs():
     stop, stop_loss = 1e4 * 0.02 + 50.0 * 0.02 * 0.4, 50.0 * 0.02 * 0.4 ** 2
     friction = 2.0 * math.tanh(40.0) + 0.3 * 0.4
     code = elements.CODE["inerter"]
-    for force in (inerter_law.force, inerter_law.force.py_func):
+    for force in (compiled_copy(inerter_law.force), inerter_law.force.py_func):
         assert force(row, L, Ldot, an, perp2) == pytest.approx(b * (an + perp2 / L) + friction + stop, rel=1e-13)
-    assert dispatch.force(code, row, L, Ldot, an, perp2) == inerter_law.force.py_func(row, L, Ldot, an, perp2)
+    assert compiled_copy(dispatch.force)(code, row, L, Ldot, an, perp2) == inerter_law.force.py_func(row, L, Ldot, an, perp2)
     assert inerter_law.energy(row, L, Ldot) == pytest.approx(0.5 * b * Ldot ** 2 + 0.5 * 1e4 * 0.02 ** 2, rel=1e-13)
     names = [s for s, _, _ in d.outputs()]
     assert names == ["w_flywheel", "f_friction", "f_stop", "p_loss"]
     expected = [2 * math.pi / 0.02 * Ldot, friction, stop, friction * Ldot + stop_loss]
     none = np.zeros(0)                               # no internal states
     gq = 0.3                                         # gᵀq̈: read only by a screw efficiency's outputs
-    for extra in (lambda out: dispatch.extra_outputs(code, row, L, Ldot, an, perp2, gq, none, out, 0),
+    for extra in (lambda out: compiled_copy(dispatch.extra_outputs)(code, row, L, Ldot, an, perp2, gq, none, out, 0),
                   lambda out: inerter_law.extra_outputs.py_func(row, L, Ldot, an, perp2, gq, none, out, 0)):
         out = np.full(6, np.nan)
         assert extra(out) == 4

@@ -18,6 +18,7 @@ import pytest
 
 import inerter
 from inerter.common.errors import InerterError, SceneError, SimulationError
+from inerter.common.inlined import compiled_copy
 from inerter.elements import device as dev
 from inerter.elements import layout
 from inerter.elements import inerter as inerter_law
@@ -115,7 +116,7 @@ def test_the_efficiency_law_and_its_mode():
     L̇·L̈ < 0; the stored mode is s = sign(L̈) (+1 at the start, kept at L̈ = 0); the loss
     (b_eff − b) L̈ L̇ ≥ 0 in both; settle flips s once (a solve to repeat) and then agrees."""
     row = _row(_device(efficiency=dict(forward=0.8, backward=0.6)), b=2.0)
-    for fn in (lambda f, *a: f(*a), lambda f, *a: f.py_func(*a)):
+    for fn in (lambda f, *a: compiled_copy(f)(*a), lambda f, *a: f.py_func(*a)):
         r = row.copy()
         assert r[layout.EFFICIENCY_MODE] == 1.0 and r[layout.EFFICIENCY_SCALE] == 0.0
         assert fn(dev.inertance, r, 0.0) == 2.0 / 0.8 == fn(dev.inertance, r, 0.5)
@@ -140,7 +141,7 @@ def test_the_regularised_law_is_smooth_passive_and_tends_to_the_switch(eta_f, et
     b, vs = 2.0, 1e-3
     row = _row(_device(efficiency=dict(forward=eta_f, backward=eta_b, velocity_scale=vs)), b=b)
     alpha, beta = 1.0 / eta_f - 1.0, 1.0 - eta_b
-    for fn in (lambda f, *a: f(*a), lambda f, *a: f.py_func(*a)):
+    for fn in (lambda f, *a: compiled_copy(f)(*a), lambda f, *a: f.py_func(*a)):
         for s in (1.0, -1.0):
             r = row.copy()
             r[layout.EFFICIENCY_MODE] = s
@@ -630,7 +631,7 @@ def test_the_series_law_is_explicit_and_passive():
     for vs in (0.0, 1e-2):
         row = _row(_device(friction=dict(coulomb=Fc, velocity_scale=vsf), compliance=dict(stiffness=kc, damping=cc),
                            efficiency=dict(forward=ETA_F, backward=ETA_B, velocity_scale=vs)), b=b)
-        for fn in (lambda f, *a: f(*a), lambda f, *a: f.py_func(*a)):
+        for fn in (lambda f, *a: compiled_copy(f)(*a), lambda f, *a: f.py_func(*a)):
             assert fn(dev.inertance, row, 0.3) == 0.0 and fn(dev.settle, row, 0.3, -2.0) == 0
             assert not fn(dev.mode_solved, row)
             for s in (-2e-3, 0.0, 1e-3):

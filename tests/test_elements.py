@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from inerter.common.inlined import compiled_copy
 from inerter import elements
 from inerter.elements import dispatch, generate, layout
 from inerter.scene.reader import ELEMENT_TYPES
@@ -58,7 +59,7 @@ def test_the_inerter_law_is_b_times_the_second_derivative_of_the_length(t):
     an = float(rdd @ rhat)
     perp2 = float(rd @ rd) - Ldot * Ldot
     law = elements.MODULE["inerter"]
-    for run in (law.force, law.force.py_func):
+    for run in (compiled_copy(law.force), law.force.py_func):
         assert run(_row(b), L, Ldot, an, perp2) == pytest.approx(b * Ldd, rel=1e-13, abs=1e-13)
         assert run(_row(b, centripetal=False), L, Ldot, an, perp2) == pytest.approx(
             b * float(rdd @ rhat), rel=1e-13)
@@ -85,15 +86,16 @@ def test_rotational_laws():
 
 
 def test_the_dispatch_calls_each_kind_by_its_code():
+    """The dispatch, compiled as the kernels compile it, gives each kind's law run as written."""
     L, Ld, an, perp2 = 1.2, 0.4, -0.7, 0.09
     for name, code in elements.CODE.items():
         module = elements.MODULE[name]
         if module.KIND.family == elements.TRANSLATIONAL:
             row = _row(2.0, 0.5)
-            assert dispatch.force(code, row, L, Ld, an, perp2) == module.force.py_func(row, L, Ld, an, perp2)
-            assert dispatch.inertance(code, row, Ld) == module.inertance.py_func(row, Ld)
-            assert dispatch.energy(code, row, L, Ld) == module.energy.py_func(row, L, Ld)
+            assert compiled_copy(dispatch.force)(code, row, L, Ld, an, perp2) == module.force.py_func(row, L, Ld, an, perp2)
+            assert compiled_copy(dispatch.inertance)(code, row, Ld) == module.inertance.py_func(row, Ld)
+            assert compiled_copy(dispatch.energy)(code, row, L, Ld) == module.energy.py_func(row, L, Ld)
         else:
             row = np.array([2.0, 0.5])
-            assert dispatch.torque(code, row, L, Ld) == module.torque.py_func(row, L, Ld)
-            assert dispatch.rotational_energy(code, row, L, Ld) == module.energy.py_func(row, L, Ld)
+            assert compiled_copy(dispatch.torque)(code, row, L, Ld) == module.torque.py_func(row, L, Ld)
+            assert compiled_copy(dispatch.rotational_energy)(code, row, L, Ld) == module.energy.py_func(row, L, Ld)

@@ -12,14 +12,15 @@ import math
 import numpy as np
 import pytest
 
+from inerter.common.inlined import compiled_copy
 from inerter.common.errors import MIN_LENGTH
 from inerter.common.rotations import axis_angle_matrix, planar_matrix9
 from inerter.elements import layout, terminals
 
 
 def _versions(name):
-    compiled = getattr(terminals, name)
-    return [compiled, compiled.py_func]
+    law = getattr(terminals, name)
+    return [compiled_copy(law), law.py_func]
 
 
 def _row(fixed=None, slider=None):
@@ -98,7 +99,7 @@ def test_turning_axis_2d(version):
     acting_line, turning_axis = _versions("acting_line")[version], _versions("turning_axis")[version]
     theta, thetadot = 0.7, -1.3
     n2, r2, rd2 = np.array([0.6, 0.8, 0.0]), np.array([1.5, -0.4, 0.0]), np.array([0.3, 0.9, 0.0])
-    A = planar_matrix9(theta) if version == 0 else planar_matrix9.py_func(theta)
+    A = compiled_copy(planar_matrix9)(theta) if version == 0 else planar_matrix9.py_func(theta)
     L, ex, ey, ez, _ = acting_line(_row(slider=n2), A, *r2, 0.0)
     cx, cy, cz, *rd_new = turning_axis(A, ex, ey, ez, *r2, 0.0, 0.0, thetadot, *rd2)
     # closed form: ∂L/∂θ = (A_θ n̄)·r, A_θ n̄ the axis turned by +90°

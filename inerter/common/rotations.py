@@ -11,14 +11,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from inerter.common.errors import SimulationError
+from inerter.common.inlined import inlined
 
 
 def _scalar(fn):
-    """A scalar kinematic function, compiled for the kernels (inlined where they call it)."""
-    return njit(cache=True, inline="always")(fn)
+    """A scalar kinematic function, inlined by the kernels where they call it and run as written
+    from Python."""
+    return inlined(fn)
 
 #: |sin θ| below which Z-X-Z Euler angles are taken to be at their singularity.
 EULER_SINGULARITY = 1e-6
@@ -31,6 +32,20 @@ def cross(a, b):
 
 def skew(u):
     return np.array(((0.0, -u[2], u[1]), (u[2], 0.0, -u[0]), (-u[1], u[0], 0.0)))
+
+
+@_scalar
+def matrix9_apply(A, x, y, z):
+    """A (x, y, z) for a rotation A given as a row-major 9-tuple: a direction fixed in a body, in
+    the global frame."""
+    return A[0] * x + A[1] * y + A[2] * z, A[3] * x + A[4] * y + A[5] * z, A[6] * x + A[7] * y + A[8] * z
+
+
+@_scalar
+def matrix9_apply_transposed(A, x, y, z):
+    """Aᵀ (x, y, z) for a rotation A given as a row-major 9-tuple: a global direction in the body's
+    frame."""
+    return A[0] * x + A[3] * y + A[6] * z, A[1] * x + A[4] * y + A[7] * z, A[2] * x + A[5] * y + A[8] * z
 
 
 # -- planar bodies (Sec. 3.1) -----------------------------------------------------------------------

@@ -13,9 +13,11 @@ import math
 from dataclasses import dataclass
 
 from llvmlite import ir
-from numba import njit, types
+from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic, overload
+
+from inerter.common.inlined import inlined
 
 #: The families of element kinds: two-terminal elements acting along the line between their
 #: terminals (uniaxial, Sec. 2.2), and rotational ones between two bodies' orientations.
@@ -23,8 +25,9 @@ TRANSLATIONAL, ROTATIONAL = "translational", "rotational"
 
 
 def law(fn):
-    """Compile a law for the kernels (inlined where they call it; cached on disk)."""
-    return njit(cache=True, inline="always")(fn)
+    """A law for the kernels, which inline it where they call it; Python runs it as written
+    (:func:`inerter.common.inlined.inlined`)."""
+    return inlined(fn)
 
 
 def rarely(condition):

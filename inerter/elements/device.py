@@ -205,8 +205,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
-from numba import njit
-
+from inerter.common.inlined import not_inlined
 from inerter.elements.base import Parameter, law
 from inerter.elements.layout import (BACKLASH, COEFFICIENT, COULOMB, DEVICE, EFFICIENCY, EFFICIENCY_MODE,
                                      EFFICIENCY_SCALE, ETA_BACKWARD, ETA_FORWARD, FLUID, FLUID_LINEAR,
@@ -231,7 +230,7 @@ MODE_SOLVES = 8
 
 def entry(fn):
     """Compile a device law that the inerter's law calls without inlining it (cached on disk)."""
-    return njit(cache=True)(fn)
+    return not_inlined(fn)
 
 
 @law

@@ -38,6 +38,7 @@ body a, independently.)
 from __future__ import annotations
 
 from inerter.common.errors import MIN_LENGTH
+from inerter.common.rotations import matrix9_apply, matrix9_apply_transposed
 from inerter.elements.base import law, rarely
 from inerter.elements.layout import DIRECTION, FIXED_DIRECTION, SLIDER
 
@@ -53,12 +54,6 @@ def turns_with_a(row):
 
 
 @law
-def body_axis(A, nx, ny, nz):
-    """ê = A n̄: a direction n̄ fixed in a body of rotation A (row-major), in the global frame."""
-    return A[0] * nx + A[1] * ny + A[2] * nz, A[3] * nx + A[4] * ny + A[5] * nz, A[6] * nx + A[7] * ny + A[8] * nz
-
-
-@law
 def acting_line(row, A, rx, ry, rz, distance):
     """(L, ê, meets): the L the element's law reads and the unit vector ê = (ex, ey, ez) it acts
     along (module docstring), from r and its length `distance` = |r|; `meets`: the terminals are
@@ -66,7 +61,7 @@ def acting_line(row, A, rx, ry, rz, distance):
     read only where :func:`turns_with_a`."""
     # the two fixed lines are rare: marked so, the kernels lay the r̂ line out as their straight path
     if rarely(row[SLIDER] != 0.0):
-        ex, ey, ez = body_axis(A, row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2])
+        ex, ey, ez = matrix9_apply(A, row[DIRECTION], row[DIRECTION + 1], row[DIRECTION + 2])
         return ex * rx + ey * ry + ez * rz, ex, ey, ez, False
     meets = not distance > MIN_LENGTH
     L = MIN_LENGTH if meets else distance
@@ -83,9 +78,7 @@ def turning_axis(A, ex, ey, ez, rx, ry, rz, wx, wy, wz, rdx, rdy, rdz):
     ω̄ = (wx, wy, wz)): (c̄, ṙ + (ω̄·c̄) ê) with c̄ = A_aᵀ(ê × r) = ∂L/∂φ̄_a, the term on H's
     rotation columns of a (module docstring)."""
     px, py, pz = ey * rz - ez * ry, ez * rx - ex * rz, ex * ry - ey * rx
-    cx = A[0] * px + A[3] * py + A[6] * pz
-    cy = A[1] * px + A[4] * py + A[7] * pz
-    cz = A[2] * px + A[5] * py + A[8] * pz
+    cx, cy, cz = matrix9_apply_transposed(A, px, py, pz)
     rate = wx * cx + wy * cy + wz * cz
     return cx, cy, cz, rdx + rate * ex, rdy + rate * ey, rdz + rate * ez
 

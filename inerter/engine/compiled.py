@@ -75,7 +75,7 @@ def kernel_sources() -> list[Path]:
     """The files whose code the kernels compile: :mod:`inerter.engine.kernels`, the element kinds'
     laws and their dispatch (:mod:`inerter.elements`), the shared constants and orientation kinematics."""
     package = Path(__file__).resolve().parents[1]
-    return ([Path(__file__).with_name("kernels.py"), package / "common" / "errors.py",
+    return ([Path(__file__).with_name("kernels.py"), package / "common" / "errors.py", package / "common" / "inlined.py",
              package / "common" / "rotations.py", package / "scene" / "ground_motion.py"]
             + sorted((package / "elements").glob("*.py")))
 

@@ -19,8 +19,8 @@ from numba.extending import intrinsic, overload
 from inerter.scene.ground_motion import (TERM_AMPLITUDE, TERM_AXIS, TERM_FREQUENCY, TERM_PHASE, TERM_START,
                                          TERM_STOP, burst)
 from inerter.common.rotations import (EULER_SINGULARITY, euler_angles9, euler_matrix9, euler_rates,
-                                       planar_matrix9, quaternion_matrix9, quaternion_of_matrix9,
-                                       quaternion_rates)
+                                       matrix9_apply, matrix9_apply_transposed, planar_matrix9,
+                                       quaternion_matrix9, quaternion_of_matrix9, quaternion_rates)
 
 from inerter.elements import device_inertia, terminals
 from inerter.elements import dispatch as law
@@ -803,7 +803,7 @@ def _terminal3(q, v, body, lx, ly, lz, H, col, rv, vv, acc):
         for j in range(3):
             H[j, col + j] = 1.0
             cx, cy, cz = _cross(1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0, lx, ly, lz)
-            H[0, col + 3 + j], H[1, col + 3 + j], H[2, col + 3 + j] = _mul(A, cx, cy, cz)
+            H[0, col + 3 + j], H[1, col + 3 + j], H[2, col + 3 + j] = matrix9_apply(A, cx, cy, cz)
 
 
 @njit(cache=True, inline="always")
@@ -819,7 +819,7 @@ def _mount3(q, v, body, row, G, a1, a1d, a1dd):
     a1[0], a1[1], a1[2], a1d[0], a1d[1], a1d[2], a1dd[0], a1dd[1], a1dd[2] = _vector(A, wx, wy, wz, sx, sy, sz)
     for j in range(3):
         cx, cy, cz = _cross(1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0, sx, sy, sz)
-        G[0, 3 + j], G[1, 3 + j], G[2, 3 + j] = _mul(A, cx, cy, cz)
+        G[0, 3 + j], G[1, 3 + j], G[2, 3 + j] = matrix9_apply(A, cx, cy, cz)
 
 
 @njit(cache=True)
@@ -1139,18 +1139,6 @@ def _omega(v, body):
 
 
 @njit(cache=True, inline="always")
-def _mul(A, x, y, z):
-    """A (x, y, z)."""
-    return (A[0] * x + A[1] * y + A[2] * z, A[3] * x + A[4] * y + A[5] * z, A[6] * x + A[7] * y + A[8] * z)
-
-
-@njit(cache=True, inline="always")
-def _tmul(A, x, y, z):
-    """Aᵀ (x, y, z)."""
-    return (A[0] * x + A[3] * y + A[6] * z, A[1] * x + A[4] * y + A[7] * z, A[2] * x + A[5] * y + A[8] * z)
-
-
-@njit(cache=True, inline="always")
 def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
@@ -1158,18 +1146,18 @@ def _cross(ax, ay, az, bx, by, bz):
 @njit(cache=True, inline="always")
 def _wcol(A, lx, ly, lz, sx, sy, sz):
     """ū × (Aᵀ s): the ω-columns of sᵀ H for a point ū (H = [I, −A ũ], Eq. 22 with body-frame ω)."""
-    tx, ty, tz = _tmul(A, sx, sy, sz)
+    tx, ty, tz = matrix9_apply_transposed(A, sx, sy, sz)
     return _cross(lx, ly, lz, tx, ty, tz)
 
 
 @njit(cache=True, inline="always")
 def _vector(A, wx, wy, wz, sx, sy, sz):
     """A body-fixed vector s = A s̄, its rate A(ω × s̄) and its acceleration at ω̇ = 0, A(ω × (ω × s̄))."""
-    s0, s1, s2 = _mul(A, sx, sy, sz)
+    s0, s1, s2 = matrix9_apply(A, sx, sy, sz)
     cx, cy, cz = _cross(wx, wy, wz, sx, sy, sz)
-    d0, d1, d2 = _mul(A, cx, cy, cz)
+    d0, d1, d2 = matrix9_apply(A, cx, cy, cz)
     ex, ey, ez = _cross(wx, wy, wz, cx, cy, cz)
-    a0, a1, a2 = _mul(A, ex, ey, ez)
+    a0, a1, a2 = matrix9_apply(A, ex, ey, ez)
     return s0, s1, s2, d0, d1, d2, a0, a1, a2
 
 
@@ -1276,11 +1264,11 @@ def _rotational3(q, v, e, rot_int, rot_real):
            + nz * (d20 * nx + d21 * ny + d22 * nz))
     c = 0.5 * (d00 + d11 + d22 - nDn)
     phi = math.atan2(s, c)
-    gx, gy, gz = _mul(Aa, nx, ny, nz)
+    gx, gy, gz = matrix9_apply(Aa, nx, ny, nz)
     wax, way, waz = _omega(v, ia)
     wbx, wby, wbz = _omega(v, ib)
-    ox, oy, oz = _mul(Ab, wbx, wby, wbz)
-    px, py, pz = _mul(Aa, wax, way, waz)
+    ox, oy, oz = matrix9_apply(Ab, wbx, wby, wbz)
+    px, py, pz = matrix9_apply(Aa, wax, way, waz)
     w = gx * (ox - px) + gy * (oy - py) + gz * (oz - pz)
     tau = law.torque(rot_int[e, ROT_KIND], rot_real[e], phi, w)
     return ia, ib, Aa, Ab, phi, w, tau, gx, gy, gz
@@ -1391,13 +1379,13 @@ def _add_rotational3(q, v, P, gen):
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
         if ib >= 0:
-            tx, ty, tz = _tmul(Ab, nx, ny, nz)
+            tx, ty, tz = matrix9_apply_transposed(Ab, nx, ny, nz)
             k = 6 * ib + 3
             gen[k] -= tau * tx
             gen[k + 1] -= tau * ty
             gen[k + 2] -= tau * tz
         if ia >= 0:
-            tx, ty, tz = _tmul(Aa, nx, ny, nz)
+            tx, ty, tz = matrix9_apply_transposed(Aa, nx, ny, nz)
             k = 6 * ia + 3
             gen[k] += tau * tx
             gen[k + 1] += tau * ty
@@ -1524,7 +1512,7 @@ def _screw_residual(Aa, Ab, jr, rx, ry, rz):
     nDn = (nx * (D[0, 0] * nx + D[0, 1] * ny + D[0, 2] * nz) + ny * (D[1, 0] * nx + D[1, 1] * ny + D[1, 2] * nz)
            + nz * (D[2, 0] * nx + D[2, 1] * ny + D[2, 2] * nz))
     phi = math.atan2(sn, 0.5 * (D[0, 0] + D[1, 1] + D[2, 2] - nDn))
-    sx, sy, sz = _mul(Aa, nx, ny, nz)
+    sx, sy, sz = matrix9_apply(Aa, nx, ny, nz)
     x = phi - jr[SCREW_RATIO] * (sx * rx + sy * ry + sz * rz - jr[SCREW_ADVANCE0])
     return x - 2.0 * math.pi * round(x / (2.0 * math.pi)), sx, sy, sz
 
@@ -1554,12 +1542,12 @@ def _screw3(v, alpha, AB, perm, off, rhs, jr, row, ba, bb, Aa, Ab, lax, lay, laz
     gb = 0.0
     if bb >= 0:
         k = 6 * bb + 3
-        tx, ty, tz = _tmul(Ab, a0, a1, a2)
+        tx, ty, tz = matrix9_apply_transposed(Ab, a0, a1, a2)
         _sym(AB, perm, off, row, k, tx)
         _sym(AB, perm, off, row, k + 1, ty)
         _sym(AB, perm, off, row, k + 2, tz)
         cd += tx * wbx + ty * wby + tz * wbz
-        ox, oy, oz = _mul(Ab, wbx, wby, wbz)
+        ox, oy, oz = matrix9_apply(Ab, wbx, wby, wbz)
         gb = ad0 * ox + ad1 * oy + ad2 * oz
     gamma = -(gb - rho * ((aa0 * rx + aa1 * ry + aa2 * rz) + 2.0 * (ad0 * rdx + ad1 * rdy + ad2 * rdz)
                           + (a0 * anx + a1 * any_ + a2 * anz)))
@@ -1650,12 +1638,12 @@ def constraint_residual3(q, P):
             worst = max(worst, abs(rx), abs(ry), abs(rz))
         for d in range(jt_int[jn, 4]):
             j = 6 * d
-            a0, a1, a2 = _mul(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
-            b0, b1, b2 = _mul(Ab, jt_real[jn, j + 3], jt_real[jn, j + 4], jt_real[jn, j + 5])
+            a0, a1, a2 = matrix9_apply(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
+            b0, b1, b2 = matrix9_apply(Ab, jt_real[jn, j + 3], jt_real[jn, j + 4], jt_real[jn, j + 5])
             worst = max(worst, abs(a0 * b0 + a1 * b1 + a2 * b2))
         for d in range(jt_int[jn, 5]):
             j = DOT2 + 3 * d
-            a0, a1, a2 = _mul(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
+            a0, a1, a2 = matrix9_apply(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
             worst = max(worst, abs(a0 * rx + a1 * ry + a2 * rz))
         if jt_int[jn, SCREW_ROW]:
             worst = max(worst, abs(_screw_residual(Aa, Ab, jt_real[jn], rx, ry, rz)[0]))
@@ -1815,7 +1803,7 @@ def _body_outputs3(q, v, b, dims, out, k):
     out[k], out[k + 1], out[k + 2], out[k + 3] = pw, px, py, pz
     out[k + 4], out[k + 5], out[k + 6] = euler_angles9(A, dims[EULER_I], dims[EULER_J], dims[EULER_K])
     wx, wy, wz = _omega(v, b)
-    out[k + 7], out[k + 8], out[k + 9] = _mul(A, wx, wy, wz)
+    out[k + 7], out[k + 8], out[k + 9] = matrix9_apply(A, wx, wy, wz)
     return k + BODY_OUTPUTS3
 
 

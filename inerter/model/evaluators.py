@@ -17,7 +17,7 @@ import numpy as np
 
 from inerter import elements
 from inerter.common.errors import MIN_LENGTH, TerminalsMeet  # noqa: F401  (re-exported)
-from inerter.common.rotations import planar_matrix9
+from inerter.common.rotations import matrix9_apply, planar_matrix9
 from inerter.elements import device, device_inertia, layout, terminals
 from inerter.elements.base import axial_scalars as _compiled_axial_scalars
 from inerter.model.planar import PointPair
@@ -47,7 +47,7 @@ def slider_direction(point, axis, q) -> np.ndarray:
     joint's first point; the ground's axis is global)."""
     n = np.zeros(3)
     n[:len(axis)] = axis
-    return np.array(terminals.body_axis.py_func(rotation(point, q), *n)[:len(axis)])
+    return np.array(matrix9_apply.py_func(rotation(point, q), *n)[:len(axis)])
 
 
 class TranslationalElement:

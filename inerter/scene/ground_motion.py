@@ -19,7 +19,8 @@ import math
 from pathlib import Path
 
 import numpy as np
-from numba import njit
+
+from inerter.common.inlined import inlined
 
 #: The columns of a row of analytic terms (GroundMotion.terms): axis (0-based), amplitude (m/s²),
 #: frequency (Hz), phase (rad), start (s), stop (s; inf: none).
@@ -29,7 +30,7 @@ TERM_COLUMNS = 6
 STANDARD_GRAVITY = 9.80665
 
 
-@njit(cache=True, inline="always")
+@inlined
 def burst(t, amplitude, frequency, phase, start, stop):
     """One analytic term: A sin(2πf(t − start) + φ) for start ≤ t < stop, 0 elsewhere."""
     if t < start or t >= stop:

@@ -642,8 +642,10 @@ def warm_up(spatial: bool = False):
             result.run.max_drift
         kernel = compiled._kernel_for(model.mechanism)
         kernel.accelerations(0.0, kernel.q0, kernel.v0)
-        for method in compiled._RK_CODE:                       # the co-simulation step (the FMU's)
+        model.simulate(method="Radau", stop_time=0.02, metrics=False)      # scipy's methods on the kernels
+        for method in (*compiled._RK_CODE, "RK4"):             # the co-simulation steps (the FMU's)
             stepper = model.stepper(method=method, path="compiled", stop_time=0.05)
+            stepper.output_values()                            # at t = 0, before a step (an FMU's initialisation)
             stepper.step(0.01)
             stepper.output_values()
         compiled._k.native_step_cfunc(kernel.spatial)         # the FMU's native step (inerter.fmu.native)

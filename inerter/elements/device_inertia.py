@@ -101,10 +101,11 @@ def _cross(a, b):
 @inlined
 def _gram(M, Q, G, c0, weight):
     """M += weight Gᵀ G and Q −= weight Gᵀ c₀ for a vector velocity G v with bias acceleration c₀."""
-    # whole rows and outer products: the same sums, term by term, as a loop over i and j, which the
-    # readable evaluators would run element by element
-    Q -= weight * (G[0] * c0[0] + G[1] * c0[1] + G[2] * c0[2])
-    M += weight * (np.outer(G[0], G[0]) + np.outer(G[1], G[1]) + np.outer(G[2], G[2]))
+    n = G.shape[1]
+    for i in range(n):
+        Q[i] -= weight * (G[0, i] * c0[0] + G[1, i] * c0[1] + G[2, i] * c0[2])
+        for j in range(n):
+            M[i, j] += weight * (G[0, i] * G[0, j] + G[1, i] * G[1, j] + G[2, i] * G[2, j])
 
 
 @inlined
@@ -124,13 +125,18 @@ def _part(M, Q, m, h, Hend, acc, Gu, udd0, r_end, rdot_end, u, ud, g, frame_acc)
 @inlined
 def _axis(r, rd, Ha, Hb, acc_a, acc_b):
     """(L, u, L̇, u̇, G_r, G_u, g_L, L̈₀, ü₀) of the module docstring's geometry."""
+    n = Ha.shape[1]
     L = math.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
     u = r / L
     Ldot = u[0] * rd[0] + u[1] * rd[1] + u[2] * rd[2]
     ud = (rd - u * Ldot) / L
     Gr = Hb - Ha
-    gL = u[0] * Gr[0] + u[1] * Gr[1] + u[2] * Gr[2]
-    Gu = (Gr - np.outer(u, gL)) / L
+    gL = np.empty(n)
+    Gu = np.empty((3, n))
+    for i in range(n):
+        gL[i] = u[0] * Gr[0, i] + u[1] * Gr[1, i] + u[2] * Gr[2, i]
+        for k in range(3):
+            Gu[k, i] = (Gr[k, i] - u[k] * gL[i]) / L
     an = acc_b - acc_a
     an_u = an[0] * u[0] + an[1] * u[1] + an[2] * u[2]
     ud2 = ud[0] * ud[0] + ud[1] * ud[1] + ud[2] * ud[2]
@@ -143,17 +149,17 @@ def _axis(r, rd, Ha, Hb, acc_a, acc_b):
 def _housing_spin(u, ud, Gu, udd0, a1, a1d, a1dd0, Ga1):
     """The housing's spin s_h under the Hooke mount, its gradient σ over v and ṡ_h₀ (module
     docstring, "The mount")."""
+    n = Gu.shape[1]
     w = _cross(a1, u)
     wn = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
     e1 = w / wn
     e2 = _cross(u, e1)
     wd = _cross(a1d, u) + _cross(a1, ud)
     s = (e2[0] * wd[0] + e2[1] * wd[1] + e2[2] * wd[2]) / wn
-    # column by column: gw = Ga₁ × u + a₁ × G_u
-    gw0 = (Ga1[1] * u[2] - Ga1[2] * u[1]) + (a1[1] * Gu[2] - a1[2] * Gu[1])
-    gw1 = (Ga1[2] * u[0] - Ga1[0] * u[2]) + (a1[2] * Gu[0] - a1[0] * Gu[2])
-    gw2 = (Ga1[0] * u[1] - Ga1[1] * u[0]) + (a1[0] * Gu[1] - a1[1] * Gu[0])
-    sigma = (e2[0] * gw0 + e2[1] * gw1 + e2[2] * gw2) / wn
+    sigma = np.empty(n)
+    for i in range(n):
+        gw = _cross(Ga1[:, i].copy(), u) + _cross(a1, Gu[:, i].copy())
+        sigma[i] = (e2[0] * gw[0] + e2[1] * gw[1] + e2[2] * gw[2]) / wn
     e1d = (wd - e1 * (e1[0] * wd[0] + e1[1] * wd[1] + e1[2] * wd[2])) / wn
     e2d = _cross(ud, e1) + _cross(u, e1d)
     wdd0 = _cross(a1dd0, u) + 2.0 * _cross(a1d, ud) + _cross(a1, udd0)
@@ -196,7 +202,10 @@ def block(row, Ha, Hb, ra, rb, ra_dot, rb_dot, acc_a, acc_b, frame_acc, a1, a1d,
     s, sigma, sd0 = _housing_spin(u, ud, Gu, udd0, a1, a1d, a1dd0, Ga1)
     sf = s + ratio * Ldot
     perp = _cross(u, ud)
-    Q -= (Jhr + J) * sd0 * sigma + J * ratio * (sd0 * gL + Ldd0 * sigma)
-    Q += (Jhr * s + J * sf) * (Gu[0] * perp[0] + Gu[1] * perp[1] + Gu[2] * perp[2])
-    M += np.outer((Jhr + J) * sigma, sigma) + J * ratio * (np.outer(sigma, gL) + np.outer(gL, sigma))
+    n = Gu.shape[1]
+    for i in range(n):
+        Q[i] -= (Jhr + J) * sd0 * sigma[i] + J * ratio * (sd0 * gL[i] + Ldd0 * sigma[i])
+        Q[i] += (Jhr * s + J * sf) * (Gu[0, i] * perp[0] + Gu[1, i] * perp[1] + Gu[2, i] * perp[2])
+        for j in range(n):
+            M[i, j] += (Jhr + J) * sigma[i] * sigma[j] + J * ratio * (sigma[i] * gL[j] + gL[i] * sigma[j])
     return T + 0.5 * Jhr * s * s + J * (0.5 * s * s + ratio * s * Ldot), V

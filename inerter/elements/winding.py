@@ -24,5 +24,6 @@ def wound(reference, reading):
     """The angle on the branch nearest `reference`: reference + wrap(reading − reference), the
     difference wrapped into (−π, π] (a reading exactly half a turn away goes forward)."""
     turn = 2.0 * math.pi
-    offset = reading - reference
-    return reference + (offset - turn * math.ceil((offset - math.pi) / turn))
+    # the reading plus whole turns (not reference + wrapped offset): a reading within half a turn of
+    # the reference is returned as it is, bit for bit, so an element that never winds is unchanged
+    return reading - turn * math.ceil((reading - reference - math.pi) / turn)

@@ -363,13 +363,24 @@ class Result:
         column = self._columns.get(name)
         return column if column is not None else self._column(name)
 
+    def _windings_at(self, t):
+        """The 3D rotational elements' angles at the last sample at or before t, from which a dense
+        output read from t on winds them on (None: there are none)."""
+        winding = self.model.mechanism.winding
+        if not winding or not len(self.time):
+            return None
+        i = max(int(np.searchsorted(self.time, t, side="right")) - 1, 0)
+        return np.array([self[f"{e.name}.phi_rel"][i] for e in winding])
+
     def dense(self, name):
         """A callable t ↦ signal(t), vectorised over t (a 1-D array of the values), through the
         integrator's dense output: on a compiled run, the states from the kept steps' polynomials
         and the signal from the kernels, in one compiled call; on the numpy path, scipy's dense
         output and the numpy signals. Where the run kept none (RK4, whose fixed steps give no
         polynomial, or a run without metrics): a cubic spline through the samples. A derived output:
-        its expression on the dense values of the outputs it reads."""
+        its expression on the dense values of the outputs it reads. A 3D rotational element's angle
+        is wound on from the sample before the first t along the times asked for (give them in
+        increasing order; inerter.elements.winding)."""
         self._check_name(name)
         signals = self.model.signals
         if signals.is_derived(name):
@@ -388,7 +399,7 @@ class Result:
             mech = self.model.mechanism
             nv = n + mech.n
             values = []
-            with mech.wound_from_start():   # increasing times from the start: angles wound on from each
+            with mech.wound_from_start(self._windings_at(t[0])):   # angles wound on along t
                 for i, ti in enumerate(t):
                     mech.wind(Y[:, i])
                     values.append(fn(ti, Y[:n, i], Y[n:nv, i], None, alpha, Y[nv:, i]))
@@ -401,7 +412,7 @@ class Result:
 
         def compiled_values(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
-            values, k = kernel.dense_signal(sol, index, t, None, alpha)
+            values, k = kernel.dense_signal(sol, index, t, None, alpha, self._windings_at(t[0]))
             if k < len(t):            # not defined at t[k]: the numpy path's values, or its message
                 values = np.concatenate((values, numpy_values(t[k:])))
             return values

@@ -584,11 +584,12 @@ class Kernel:
         return rot_real[:, layout.PHI_REF] if self.spatial else rot_real[:, :0]
 
     @contextlib.contextmanager
-    def wound_from_start(self):
-        """φ_ref at 0, its value at t = 0, while a history is evaluated sample after sample from the
-        start (kernels._signals_at winds on from each sample to the next); as it was afterwards."""
+    def wound_from_start(self, start=None):
+        """φ_ref at 0, its value at t = 0 (or at `start`, the angles where the history starts), while a
+        history is evaluated sample after sample from there (kernels._signals_at winds on from each
+        sample to the next); as it was afterwards."""
         held = self.windings.copy()
-        self.windings[:] = 0.0
+        self.windings[:] = 0.0 if start is None else start
         try:
             yield
         finally:
@@ -696,28 +697,30 @@ class Kernel:
                 need = True             # a rigid screw efficiency's mode and loss: those of the solved L̈
         return need, np.arange(ny, dtype=np.int64)
 
-    def signal_column(self, index, times, states, inputs=None, alpha=0.0):
+    def signal_column(self, index, times, states, inputs=None, alpha=0.0, windings=None):
         """(values, k): the signal at `index` at each sample of a history (rows [q, v, z]), up to the
         first sample k where it cannot be evaluated (k = len(times) when it can at all), with the
         values signal_history gives."""
         need, _ = self._reads(index)
         out = np.empty(len(times))
-        with self.wound_from_start():
+        with self.wound_from_start(windings):
             st, k = _k.signal_column(np.ascontiguousarray(times, dtype=float),
                                      np.ascontiguousarray(states, dtype=float), self._inputs(inputs), float(alpha),
                                      int(index), need, self.params, np.empty(len(self._layout)), out)
         return out[:k], int(k)
 
-    def dense_signal(self, sol, index, times, inputs=None, alpha=0.0):
+    def dense_signal(self, sol, index, times, inputs=None, alpha=0.0, windings=None):
         """(values, k): the signal at `index` at `times` on a dense output, up to the first time k
         where it cannot be evaluated: a :class:`DenseOutput` in one compiled call (only the state
-        components the signal reads), another (scipy's OdeSolution) through its states."""
+        components the signal reads), another (scipy's OdeSolution) through its states. `windings`:
+        the 3D rotational elements' angles where `times` start (default: those at t = 0), from which
+        their angles wind on along `times` (Kernel.wound_from_start)."""
         times = np.ascontiguousarray(times, dtype=float).reshape(-1)
         if not isinstance(sol, DenseOutput):
-            return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha)
+            return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha, windings)
         need, comps = self._reads(index)
         out = np.empty(len(times))
-        with self.wound_from_start():
+        with self.wound_from_start(windings):
             st, k = _k.dense_signal(sol.method_code, sol.nodes, sol.coeffs, sol.count, times, comps,
                                     self._inputs(inputs), float(alpha), int(index), need, self.params,
                                     np.empty(len(self._layout)), out)

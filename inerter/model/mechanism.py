@@ -383,11 +383,12 @@ class Mechanism:
             e.reference = 0.0
 
     @contextlib.contextmanager
-    def wound_from_start(self):
-        """φ_ref at 0, its value at t = 0, while a history is evaluated sample after sample from the
-        start (each sample winding on, :meth:`wind`); as it was afterwards."""
+    def wound_from_start(self, start=None):
+        """φ_ref at 0, its value at t = 0 (or at `start`, the angles where the history starts), while
+        a history is evaluated sample after sample from there (each sample winding on,
+        :meth:`wind`); as it was afterwards."""
         held = self.windings
-        self.windings = np.zeros(len(held))
+        self.windings = np.zeros(len(held)) if start is None else start
         try:
             yield
         finally:

@@ -941,11 +941,11 @@ def _wind_by_dimension(y, P):
     """After an accepted step to y = [q, v, z]: :func:`wind3` in 3D; nothing in 2D, where a
     rotational element's angle θ_b − θ_a has no branch."""
     if is_spatial(P):
-        def wind(y, P):
+        def wind_spatial(y, P):
             nq = P[DIMS][N_COORD]
             if P[ROT_INT].shape[0]:
                 wind3(y[:nq], y[nq:nq + P[DIMS][N_VELOCITY]], P)
-        return wind
+        return wind_spatial
     return lambda y, P: None
 
 

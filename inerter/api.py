@@ -5,7 +5,6 @@ the same scene compiled with ``oracle=True`` and solved at tight tolerance.
 """
 from __future__ import annotations
 
-import math
 import time as _time
 from pathlib import Path
 from typing import Any
@@ -257,14 +256,19 @@ class Result:
         if order is not None:
             compiled_values, start = kernel.signal_history(sig, order, run.time, run.states, None, settings.alpha)
             values = list(compiled_values)
-        for i in range(start, len(run.time)):        # the numpy path (and its messages where one fails)
-            t, y = run.time[i], run.states[i]
-            try:
-                nv = n + self.model.mechanism.n
-                values.append(sig.evaluate(t, y[:n], y[n:nv], None, settings.alpha, z=y[nv:]))
-            except SimulationError as exc:   # an output undefined at a sample: keep what came before
-                self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
-                break
+        mech = self.model.mechanism
+        with mech.wound_from_start():       # 3D rotational elements: their angles wound on sample by sample
+            for y in (run.states[:start] if mech.winding else ()):
+                mech.wind(y)
+            for i in range(start, len(run.time)):    # the numpy path (and its messages where one fails)
+                t, y = run.time[i], run.states[i]
+                try:
+                    nv = n + mech.n
+                    mech.wind(y)
+                    values.append(sig.evaluate(t, y[:n], y[n:nv], None, settings.alpha, z=y[nv:]))
+                except SimulationError as exc:   # an output undefined at a sample: keep what came before
+                    self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
+                    break
         self._values = np.array(values) if values else np.zeros((0, len(sig.names)))
         return self._values
 
@@ -287,14 +291,19 @@ class Result:
         if k < len(run.time):
             sig, n, j = self.model.signals, self.model.mechanism.nq, self.model.signals.index[name]
             values = list(values)
-            for i in range(k, len(run.time)):
-                t, y = run.time[i], run.states[i]
-                try:
-                    nv = n + self.model.mechanism.n
-                    values.append(sig.evaluate(t, y[:n], y[n:nv], None, alpha, z=y[nv:])[j])
-                except SimulationError as exc:
-                    self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
-                    break
+            mech = self.model.mechanism
+            with mech.wound_from_start():   # 3D rotational elements: their angles wound on sample by sample
+                for y in (run.states[:k] if mech.winding else ()):
+                    mech.wind(y)
+                for i in range(k, len(run.time)):
+                    t, y = run.time[i], run.states[i]
+                    try:
+                        nv = n + mech.n
+                        mech.wind(y)
+                        values.append(sig.evaluate(t, y[:n], y[n:nv], None, alpha, z=y[nv:])[j])
+                    except SimulationError as exc:
+                        self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
+                        break
             values = np.array(values, dtype=float)
         self._columns[name] = values
         return values
@@ -310,7 +319,6 @@ class Result:
             notes.append(f"{self.model.source}: device.efficiency: {unsettled} evaluations of the equations of "
                          f"motion kept a solve whose efficiency modes did not settle in {MODE_SOLVES} checks "
                          f"(several efficiency elements whose modes are coupled; inerter.elements.device)")
-        notes += half_turn_warnings(self)
         for d in self.model.signals.derived:
             try:
                 column = self[d.name]
@@ -355,13 +363,24 @@ class Result:
         column = self._columns.get(name)
         return column if column is not None else self._column(name)
 
+    def _windings_at(self, t):
+        """The 3D rotational elements' angles at the last sample at or before t, from which a dense
+        output read from t on winds them on (None: there are none)."""
+        winding = self.model.mechanism.winding
+        if not winding or not len(self.time):
+            return None
+        i = max(int(np.searchsorted(self.time, t, side="right")) - 1, 0)
+        return np.array([self[f"{e.name}.phi_rel"][i] for e in winding])
+
     def dense(self, name):
         """A callable t ↦ signal(t), vectorised over t (a 1-D array of the values), through the
         integrator's dense output: on a compiled run, the states from the kept steps' polynomials
         and the signal from the kernels, in one compiled call; on the numpy path, scipy's dense
         output and the numpy signals. Where the run kept none (RK4, whose fixed steps give no
         polynomial, or a run without metrics): a cubic spline through the samples. A derived output:
-        its expression on the dense values of the outputs it reads."""
+        its expression on the dense values of the outputs it reads. A 3D rotational element's angle
+        is wound on from the sample before the first t along the times asked for (give them in
+        increasing order; inerter.elements.winding)."""
         self._check_name(name)
         signals = self.model.signals
         if signals.is_derived(name):
@@ -377,8 +396,14 @@ class Result:
 
         def numpy_values(t):
             Y = sol(t)
-            nv = n + self.model.mechanism.n
-            return np.array([fn(ti, Y[:n, i], Y[n:nv, i], None, alpha, Y[nv:, i]) for i, ti in enumerate(t)])
+            mech = self.model.mechanism
+            nv = n + mech.n
+            values = []
+            with mech.wound_from_start(self._windings_at(t[0])):   # angles wound on along t
+                for i, ti in enumerate(t):
+                    mech.wind(Y[:, i])
+                    values.append(fn(ti, Y[:n, i], Y[n:nv, i], None, alpha, Y[nv:, i]))
+            return np.array(values)
 
         kernel = self._kernel
         index = kernel.signal_index(name) if kernel is not None else None
@@ -387,7 +412,7 @@ class Result:
 
         def compiled_values(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
-            values, k = kernel.dense_signal(sol, index, t, None, alpha)
+            values, k = kernel.dense_signal(sol, index, t, None, alpha, self._windings_at(t[0]))
             if k < len(t):            # not defined at t[k]: the numpy path's values, or its message
                 values = np.concatenate((values, numpy_values(t[k:])))
             return values
@@ -446,32 +471,6 @@ class Result:
     def to_dataframe(self):
         """The time history as a pandas DataFrame (pandas is optional: ``pip install pandas``)."""
         return to_dataframe(self)
-
-
-def half_turn_warnings(result) -> list[str]:
-    """Warnings of a run (`result`: the solver's or an FMU's), one per 3D rotational spring whose
-    angle passed ±π between two samples: it is measured within (−π, π] from the initial pose (the
-    relative rotation's angle about the axis), so there it jumps by 2π and so does the torque,
-    unlike a spring wound further."""
-    mech = result.model.mechanism
-    if mech.dim != 3 or not len(result.time):
-        return []
-    notes = []
-    for e in mech.elements:
-        if e.kind != "rotational_spring" or e.coefficient == 0.0:
-            continue
-        try:
-            phi = result[f"{e.name}.phi_rel"]
-        except KeyError:                      # an FMU run that did not record it
-            continue
-        jumps = np.flatnonzero(np.abs(np.diff(phi)) > math.pi)
-        if jumps.size:
-            notes.append(f"{result.model.source}: elements.{e.name}: its angle passed ±π (half a turn from the "
-                         f"initial pose) between t = {result.time[jumps[0]]:.6g} s and "
-                         f"{result.time[jumps[0] + 1]:.6g} s, where a 3D rotational spring's angle (within "
-                         f"(−π, π]) and its torque jump: the results after it are not those of a spring "
-                         f"wound further")
-    return notes
 
 
 def output_units(result) -> dict[str, str]:

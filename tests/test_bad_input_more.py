@@ -74,66 +74,6 @@ def test_max_steps_exhausted(tmp_path, capsys):
     assert all(math.isfinite(float(x)) for row in data for x in row)
 
 
-ROTOR_3D = """
-[scene]
-dimension = 3
-
-[bodies.rotor]
-mass = 1.0
-inertia = [0.1, 0.1, 0.1]
-position = [0, 0, 0]
-angular_velocity = [0, 0, {w}]
-points = {{ P = [0, 0, 0] }}
-
-[ground.points]
-O = [0, 0, 0]
-
-[joints.hub]
-type = "revolute"
-between = ["O", "P"]
-axis = [0, 0, 1]
-
-[elements.torsion]
-type = "rotational_spring"
-bodies = ["ground", "rotor"]
-axis = [0, 0, 1]
-k = {k}
-{angle}
-
-[experiment]
-stop_time = 1.0
-output_interval = 0.01
-"""
-
-
-@pytest.mark.parametrize("angle", ["3.5", "-3.2", "4*pi"])
-def test_a_3d_rotational_spring_free_angle_beyond_half_a_turn(tmp_path, capsys, angle):
-    """In 3D the angle is measured within (−π, π] from the initial pose: a free angle outside could
-    never be reached (the torque would jump at ±π instead); it was accepted silently."""
-    scene = tmp_path / "rotor.toml"
-    scene.write_text(ROTOR_3D.format(w=0.0, k=1.0, angle=f'angle = "{angle}"'))
-    assert main(["describe", str(scene)]) == 2
-    one_line(capsys, str(scene), "elements.torsion.angle", "a free angle in (−π, π) rad")
-
-
-def test_a_3d_rotational_spring_passing_half_a_turn_is_reported(tmp_path, capsys):
-    """A rotor spinning at ω = 10 rad/s on a spring too weak to slow it (k = 1e-9 N·m/rad) turns by
-    π at t = π/10 s (closed form: uniform rotation), where its 3D angle jumps from π to −π: the
-    run says so on stderr and in summary.json, naming the element and the samples around 0.314 s."""
-    import json
-    scene = tmp_path / "rotor.toml"
-    scene.write_text(ROTOR_3D.format(w=10.0, k=1e-9, angle=""))
-    out = tmp_path / "out"
-    assert main(["run", str(scene), "--out", str(out)]) == 0
-    err = capsys.readouterr().err
-    assert "elements.torsion: its angle passed ±π" in err and "between t = 0.31 s and 0.32 s" in err, err
-    summary = json.loads((out / "summary.json").read_text())
-    assert any("elements.torsion" in w for w in summary["warnings"])
-    scene.write_text(ROTOR_3D.format(w=3.0, k=1e-9, angle=""))      # 3 rad in 1 s: no warning
-    assert main(["run", str(scene), "--out", str(out)]) == 0
-    assert "passed ±π" not in capsys.readouterr().err
-
-
 @pytest.mark.parametrize("second, clash", [
     ('kind = "natural_frequency"', "natural_frequency"),
     ('kind = "peak"\nsignal = "C.r[1]"', "peak"),

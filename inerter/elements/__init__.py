@@ -12,7 +12,8 @@ here, so a kind is declared, validated, simulated and reported from its one modu
 Beside the kinds: :mod:`.base` (what a kind is, :func:`~inerter.elements.base.law`), :mod:`.layout`
 (the named columns of the engine's element tables), :mod:`.terminals` (a translational element's
 terminal geometry, whatever its kind: the line it acts along, r̂, a fixed ê₀ or a prismatic joint's
-axis turning with a body, the L its law reads and whether its terminals meet), :mod:`.device` and
+axis turning with a body, the L its law reads and whether its terminals meet), :mod:`.winding` (a 3D
+rotational element's angle wound on past half a turn), :mod:`.device` and
 :mod:`.device_inertia` (an inerter's device effects), :mod:`.dispatch` and :mod:`.generate` (the
 kernels' dispatch over the kinds, generated).
 
@@ -69,7 +70,7 @@ import pkgutil
 
 from inerter.elements.base import ROTATIONAL, TRANSLATIONAL, ElementKind, Parameter  # noqa: F401
 
-_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device", "device_inertia", "terminals"}
+_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device", "device_inertia", "terminals", "winding"}
 
 
 def _kind_modules():

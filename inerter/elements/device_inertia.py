@@ -81,7 +81,6 @@ import math
 import numpy as np
 
 from inerter.common.inlined import inlined, not_inlined
-
 from inerter.elements.layout import (DEVICE_GRAVITY, FLYWHEEL_AXIAL, FLYWHEEL_CENTRE, FLYWHEEL_MASS,
                                      FLYWHEEL_RATIO, HOUSING_AXIAL, HOUSING_CENTRE, HOUSING_MASS, MOUNT, ROD_CENTRE, ROD_MASS,
                                      TRANSVERSE)

@@ -81,8 +81,10 @@ ROT_INT_COLUMNS = 3
 FREE_ANGLE = 1           # a rotational spring's free angle φ0 (rad); COEFFICIENT is column 0 too
 AXIS = 2                 # 3D: the axis n̄ in body a's frame, 3 columns
 REL0 = 5                 # 3D: the initial relative orientation A_aᵀ A_b, 9 columns, row-major
+PHI_REF = 14             # 3D: the element's wound angle at the last accepted step (rad; inerter.elements.winding),
+                         # 0.0 at t = 0; written by the engine after each accepted step
 ROT_REAL_COLUMNS_2D = 2
-ROT_REAL_COLUMNS_3D = 14
+ROT_REAL_COLUMNS_3D = 15
 
 # -- jt_real of a 3D joint (after its dot-1 pairs at 0..17 and dot-2 vectors at 18..23): a screw
 #    joint's row (inerter.model.joints.Screw), read where column SCREW_ROW of jt_int is 1

@@ -37,6 +37,7 @@ returns a kernel that calls the numpy path and :func:`integrate_compiled` runs
 """
 from __future__ import annotations
 
+import contextlib
 import copy
 import functools
 import hashlib
@@ -576,6 +577,25 @@ class Kernel:
         self._read_cache = {}
 
     @property
+    def windings(self) -> np.ndarray:
+        """The 3D rotational elements' φ_ref (layout.PHI_REF: each one's wound angle at the last
+        accepted step, inerter.elements.winding), a view the kernels write; empty in 2D."""
+        rot_real = self.params[_k.ROT_REAL]
+        return rot_real[:, layout.PHI_REF] if self.spatial else rot_real[:, :0]
+
+    @contextlib.contextmanager
+    def wound_from_start(self, start=None):
+        """φ_ref at 0, its value at t = 0 (or at `start`, the angles where the history starts), while a
+        history is evaluated sample after sample from there (kernels._signals_at winds on from each
+        sample to the next); as it was afterwards."""
+        held = self.windings.copy()
+        self.windings[:] = 0.0 if start is None else start
+        try:
+            yield
+        finally:
+            self.windings[:] = held
+
+    @property
     def unsettled(self) -> int:
         """How many evaluations of Eq. (33) kept a solve whose screw efficiencies' modes did not
         settle in device.MODE_SOLVES solves (kernels.accelerations; 0 without efficiencies)."""
@@ -677,29 +697,33 @@ class Kernel:
                 need = True             # a rigid screw efficiency's mode and loss: those of the solved L̈
         return need, np.arange(ny, dtype=np.int64)
 
-    def signal_column(self, index, times, states, inputs=None, alpha=0.0):
+    def signal_column(self, index, times, states, inputs=None, alpha=0.0, windings=None):
         """(values, k): the signal at `index` at each sample of a history (rows [q, v, z]), up to the
         first sample k where it cannot be evaluated (k = len(times) when it can at all), with the
         values signal_history gives."""
         need, _ = self._reads(index)
         out = np.empty(len(times))
-        st, k = _k.signal_column(np.ascontiguousarray(times, dtype=float), np.ascontiguousarray(states, dtype=float),
-                                 self._inputs(inputs), float(alpha), int(index), need, self.params,
-                                 np.empty(len(self._layout)), out)
+        with self.wound_from_start(windings):
+            st, k = _k.signal_column(np.ascontiguousarray(times, dtype=float),
+                                     np.ascontiguousarray(states, dtype=float), self._inputs(inputs), float(alpha),
+                                     int(index), need, self.params, np.empty(len(self._layout)), out)
         return out[:k], int(k)
 
-    def dense_signal(self, sol, index, times, inputs=None, alpha=0.0):
+    def dense_signal(self, sol, index, times, inputs=None, alpha=0.0, windings=None):
         """(values, k): the signal at `index` at `times` on a dense output, up to the first time k
         where it cannot be evaluated: a :class:`DenseOutput` in one compiled call (only the state
-        components the signal reads), another (scipy's OdeSolution) through its states."""
+        components the signal reads), another (scipy's OdeSolution) through its states. `windings`:
+        the 3D rotational elements' angles where `times` start (default: those at t = 0), from which
+        their angles wind on along `times` (Kernel.wound_from_start)."""
         times = np.ascontiguousarray(times, dtype=float).reshape(-1)
         if not isinstance(sol, DenseOutput):
-            return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha)
+            return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha, windings)
         need, comps = self._reads(index)
         out = np.empty(len(times))
-        st, k = _k.dense_signal(sol.method_code, sol.nodes, sol.coeffs, sol.count, times, comps,
-                                self._inputs(inputs), float(alpha), int(index), need, self.params,
-                                np.empty(len(self._layout)), out)
+        with self.wound_from_start(windings):
+            st, k = _k.dense_signal(sol.method_code, sol.nodes, sol.coeffs, sol.count, times, comps,
+                                    self._inputs(inputs), float(alpha), int(index), need, self.params,
+                                    np.empty(len(self._layout)), out)
         return out[:k], int(k)
 
     def signal_order(self, signals):
@@ -733,8 +757,9 @@ class Kernel:
         cannot be evaluated (k = len(times) when all can)."""
         states = np.ascontiguousarray(states, dtype=float)
         raw = np.empty((len(states), len(order)))
-        st, k = _k.signal_history(np.ascontiguousarray(times, dtype=float), states, self._inputs(inputs),
-                                  float(alpha), bool(signals.needs_accelerations), self.params, raw)
+        with self.wound_from_start():
+            st, k = _k.signal_history(np.ascontiguousarray(times, dtype=float), states, self._inputs(inputs),
+                                      float(alpha), bool(signals.needs_accelerations), self.params, raw)
         return signals.complete(raw[:k][:, order]), int(k)
 
     def point_positions(self, states) -> dict:
@@ -804,6 +829,22 @@ class _KernelMechanism:
 
     def constraint_residual(self, q):
         return self._kernel.constraint_residual(q)
+
+    def wind(self, y):
+        """``Mechanism.wind`` on the kernel's tables (kernels.wind; nothing to do in 2D)."""
+        if self._kernel.spatial:
+            _k.wind(np.ascontiguousarray(y, dtype=float), self._kernel.params)
+
+    def reset_windings(self):
+        self._kernel.windings[:] = 0.0
+
+    @property
+    def windings(self) -> np.ndarray:
+        return self._kernel.windings.copy()
+
+    @windings.setter
+    def windings(self, values):
+        self._kernel.windings[:] = values
 
     def project(self, q, v, *args, **kwargs):
         return self._mech.project(q, v, *args, **kwargs)
@@ -910,6 +951,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         kept[_k.KEPT_ON] = 1
         keep = (np.empty(room + 1), np.empty((room, rows, len(y0))), kept)
     start = _time.process_time()
+    kernel.windings[:] = 0.0                  # the 3D rotational elements' angles: from the initial pose
     y = y0
     for t1 in ends:
         last = int(np.searchsorted(grid, t1, side="right"))      # grid[k:last] lie in (t0, t1]
@@ -1026,6 +1068,9 @@ class CompiledStepper(Stepper):
     def __init__(self, mech, settings, signals, kernel, stop_time=None):
         super().__init__(mech, settings, signals)
         self.kernel = kernel
+        if len(kernel.windings):
+            self._own_tables()                # its 3D rotational elements' φ_ref are this run's
+            self.kernel.windings[:] = 0.0     # measured from the initial pose
         self.path = "compiled"
         self.t_bound = float(stop_time) if stop_time is not None and stop_time > 0 else np.inf
         self._order = kernel.signal_order(signals)
@@ -1298,11 +1343,12 @@ class CompiledStepper(Stepper):
     def get_state(self) -> bytes:
         rk = None if self._rk is None else [a.copy() for a in self._rk]
         return pickle.dumps((self.time, self.y.copy(), self.h, self.inputs.copy(), self.steps, self.t_bound, rk,
-                             self._rk_inputs, self._input_moved))
+                             self._rk_inputs, self._input_moved, self.kernel.windings.copy()))
 
     def set_state(self, blob: bytes):
         (self.time, y, self.h, inputs, self.steps, self.t_bound, self._rk, self._rk_inputs,
-         self._input_moved) = pickle.loads(blob)
+         self._input_moved, windings) = pickle.loads(blob)
+        self.kernel.windings[:] = windings
         self.y = np.array(y)
         self.inputs = np.array(inputs)
         self._values = None

@@ -113,8 +113,8 @@ def flatten3(mech) -> dict:
     jt_int, jt_real = _joint_rows3(mech, pidx)
     m = sum(3 * c + d1 + d2 + sc for _, _, _, c, d1, d2, sc in jt_int)
 
-    def rotational(e, me):          # body indices; the axis and the initial relative orientation
-        extra = [*np.asarray(me.axis, dtype=float), *np.asarray(me.rel0, dtype=float).ravel()]
+    def rotational(e, me):          # body indices; the axis, the initial relative orientation, φ_ref = 0
+        extra = [*np.asarray(me.axis, dtype=float), *np.asarray(me.rel0, dtype=float).ravel(), 0.0]
         return me.fa.body, me.fb.body, me.free_angle, extra
 
     tables = element_tables(mech, pidx, rotational)

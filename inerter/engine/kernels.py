@@ -27,10 +27,11 @@ from inerter.elements import dispatch as law
 from inerter.elements.base import axial_scalars, rarely
 from inerter.elements.device import MODE_SOLVES
 from inerter.elements.inerter import settle
+from inerter.elements.winding import wound
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, DEVICE, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY,
                                      F_INITIAL, F_OFFSET, F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA, KIND,
-                                     MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE, POINT_A, POINT_B,
-                                     REL0, ROT_KIND, SCREW, SCREW_ADVANCE0,
+                                     MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE, PHI_REF, POINT_A,
+                                     POINT_B, REL0, ROT_KIND, SCREW, SCREW_ADVANCE0,
                                      SCREW_RATIO, SCREW_REL0, SCREW_ROW, STATE,
                                      STATES)
 
@@ -931,6 +932,29 @@ def _state_rates_by_dimension(q, v, z, qdd, P, dz):
     return lambda q, v, z, qdd, P, dz: state_rates2(q, v, z, qdd, P, dz)
 
 
+def _wind_of(y, P):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_wind_of, inline="always")
+def _wind_by_dimension(y, P):
+    """After an accepted step to y = [q, v, z]: :func:`wind3` in 3D; nothing in 2D, where a
+    rotational element's angle θ_b − θ_a has no branch."""
+    if is_spatial(P):
+        def wind_spatial(y, P):
+            nq = P[DIMS][N_COORD]
+            if P[ROT_INT].shape[0]:
+                wind3(y[:nq], y[nq:nq + P[DIMS][N_VELOCITY]], P)
+        return wind_spatial
+    return lambda y, P: None
+
+
+@njit(cache=True)
+def wind(y, P):
+    """:func:`_wind_of` from Python (the scipy integrators on the compiled right-hand side)."""
+    _wind_of(y, P)
+
+
 def _settle_of(q, v, qdd, P):
     raise NotImplementedError("compiled code only")
 
@@ -1066,6 +1090,7 @@ def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
     nq = P[DIMS][N_COORD]
     nv = nq + P[DIMS][N_VELOCITY]
     AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
+    _wind_of(y, P)                  # the samples come in time order: each winds on from the last
     if need_acc:
         st = accelerations(t, y[:nq], y[nq:nv], y[nv:], inputs, alpha, P, AB, rhs, gen, sig_acc)
         if st != OK:
@@ -1240,7 +1265,8 @@ def _rel(Aa, Ab, rot_real, e, i, j):
 @njit(cache=True, inline="always")
 def _rotational3(q, v, e, rot_int, rot_real):
     """A 3D rotational element (``elements.SpatialRotationalElement``): φ about the axis n̄ (fixed in
-    body a) since the initial relative orientation rel0, its rate n·(A_b ω_b − A_a ω_a), the torque
+    body a) since the initial relative orientation rel0, wound on from its angle at the last
+    accepted step (PHI_REF, inerter.elements.winding), its rate n·(A_b ω_b − A_a ω_a), the torque
     (restoring positive) and the axis in the global frame n = A_a n̄, with A_a, A_b."""
     ia = rot_int[e, BODY_A]
     ib = rot_int[e, BODY_B]
@@ -1263,7 +1289,7 @@ def _rotational3(q, v, e, rot_int, rot_real):
     nDn = (nx * (d00 * nx + d01 * ny + d02 * nz) + ny * (d10 * nx + d11 * ny + d12 * nz)
            + nz * (d20 * nx + d21 * ny + d22 * nz))
     c = 0.5 * (d00 + d11 + d22 - nDn)
-    phi = math.atan2(s, c)
+    phi = wound(rot_real[e, PHI_REF], math.atan2(s, c))
     gx, gy, gz = matrix9_apply(Aa, nx, ny, nz)
     wax, way, waz = _omega(v, ia)
     wbx, wby, wbz = _omega(v, ib)
@@ -1707,6 +1733,15 @@ def settle3(q, v, qdd, P):
         kind, L, Ldot, an, perp2, gq = _axial3(q, v, qdd, e, P, ga, gb)
         changed += settle(el_real[e], L, Ldot, an, perp2, gq)
     return changed
+
+
+@njit(cache=True)
+def wind3(q, v, P):
+    """Move each 3D rotational element's φ_ref (PHI_REF) on to its angle at (q, v), an accepted
+    state (inerter.elements.winding): the next steps read their angles on its branch."""
+    rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
+    for e in range(rot_int.shape[0]):
+        rot_real[e, PHI_REF] = _rotational3(q, v, e, rot_int, rot_real)[4]
 
 
 @njit(cache=True)
@@ -2367,6 +2402,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
             y_prev[i] = y[i]
             y[i] = y_new[i]
             f[i] = f_new[i]
+        _wind_of(y, P)
         hdr[RK_T_PREV] = t
         hdr[RK_H_LAST] = h
         if keeping:
@@ -2723,6 +2759,7 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
         for i in range(ny):
             y[i] = y_new[i]
             f[i] = f_new[i]
+        _wind_of(y, P)
         t = t_new
         if steps > max_steps:
             return MAX_STEPS, k, steps, evals, t

@@ -208,7 +208,8 @@ class StepMonitor:
     """Watches an integration after every accepted step: the mechanism's own checks (terminals
     meeting, Euler-angle singularity), the explicit methods' stiffness (Hairer's test), a step size
     collapsing towards a singularity, and the step budget max_steps. Each stops the run with a
-    SimulationError that names the method and what to do."""
+    SimulationError that names the method and what to do. A step that passes them moves the 3D
+    rotational elements' angles on (``mech.wind``: they wind past half a turn from there)."""
 
     def __init__(self, mech, method, max_steps):
         self.mech, self.method, self.max_steps = mech, method, max_steps
@@ -237,6 +238,7 @@ class StepMonitor:
                     f"singularity" + self.mech.diagnose(solver.y), t_old)
         else:
             self.small = 0
+        self.mech.wind(solver.y)
 
     def _stiffness(self, solver, h):
         K = getattr(solver, "K", None)
@@ -349,6 +351,7 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
     t0 = 0.0
     first_step = None
     max_drift = mech.constraint_residual(y[:n])
+    mech.reset_windings()                   # the angles are measured from the initial pose
     monitor = StepMonitor(mech, settings.method, settings.max_steps)
     solver = None
     try:
@@ -449,6 +452,7 @@ class Stepper:
         self.steps = 0
         self.path = "numpy"
         self.t_bound = float(stop_time) if stop_time is not None and stop_time > 0 else np.inf
+        mech.reset_windings()                 # the angles are measured from the initial pose
         self._runs_on = settings.method in RUNS_ON and settings.constraint != "projection"
         self._solver = None                   # the running integration (scipy OdeSolver)
         self._segment = None                  # its (end, ends at a jump)
@@ -473,6 +477,7 @@ class Stepper:
         the stepper unchanged, where `mech` differs in anything else (geometry, masses, ...)."""
         from inerter.engine.tables import check_retune
         check_retune(self.mech.scene, mech.scene)
+        mech.windings = self.mech.windings    # the angles wind on from where they are
         self.mech, self.signals = mech, signals
         self._solver = None
         self._input_moved = True
@@ -590,10 +595,11 @@ class Stepper:
     def get_state(self) -> bytes:
         running = None if self._solver is None else (self._segment, solver_state(self._solver))
         return pickle.dumps((self.time, self.y.copy(), self.h, self.inputs.copy(), self.steps, self.t_bound,
-                             self._input_moved, running))
+                             self._input_moved, running, self.mech.windings))
 
     def set_state(self, blob: bytes):
-        (self.time, y, self.h, inputs, self.steps, self.t_bound, self._input_moved, running) = pickle.loads(blob)
+        (self.time, y, self.h, inputs, self.steps, self.t_bound, self._input_moved, running,
+         self.mech.windings) = pickle.loads(blob)
         self.y = np.array(y)
         self.inputs = np.array(inputs)
         self._solver = self._dense = None

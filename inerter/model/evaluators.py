@@ -20,6 +20,7 @@ from inerter.common.errors import MIN_LENGTH, TerminalsMeet  # noqa: F401  (re-e
 from inerter.common.rotations import matrix9_apply, planar_matrix9
 from inerter.elements import device, device_inertia, layout, terminals
 from inerter.elements.base import axial_scalars as _compiled_axial_scalars
+from inerter.elements.winding import wound
 from inerter.model.planar import PointPair
 
 
@@ -363,7 +364,8 @@ class SpatialRotationalElement:
     """A rotational element about an axis between two 3D bodies (or a body and the ground), of any
     rotational kind. φ is the rotation about the axis (fixed in body a; global for the ground)
     measured from the initial relative orientation, so φ(0) = 0; exact while the relative rotation
-    is about that axis (as a revolute joint keeps it)."""
+    is about that axis (as a revolute joint keeps it). It winds on past half a turn from
+    :attr:`reference`, its angle at the last accepted step (inerter.elements.winding)."""
 
     def __init__(self, spec, frame_a, frame_b, q0):
         self.name = spec.name
@@ -380,6 +382,12 @@ class SpatialRotationalElement:
         Aa, _ = frame_a.evaluate(q0, z)
         Ab, _ = frame_b.evaluate(q0, z)
         self.rel0 = Aa.T @ Ab
+        #: φ_ref: the angle at the last accepted step (0 at t = 0), moved on by :meth:`wind`.
+        self.reference = 0.0
+
+    def wind(self, q):
+        """After an accepted step to q: the next angles are read on the branch of this one."""
+        self.reference = self.geometry(q, np.zeros(len(q)))[0]
 
     def geometry(self, q, v):
         Aa, wa = self.fa.evaluate(q, v)
@@ -389,7 +397,7 @@ class SpatialRotationalElement:
         s = 0.5 * (n[0] * (D[2, 1] - D[1, 2]) + n[1] * (D[0, 2] - D[2, 0]) + n[2] * (D[1, 0] - D[0, 1]))
         c = 0.5 * (np.trace(D) - n @ D @ n)
         n_w = Aa @ n
-        return math.atan2(s, c), float(n_w @ (Ab @ wb - Aa @ wa)), n_w, Aa, Ab
+        return wound.py_func(self.reference, math.atan2(s, c)), float(n_w @ (Ab @ wb - Aa @ wa)), n_w, Aa, Ab
 
     def torque(self, q, v, geo=None):
         phi, w, *_ = geo or self.geometry(q, v)

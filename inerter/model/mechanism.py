@@ -15,6 +15,7 @@ q̇ = B(q) v (the identity in 2D; the quaternion or Euler-angle rates in 3D).
 """
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -119,6 +120,8 @@ class Mechanism:
         self.initial_q = np.array(q0, dtype=float)
         self.elements = [self._element(e, q0) for e in scene.elements.values()]
         self.inerters = [e for e in self.elements if e.kind == "inerter"]
+        #: The 3D rotational elements, whose angles wind on from the last accepted step (:meth:`wind`).
+        self.winding = [e for e in self.elements if isinstance(e, el.SpatialRotationalElement)]
         #: The elements with a screw efficiency, whose modes each solve settles (:meth:`accelerations`).
         self.efficient = [e for e in self.inerters if getattr(e, "efficient", None) is not None and e.efficient()]
         # Elements on the same pair of terminals share one evaluation of the pair's geometry (one
@@ -356,6 +359,40 @@ class Mechanism:
                     f"sin θ goes from {s0:.3g} to {s1:.3g} in the step"
                     + (f" from t = {t_old:.6g} s" if t_old is not None else "") + "), where the angle rates are "
                     "undefined; use orientation = \"quaternion\" (the default)", t)
+
+    def wind(self, y):
+        """After an accepted step to the state y = [q, v, z] (or at each sample of a history, in time
+        order from t = 0): each 3D rotational element's φ_ref moves on to its angle there, so that
+        its angle winds on past half a turn (inerter.elements.winding); nothing in 2D."""
+        for e in self.winding:
+            e.wind(y[:self.nq])
+
+    @property
+    def windings(self) -> np.ndarray:
+        """The 3D rotational elements' φ_ref (0 at t = 0), in the order of :attr:`winding`."""
+        return np.array([e.reference for e in self.winding], dtype=float)
+
+    @windings.setter
+    def windings(self, values):
+        for e, value in zip(self.winding, values, strict=True):
+            e.reference = float(value)
+
+    def reset_windings(self):
+        """φ_ref at 0, its value at t = 0 (a run's start)."""
+        for e in self.winding:
+            e.reference = 0.0
+
+    @contextlib.contextmanager
+    def wound_from_start(self, start=None):
+        """φ_ref at 0, its value at t = 0 (or at `start`, the angles where the history starts), while
+        a history is evaluated sample after sample from there (each sample winding on,
+        :meth:`wind`); as it was afterwards."""
+        held = self.windings
+        self.windings = np.zeros(len(held)) if start is None else start
+        try:
+            yield
+        finally:
+            self.windings = held
 
     def check_terminals(self, q_old, q_new, t, t_old=None):
         """Stop where a translational element's terminals meet within a step: the closest approach

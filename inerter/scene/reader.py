@@ -903,11 +903,6 @@ def _read_elements(r: _Reader, raw, points, bodies, dimension):
             raise r.error(f"{fld}.{kind.coefficient.key}", coef, f"an inertance > 0 ({kind.coefficient.unit}) with "
                           "device.compliance (the series node's law divides by it)", "out of range")
         free = _read_parameter(r, spec, fld, kind.free) if kind.free is not None else None
-        if rotational and dimension == 3 and free is not None and not abs(free) < math.pi:
-            # a 3D relative rotation's angle is measured in (−π, π] from the initial pose: a spring
-            # whose free angle lies outside could never reach it, and its torque would jump at ±π
-            raise r.error(f"{fld}.{kind.free.key}", free, "a free angle in (−π, π) rad (in 3D the angle is "
-                          "measured from the initial pose, within a half turn either way)", "out of range")
         if rotational:
             axis = r.vector(spec, "axis", fld, 3, unit_length=True) if dimension == 3 else None
             out[ename] = Element(ename, etype, body_a=a, body_b=b, coefficient=coef, free_length=free, axis=axis)

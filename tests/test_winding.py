@@ -1,0 +1,229 @@
+"""A 3D rotational spring winds on past half a turn (inerter.elements.winding).
+
+The scene: a bar (m = 1 kg, length 1 m, J = m l²/3 = 1/3 kg·m² about its end) pinned to the
+ground about z through a rotational spring k = 3 N·m/rad, tests/data/winding_bar_3d.toml, a linear
+torsional oscillator J θ̈ = −k(θ − θ0) whose closed form is
+
+    θ(t) = θ0 + (θ(0) − θ0) cos ωt + θ̇(0)/ω sin ωt,   ω = √(k/J) = 3 rad/s,
+
+with amplitude θ̇(0)/ω = 3.33 rad (θ̇(0) = 10 rad/s) or |θ0| (θ0 = ±3π/2), past π either way.
+References: that closed form, the planar twin (tests/data/winding_bar_2d.toml, whose angle
+θ_b − θ_a has no branch: another code path of the engine, which never winds), the energy
+E = ½Jθ̇² + ½k(θ − θ0)² of the initial state, and the oracle at a state past π.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import inerter
+from inerter.cli import main
+from inerter.elements.winding import wound
+
+DATA = Path(__file__).parent / "data"
+BAR_3D = DATA / "winding_bar_3d.toml"
+BAR_2D = DATA / "winding_bar_2d.toml"
+J, K = 1.0 / 3.0, 3.0
+OMEGA = math.sqrt(K / J)
+# (initial angular velocity, free angle): wound past π by the initial velocity, or by a free angle
+# three quarters of a turn away either way
+CASES = {"spun": (10.0, 0.0), "free_angle_ahead": (0.0, 1.5 * math.pi), "free_angle_behind": (2.0, -1.5 * math.pi)}
+
+
+def closed_form(t, w0, phi0):
+    """θ(t) of J θ̈ = −k(θ − θ0) from θ(0) = 0, θ̇(0) = w0."""
+    return phi0 - phi0 * np.cos(OMEGA * t) + w0 / OMEGA * np.sin(OMEGA * t)
+
+
+def run(scene, case, **kw):
+    w0, phi0 = CASES[case]
+    return inerter.load(scene, w=w0, phi0=phi0).simulate(**kw)
+
+
+def test_the_unwrap_picks_the_branch_nearest_the_reference():
+    """wound(φ_ref, reading) = reading + 2πk within (φ_ref − π, φ_ref + π]: worked by hand."""
+    assert wound(0.0, 0.5) == 0.5
+    assert wound.py_func(3.0, -3.0) == pytest.approx(-3.0 + 2 * math.pi, abs=1e-15)
+    assert wound.py_func(-3.0, 3.0) == pytest.approx(3.0 - 2 * math.pi, abs=1e-15)
+    assert wound.py_func(20.0, 1.0) == pytest.approx(1.0 + 6 * math.pi, abs=1e-14)
+    assert wound.py_func(0.0, math.pi) == math.pi                    # half a turn goes forward
+    assert wound.py_func(2 * math.pi, -math.pi) == pytest.approx(3 * math.pi, abs=1e-15)
+
+
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
+@pytest.mark.parametrize("case", CASES)
+def test_the_3d_spring_winds_as_its_planar_twin_and_the_closed_form(path, case):
+    """φ and τ of the 3D bar equal the 2D twin's and the closed form at every sample, past π
+    (rtol 1e-10: the runs agree to 1e-8 rad, the closed form to 1e-8 rad; τ = kφ to 1e-7 N·m)."""
+    r3 = run(BAR_3D, case, path=path)
+    r2 = run(BAR_2D, case, path=path)
+    assert r3.run.status == "ok" and r2.run.status == "ok"
+    assert path == "numpy" or r3.run.extra["path"] == "compiled"
+    w0, phi0 = CASES[case]
+    phi, tau = r3["torsion.phi_rel"], r3["torsion.tau"]
+    reference = closed_form(r3.time, w0, phi0)
+    assert np.abs(reference).max() > math.pi + 0.1                    # it does wind past half a turn
+    assert np.abs(phi - r2["torsion.phi_rel"]).max() < 1e-8
+    assert np.abs(tau - r2["torsion.tau"]).max() < 1e-7
+    assert np.abs(phi - reference).max() < 1e-8
+    assert np.abs(tau - K * (reference - phi0)).max() < 1e-7
+    assert not r3.warnings
+
+
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
+def test_energy_is_conserved_through_the_wrap(path):
+    """Spring and kinetic energy (the `energy` output) stay at E = ½Jθ̇(0)² + ½kθ0² within 1e-8
+    relative, through two passes of ±π (spun and wound by the free angle at once)."""
+    w0, phi0 = 6.0, 1.5 * math.pi
+    r = inerter.load(BAR_3D, w=w0, phi0=phi0).simulate(path=path)
+    E0 = 0.5 * J * w0 ** 2 + 0.5 * K * phi0 ** 2
+    assert np.abs(r["torsion.phi_rel"] - closed_form(r.time, w0, phi0)).max() < 1e-8
+    assert np.abs(r["energy"] - E0).max() < 1e-8 * E0
+
+
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
+@pytest.mark.parametrize("method", ["Radau", "BDF", "LSODA", "RK45", "RK4"])
+def test_each_method_winds(path, method):
+    """Every integrator moves φ_ref on after its accepted steps: the closed form within 2e-4 rad
+    (rtol 1e-8 for the adaptive methods; RK4's step 1e-3 s: error ~(ωh)⁴)."""
+    w0, phi0 = CASES["spun"]
+    r = inerter.load(BAR_3D, w=w0, phi0=phi0, **{"experiment.step": 1e-3}).simulate(
+        path=path, method=method, rtol=1e-8, atol=1e-10)
+    assert r.run.status == "ok", r.run.message
+    assert np.abs(r["torsion.phi_rel"] - closed_form(r.time, w0, phi0)).max() < 2e-4
+
+
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
+def test_the_dense_output_reads_the_wound_angle_between_samples(path):
+    """The dense output of φ and τ (DOP853's polynomials) at times between samples in a window
+    late in the run where φ > π throughout (its first time more than half a turn from φ = 0)
+    equals the closed form within 1e-8 rad (1e-7 N·m)."""
+    from inerter.api import Result
+    from inerter.engine import compiled
+
+    w0, phi0 = CASES["spun"]
+    model = inerter.load(BAR_3D, w=w0, phi0=phi0)
+    settings = model.settings()
+    run = (compiled.integrate_compiled(model.mechanism, settings, dense=True) if path == "compiled"
+           else model.simulate(path="numpy", metrics=False).run)
+    result = Result(model, settings, run)
+    assert path == "numpy" or run.extra["path"] == "compiled"
+    t = np.linspace(2.55, 2.7, 16)                # φ > π throughout: 3.33 sin 3t
+    reference = closed_form(t, w0, phi0)
+    assert reference.min() > math.pi
+    assert np.abs(result.dense("torsion.phi_rel")(t) - reference).max() < 1e-8
+    assert np.abs(result.dense("torsion.tau")(t) - K * (reference - phi0)).max() < 1e-7
+
+
+def bar_state(model, theta, rate):
+    """The bar's state (q, v) at angle θ about z, turning at θ̇ (quaternion orientation)."""
+    q = np.array([0.5 * math.cos(theta), 0.5 * math.sin(theta), 0.0,
+                  math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2)])
+    v = np.array([-0.5 * rate * math.sin(theta), 0.5 * rate * math.cos(theta), 0.0, 0.0, 0.0, rate])
+    assert model.mechanism.nq == 7 and model.mechanism.n == 6
+    return q, v
+
+
+def test_the_engine_equals_the_oracle_past_half_a_turn():
+    """At θ = 1.2π + 2π (a turn and more: the reading is −0.8π), on the branch of φ_ref = 3π: the
+    compiled kernels' accelerations equal the oracle's (the oracle given the branch) and the closed
+    form θ̈ = −k(θ − θ0)/J, to 1e-9 relative; with φ_ref = 0 they would read θ − 4π."""
+    from inerter.engine.compiled import compile_mechanism
+
+    model = inerter.load(BAR_3D, phi0=0.5)
+    oracle = model.oracle()
+    theta, rate = 3.2 * math.pi, 2.0
+    q, v = bar_state(model, theta, rate)
+    kernel = compile_mechanism(model.mechanism)
+    kernel.windings[:] = 3.0 * math.pi
+    oracle.mechanism.windings = [3.0 * math.pi]
+    a_engine, _ = kernel.accelerations(0.0, q, v)
+    a_oracle, _ = oracle.mechanism.accelerations(0.0, q, v)
+    expected = -K * (theta - 0.5) / J
+    assert a_engine[5] == pytest.approx(expected, rel=1e-9)
+    assert a_oracle[5] == pytest.approx(expected, rel=1e-9)
+    assert np.allclose(a_engine, a_oracle, rtol=0, atol=1e-9 * abs(expected))
+    kernel.windings[:] = 0.0
+
+
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
+def test_a_stepper_rolled_back_winds_as_before(path):
+    """A co-simulation stepper (spun at 20 rad/s: amplitude 6.7 rad) saved near φ = 0, stepped past
+    1.3π, restored and stepped again gives the same φ, the whole run's (within 1e-8 rad)."""
+    model = inerter.load(BAR_3D, w=20.0)
+    stepper = model.stepper(path=path)
+    stepper.step(0.01)
+    saved = stepper.get_state()
+    for k in range(2, 51):
+        stepper.step(0.01 * k)
+    first = stepper.outputs()["torsion.phi_rel"]
+    stepper.set_state(saved)
+    for k in range(2, 51):
+        stepper.step(0.01 * k)
+    again = stepper.outputs()["torsion.phi_rel"]
+    assert first > 1.3 * math.pi
+    assert again == first
+    assert first == pytest.approx(float(closed_form(0.5, 20.0, 0.0)), abs=1e-8)
+
+
+@pytest.mark.parametrize("angle", ["3.5", "-3.2", "4*pi"])
+def test_a_3d_free_angle_may_be_any_number_of_turns(tmp_path, angle):
+    """The free angle is no longer limited to (−π, π): the scene loads and the bar, released from
+    rest, swings about it (its torque at t = 0 is −k·φ0)."""
+    model = inerter.load(BAR_3D, w=0.0, phi0=angle)
+    r = model.simulate(stop_time=0.05)
+    phi0 = {"3.5": 3.5, "-3.2": -3.2, "4*pi": 4 * math.pi}[angle]
+    assert r["torsion.tau"][0] == pytest.approx(-K * phi0, rel=1e-12)
+    assert main(["describe", str(BAR_3D), "--set", f"phi0={angle}"]) == 0
+
+
+def test_a_rotor_spun_past_half_a_turn_reports_its_wound_angle(tmp_path, capsys):
+    """A rotor spinning at ω = 10 rad/s on a spring too weak to slow it (k = 1e-9 N·m/rad; closed
+    form: uniform rotation, φ = 10 t) passes π at t = π/10 s: its φ_rel goes on to 10 rad at 1 s
+    (within 1e-6 rad) and the run warns of nothing."""
+    import csv
+    scene = tmp_path / "rotor.toml"
+    scene.write_text(ROTOR_3D)
+    out = tmp_path / "out"
+    assert main(["run", str(scene), "--out", str(out)]) == 0
+    assert "±π" not in capsys.readouterr().err
+    with open(out / "rotor.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    t = np.array([float(row["time (s)"]) for row in rows])
+    phi = np.array([float(row["torsion.phi_rel (rad)"]) for row in rows])
+    assert np.abs(phi - 10.0 * t).max() < 1e-6 and phi[-1] > 3 * math.pi
+
+
+ROTOR_3D = """
+[scene]
+name = "rotor"
+dimension = 3
+
+[bodies.rotor]
+mass = 1.0
+inertia = [0.1, 0.1, 0.1]
+position = [0, 0, 0]
+angular_velocity = [0, 0, 10]
+points = { P = [0, 0, 0] }
+
+[ground.points]
+O = [0, 0, 0]
+
+[joints.hub]
+type = "revolute"
+between = ["O", "P"]
+axis = [0, 0, 1]
+
+[elements.torsion]
+type = "rotational_spring"
+bodies = ["ground", "rotor"]
+axis = [0, 0, 1]
+k = 1e-9
+
+[experiment]
+stop_time = 1.0
+output_interval = 0.01
+"""

@@ -151,9 +151,6 @@ def test_two_metrics_whose_values_share_a_name(tmp_path, capsys, second, clash):
     one_line(capsys, str(scene), ".prefix", "name clash", repr(clash))
 
 
-PARALLELOGRAM = "parallelogram_2d.toml"
-
-
 @pytest.mark.parametrize("path", ["numpy", "compiled"])
 def test_a_mechanism_at_a_change_point_stops_and_says_why(tmp_path, capsys, path):
     """tests/data/parallelogram_2d.toml turns at a constant crank rate θ̇0 (the loader's projection
@@ -180,16 +177,26 @@ def test_each_compiled_loop_stops_at_the_change_point(tmp_path, capsys, settings
     _stops_at_the_change_point(tmp_path, capsys, ["--path", "compiled"] + [a for s in settings for a in ("--set", s)])
 
 
-def _stops_at_the_change_point(tmp_path, capsys, args):
+@pytest.mark.parametrize("method", ["DOP853", "RK4"])
+def test_a_spatial_mechanism_at_a_change_point_stops_and_says_why(tmp_path, capsys, method):
+    """tests/data/parallelogram_3d.toml, the parallelogram with spatial bodies (revolute joints about
+    Z at the ground, spherical joints at the coupler): the same crank rate θ̇0 (ω_z, body frame =
+    global about Z) and t* = (π/2)/|θ̇0|, the same stop on the 3D kernels."""
+    _stops_at_the_change_point(tmp_path, capsys, ["--path", "compiled", "--set", f"experiment.method={method}"],
+                               "parallelogram_3d", rate=5)
+
+
+def _stops_at_the_change_point(tmp_path, capsys, args, name="parallelogram_2d", rate=2):
+    """`rate`: the crank's angle rate's index in v0."""
     import inerter
     from conftest import ROOT
-    scene = ROOT / "tests" / "data" / PARALLELOGRAM
+    scene = ROOT / "tests" / "data" / f"{name}.toml"
     mech = inerter.load(scene).mechanism
-    t_star = (math.pi / 2) / abs(mech.v0[2])
+    t_star = (math.pi / 2) / abs(mech.v0[rate])
     out = tmp_path / "out"
     assert main(["run", str(scene), *args, "--out", str(out)]) == 3
     one_line(capsys, str(scene), "joints a, b, c, d", "change point")
-    data = rows(out / "parallelogram_2d.csv")
+    data = rows(out / f"{name}.csv")
     assert all(math.isfinite(float(x)) for row in data for x in row)
     assert t_star - 0.02 <= float(data[-1][0]) <= t_star
 

@@ -923,12 +923,12 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         seg_out = np.empty((len(seg), len(y0)))
         seg_out[0] = y
         if settings.method == "RK4":
-            status, done, s_steps, s_evals, t_reached = _k.integrate_rk4(
+            status, done, s_steps, s_evals, t_reached, y_reached = _k.integrate_rk4(
                 y, t0, t1, seg, seg_out, float(settings.step), int(settings.max_steps) - steps, inp, alpha,
                 kernel.params, t1 if t1 in switches else 0.0, kinks, _monitor("RK4"))
         else:
             A, B, C, E, E3, D, Pm = tables
-            status, done, s_steps, s_evals, t_reached, h, keep = _k.integrate_rk(
+            status, done, s_steps, s_evals, t_reached, h, keep, y_reached = _k.integrate_rk(
                 _RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol), float(settings.atol), 0.0,
                 int(settings.max_steps) - steps, inp, alpha, kernel.params, A, B, C, E, E3, D, Pm,
                 _monitor(settings.method), t1 if t1 in switches else 0.0, kinks, keep)
@@ -938,7 +938,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         out[k:k + written] = seg_out[1:1 + written]
         k += written
         if status != 0:
-            stopped = seg_out[min(done, len(seg) - 1)] if status == _k.CHANGE_POINT else None  # its state there
+            stopped = y_reached if status == _k.CHANGE_POINT else None      # the state it stopped at there
             break
         y, t0 = seg_out[-1].copy(), t1
     cpu = _time.process_time() - start
@@ -1153,14 +1153,12 @@ class CompiledStepper(Stepper):
         step (:func:`compiled_kernels.rk4_cosim_step`, which the FMU's native step calls too)."""
         s, kernel = self.settings, self.kernel
         y = np.array(self.y, dtype=float)                 # advanced in place, segment by segment
-        out = np.empty((2, len(y)))
         status, steps, t_reached, t_fail = _k.rk4_cosim_step(
-            y, float(self.time), t_end, self._jumps, self._kinks, np.zeros(2), out,
+            y, float(self.time), t_end, self._jumps, self._kinks, np.zeros(2), np.empty((2, len(y))),
             float(s.step), int(s.max_steps), kernel._inputs(self.inputs.copy()), float(s.alpha), kernel.params,
             self._monitor)
         if status:
-            stopped = out[1] if status == _k.CHANGE_POINT else y      # the state it stopped at there
-            why = failure_text(kernel, status, s.method, s.step, stopped, t_fail, int(s.max_steps))
+            why = failure_text(kernel, status, s.method, s.step, y, t_fail, int(s.max_steps))
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
         self.steps += int(steps)
         if not np.isfinite(y).all():

@@ -2048,9 +2048,10 @@ def _stop_at_change_point(loop, method, hdr, y, y_prev, f_prev, f, dense, Pm, t,
     time it stops at, the first k not written). LOOP_REACHED: it stops at t, the step's samples
     written; LOOP_CROSSED: at the last time before the crossing (:func:`locate_crossing`), the
     samples before it written (the mechanism's motion is determined up to there), y becoming the
-    state there; or, where the crossing is not a change point, OK and nothing written. On
-    CHANGE_POINT, out[k] (where k < len(ts): not a sample) holds the state it stops at, for the
-    message."""
+    state there (for the message); or, where the crossing is not a change point, OK and nothing
+    written. Where every time of `ts` lies before the stop (a co-simulation step's integrator step
+    reaching past its communication point), their samples are written and the status is OK: the
+    caller takes the step again when asked further (:func:`_step_back`)."""
     ny = y.shape[0]
     t_stop = t
     stop = np.empty((1, ny))
@@ -2068,10 +2069,25 @@ def _stop_at_change_point(loop, method, hdr, y, y_prev, f_prev, f, dense, Pm, t,
         else:
             _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
         k += 1
+    if k == ts.shape[0]:
+        return OK, t, k
     y[:] = stop[0]
-    if k < ts.shape[0]:
-        out[k, :] = stop[0]
     return CHANGE_POINT, t_stop, k
+
+
+@njit(cache=True)
+def _step_back(hdr, y, f, y_prev, f_prev, P, gaps, z):
+    """Undo the last accepted step (from hdr[RK_T_PREV], y_prev, f_prev: its start) where it reached
+    a change point past every time asked for (:func:`_stop_at_change_point`): the integration
+    stays at the step's start, without a dense output (every sample before it is written), and
+    the terminals' gaps are those there; taken again from there with the same size, the step is
+    the same (a co-simulation step's samples do not depend on where the communication points
+    fall). Returns the time it stays at."""
+    y[:] = y_prev
+    f[:] = f_prev
+    hdr[RK_DENSE] = 0.0
+    gaps_at(y, P, gaps, z)
+    return hdr[RK_T_PREV]
 
 
 @njit(cache=True)
@@ -2614,7 +2630,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         if rarely(loop != LOOP_CLEAR):
             status, t, k = _stop_at_change_point(loop, method, hdr, y, y_prev, y_prev, f, dense, Pm, t, ts, k, out,
                                                  inputs, alpha, P, work, monitor)
-            if status != OK:
+            if status != OK or k == ts.shape[0]:
+                if status == OK:
+                    t = _step_back(hdr, y, f, y_prev, K[0], P, gaps, z)
+                h_abs = abs(h)
                 break
         k = _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
         if hdr[RK_STEPS] - steps_before > max_steps:
@@ -2633,8 +2652,9 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     discontinuity it ends at (0: none), see :func:`_before`. `keep`: (nodes, coeffs, kept) of
     :func:`rk_advance` (:func:`no_keep`: nothing kept), to which every step's dense output is
     appended, the arrays replaced by ones twice as long when full. Returns (status, samples written, steps,
-    evaluations, t reached, next step size, keep): the step size is the one the error control
-    proposes after the last accepted step (scipy's ``h_abs``)."""
+    evaluations, t reached, next step size, keep, the state reached): the step size is the one the
+    error control proposes after the last accepted step (scipy's ``h_abs``); the state, where it
+    stopped at a change point (CHANGE_POINT), the one there."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = y0.shape[0]
     hdr = np.zeros(RK_HEADER)
@@ -2664,7 +2684,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
         longer = np.empty(size + 1)
         longer[:room + 1] = nodes
         nodes = longer
-    return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H], (nodes, coeffs, kept)
+    return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H], (nodes, coeffs, kept), y
 
 
 # ------------------------------------------------------------------------------------------------
@@ -2917,10 +2937,16 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, j
     integration ends at (0: none), see :func:`_before`. The step before t_end and the step before
     each of the increasing `kinks` (a ground record's samples, where the right-hand side's slope
     jumps) are shortened to end there, and from a kink the steps go on with the fixed step and the
-    last derivative, as from a restart there without its evaluation."""
+    last derivative, as from a restart there without its evaluation. A mechanism with closed loops
+    is watched for change points (:func:`loop_watch`, its ratio in `monitor`). Returns (status,
+    samples written, steps, evaluations, t reached, the state reached: where it stopped at a change
+    point, the one there)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     work = work_arrays(P, y0.shape[0], 4)
-    return _rk4_run(y0.copy(), t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work, monitor)
+    y = y0.copy()
+    st, k, steps, evals, t = _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work,
+                                      monitor)
+    return st, k, steps, evals, t, y
 
 
 @njit(cache=True)
@@ -2972,6 +2998,7 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
             st, t_stop, k = _rk4_loop_watch(t, y, f, t_new, y_new, f_new, grid, k, out, inputs, alpha, P, work,
                                             monitor)
             if st != OK:
+                y[:] = y_new                # the state it stopped at (_stop_at_change_point)
                 return st, k, steps, evals, t_stop
         while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
             _hermite(y, f, y_new, f_new, h, (grid[k] - t) / h, out, k)
@@ -2993,7 +3020,8 @@ def rk4_cosim_step(y, t0, t_end, jumps, kinks, ts, out, step, max_steps, inputs,
     eps = 1e-12·max(1 s, |t_end|) one at t_end ends the last segment and one at t0 starts none.
     The increasing `kinks` in (t0 + eps, t_end − eps] end steps, which run on from them
     (:func:`integrate_rk4`). `ts`, `out`: scratch of two samples. Returns (status, steps, the time
-    reached, the start of the segment that failed)."""
+    reached, the start of the segment that failed); y is left at that start, or where the step
+    stopped at a change point (CHANGE_POINT), at the state there."""
     P = _unowned(P)                 # entered from Python (_unowned)
     eps = 1e-12 * max(1.0, abs(t_end))
     steps = 0
@@ -3009,10 +3037,12 @@ def rk4_cosim_step(y, t0, t_end, jumps, kinks, ts, out, step, max_steps, inputs,
         jump = end if j < jumps.shape[0] and jumps[j] <= end + eps else 0.0
         ts[0] = t0
         ts[1] = end
-        st, k, s_steps, evals, t_reached = integrate_rk4(y, t0, end, ts, out, step, max_steps, inputs, alpha, P,
-                                                         jump, inside, monitor)
+        st, k, s_steps, evals, t_reached, y_reached = integrate_rk4(y, t0, end, ts, out, step, max_steps, inputs,
+                                                                    alpha, P, jump, inside, monitor)
         steps += s_steps
         if st != OK:
+            if st == CHANGE_POINT:
+                y[:] = y_reached            # the state it stopped at, for the message
             return st, steps, t_reached, t0
         y[:] = out[1]
         if end == t_end:

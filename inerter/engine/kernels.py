@@ -2568,8 +2568,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     gave it room (:func:`integrate_rk`). Keeping them changes neither the steps nor the samples.
     `gaps`, `z`: the terminals' gaps at y (:func:`terminal_gaps`), moved on with every accepted
     step (:func:`terminals_meet`), so that a call resuming the integration need not evaluate them
-    again. Returns (status, the first k not written); on failure y, f and the last step's data are
-    those of the last good node (`gaps` may be the failed step's)."""
+    again. A mechanism whose joints close a loop (dims[LOOPS] > 0) is watched for change points
+    after each accepted step (:func:`_rk_loop_watch`). Returns (status, the first k not written);
+    on failure y, f and the last step's data are those of the last good node (`gaps` may be the
+    failed step's), except at a change point (CHANGE_POINT), where y is the state it stopped at."""
     work = _unowned(work)
     K, y_new, f_new = work[4], work[5], work[6]
     n_stages, order = _rk_shape(method)
@@ -2604,14 +2606,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         if status != OK:
             h_abs = abs(h)
             break
-        loop = LOOP_CLEAR
-        if rarely(P[DIMS][LOOPS] != 0):
-            loop = loop_watch(t, y, t_new, y_new, inputs, alpha, P, work, monitor)
         # The step is accepted: it becomes the last step, with its dense output where a sample lies
-        # inside it (DOP853's extra stages are evaluated only then), where every step's is kept or
-        # where a change point is located on it.
+        # inside it (DOP853's extra stages are evaluated only then) or where every step's is kept.
         hdr[RK_DENSE] = 0.0
-        if keeping or loop == LOOP_CROSSED or (ts[k] <= t_new + 1e-12 * max(1.0, t_new) and ts[k] < t_new):
+        if keeping or (ts[k] <= t_new + 1e-12 * max(1.0, t_new) and ts[k] < t_new):
             status = _rk_dense(method, hdr, t, h, y, inputs, alpha, P, A, C, Dm, Pm, work, before, dense)
             if status != OK:
                 break
@@ -2627,12 +2625,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         t = t_new
         while ik < kinks.shape[0] and kinks[ik] <= t:
             ik += 1
-        if rarely(loop != LOOP_CLEAR):
-            status, t, k = _stop_at_change_point(loop, method, hdr, y, y_prev, y_prev, f, dense, Pm, t, ts, k, out,
-                                                 inputs, alpha, P, work, monitor)
+        if rarely(P[DIMS][LOOPS] != 0):
+            status, t, k = _rk_loop_watch(method, hdr, y, y_prev, f, dense, t, ts, k, out, inputs, alpha, P, A, C,
+                                          Dm, Pm, monitor, work, before, gaps, z)
             if status != OK or k == ts.shape[0]:
-                if status == OK:
-                    t = _step_back(hdr, y, f, y_prev, K[0], P, gaps, z)
                 h_abs = abs(h)
                 break
         k = _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
@@ -2914,6 +2910,32 @@ def _cosim_step(method, hdr, y, f, y_prev, dense, t_end, ts, out, t_bound, rtol,
 #: (the arguments as one tuple), which numba's inliner refuses ("Calling a closure with *args").
 cosim_step = njit(cache=True)(_cosim_step)
 _cosim_step_inlined = njit(inline="always")(_cosim_step)
+
+
+@njit(cache=True)
+def _rk_loop_watch(method, hdr, y, y_prev, f, dense, t, ts, k, out, inputs, alpha, P, A, C, Dm, Pm, monitor, work,
+                   before, gaps, z):
+    """:func:`loop_watch` on the step :func:`rk_advance` has just accepted (from hdr[RK_T_PREV],
+    y_prev to (t, y); its stages still in `work`) and, where it finds a change point,
+    :func:`_stop_at_change_point`, the step's dense output computed first where a crossing is to be
+    located on it; where every time of `ts` lies before the stop, the step is taken back
+    (:func:`_step_back`), the caller ending its call there. Kept out of :func:`rk_advance`'s loop,
+    which a tree of joints runs as before. Returns (status, the time it stops or stays at, the
+    first k not written)."""
+    loop = loop_watch(hdr[RK_T_PREV], y_prev, t, y, inputs, alpha, P, work, monitor)
+    if loop == LOOP_CLEAR:
+        return OK, t, k
+    if loop == LOOP_CROSSED and hdr[RK_DENSE] == 0.0:
+        st = _rk_dense(method, hdr, hdr[RK_T_PREV], hdr[RK_H_LAST], y_prev, inputs, alpha, P, A, C, Dm, Pm, work,
+                       before, dense)
+        if st != OK:
+            return st, t, k
+        hdr[RK_DENSE] = 1.0
+    status, t_stop, k = _stop_at_change_point(loop, method, hdr, y, y_prev, y_prev, f, dense, Pm, t, ts, k, out,
+                                              inputs, alpha, P, work, monitor)
+    if status == OK and k == ts.shape[0]:
+        return OK, _step_back(hdr, y, f, y_prev, work[4][0], P, gaps, z), k
+    return status, t_stop, k
 
 
 @njit(cache=True)

@@ -6,8 +6,8 @@ Runs the scene's compiled whole run keeping every step's dense output and prints
 steps around the time where C_v's smallest/largest singular value is least: the step size, that
 ratio, the largest |q̈| and |λ| of Eq. (33). Then scipy's DOP853 on the same compiled right-hand
 side, and at every stage of its step across that time the same measures. The run stops there
-now; to see what the loop did before the change-point watch, run it with a tree whose kernels
-lack it.
+now (kernels.loop_watch); to see what the loop did before that watch, run it on the commit before
+it (docs/changepoint.md).
 """
 from __future__ import annotations
 

@@ -177,6 +177,37 @@ def test_each_compiled_loop_stops_at_the_change_point(tmp_path, capsys, settings
     _stops_at_the_change_point(tmp_path, capsys, ["--path", "compiled"] + [a for s in settings for a in ("--set", s)])
 
 
+@pytest.mark.parametrize("h", [0.0007, 0.003, 0.01, 0.037])
+def test_a_cosim_step_fails_where_it_reaches_the_change_point(h):
+    """Co-simulation steps of h on the compiled stepper (its DOP853 integration runs on across
+    communication points, its steps of up to 0.03 s reaching past them): every step before the
+    change point succeeds, and the one that fails holds t* (closed form, above) or ends within
+    1e-3 s before it (the watch stops where the joints' rows are within 1e-4 of dependent, about
+    1e-4 rad of crank before t*), saying so, and fails again from the same state when retried (an
+    integrator step reaching it past a communication point is taken back, kernels._step_back)."""
+    import inerter
+    from conftest import ROOT
+    from inerter.common.errors import SimulationError
+    model = inerter.load(ROOT / "tests" / "data" / "parallelogram_2d.toml")
+    t_star = (math.pi / 2) / abs(model.mechanism.v0[2])
+    stepper = model.stepper(path="compiled")
+    assert stepper.path == "compiled"
+    t = 0.0
+    while t < 2.0:
+        try:
+            stepper.step(t + h)
+        except SimulationError as exc:
+            failure = str(exc)
+            break
+        t += h
+    else:
+        pytest.fail("no step failed")
+    assert t <= t_star < t + h + 1e-3, (t, t + h, t_star)
+    assert "change point" in failure and "joints a, b, c, d" in failure
+    with pytest.raises(SimulationError, match="change point"):
+        stepper.step(t + h)
+
+
 @pytest.mark.parametrize("method", ["DOP853", "RK4"])
 def test_a_spatial_mechanism_at_a_change_point_stops_and_says_why(tmp_path, capsys, method):
     """tests/data/parallelogram_3d.toml, the parallelogram with spatial bodies (revolute joints about

@@ -91,32 +91,108 @@ def test_two_metrics_whose_values_share_a_name(tmp_path, capsys, second, clash):
     one_line(capsys, str(scene), ".prefix", "name clash", repr(clash))
 
 
-#: Open: the compiled loop's steps pass the change point (the banded solve of Eq. 33 does not fail
-#: at a state near it) and the run goes on along the anti-parallelogram branch without a word
-#: (measured: the rocker's angle leaves the crank's, 1.58 rad apart at t = 3 s; energy and joints
-#: are kept). Which branch a real linkage takes there is not determined; the run should say so.
-COMPILED_PASSES = pytest.mark.xfail(strict=True, reason="the compiled path passes the change point silently")
-
-
-@pytest.mark.parametrize("path", ["numpy", pytest.param("compiled", marks=COMPILED_PASSES)])
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
 def test_a_mechanism_at_a_change_point_stops_and_says_why(tmp_path, capsys, path):
     """tests/data/parallelogram_2d.toml turns at a constant crank rate θ̇0 (the loader's projection
     of the given velocities; no force acts and the coupler translates, so the kinetic energy
     ½(2(J + m/4) + m)θ̇² fixes θ̇) from θ = π/2 to the change point θ = π at t* = (π/2)/|θ̇0|
     (closed form), where all four pivots lie on a line. The run stops just before t* (status 3) and
     names the dependent joints; its samples up to there are kept and finite. It said only
-    "Required step size is less than spacing between numbers" (numpy path)."""
+    "Required step size is less than spacing between numbers" (numpy path); the compiled loop went
+    on along the anti-parallelogram branch without a word."""
+    _stops_at_the_change_point(tmp_path, capsys, ["--path", path])
+
+
+@pytest.mark.parametrize("settings", [
+    ("experiment.method=RK45",),
+    ("experiment.method=RK4",),
+    # steps that jump across t* (0.05 s, 0.04 rad of crank; the joints' rows are 5e-3 from dependent
+    # at their ends): the orientation det(C_v(q₁) C_v(q₀)ᵀ) changes sign over the step
+    ("experiment.method=RK4", "experiment.step=0.05"),
+    ("experiment.rtol=1e-3", "experiment.atol=1e-6"),
+])
+def test_each_compiled_loop_stops_at_the_change_point(tmp_path, capsys, settings):
+    """As above for the compiled RK45 and RK4 loops, and with steps long enough to jump across the
+    change point (kernels.loop_watch, locate_crossing): the same stop, samples and line."""
+    _stops_at_the_change_point(tmp_path, capsys, ["--path", "compiled"] + [a for s in settings for a in ("--set", s)])
+
+
+@pytest.mark.parametrize("h", [0.0007, 0.003, 0.01, 0.037])
+def test_a_cosim_step_fails_where_it_reaches_the_change_point(h):
+    """Co-simulation steps of h on the compiled stepper (its DOP853 integration runs on across
+    communication points, its steps of up to 0.03 s reaching past them): every step before the
+    change point succeeds, and the one that fails holds t* (closed form, above) or ends within
+    1e-3 s before it (the watch stops where the joints' rows are within 1e-4 of dependent, about
+    1e-4 rad of crank before t*), saying so, and fails again from the same state when retried (an
+    integrator step reaching it past a communication point is taken back, kernels._step_back)."""
     import inerter
     from conftest import ROOT
-    scene = ROOT / "tests" / "data" / "parallelogram_2d.toml"
+    from inerter.common.errors import SimulationError
+    model = inerter.load(ROOT / "tests" / "data" / "parallelogram_2d.toml")
+    t_star = (math.pi / 2) / abs(model.mechanism.v0[2])
+    stepper = model.stepper(path="compiled")
+    assert stepper.path == "compiled"
+    t = 0.0
+    while t < 2.0:
+        try:
+            stepper.step(t + h)
+        except SimulationError as exc:
+            failure = str(exc)
+            break
+        t += h
+    else:
+        pytest.fail("no step failed")
+    assert t <= t_star < t + h + 1e-3, (t, t + h, t_star)
+    assert "change point" in failure and "joints a, b, c, d" in failure
+    with pytest.raises(SimulationError, match="change point"):
+        stepper.step(t + h)
+
+
+@pytest.mark.parametrize("method", ["DOP853", "RK4"])
+def test_a_spatial_mechanism_at_a_change_point_stops_and_says_why(tmp_path, capsys, method):
+    """tests/data/parallelogram_3d.toml, the parallelogram with spatial bodies (revolute joints about
+    Z at the ground, spherical joints at the coupler): the same crank rate θ̇0 (ω_z, body frame =
+    global about Z) and t* = (π/2)/|θ̇0|, the same stop on the 3D kernels."""
+    _stops_at_the_change_point(tmp_path, capsys, ["--path", "compiled", "--set", f"experiment.method={method}"],
+                               "parallelogram_3d", rate=5)
+
+
+def _stops_at_the_change_point(tmp_path, capsys, args, name="parallelogram_2d", rate=2):
+    """`rate`: the crank's angle rate's index in v0."""
+    import inerter
+    from conftest import ROOT
+    scene = ROOT / "tests" / "data" / f"{name}.toml"
     mech = inerter.load(scene).mechanism
-    t_star = (math.pi / 2) / abs(mech.v0[2])
+    t_star = (math.pi / 2) / abs(mech.v0[rate])
     out = tmp_path / "out"
-    assert main(["run", str(scene), "--path", path, "--out", str(out)]) == 3
+    assert main(["run", str(scene), *args, "--out", str(out)]) == 3
     one_line(capsys, str(scene), "joints a, b, c, d", "change point")
-    data = rows(out / "parallelogram_2d.csv")
+    data = rows(out / f"{name}.csv")
     assert all(math.isfinite(float(x)) for row in data for x in row)
     assert t_star - 0.02 <= float(data[-1][0]) <= t_star
+
+
+@pytest.mark.parametrize("method", ["DOP853", "RK4"])
+def test_a_four_bar_passing_near_a_change_point_goes_on(method):
+    """tests/data/fourbar_near_change_point_2d.toml, a crank-rocker (ground 1, crank 0.5, coupler 1,
+    rocker 0.51: Grashof, the crank turns fully) whose four pivots come within a centimetre of a
+    line at crank angle π: its joints' rows come near dependent (smallest/largest singular value of
+    C_v below 0.05 at a sample) but never are, and the compiled run goes on through it to its stop
+    time (crank angle π/2 to past 3π/2), as the numpy path does, with the same samples (1e-6: the
+    two paths at rtol 1e-8; RK4: the same fixed steps)."""
+    import inerter
+    import numpy as np
+    from conftest import ROOT
+    model = inerter.load(ROOT / "tests" / "data" / "fourbar_near_change_point_2d.toml")
+    mech = model.mechanism
+    fast = model.simulate(path="compiled", method=method, metrics=False)
+    slow = model.simulate(path="numpy", method=method, metrics=False)
+    assert fast.status == slow.status == "ok", (fast.message, slow.message)
+    states = fast.run.states
+    assert states[0][2] < math.pi < 1.5 * math.pi < states[-1][2]    # the crank turns on past angle π
+    ratios = [np.linalg.svd(mech.constraints(y[:mech.nq], np.zeros(mech.n))[1], compute_uv=False) for y in states]
+    assert min(sv[-1] / sv[0] for sv in ratios) < 0.05
+    assert np.max(np.abs(states - slow.run.states)) < 1e-6
 
 
 @pytest.mark.parametrize("path", ["numpy", "compiled"])

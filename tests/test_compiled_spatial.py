@@ -357,8 +357,9 @@ def test_parameter_tuple_matches_planar_contract(tmp_path):
     same dtypes, dimensions and C-contiguity (the FMU's native table holds both), and one more,
     `spatial`, by whose presence the kernels compile the 3D code only for 3D scenes;
     dims = [n, m, kl, ku, has_gravity, 3, nq, ground mode, input offset, the Euler-output sequence's
-    three axes (Z-Y-X by default), the count of elements with a screw efficiency (none here) and of
-    calls whose efficiency modes did not settle (none yet)]; the flat dict has the planar keys."""
+    three axes (Z-Y-X by default), the count of elements with a screw efficiency (none here), of
+    calls whose efficiency modes did not settle (none yet) and of the closed loops of its joints
+    (none: each joint carries a body of its own)]; the flat dict has the planar keys."""
     planar_mech = inerter.load(ROOT / "scenarios" / "two_bar_2d.toml").mechanism
     planar = compiled.Kernel(planar_mech).params
     mech = _load(_every_branch_scene(tmp_path), True)
@@ -369,7 +370,7 @@ def test_parameter_tuple_matches_planar_contract(tmp_path):
     for a, b in zip(P, planar):
         assert a.dtype == b.dtype and a.ndim == b.ndim and a.flags.c_contiguous
     assert list(P[ck.DIMS]) == [flat["n"], flat["m"], kernel.kl, kernel.ku, 1, 3, flat["nq"], ck.GROUND_NONE, 0,
-                                2, 1, 0, 0, 0]
+                                2, 1, 0, 0, 0, 0]
     assert flat["n"] == mech.n and flat["m"] == mech.m and flat["nq"] == mech.nq and flat["dim"] == 3
     assert set(compiled.flatten(planar_mech)) <= set(flat)
 

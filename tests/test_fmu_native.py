@@ -229,6 +229,44 @@ def test_a_step_that_fails_natively_is_taken_and_reported_by_the_slave(fmus, pai
     assert native_steps(native) == 111                  # every step before the one that fails
 
 
+PARALLELOGRAM = INPUT_SCENE.parents[1] / "tests" / "data" / "parallelogram_2d.toml"
+
+
+@pytest.mark.parametrize("solver", [None, "RK4"])
+def test_a_step_that_reaches_a_change_point_fails_as_the_slave_reports_it(fmus, pair, solver):
+    """tests/data/parallelogram_2d.toml, whose four pivots lie on a line at t* = (π/2)/|θ̇0| (closed
+    form, tests/test_bad_input_more.py): the communication step holding t* fails in the native
+    step (kernels.loop_watch) and in the slave's alike: the same fmi2Discard, message (naming the
+    joints and the change point) and last good outputs as without native steps, and again when
+    the importer retries it; the steps before it are native."""
+    native_scene(PARALLELOGRAM)
+    t_star = (math.pi / 2) / abs(inerter.load(PARALLELOGRAM).mechanism.v0[2])
+    native, slave = pair(fmus[PARALLELOGRAM])
+    transcripts = []
+    for inst in (native, slave):
+        inst.initialise(strings={"solver": solver} if solver else None)
+        tr = Transcript(inst)
+        h, t = 0.01, 0.0
+        for _ in range(300):
+            tr.step(t, h)
+            tr.outputs()
+            if tr.entries[-2][1]:
+                break
+            t += h
+        tr.step(t, h)                                    # the same step fails again
+        tr.outputs()
+        transcripts.append(tr)
+    a, b = transcripts
+    assert a.entries == b.entries
+    assert a.messages() == b.messages()
+    failed = [(label, status) for label, status, _ in a.entries if status]
+    assert len(failed) == 2 and failed[0] == failed[1] and failed[0][1] == FMI_DISCARD, failed
+    t_fail = float(failed[0][0][len("doStep("):].split(",")[0])
+    assert t_fail <= t_star < t_fail + 0.01 + 1e-12
+    assert "change point" in a.messages()[-1][1] and "joints a, b, c, d" in a.messages()[-1][1]
+    assert native_steps(native) == round(t_fail / 0.01)   # every step before the one that fails
+
+
 def before_first_step(inst, case: str, solver: str | None) -> Transcript:
     """Initialise, then one of the call sequences that hand over to the slave between
     exitInitializationMode and the first step, then steps."""

@@ -60,6 +60,7 @@ from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import device, layout
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
+from inerter.model.mechanism import DEPENDENT_RATIO
 
 
 
@@ -323,10 +324,12 @@ _RK_CODE = {"DOP853": 0, "RK45": 1}
 _NO_ORDER = np.zeros(0, dtype=np.int64)
 
 def _monitor(method) -> np.ndarray:
-    """The constants of :class:`inerter.engine.simulation.StepMonitor` for the compiled loop."""
+    """The constants of :class:`inerter.engine.simulation.StepMonitor` for the compiled loop, and the
+    ratio below which the joints' rows count as dependent (``mechanism.DEPENDENT_RATIO``: the
+    kernels' change-point watch, kernels.loop_watch), in the slots kernels.MONITOR_*."""
     from inerter.engine import simulation as sim
     return np.array([sim.STIFFNESS_BOUND.get(method, 0.0), sim.STIFFNESS_EVERY, sim.STIFFNESS_HITS,
-                     sim.COLLAPSE_RELATIVE, sim.COLLAPSE_STEPS, sim.TRIAL_SHRINK], dtype=float)
+                     sim.COLLAPSE_RELATIVE, sim.COLLAPSE_STEPS, sim.TRIAL_SHRINK, DEPENDENT_RATIO], dtype=float)
 
 
 #: The statuses of an evaluation at a state where the accelerations cannot be evaluated (a singular
@@ -347,6 +350,7 @@ _STATUS_TEXT = {
        "{h:.3g} s): the solution is approaching a singularity",
     8: "a body's Z-X-Z Euler angles reach their singularity (gimbal lock): the angle rates are undefined; "
        "use orientation = \"quaternion\" (the default)",
+    9: "a step reaches a pose where the joints' constraint rows lose rank",
 }
 
 
@@ -554,7 +558,7 @@ class Kernel:
         # a law of the state, device.series_drive, and needs no solve again)
         efficient = sum(1 for row in flat["el_real"] if device.mode_solved.py_func(row))
         dims = np.array([self.n, self.m, self.kl, self.ku, int(flat["has_gravity"]), flat["dim"], self.nq, mode,
-                         offset, *euler_axes, efficient, 0], dtype=np.int64)
+                         offset, *euler_axes, efficient, 0, mech.closed_loops()], dtype=np.int64)
         self.params = (flat["mass"], flat["pbody"], flat["ploc"], flat["el_int"], flat["el_real"],
                        flat["rot_int"], flat["rot_real"], flat["jt_int"], flat["jt_real"], flat["fa_int"],
                        flat["fa_real"], flat["pd_int"], flat["pd_real"], flat["in_int"], flat["gravity"],
@@ -941,7 +945,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     kinks = np.array(getattr(mech, "kinks", ()), dtype=float)
     ends = sorted(d for d in switches if d < stop) + [stop]
     steps = evals = 0
-    h, t0, k, status, t_reached = 0.0, 0.0, 1, 0, 0.0
+    h, t0, k, status, t_reached, stopped = 0.0, 0.0, 1, 0, 0.0, None
     tables = None if settings.method == "RK4" else _tables(settings.method)
     keep = _k.no_keep.py_func(len(y0))            # three empty arrays: the kernel's Python, as band_storage's
     if dense and tables is not None:          # (nodes, coeffs, kept) of kernels.rk_advance, grown there
@@ -961,12 +965,12 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         seg_out = np.empty((len(seg), len(y0)))
         seg_out[0] = y
         if settings.method == "RK4":
-            status, done, s_steps, s_evals, t_reached = _k.integrate_rk4(
+            status, done, s_steps, s_evals, t_reached, y_reached = _k.integrate_rk4(
                 y, t0, t1, seg, seg_out, float(settings.step), int(settings.max_steps) - steps, inp, alpha,
-                kernel.params, t1 if t1 in switches else 0.0, kinks)
+                kernel.params, t1 if t1 in switches else 0.0, kinks, _monitor("RK4"))
         else:
             A, B, C, E, E3, D, Pm = tables
-            status, done, s_steps, s_evals, t_reached, h, keep = _k.integrate_rk(
+            status, done, s_steps, s_evals, t_reached, h, keep, y_reached = _k.integrate_rk(
                 _RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol), float(settings.atol), 0.0,
                 int(settings.max_steps) - steps, inp, alpha, kernel.params, A, B, C, E, E3, D, Pm,
                 _monitor(settings.method), t1 if t1 in switches else 0.0, kinks, keep)
@@ -976,6 +980,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         out[k:k + written] = seg_out[1:1 + written]
         k += written
         if status != 0:
+            stopped = y_reached if status == _k.CHANGE_POINT else None      # the state it stopped at there
             break
         y, t0 = seg_out[-1].copy(), t1
     cpu = _time.process_time() - start
@@ -984,7 +989,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         message = "completed"
     else:
         why = failure_text(kernel, status, settings.method, h if settings.method != "RK4" else settings.step,
-                           states[-1], grid[k - 1], int(settings.max_steps))
+                           states[-1] if stopped is None else stopped, grid[k - 1], int(settings.max_steps))
         message = f"at t = {t_reached:.6g} s: the {settings.method} integrator failed: {why}"
     sol = None
     if keep[2][_k.KEPT_COUNT] > 0:
@@ -1195,7 +1200,8 @@ class CompiledStepper(Stepper):
         y = np.array(self.y, dtype=float)                 # advanced in place, segment by segment
         status, steps, t_reached, t_fail = _k.rk4_cosim_step(
             y, float(self.time), t_end, self._jumps, self._kinks, np.zeros(2), np.empty((2, len(y))),
-            float(s.step), int(s.max_steps), kernel._inputs(self.inputs.copy()), float(s.alpha), kernel.params)
+            float(s.step), int(s.max_steps), kernel._inputs(self.inputs.copy()), float(s.alpha), kernel.params,
+            self._monitor)
         if status:
             why = failure_text(kernel, status, s.method, s.step, y, t_fail, int(s.max_steps))
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
@@ -1364,7 +1370,7 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
     singularity); where the step size collapsed or the steps read as stiff, the scene's fastest time
     scale (``Mechanism.stiffest``: a device's series mode, the narrowest tanh switch)."""
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)
-    if status in (2, 3, 4, 7) and y_last is not None:         # as the numpy path: what may have stalled it
+    if status in (2, 3, 4, 7, 9) and y_last is not None:         # as the numpy path: what may have stalled it
         text += kernel.mech.diagnose(y_last)        # it reads the state's q
     if status in (6, 7):                            # as the numpy path: StiffForMethod, StepCollapse
         text += kernel.mech.stiffest()

@@ -53,10 +53,17 @@ GROUND_NONE, GROUND_PRESCRIBED, GROUND_INPUT = 0, 1, 2
 # a screw efficiency (device.efficiency: their mode is resolved by repeated solves, :func:`accelerations`)
 # and how many calls kept a solve whose modes did not settle (written by the kernels).
 N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND_OFFSET, EULER_I, EULER_J, \
-    EULER_K, EFFICIENT, UNSETTLED = range(14)
+    EULER_K, EFFICIENT, UNSETTLED, LOOPS = range(15)
+# (LOOPS: the closed loops of the joints, ``Mechanism.closed_loops``; 0: the change-point watch is off.)
 
 # Status codes of the integrators.
-OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED, GIMBAL_LOCK = range(9)
+OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED, GIMBAL_LOCK, \
+    CHANGE_POINT = range(10)
+# The slots of the integrators' `monitor` (inerter.engine.compiled._monitor): Hairer's stiffness
+# bound, how often it is tested, its firings in a row that stop a run; the collapse's relative step
+# and steps in a row; the trial shrink; the smallest/largest singular value ratio of C_v below which
+# the joints' rows count as dependent (Mechanism.DEPENDENT_RATIO, :func:`loop_watch`).
+MONITOR_DEPENDENT = 6
 
 
 
@@ -1876,6 +1883,236 @@ def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
     return st
 
 
+# ------------------------------------------------------------------------------------------------
+# Change points of closed loops: where the joints' constraint rows become dependent
+# ------------------------------------------------------------------------------------------------
+# What the watch of an accepted step finds (:func:`loop_watch`).
+LOOP_CLEAR, LOOP_REACHED, LOOP_CROSSED = range(3)
+
+
+@njit(cache=True)
+def joint_jacobian(t, y, inputs, alpha, P, work, Cv):
+    """Cv = C_v (m × n, the joints' rows of Eq. 33's matrix) at the state y, read back out of the
+    band storage the assembly fills (:func:`_addK`), so that the joints' rows are written once, in
+    the assembly; `work`: :func:`work_arrays` (AB, rhs, gen are overwritten)."""
+    AB, rhs, gen = work[0], work[1], work[2]
+    dims, perm = P[DIMS], P[PERM]
+    n, nq, off = dims[N_VELOCITY], dims[N_COORD], dims[KL]
+    _assemble_of(t, y[:nq], y[nq:nq + n], y[nq + n:], inputs, alpha, P, AB, rhs, gen)
+    for r in range(Cv.shape[0]):
+        pi = perm[n + r]
+        for j in range(n):
+            c = off + perm[j] - pi
+            Cv[r, j] = AB[pi, c] if 0 <= c < AB.shape[1] else 0.0
+
+
+@njit(cache=True)
+def dependence(Cv, R):
+    """How close the rows of Cv are to dependent, scale-free: the last over the first pivot of
+    Gram-Schmidt with row pivoting (at each stage the row farthest from the span of those taken;
+    Businger & Golub 1965's column pivoting on C_vᵀ). The last pivot is the distance of a row from
+    the span of the others, at least σ_min; the first is the largest row norm, at most σ_max: the
+    value is at least σ_min/σ_max, so that a value below a ratio means the singular values'
+    ratio is below it too (Mechanism._dependent_joints then names the joints). `R`: scratch of
+    Cv's shape."""
+    m, n = Cv.shape
+    R[:, :] = Cv
+    taken = np.zeros(m, dtype=np.bool_)
+    first = last = 0.0
+    for stage in range(m):
+        best, p = -1.0, 0
+        for i in range(m):
+            if not taken[i]:
+                norm2 = 0.0
+                for j in range(n):
+                    norm2 += R[i, j] * R[i, j]
+                if norm2 > best:
+                    best, p = norm2, i
+        last = math.sqrt(best)
+        if stage == 0:
+            first = last
+        if last == 0.0:
+            return 0.0
+        taken[p] = True
+        for i in range(m):
+            if not taken[i]:
+                dot = 0.0
+                for j in range(n):
+                    dot += R[i, j] * R[p, j]
+                c = dot / best
+                for j in range(n):
+                    R[i, j] -= c * R[p, j]
+    return last / first if m > 0 else 1.0
+
+
+@njit(cache=True)
+def orientation(Ca, Cb, G):
+    """The sign of det(Ca Cbᵀ) (1.0, −1.0; 0.0 where singular), by Gaussian elimination with
+    partial pivoting of G = Ca Cbᵀ (m × m scratch). With Cb = C_v at a step's start (of full rank:
+    det(Cb Cbᵀ) > 0) and Ca = C_v(q(s)) along the step, det(Ca Cbᵀ) = det([C_v(q(s)); Tᵀ]) ·
+    det([Cbᵀ T]) for T a basis of Cb's null space: the orientation of the augmented Jacobian,
+    whose sign changes where a path through a simple bifurcation point crosses it (Allgower &
+    Georg 1990, Sec. 8.1), here where the joints' rows lose rank."""
+    m, n = Ca.shape
+    for i in range(m):
+        for k in range(m):
+            s = 0.0
+            for j in range(n):
+                s += Ca[i, j] * Cb[k, j]
+            G[i, k] = s
+    sign = 1.0
+    for k in range(m):
+        p = k
+        best = abs(G[k, k])
+        for i in range(k + 1, m):
+            if abs(G[i, k]) > best:
+                best, p = abs(G[i, k]), i
+        if best == 0.0:
+            return 0.0
+        if p != k:
+            sign = -sign
+            for j in range(k, m):
+                G[k, j], G[p, j] = G[p, j], G[k, j]
+        if G[k, k] < 0.0:
+            sign = -sign
+        for i in range(k + 1, m):
+            f = G[i, k] / G[k, k]
+            for j in range(k + 1, m):
+                G[i, j] -= f * G[k, j]
+    return sign
+
+
+@njit(cache=True)
+def loop_watch(t, y, t_new, y_new, inputs, alpha, P, work, monitor):
+    """The change-point watch of an accepted step from (t, y) to (t_new, y_new) of a mechanism
+    with closed loops (dims[LOOPS] > 0; a tree of joints keeps C_v of full rank and is not
+    watched): LOOP_REACHED where the joints' rows at y_new are dependent within the ratio
+    monitor[MONITOR_DEPENDENT] (:func:`dependence`), LOOP_CROSSED where the orientation
+    det(C_v(y_new) C_v(y)ᵀ) is not positive (:func:`orientation`): the step jumped across a change
+    point (its rows' measure may be small at neither end), else LOOP_CLEAR.
+
+    Both are needed: a step accepted by the error control near a change point either keeps to
+    its branch, and the orientation changes sign across it, or resolves the turn onto the other
+    branch in steps of ~1e-8 s (the accelerations of Eq. 33 grow as 1/σ_min there: measured on
+    tests/data/parallelogram_2d.toml, |q̈| from 0.7 to 4e7 m/s², docs/changepoint.md), whose nodes
+    come within the ratio of it while the orientation may keep its sign."""
+    m, n = P[DIMS][N_ROWS], P[DIMS][N_VELOCITY]
+    C0 = np.empty((m, n))
+    C1 = np.empty((m, n))
+    joint_jacobian(t_new, y_new, inputs, alpha, P, work, C1)
+    if dependence(C1, C0) < monitor[MONITOR_DEPENDENT]:
+        return LOOP_REACHED
+    joint_jacobian(t, y, inputs, alpha, P, work, C0)
+    if orientation(C1, C0, np.empty((m, m))) <= 0.0:
+        return LOOP_CROSSED
+    return LOOP_CLEAR
+
+
+@njit(cache=True, inline="always")
+def _hermite(y, f, y_new, f_new, h, s, out, k):
+    """out[k] = the cubic Hermite interpolant of RK4's step (y, f) → (y_new, f_new) of length h at
+    the fraction s of it."""
+    h00 = 2 * s ** 3 - 3 * s ** 2 + 1
+    h10 = s ** 3 - 2 * s ** 2 + s
+    h01 = -2 * s ** 3 + 3 * s ** 2
+    h11 = s ** 3 - s ** 2
+    for i in range(y.shape[0]):
+        out[k, i] = h00 * y[i] + h10 * h * f[i] + h01 * y_new[i] + h11 * h * f_new[i]
+
+
+@njit(cache=True)
+def _state_in_step(method, hdr, y, y_prev, f_prev, f, dense, Pm, t, s, ts, out):
+    """out[0] = the state at s in the last step (from hdr[RK_T_PREV], of length hdr[RK_H_LAST],
+    to (t, y)): the dense output of DOP853 and RK45 (:func:`_rk_sample`), RK4's cubic Hermite
+    (method NATIVE_RK4, from (y_prev, f_prev) to (y, f))."""
+    if method == NATIVE_RK4:
+        h = hdr[RK_H_LAST]
+        _hermite(y_prev, f_prev, y, f, h, (s - hdr[RK_T_PREV]) / h, out, 0)
+    else:
+        ts[0] = s
+        _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, 0, out)
+
+
+@njit(cache=True)
+def locate_crossing(method, hdr, y, y_prev, f_prev, f, dense, Pm, t, inputs, alpha, P, work, monitor, out):
+    """Where the last step (as :func:`_state_in_step` reads it), found LOOP_CROSSED, crosses the
+    change point: bisection on the sign of det(C_v(q(s)) C_v(q(t0))ᵀ) (:func:`orientation`) to
+    adjacent floats, on the step's own interpolant. Returns the last time before the crossing, its
+    state in out[0], where the joints' rows are dependent there within monitor[MONITOR_DEPENDENT]
+    (:func:`dependence`); −1.0 where they are not (the sign changed as the rows turned by a right
+    angle within the step, not through a loss of rank: no change point)."""
+    m, n = P[DIMS][N_ROWS], P[DIMS][N_VELOCITY]
+    C0 = np.empty((m, n))
+    C1 = np.empty((m, n))
+    G = np.empty((m, m))
+    ts = np.empty(1)
+    lo, hi = hdr[RK_T_PREV], t
+    joint_jacobian(lo, y_prev, inputs, alpha, P, work, C0)
+    while True:
+        mid = 0.5 * (lo + hi)
+        if not lo < mid < hi:
+            break
+        _state_in_step(method, hdr, y, y_prev, f_prev, f, dense, Pm, t, mid, ts, out)
+        joint_jacobian(mid, out[0], inputs, alpha, P, work, C1)
+        if orientation(C1, C0, G) > 0.0:
+            lo = mid
+        else:
+            hi = mid
+    _state_in_step(method, hdr, y, y_prev, f_prev, f, dense, Pm, t, lo, ts, out)
+    joint_jacobian(lo, out[0], inputs, alpha, P, work, C1)
+    return lo if dependence(C1, C0) < monitor[MONITOR_DEPENDENT] else -1.0
+
+
+@njit(cache=True)
+def _stop_at_change_point(loop, method, hdr, y, y_prev, f_prev, f, dense, Pm, t, ts, k, out, inputs, alpha, P,
+                          work, monitor):
+    """After the last step (to (t, y), see :func:`_state_in_step`), which :func:`loop_watch` found
+    at or across a change point (`loop`): its samples up to where the run stops and (status, the
+    time it stops at, the first k not written). LOOP_REACHED: it stops at t, the step's samples
+    written; LOOP_CROSSED: at the last time before the crossing (:func:`locate_crossing`), the
+    samples before it written (the mechanism's motion is determined up to there), y becoming the
+    state there (for the message); or, where the crossing is not a change point, OK and nothing
+    written. Where every time of `ts` lies before the stop (a co-simulation step's integrator step
+    reaching past its communication point), their samples are written and the status is OK: the
+    caller takes the step again when asked further (:func:`_step_back`)."""
+    ny = y.shape[0]
+    t_stop = t
+    stop = np.empty((1, ny))
+    stop[0, :] = y
+    if loop == LOOP_CROSSED:
+        t_stop = locate_crossing(method, hdr, y, y_prev, f_prev, f, dense, Pm, t, inputs, alpha, P, work, monitor,
+                                 stop)
+        if t_stop < 0.0:
+            return OK, t, k
+    limit = t + 1e-12 * max(1.0, t) if loop == LOOP_REACHED else t_stop      # as _rk_sample_covered
+    while k < ts.shape[0] and ts[k] <= limit:
+        if method == NATIVE_RK4:
+            h = hdr[RK_H_LAST]
+            _hermite(y_prev, f_prev, y, f, h, (ts[k] - hdr[RK_T_PREV]) / h, out, k)
+        else:
+            _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
+        k += 1
+    if k == ts.shape[0]:
+        return OK, t, k
+    y[:] = stop[0]
+    return CHANGE_POINT, t_stop, k
+
+
+@njit(cache=True)
+def _step_back(hdr, y, f, y_prev, f_prev, P, gaps, z):
+    """Undo the last accepted step (from hdr[RK_T_PREV], y_prev, f_prev: its start) where it reached
+    a change point past every time asked for (:func:`_stop_at_change_point`): the integration
+    stays at the step's start, without a dense output (every sample before it is written), and
+    the terminals' gaps are those there; taken again from there with the same size, the step is
+    the same (a co-simulation step's samples do not depend on where the communication points
+    fall). Returns the time it stays at."""
+    y[:] = y_prev
+    f[:] = f_prev
+    hdr[RK_DENSE] = 0.0
+    gaps_at(y, P, gaps, z)
+    return hdr[RK_T_PREV]
+
+
 @njit(cache=True)
 def _rms(x):
     s = 0.0
@@ -2354,8 +2591,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     gave it room (:func:`integrate_rk`). Keeping them changes neither the steps nor the samples.
     `gaps`, `z`: the terminals' gaps at y (:func:`terminal_gaps`), moved on with every accepted
     step (:func:`terminals_meet`), so that a call resuming the integration need not evaluate them
-    again. Returns (status, the first k not written); on failure y, f and the last step's data are
-    those of the last good node (`gaps` may be the failed step's)."""
+    again. A mechanism whose joints close a loop (dims[LOOPS] > 0) is watched for change points
+    after each accepted step (:func:`_rk_loop_watch`). Returns (status, the first k not written);
+    on failure y, f and the last step's data are those of the last good node (`gaps` may be the
+    failed step's), except at a change point (CHANGE_POINT), where y is the state it stopped at."""
     work = _unowned(work)
     K, y_new, f_new = work[4], work[5], work[6]
     n_stages, order = _rk_shape(method)
@@ -2410,6 +2649,12 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         t = t_new
         while ik < kinks.shape[0] and kinks[ik] <= t:
             ik += 1
+        if rarely(P[DIMS][LOOPS] != 0):
+            status, t, k = _rk_loop_watch(method, hdr, y, y_prev, f, dense, t, ts, k, out, inputs, alpha, P, A, C,
+                                          Dm, Pm, monitor, work, before, gaps, z)
+            if status != OK or k == ts.shape[0]:
+                h_abs = abs(h)
+                break
         k = _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
         if hdr[RK_STEPS] - steps_before > max_steps:
             status = MAX_STEPS
@@ -2427,8 +2672,9 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     discontinuity it ends at (0: none), see :func:`_before`. `keep`: (nodes, coeffs, kept) of
     :func:`rk_advance` (:func:`no_keep`: nothing kept), to which every step's dense output is
     appended, the arrays replaced by ones twice as long when full. Returns (status, samples written, steps,
-    evaluations, t reached, next step size, keep): the step size is the one the error control
-    proposes after the last accepted step (scipy's ``h_abs``)."""
+    evaluations, t reached, next step size, keep, the state reached): the step size is the one the
+    error control proposes after the last accepted step (scipy's ``h_abs``); the state, where it
+    stopped at a change point (CHANGE_POINT), the one there."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = y0.shape[0]
     hdr = np.zeros(RK_HEADER)
@@ -2458,7 +2704,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
         longer = np.empty(size + 1)
         longer[:room + 1] = nodes
         nodes = longer
-    return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H], (nodes, coeffs, kept)
+    return st, k, int(hdr[RK_STEPS]), int(hdr[RK_EVALS]), hdr[RK_T], hdr[RK_H], (nodes, coeffs, kept), y
 
 
 # ------------------------------------------------------------------------------------------------
@@ -2691,19 +2937,66 @@ _cosim_step_inlined = njit(inline="always")(_cosim_step)
 
 
 @njit(cache=True)
-def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks):
+def _rk_loop_watch(method, hdr, y, y_prev, f, dense, t, ts, k, out, inputs, alpha, P, A, C, Dm, Pm, monitor, work,
+                   before, gaps, z):
+    """:func:`loop_watch` on the step :func:`rk_advance` has just accepted (from hdr[RK_T_PREV],
+    y_prev to (t, y); its stages still in `work`) and, where it finds a change point,
+    :func:`_stop_at_change_point`, the step's dense output computed first where a crossing is to be
+    located on it; where every time of `ts` lies before the stop, the step is taken back
+    (:func:`_step_back`), the caller ending its call there. Kept out of :func:`rk_advance`'s loop,
+    which a tree of joints runs as before. Returns (status, the time it stops or stays at, the
+    first k not written)."""
+    loop = loop_watch(hdr[RK_T_PREV], y_prev, t, y, inputs, alpha, P, work, monitor)
+    if loop == LOOP_CLEAR:
+        return OK, t, k
+    if loop == LOOP_CROSSED and hdr[RK_DENSE] == 0.0:
+        st = _rk_dense(method, hdr, hdr[RK_T_PREV], hdr[RK_H_LAST], y_prev, inputs, alpha, P, A, C, Dm, Pm, work,
+                       before, dense)
+        if st != OK:
+            return st, t, k
+        hdr[RK_DENSE] = 1.0
+    status, t_stop, k = _stop_at_change_point(loop, method, hdr, y, y_prev, y_prev, f, dense, Pm, t, ts, k, out,
+                                              inputs, alpha, P, work, monitor)
+    if status == OK and k == ts.shape[0]:
+        return OK, _step_back(hdr, y, f, y_prev, work[4][0], P, gaps, z), k
+    return status, t_stop, k
+
+
+@njit(cache=True)
+def _rk4_loop_watch(t, y, f, t_new, y_new, f_new, grid, k, out, inputs, alpha, P, work, monitor):
+    """:func:`loop_watch` on RK4's step from (t, y, f) to (t_new, y_new, f_new) and, where it finds
+    a change point, :func:`_stop_at_change_point` on the step's cubic Hermite (y_new becoming the
+    state it stops at). Returns (status, the time it stops at, the first k not written)."""
+    loop = loop_watch(t, y, t_new, y_new, inputs, alpha, P, work, monitor)
+    if loop == LOOP_CLEAR:
+        return OK, t, k
+    hdr = np.zeros(RK_HEADER)
+    hdr[RK_T_PREV] = t
+    hdr[RK_H_LAST] = t_new - t
+    return _stop_at_change_point(loop, NATIVE_RK4, hdr, y_new, y, f, f_new, work[4], work[4], t_new, grid, k, out,
+                                 inputs, alpha, P, work, monitor)
+
+
+@njit(cache=True)
+def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, monitor):
     """Classical RK4 with a fixed step, cubic Hermite between nodes; `jump`: a discontinuity the
     integration ends at (0: none), see :func:`_before`. The step before t_end and the step before
     each of the increasing `kinks` (a ground record's samples, where the right-hand side's slope
     jumps) are shortened to end there, and from a kink the steps go on with the fixed step and the
-    last derivative, as from a restart there without its evaluation."""
+    last derivative, as from a restart there without its evaluation. A mechanism with closed loops
+    is watched for change points (:func:`loop_watch`, its ratio in `monitor`). Returns (status,
+    samples written, steps, evaluations, t reached, the state reached: where it stopped at a change
+    point, the one there)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     work = work_arrays(P, y0.shape[0], 4)
-    return _rk4_run(y0.copy(), t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work)
+    y = y0.copy()
+    st, k, steps, evals, t = _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work,
+                                      monitor)
+    return st, k, steps, evals, t, y
 
 
 @njit(cache=True)
-def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work):
+def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work, monitor):
     """:func:`integrate_rk4` from y (overwritten) with the scratch `work` (:func:`work_arrays`, 4 rows
     of stages), an argument so that it can be taken without reference counting (_unowned)."""
     AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
@@ -2747,14 +3040,14 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
             return TERMINALS_MEET, k, steps, evals, t
         if euler_lock_within(y, y_new, P):
             return GIMBAL_LOCK, k, steps, evals, t
+        if rarely(P[DIMS][LOOPS] != 0):
+            st, t_stop, k = _rk4_loop_watch(t, y, f, t_new, y_new, f_new, grid, k, out, inputs, alpha, P, work,
+                                            monitor)
+            if st != OK:
+                y[:] = y_new                # the state it stopped at (_stop_at_change_point)
+                return st, k, steps, evals, t_stop
         while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
-            s = (grid[k] - t) / h
-            h00 = 2 * s ** 3 - 3 * s ** 2 + 1
-            h10 = s ** 3 - 2 * s ** 2 + s
-            h01 = -2 * s ** 3 + 3 * s ** 2
-            h11 = s ** 3 - s ** 2
-            for i in range(ny):
-                out[k, i] = h00 * y[i] + h10 * h * f[i] + h01 * y_new[i] + h11 * h * f_new[i]
+            _hermite(y, f, y_new, f_new, h, (grid[k] - t) / h, out, k)
             k += 1
         for i in range(ny):
             y[i] = y_new[i]
@@ -2767,14 +3060,15 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
 
 
 @njit(cache=True)
-def rk4_cosim_step(y, t0, t_end, jumps, kinks, ts, out, step, max_steps, inputs, alpha, P):
+def rk4_cosim_step(y, t0, t_end, jumps, kinks, ts, out, step, max_steps, inputs, alpha, P, monitor):
     """RK4 from (t0, y) to t_end, y left at t_end (a co-simulation step: CompiledStepper.step and
     the FMU's native step), segment by segment: a discontinuity of the increasing `jumps` in
     (t0, t_end) ends a segment there, where :func:`integrate_rk4` restarts; within
     eps = 1e-12·max(1 s, |t_end|) one at t_end ends the last segment and one at t0 starts none.
     The increasing `kinks` in (t0 + eps, t_end − eps] end steps, which run on from them
     (:func:`integrate_rk4`). `ts`, `out`: scratch of two samples. Returns (status, steps, the time
-    reached, the start of the segment that failed)."""
+    reached, the start of the segment that failed); y is left at that start, or where the step
+    stopped at a change point (CHANGE_POINT), at the state there."""
     P = _unowned(P)                 # entered from Python (_unowned)
     eps = 1e-12 * max(1.0, abs(t_end))
     steps = 0
@@ -2790,10 +3084,12 @@ def rk4_cosim_step(y, t0, t_end, jumps, kinks, ts, out, step, max_steps, inputs,
         jump = end if j < jumps.shape[0] and jumps[j] <= end + eps else 0.0
         ts[0] = t0
         ts[1] = end
-        st, k, s_steps, evals, t_reached = integrate_rk4(y, t0, end, ts, out, step, max_steps, inputs, alpha, P,
-                                                         jump, inside)
+        st, k, s_steps, evals, t_reached, y_reached = integrate_rk4(y, t0, end, ts, out, step, max_steps, inputs,
+                                                                    alpha, P, jump, inside, monitor)
         steps += s_steps
         if st != OK:
+            if st == CHANGE_POINT:
+                y[:] = y_reached            # the state it stopped at, for the message
             return st, steps, t_reached, t0
         y[:] = out[1]
         if end == t_end:
@@ -2998,7 +3294,8 @@ def native_step_on(tab, t, h, P):
     raw, order, values = _f1(tab, S_RAW), _i1(tab, S_ORDER), _f1(tab, S_VALUES)
     if tab[TABLE_METHOD] == NATIVE_RK4:
         st, steps, t_reached, t_fail = rk4_cosim_step(y, now, t_end, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), ts, out,
-                                                      clock[CLOCK_STEP], tab[TABLE_MAX_STEPS], inputs, alpha, P)
+                                                      clock[CLOCK_STEP], tab[TABLE_MAX_STEPS], inputs, alpha, P,
+                                                      _f1(tab, S_MONITOR))
         if st != OK:
             return 0
         for n in range(y.shape[0]):

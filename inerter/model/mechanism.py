@@ -482,6 +482,32 @@ class Mechanism:
             ([f"the narrowest switch, {min(switches)[1]}"] if switches else [])
         return "; likely cause: " + "; ".join(parts) if parts else ""
 
+    def closed_loops(self) -> int:
+        """How many independent closed loops the joints form: the cyclomatic number E − V + c of
+        the graph whose nodes are the bodies and the ground and whose edges are the joints (each
+        edge joins two components or closes a loop). A tree of joints (0) keeps C_v of full rank at
+        every pose: ordered from the ground out, each joint's rows act on the body it carries
+        through a block of full row rank (a revolute joint's on the point's translation, a
+        prismatic's on its perpendicular and its angle, the dot-1 rows held at right angles), so
+        C_v is block-triangular with full-rank diagonal blocks. Only a mechanism with a closed loop
+        can reach a change point, where the rows become dependent (:meth:`_dependent_joints`), and
+        only such a mechanism is watched for one (inerter.engine.kernels.loop_watch)."""
+        root = {}
+
+        def find(node):
+            while root.get(node, node) != node:
+                node = root[node]
+            return node
+        loops = 0
+        for joint in self.scene.joints.values():
+            a = find(self.scene.points[joint.point_a].body)
+            b = find(self.scene.points[joint.point_b].body)
+            if a == b:
+                loops += 1
+            else:
+                root[a] = b
+        return loops
+
     def _dependent_joints(self, q) -> str:
         """The joints whose constraint rows are nearly dependent at q (the smallest singular value of
         C_v below DEPENDENT_RATIO of the largest), named by their share of the left singular vector:

@@ -149,8 +149,9 @@ def _write_bytecode(source: Path, fresh: bool):
 #: integrator loop and outputs, docs/benchmarks/first_use.md), for the notice.
 COMPILE_SECONDS = {2: 95, 3: 140}
 #: Seconds ``inerter compile`` takes on a 2-core machine with an empty cache, by dimension (every kernel:
-#: the three integrator loops, outputs, co-simulation steps and the FMU's native step).
-AOT_SECONDS = {2: 160, 3: 260}
+#: the three integrator loops, outputs, co-simulation steps and the FMU's native step; 543 s for both,
+#: 2026-11-26).
+AOT_SECONDS = {2: 205, 3: 340}
 #: The kernels entered from Python, in the notice's words (others by their own name).
 _WHAT = {"integrate_rk": "the DOP853/RK45 loop", "integrate_rk4": "the RK4 loop",
          "signal_history": "the outputs", "signal_column": "the outputs", "dense_signal": "the outputs",
@@ -907,6 +908,19 @@ def _kernel_for(mech):
     return kernel
 
 
+def _dense_keep(method, tables, ny, dense):
+    """(nodes, coeffs, kept) of kernels.rk_advance, which appends every step's dense output there
+    (grown there) where `dense` and the method has one (DOP853, RK45); else three empty arrays
+    (kernels.no_keep, its Python, as band_storage's)."""
+    if not dense or tables is None:
+        return _k.no_keep.py_func(ny)
+    rows = 8 if method == "DOP853" else 1 + tables[6].shape[1]
+    room = 256
+    kept = np.zeros(2, dtype=np.int64)
+    kept[_k.KEPT_ON] = 1
+    return np.empty(room + 1), np.empty((room, rows, ny)), kept
+
+
 def integrate_compiled(mech, settings, inputs=None, dense=False):
     """Integrate like :func:`inerter.engine.simulation.integrate`, in one compiled loop for DOP853, RK45
     and RK4 with Baumgarte stabilisation; other methods and ``projection`` use scipy's integrators
@@ -947,13 +961,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     steps = evals = 0
     h, t0, k, status, t_reached, stopped = 0.0, 0.0, 1, 0, 0.0, None
     tables = None if settings.method == "RK4" else _tables(settings.method)
-    keep = _k.no_keep.py_func(len(y0))            # three empty arrays: the kernel's Python, as band_storage's
-    if dense and tables is not None:          # (nodes, coeffs, kept) of kernels.rk_advance, grown there
-        rows = 8 if settings.method == "DOP853" else 1 + tables[6].shape[1]
-        room = 256
-        kept = np.zeros(2, dtype=np.int64)
-        kept[_k.KEPT_ON] = 1
-        keep = (np.empty(room + 1), np.empty((room, rows, len(y0))), kept)
+    keep = _dense_keep(settings.method, tables, len(y0), dense)
     start = _time.process_time()
     kernel.windings[:] = 0.0                  # the 3D rotational elements' angles: from the initial pose
     y = y0

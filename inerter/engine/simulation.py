@@ -333,7 +333,20 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
     The integration restarts at each jump of the right-hand side (``mech.discontinuities``); DOP853,
     RK45 and RK4 run on through its kinks (``mech.kinks``), their steps clipped to end on each
     (:data:`THROUGH_KINKS`), as the compiled loop does, and take the same steps; the other methods
-    restart at a kink too."""
+    restart at a kink too.
+
+    The 3D rotational elements' angles wind on from the initial pose during the run, and are as
+    they were afterwards: a :class:`Stepper` running on the same mechanism winds on from its own."""
+    held = mech.windings
+    mech.reset_windings()                   # the angles are measured from the initial pose
+    try:
+        return _integrate(mech, settings, inputs)
+    finally:
+        mech.windings = held
+
+
+def _integrate(mech, settings: Settings, inputs=None) -> Run:
+    """:func:`integrate`, its angles wound on from where the mechanism holds them."""
     n = mech.nq
     fun = derivative(mech, inputs, settings.alpha)
     grid = np.arange(0.0, settings.stop_time + 0.5 * settings.output_interval, settings.output_interval)
@@ -351,7 +364,6 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
     t0 = 0.0
     first_step = None
     max_drift = mech.constraint_residual(y[:n])
-    mech.reset_windings()                   # the angles are measured from the initial pose
     monitor = StepMonitor(mech, settings.method, settings.max_steps)
     solver = None
     try:

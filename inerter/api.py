@@ -249,28 +249,35 @@ class Result:
         if self._values is not None:
             return self._values
         run, settings, sig = self.run, self.settings, self.model.signals
-        n = self.model.mechanism.nq
         values, start = [], 0
         kernel = self._kernel
         order = kernel.signal_order(sig) if kernel is not None else None
         if order is not None:
             compiled_values, start = kernel.signal_history(sig, order, run.time, run.states, None, settings.alpha)
             values = list(compiled_values)
-        mech = self.model.mechanism
-        with mech.wound_from_start():       # 3D rotational elements: their angles wound on sample by sample
+        values += self._numpy_rows(start)
+        self._values = np.array(values) if values else np.zeros((0, len(sig.names)))
+        return self._values
+
+    def _numpy_rows(self, start) -> list:
+        """Every output at the samples from `start` on, by the numpy path's signals, up to a sample
+        where they cannot be evaluated (the run is truncated there, with the message). The 3D
+        rotational elements' angles are wound on sample by sample from t = 0."""
+        run, sig, mech = self.run, self.model.signals, self.model.mechanism
+        n, nv = mech.nq, mech.nq + mech.n
+        rows = []
+        with mech.wound_from_start():
             for y in (run.states[:start] if mech.winding else ()):
                 mech.wind(y)
-            for i in range(start, len(run.time)):    # the numpy path (and its messages where one fails)
+            for i in range(start, len(run.time)):
                 t, y = run.time[i], run.states[i]
                 try:
-                    nv = n + mech.n
                     mech.wind(y)
-                    values.append(sig.evaluate(t, y[:n], y[n:nv], None, settings.alpha, z=y[nv:]))
+                    rows.append(sig.evaluate(t, y[:n], y[n:nv], None, self.settings.alpha, z=y[nv:]))
                 except SimulationError as exc:   # an output undefined at a sample: keep what came before
                     self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
                     break
-        self._values = np.array(values) if values else np.zeros((0, len(sig.names)))
-        return self._values
+        return rows
 
     def values(self) -> np.ndarray:
         """Every output at every sample (samples × outputs, in the order of ``names``); outputs are
@@ -289,22 +296,8 @@ class Result:
         run, alpha = self.run, self.settings.alpha
         values, k = kernel.signal_column(index, run.time, run.states, None, alpha)
         if k < len(run.time):
-            sig, n, j = self.model.signals, self.model.mechanism.nq, self.model.signals.index[name]
-            values = list(values)
-            mech = self.model.mechanism
-            with mech.wound_from_start():   # 3D rotational elements: their angles wound on sample by sample
-                for y in (run.states[:k] if mech.winding else ()):
-                    mech.wind(y)
-                for i in range(k, len(run.time)):
-                    t, y = run.time[i], run.states[i]
-                    try:
-                        nv = n + mech.n
-                        mech.wind(y)
-                        values.append(sig.evaluate(t, y[:n], y[n:nv], None, alpha, z=y[nv:])[j])
-                    except SimulationError as exc:
-                        self._truncate(i, exc if exc.time is not None else SimulationError(exc.message, float(t)))
-                        break
-            values = np.array(values, dtype=float)
+            j = self.model.signals.index[name]
+            values = np.array(list(values) + [row[j] for row in self._numpy_rows(k)], dtype=float)
         self._columns[name] = values
         return values
 

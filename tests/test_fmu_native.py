@@ -196,6 +196,23 @@ def test_native_rk4_steps_through_discontinuities_give_what_the_slave_gives(fmus
 TERMINALS_MEET = INPUT_SCENE.parent / "hard" / "terminals_meet_2d.toml"
 
 
+def _until_a_step_fails_then_again(inst, most, strings=None):
+    """The transcript of `inst` initialised (with `strings`) and stepped by 10 ms, its outputs read
+    after each step, until a step fails (at most `most` steps), then that step asked for again."""
+    inst.initialise(strings=strings)
+    tr = Transcript(inst)
+    h, t = 0.01, 0.0
+    for _ in range(most):
+        tr.step(t, h)
+        tr.outputs()
+        if tr.entries[-2][1]:
+            break
+        t += h
+    tr.step(t, h)                                    # the same step fails again
+    tr.outputs()
+    return tr
+
+
 def test_a_step_that_fails_natively_is_taken_and_reported_by_the_slave(fmus, pair):
     """A mass driven into the point its elements are attached to (scenarios/hard): the native step
     that reaches it fails half-way and declines; the slave restores the integration from the
@@ -203,21 +220,7 @@ def test_a_step_that_fails_natively_is_taken_and_reported_by_the_slave(fmus, pai
     good state as without native steps, and again when the importer retries it."""
     native_scene(TERMINALS_MEET)
     native, slave = pair(fmus[TERMINALS_MEET])
-    transcripts = []
-    for inst in (native, slave):
-        inst.initialise()
-        tr = Transcript(inst)
-        h, t = 0.01, 0.0
-        for _ in range(200):
-            tr.step(t, h)
-            tr.outputs()
-            if tr.entries[-2][1]:
-                break
-            t += h
-        tr.step(t, h)                                    # the same step fails again
-        tr.outputs()
-        transcripts.append(tr)
-    a, b = transcripts
+    a, b = (_until_a_step_fails_then_again(inst, 200) for inst in (native, slave))
     assert a.entries == b.entries
     assert a.messages() == b.messages()
     failed = [label for label, status, _ in a.entries if status]
@@ -242,21 +245,8 @@ def test_a_step_that_reaches_a_change_point_fails_as_the_slave_reports_it(fmus, 
     native_scene(PARALLELOGRAM)
     t_star = (math.pi / 2) / abs(inerter.load(PARALLELOGRAM).mechanism.v0[2])
     native, slave = pair(fmus[PARALLELOGRAM])
-    transcripts = []
-    for inst in (native, slave):
-        inst.initialise(strings={"solver": solver} if solver else None)
-        tr = Transcript(inst)
-        h, t = 0.01, 0.0
-        for _ in range(300):
-            tr.step(t, h)
-            tr.outputs()
-            if tr.entries[-2][1]:
-                break
-            t += h
-        tr.step(t, h)                                    # the same step fails again
-        tr.outputs()
-        transcripts.append(tr)
-    a, b = transcripts
+    a, b = (_until_a_step_fails_then_again(inst, 300, {"solver": solver} if solver else None)
+            for inst in (native, slave))
     assert a.entries == b.entries
     assert a.messages() == b.messages()
     failed = [(label, status) for label, status, _ in a.entries if status]

@@ -843,6 +843,10 @@ class _KernelMechanism:
     def reset_windings(self):
         self._kernel.windings[:] = 0.0
 
+    def wound_from_start(self, start=None):
+        """``Mechanism.wound_from_start`` on the kernel's tables (Kernel.wound_from_start)."""
+        return self._kernel.wound_from_start(start)
+
     @property
     def windings(self) -> np.ndarray:
         return self._kernel.windings.copy()

@@ -337,12 +337,8 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
 
     The 3D rotational elements' angles wind on from the initial pose during the run, and are as
     they were afterwards: a :class:`Stepper` running on the same mechanism winds on from its own."""
-    held = mech.windings
-    mech.reset_windings()                   # the angles are measured from the initial pose
-    try:
+    with mech.wound_from_start():           # the angles are measured from the initial pose
         return _integrate(mech, settings, inputs)
-    finally:
-        mech.windings = held
 
 
 def _integrate(mech, settings: Settings, inputs=None) -> Run:

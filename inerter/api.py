@@ -5,6 +5,8 @@ the same scene compiled with ``oracle=True`` and solved at tight tolerance.
 """
 from __future__ import annotations
 
+import subprocess as _subprocess
+import sys as _sys
 import time as _time
 from pathlib import Path
 from typing import Any
@@ -605,18 +607,57 @@ def _compute_metric(model, result, m, out, windows):
         out[_key(m.prefix, "mean_offset")] = float(r["mean_offset"])
 
 
-def warm_up(spatial: bool = False):
+#: The shipped scene each dimension's kernels are compiled on (:func:`warm_up`).
+WARM_UP_SCENES = {2: "two_bar_2d.toml", 3: "two_bar_2d_as_3d.toml"}
+
+
+#: The second process of a parallel warm-up: the 3D kernels; prints the seconds it compiled for.
+_WARM_UP_3D = ("from inerter.api import warm_up; from inerter.engine import compiled; warm_up(dims=(3,)); "
+               "print(compiled.NOTICE.seconds if compiled.NOTICE is not None else 0.0)")
+
+
+def warm_up(spatial: bool = False, parallel: bool = False, dims=None):
     """Compile (or load from numba's cache) every kernel once for 2D scenes (`spatial`: for 3D
-    scenes too), so timings exclude compilation. Returns the seconds it took."""
+    scenes too; `dims` names them instead), so timings exclude compilation. Returns the seconds it
+    took.
+
+    `parallel` (both dimensions): the 3D kernels compile in a second process while this one
+    compiles the 2D kernels (numba compiles on one core; `inerter compile` on 2 cores), then this
+    process loads them all, compiling whatever the other's cache entries lack (two processes that
+    save the same kernel's cache index at once keep one entry), so that the cache is complete when
+    it returns."""
     from inerter.engine import compiled
 
     if not compiled.AVAILABLE:
         return 0.0
-
+    dims = tuple(dims or ((2, 3) if spatial else (2,)))
     t0 = _time.perf_counter()
+    if parallel and 3 in dims and len(dims) > 1:
+        other = _subprocess.Popen([_sys.executable, "-c", _WARM_UP_3D], stdout=_subprocess.PIPE,
+                                  stderr=_subprocess.DEVNULL, text=True)
+        try:
+            _warm_up_dimensions([d for d in dims if d != 3])
+        except BaseException:
+            other.kill()
+            other.wait()
+            raise
+        reported = other.communicate()[0].split()      # its outcome is checked by loading what it compiled, below
+        if compiled.NOTICE is not None and reported:
+            compiled.NOTICE.seconds += float(reported[-1])     # what it compiled counts as compiled here
+    _warm_up_dimensions(dims)
+    return _time.perf_counter() - t0
+
+
+def _warm_up_dimensions(dims):
+    """Every kernel called for the shipped scenes of `dims` (:data:`WARM_UP_SCENES`), compiled or
+    loaded: whole runs of each compiled method with and without the dense output, their outputs and
+    metrics, the accelerations, scipy's methods on the kernels, the co-simulation steps and the
+    FMU's native step."""
+    from inerter.engine import compiled
+
     from inerter.common.locations import scenarios
     folder = scenarios()
-    for name in ("two_bar_2d.toml", "two_bar_2d_as_3d.toml")[:2 if spatial else 1]:
+    for name in (WARM_UP_SCENES[d] for d in dims):
         if not (folder / name).exists():         # nothing compiled would pass unnoticed: say so
             raise InerterError(f"{folder / name}: the shipped scene the kernels are compiled on is missing "
                                "(reinstall inerter)")
@@ -641,4 +682,3 @@ def warm_up(spatial: bool = False):
             stepper.step(0.01)
             stepper.output_values()
         compiled._k.native_step_cfunc(kernel.spatial)         # the FMU's native step (inerter.fmu.native)
-    return _time.perf_counter() - t0

@@ -118,7 +118,7 @@ def test_compile_command(monkeypatch, capsys):
     """`inerter compile` says once what it compiles, with the kernels' notice silenced meanwhile."""
     import inerter.api
 
-    def fake_warm_up(spatial=False):
+    def fake_warm_up(spatial=False, parallel=False):
         assert not compiled.NOTICE.enabled and spatial
         return 0.5
     monkeypatch.setattr(inerter.api, "warm_up", fake_warm_up)
@@ -134,9 +134,10 @@ def test_compile_says_so_when_its_scenes_are_missing(monkeypatch, tmp_path, caps
     fails with one line instead of reporting success having compiled nothing."""
     import inerter.common.locations as locations
     monkeypatch.setattr(locations, "scenarios", lambda: tmp_path)
-    assert cli.main(["compile", "--planar"]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) >= 1 and "two_bar_2d.toml" in err[-1] and "missing" in err[-1]
+    for args in (["compile", "--planar"], ["compile"]):     # the second with its 3D process alongside
+        assert cli.main(args) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) >= 1 and "two_bar_2d.toml" in err[-1] and "missing" in err[-1]
 
 
 def test_kernel_registries_load_without_scipy_linalg():
@@ -188,7 +189,7 @@ import inspect, json, pathlib, re, sys
 from numba.core.dispatcher import Dispatcher
 from inerter.api import warm_up
 from inerter.engine import compiled
-warm_up(spatial=True)
+warm_up(spatial=True, parallel=True)      # as `inerter compile` runs it
 root = pathlib.Path(compiled.__file__).resolve().parents[1]
 names = set()
 for path in [*root.rglob("*.py"), *root.parent.glob("fmu_src/*.py")]:

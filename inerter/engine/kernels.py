@@ -518,61 +518,60 @@ def band_solve(AB, b, kl):
     the inner loop, row i −= l · row k, runs over contiguous memory; and each row's last nonzero
     column is tracked (the row's profile), so that the loop stops there instead of at the band's
     edge (an N-link chain's augmented matrix, benchmarks/chain_scene.py, holds 5–6 nonzeros per
-    row in a band of 17)."""
+    row in a band of 17). The storage is addressed as one flat vector, K[i, j] at
+    i·W + kl − i + j: a row taken as a view of the 2-D storage at every use cost as much as the
+    arithmetic of a two-bar's 10 × 10 system (1.4 against 0.7 µs, benchmarks/eval_cost.py)."""
     N = b.shape[0]
     W = AB.shape[1]
+    F = AB.reshape(N * W)
     last = np.empty(N, dtype=np.int64)          # last[i]: no nonzero right of column last[i] in row i
     for i in range(N):
-        ri = AB[i]
         j = min(W - 1, kl + N - 1 - i)
-        while j > kl and ri[j] == 0.0:
+        while j > kl and F[i * W + j] == 0.0:
             j -= 1
         last[i] = i + j - kl
     for k in range(N):
         imax = min(N - 1, k + kl)
         p = k
-        best = abs(AB[k, kl])
+        best = abs(F[k * W + kl])
         for i in range(k + 1, imax + 1):
-            a = abs(AB[i, kl + k - i])
+            a = abs(F[i * W + kl + k - i])
             if a > best:
                 best = a
                 p = i
         if best == 0.0:
             return False
-        rk = AB[k]
-        sk = kl - k                     # column j of row k is rk[sk + j]
+        rk = k * W + kl - k             # column j of row k is F[rk + j]
         if p != k:
-            rp = AB[p]
-            sp = kl - p
+            rp = p * W + kl - p
             for j in range(k, max(last[k], last[p]) + 1):
-                tmp = rk[sk + j]
-                rk[sk + j] = rp[sp + j]
-                rp[sp + j] = tmp
+                tmp = F[rk + j]
+                F[rk + j] = F[rp + j]
+                F[rp + j] = tmp
             tmp = last[k]
             last[k] = last[p]
             last[p] = tmp
             tmp = b[k]
             b[k] = b[p]
             b[p] = tmp
-        piv = rk[kl]
+        piv = F[rk + k]
         jmax = last[k]
+        bk = b[k]
         for i in range(k + 1, imax + 1):
-            ri = AB[i]
-            si = kl - i
-            l = ri[si + k] / piv
+            ri = i * W + kl - i
+            l = F[ri + k] / piv
             if l != 0.0:
                 for j in range(k + 1, jmax + 1):
-                    ri[si + j] -= l * rk[sk + j]
-                b[i] -= l * b[k]
+                    F[ri + j] -= l * F[rk + j]
+                b[i] -= l * bk
                 if jmax > last[i]:
                     last[i] = jmax
     for i in range(N - 1, -1, -1):
-        ri = AB[i]
-        si = kl - i
+        ri = i * W + kl - i
         s = b[i]
         for j in range(i + 1, last[i] + 1):
-            s -= ri[si + j] * b[j]
-        b[i] = s / ri[kl]
+            s -= F[ri + j] * b[j]
+        b[i] = s / F[ri + i]
     return True
 
 
@@ -585,22 +584,35 @@ def accelerations(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out):
     the modes are checked against the solved L̈ and, where one flipped, solved again
     (:func:`_settle_modes`; inerter.elements.device: exact, two solves for one such element)."""
     P = _unowned(P)                 # entered from Python (_unowned)
-    status = _solve(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out)
-    if rarely(P[DIMS][EFFICIENT] != 0) and status != SINGULAR:
-        return _settle_modes(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out, status)
-    return status
+    return _settled(_solve(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out),
+                    t, q, v, z, inputs, alpha, P, AB, rhs, gen, out)
 
 
 @njit(cache=True, inline="always")
 def _solve(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out):
     """Assemble Eq. (33) and solve it into `out` (original ordering): the assembly's status, or
     SINGULAR (out untouched)."""
+    return _solved(_assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen), P, AB, rhs, out)
+
+
+@njit(cache=True, inline="always")
+def _solved(status, P, AB, rhs, out):
+    """Solve Eq. (33) as assembled in AB, rhs into `out` (original ordering): the assembly's
+    `status`, or SINGULAR (out untouched)."""
     perm = P[PERM]
-    status = _assemble_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
     if not band_solve(AB, rhs, P[DIMS][KL]):
         return SINGULAR
     for i in range(out.shape[0]):
         out[i] = rhs[perm[i]]
+    return status
+
+
+@njit(cache=True, inline="always")
+def _settled(status, t, q, v, z, inputs, alpha, P, AB, rhs, gen, out):
+    """The solve's `status` once the screw efficiencies' modes agree with it (:func:`_settle_modes`;
+    nothing to do where the scene declares none)."""
+    if rarely(P[DIMS][EFFICIENT] != 0) and status != SINGULAR:
+        return _settle_modes(t, q, v, z, inputs, alpha, P, AB, rhs, gen, out, status)
     return status
 
 
@@ -904,6 +916,23 @@ def _assemble_by_dimension(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
         return lambda t, q, v, z, inputs, alpha, P, AB, rhs, gen: assemble3(t, q, v, z, inputs, alpha, P, AB, rhs,
                                                                             gen)
     return lambda t, q, v, z, inputs, alpha, P, AB, rhs, gen: assemble(t, q, v, z, inputs, alpha, P, AB, rhs, gen)
+
+
+def _assemble_inlined_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_assemble_inlined_of, inline="always")
+def _assemble_inlined_by_dimension(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
+    """The 2D assembly compiled into the integrators' right-hand side (:func:`_rhs`, a dozen
+    evaluations per step) rather than called: a call passes the scene's twenty arrays field by
+    field, 15–20 % of a 2D evaluation (two-bar 2.03 → 1.73 µs, benchmarks/eval_cost.py). The 3D
+    assembly stays a call: inlined, it gained 7 % of a 3D evaluation, and the kernels with both
+    assemblies inlined took 819 s to compile on 2 cores instead of 543 s."""
+    if is_spatial(P):
+        return lambda t, q, v, z, inputs, alpha, P, AB, rhs, gen: assemble3(t, q, v, z, inputs, alpha, P, AB, rhs,
+                                                                            gen)
+    return assemble.py_func
 
 
 def _residual_of(q, P):
@@ -1869,7 +1898,8 @@ def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
     q = y[:nq]
     v = y[nq:nv]
     z = y[nv:]
-    st = accelerations(t, q, v, z, inputs, alpha, P, AB, rhs, gen, acc)
+    st = _settled(_solved(_assemble_inlined_of(t, q, v, z, inputs, alpha, P, AB, rhs, gen), P, AB, rhs, acc),
+                  t, q, v, z, inputs, alpha, P, AB, rhs, gen, acc)     # accelerations, its assembly inlined
     if _qdot_of(q, v, P, dy[:nq]) == GIMBAL_LOCK:
         return GIMBAL_LOCK
     for i in range(n):

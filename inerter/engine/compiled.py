@@ -147,7 +147,7 @@ def _write_bytecode(source: Path, fresh: bool):
 # ------------------------------------------------------------------------------------------------
 #: Seconds a run's first compilation of the kernels takes on a 2-core machine, by dimension (its
 #: integrator loop and outputs, docs/benchmarks/first_use.md), for the notice.
-COMPILE_SECONDS = {2: 95, 3: 140}
+COMPILE_SECONDS = {2: 150, 3: 180}
 #: Seconds ``inerter compile`` takes on a 2-core machine with an empty cache, by dimension (every kernel:
 #: the three integrator loops, outputs, co-simulation steps and the FMU's native step). Measured
 #: 2026-11-26 with the two dimensions in parallel (api.warm_up): 331 s wall, 598 s of CPU, the 3D

@@ -1106,11 +1106,14 @@ def work_arrays(P, ny, stages):
     """Scratch arrays of the integrators and of the outputs, allocated once per integration:
     (AB, rhs, gen, acc: Eq. 33 in band storage; K: `stages` rows of Runge-Kutta stages; y_new,
     f_new, ys: a step's solution, derivative and stage argument; sig_acc: the accelerations the
-    outputs are evaluated with, zero where they need none)."""
+    outputs are evaluated with, zero where they need none; cv_start, cv_end, cv_work, cv_gram,
+    cv_known: the change-point watch's, :func:`loop_watch`, empty where the joints close no loop)."""
     n = P[DIMS][N_VELOCITY]
     N = n + P[DIMS][N_ROWS]
+    m, nv = (P[DIMS][N_ROWS], n) if P[DIMS][LOOPS] != 0 else (0, 0)
     return (band_storage(P[DIMS][KL], P[DIMS][KU], N), np.empty(N), np.empty(n), np.empty(N),
-            np.zeros((stages, ny)), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros(N))
+            np.zeros((stages, ny)), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros(N),
+            np.zeros((m, nv)), np.zeros((m, nv)), np.zeros((m, nv)), np.zeros((m, m)), np.zeros(1))
 
 
 #: signal_values inlined where the outputs of one state at a time are evaluated (:func:`_signals_at`:
@@ -1125,7 +1128,7 @@ def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
     Inlined where it is called."""
     nq = P[DIMS][N_COORD]
     nv = nq + P[DIMS][N_VELOCITY]
-    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)[:9]
     _wind_of(y, P)                  # the samples come in time order: each winds on from the last
     if need_acc:
         st = accelerations(t, y[:nq], y[nq:nv], y[nv:], inputs, alpha, P, AB, rhs, gen, sig_acc)
@@ -2025,16 +2028,23 @@ def loop_watch(t, y, t_new, y_new, inputs, alpha, P, work, monitor):
     its branch, and the orientation changes sign across it, or resolves the turn onto the other
     branch in steps of ~1e-8 s (the accelerations of Eq. 33 grow as 1/σ_min there: measured on
     tests/data/parallelogram_2d.toml, |q̈| from 0.7 to 4e7 m/s², docs/changepoint.md), whose nodes
-    come within the ratio of it while the orientation may keep its sign."""
-    m, n = P[DIMS][N_ROWS], P[DIMS][N_VELOCITY]
-    C0 = np.empty((m, n))
-    C1 = np.empty((m, n))
+    come within the ratio of it while the orientation may keep its sign.
+
+    C_v at the step's start is the last clear step's C_v at its end, carried in `work`
+    (cv_start, with cv_known[0] = 1; the caller sets it to 0 where y did not come from that step):
+    one assembly per watched step instead of two, the same values."""
+    C0, C1, R, G, known = work[9], work[10], work[11], work[12], work[13]
     joint_jacobian(t_new, y_new, inputs, alpha, P, work, C1)
-    if dependence(C1, C0) < monitor[MONITOR_DEPENDENT]:
+    if dependence(C1, R) < monitor[MONITOR_DEPENDENT]:
+        known[0] = 0.0
         return LOOP_REACHED
-    joint_jacobian(t, y, inputs, alpha, P, work, C0)
-    if orientation(C1, C0, np.empty((m, m))) <= 0.0:
+    if known[0] == 0.0:             # C_v at the step's start, unless the last clear step left it
+        joint_jacobian(t, y, inputs, alpha, P, work, C0)
+    if orientation(C1, C0, G) <= 0.0:
+        known[0] = 0.0
         return LOOP_CROSSED
+    C0[:, :] = C1                   # the next step starts where this one ends
+    known[0] = 1.0
     return LOOP_CLEAR
 
 
@@ -2627,6 +2637,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     failed step's), except at a change point (CHANGE_POINT), where y is the state it stopped at."""
     work = _unowned(work)
     K, y_new, f_new = work[4], work[5], work[6]
+    work[13][0] = 0.0               # C_v at y is not known yet (loop_watch): y may have been set anew
     n_stages, order = _rk_shape(method)
     keeping = keep[2][KEPT_ON] == 1
     before = _before(hdr[RK_JUMP])
@@ -3029,8 +3040,9 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, j
 def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work, monitor):
     """:func:`integrate_rk4` from y (overwritten) with the scratch `work` (:func:`work_arrays`, 4 rows
     of stages), an argument so that it can be taken without reference counting (_unowned)."""
-    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)[:9]
     f, k2, k3, k4 = K[0], K[1], K[2], K[3]
+    work[13][0] = 0.0               # C_v at y is not known yet (loop_watch)
     before = _before(jump)
     ny = y.shape[0]
     t = t0
@@ -3161,7 +3173,8 @@ PARAMS = (("mass", "f1"), ("pbody", "i1"), ("ploc", "f2"), ("el_int", "i2"), ("e
           ("perm", "i1"), ("dims", "i1"), ("ground_t", "f1"), ("ground_a", "f2"), ("ground_terms", "f2"))
 TABLEAU = (("A", "f2"), ("B", "f1"), ("C", "f1"), ("E", "f1"), ("E3", "f1"), ("D", "f2"), ("Pm", "f2"))
 WORK = (("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), ("y_new", "f1"), ("f_new", "f1"),
-        ("ys", "f1"), ("sig_acc", "f1"))
+        ("ys", "f1"), ("sig_acc", "f1"), ("cv_start", "f2"), ("cv_end", "f2"), ("cv_work", "f2"), ("cv_gram", "f2"),
+        ("cv_known", "f1"))
 #: cosim_scratch (gaps, z, fresh, keep), keep's coefficients (a (0, 1, ny) array) left out: native_step
 #: makes them an empty view of `nodes`.
 COSIM = (("gaps", "f2"), ("z", "f1"), ("fresh", "f1"), ("nodes", "f1"), ("kept", "i1"))
@@ -3318,9 +3331,10 @@ def native_step_on(tab, t, h, P):
     clock[CLOCK_BUSY] = 1.0
     bound = clock[CLOCK_BOUND]
     ts, out, inputs, alpha = _f1(tab, S_TS), _f2(tab, S_OUT), _f1(tab, S_INPUTS), clock[CLOCK_ALPHA]
-    w = S_WORK                                  # AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc
+    w = S_WORK                                  # as WORK lists them
     work = (_f2(tab, w), _f1(tab, w + 1), _f1(tab, w + 2), _f1(tab, w + 3), _f2(tab, w + 4), _f1(tab, w + 5),
-            _f1(tab, w + 6), _f1(tab, w + 7), _f1(tab, w + 8))
+            _f1(tab, w + 6), _f1(tab, w + 7), _f1(tab, w + 8), _f2(tab, w + 9), _f2(tab, w + 10), _f2(tab, w + 11),
+            _f2(tab, w + 12), _f1(tab, w + 13))
     raw, order, values = _f1(tab, S_RAW), _i1(tab, S_ORDER), _f1(tab, S_VALUES)
     if tab[TABLE_METHOD] == NATIVE_RK4:
         st, steps, t_reached, t_fail = rk4_cosim_step(y, now, t_end, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), ts, out,

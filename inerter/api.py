@@ -623,9 +623,9 @@ def warm_up(spatial: bool = False, parallel: bool = False, dims=None):
 
     `parallel` (both dimensions): the 3D kernels compile in a second process while this one
     compiles the 2D kernels (numba compiles on one core; `inerter compile` on 2 cores), then this
-    process loads them all, compiling whatever the other's cache entries lack (two processes that
-    save the same kernel's cache index at once keep one entry), so that the cache is complete when
-    it returns."""
+    process loads the 3D kernels too, compiling whatever the other's cache entries lack (two
+    processes that save the same kernel's cache index at once keep one entry), so that the cache is
+    complete when it returns."""
     from inerter.engine import compiled
 
     if not compiled.AVAILABLE:
@@ -644,6 +644,7 @@ def warm_up(spatial: bool = False, parallel: bool = False, dims=None):
         reported = other.communicate()[0].split()      # its outcome is checked by loading what it compiled, below
         if compiled.NOTICE is not None and reported:
             compiled.NOTICE.seconds += float(reported[-1])     # what it compiled counts as compiled here
+        dims = (3,)                 # the 2D kernels are loaded here already
     _warm_up_dimensions(dims)
     return _time.perf_counter() - t0
 

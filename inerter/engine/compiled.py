@@ -37,7 +37,6 @@ returns a kernel that calls the numpy path and :func:`integrate_compiled` runs
 """
 from __future__ import annotations
 
-import contextlib
 import copy
 import functools
 import hashlib
@@ -60,7 +59,7 @@ from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import device, layout
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
-from inerter.model.mechanism import DEPENDENT_RATIO
+from inerter.model.mechanism import DEPENDENT_RATIO, wound_from
 
 
 
@@ -589,17 +588,14 @@ class Kernel:
         rot_real = self.params[_k.ROT_REAL]
         return rot_real[:, layout.PHI_REF] if self.spatial else rot_real[:, :0]
 
-    @contextlib.contextmanager
+    @windings.setter
+    def windings(self, values):
+        self.windings[:] = values             # into the table the kernels read
+
     def wound_from_start(self, start=None):
-        """φ_ref at 0, its value at t = 0 (or at `start`, the angles where the history starts), while a
-        history is evaluated sample after sample from there (kernels._signals_at winds on from each
-        sample to the next); as it was afterwards."""
-        held = self.windings.copy()
-        self.windings[:] = 0.0 if start is None else start
-        try:
-            yield
-        finally:
-            self.windings[:] = held
+        """φ_ref at 0, its value at t = 0 (or at `start`), while a history is evaluated from there
+        (kernels._signals_at winds on from each sample to the next; mechanism.wound_from)."""
+        return wound_from(self, start)
 
     @property
     def unsettled(self) -> int:

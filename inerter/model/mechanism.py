@@ -94,6 +94,20 @@ class BodyFrame:
         return o.matrix(q[self.qi + 3:self.qi + 3 + o.size]), v[self.vi + 3:self.vi + 6]
 
 
+@contextlib.contextmanager
+def wound_from(holder, start=None):
+    """`holder.windings` (the φ_ref of its 3D rotational elements: a :class:`Mechanism`'s evaluators,
+    the engine kernel's table column) at 0, their value at t = 0, or at `start` (the angles where a
+    history starts), while a history is evaluated sample after sample from there, each sample
+    winding on; as they were afterwards."""
+    held = np.array(holder.windings, dtype=float)
+    holder.windings = np.zeros(len(held)) if start is None else start
+    try:
+        yield
+    finally:
+        holder.windings = held
+
+
 class Mechanism:
     """A scene compiled for simulation. `element_factory`, where given, builds the translational
     elements instead of :mod:`inerter.model.evaluators`: the oracle (:mod:`inerter.oracle`) passes
@@ -382,17 +396,10 @@ class Mechanism:
         for e in self.winding:
             e.reference = 0.0
 
-    @contextlib.contextmanager
     def wound_from_start(self, start=None):
-        """φ_ref at 0, its value at t = 0 (or at `start`, the angles where the history starts), while
-        a history is evaluated sample after sample from there (each sample winding on,
-        :meth:`wind`); as it was afterwards."""
-        held = self.windings
-        self.windings = np.zeros(len(held)) if start is None else start
-        try:
-            yield
-        finally:
-            self.windings = held
+        """φ_ref at 0, its value at t = 0 (or at `start`), while a history is evaluated from there
+        (:func:`wound_from`)."""
+        return wound_from(self, start)
 
     def check_terminals(self, q_old, q_new, t, t_old=None):
         """Stop where a translational element's terminals meet within a step: the closest approach

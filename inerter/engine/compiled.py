@@ -586,7 +586,7 @@ class Kernel:
         """The 3D rotational elements' φ_ref (layout.PHI_REF: each one's wound angle at the last
         accepted step, inerter.elements.winding), a view the kernels write; empty in 2D."""
         rot_real = self.params[_k.ROT_REAL]
-        return rot_real[:, layout.PHI_REF] if self.spatial else rot_real[:, :0]
+        return rot_real[:, layout.PHI_REF] if self.spatial else rot_real.reshape(-1)[:0]     # 2D: none
 
     @windings.setter
     def windings(self, values):

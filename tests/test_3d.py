@@ -10,7 +10,7 @@ import pytest
 import inerter
 from conftest import SCENARIOS, TWO_BAR
 from inerter.common.errors import SceneError
-from inerter.oracle.derivation import Jet
+from inerter.oracle.jets import Jet
 
 AS_3D = SCENARIOS / "two_bar_2d_as_3d.toml"
 SPHERICAL = SCENARIOS / "spherical_pendulum_3d.toml"
@@ -86,7 +86,7 @@ def test_eq11_spherical_form_is_b_rho_ddot():
         rho, th, ph = (Jet(v, d1, d2, np.zeros(1)) for v, d1, d2 in
                        zip((1.0 + rng.random(), 0.3 + 2.5 * rng.random(), 6 * rng.random()),
                            rng.normal(size=3), rng.normal(size=3)))
-        from inerter.oracle.derivation import jcos, jsin
+        from inerter.oracle.jets import jcos, jsin
         pos = [rho * jsin(th) * jcos(ph), rho * jsin(th) * jsin(ph), rho * jcos(th)]
         r = [p.v for p in pos]
         rd = [p.d1 for p in pos]

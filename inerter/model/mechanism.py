@@ -114,7 +114,9 @@ class Mechanism:
     its own, which differentiates each element's terminal distance L(q) instead of Eqs. (15–20),
     with the signature ``factory(spec, pair, centripetal, free_length, labels, mechanism)``. Where
     the factory has an attribute ``rotational``, the planar rotational elements are built by it,
-    ``factory.rotational(spec, angle_index_a, angle_index_b, free_angle)``."""
+    ``factory.rotational(spec, angle_index_a, angle_index_b, free_angle)``, and where it has
+    ``spatial_rotational``, the 3D ones, ``factory.spatial_rotational(spec, frame_a, frame_b, q0)``
+    (each with the evaluators' ``reference`` and ``wind``)."""
 
     def __init__(self, scene: Scene, element_factory=None):
         self.scene = scene
@@ -135,7 +137,7 @@ class Mechanism:
         self.elements = [self._element(e, q0) for e in scene.elements.values()]
         self.inerters = [e for e in self.elements if e.kind == "inerter"]
         #: The 3D rotational elements, whose angles wind on from the last accepted step (:meth:`wind`).
-        self.winding = [e for e in self.elements if isinstance(e, el.SpatialRotationalElement)]
+        self.winding = [e for e in self.elements if hasattr(e, "wind")]
         #: The elements with a screw efficiency, whose modes each solve settles (:meth:`accelerations`).
         self.efficient = [e for e in self.inerters if getattr(e, "efficient", None) is not None and e.efficient()]
         # Elements on the same pair of terminals share one evaluation of the pair's geometry (one
@@ -290,7 +292,8 @@ class Mechanism:
         has_free = elements.KINDS[e.type].free is not None
         if not elements.translational(e.type):
             if self.dim == 3:
-                return el.SpatialRotationalElement(e, self.frames[e.body_a], self.frames[e.body_b], q0)
+                build = getattr(self.element_factory, "spatial_rotational", el.SpatialRotationalElement)
+                return build(e, self.frames[e.body_a], self.frames[e.body_b], q0)
             ia, ib = self.angle_index(e.body_a), self.angle_index(e.body_b)
             phi0 = e.free_length if has_free else 0.0
             if phi0 is None:

@@ -20,8 +20,9 @@ An error in either the fast path or this module shows up as a disagreement betwe
 Planar rotational elements (:class:`OracleRotational`) are derived in the same way from the relative
 angle φ(q) = θ_b − θ_a: a rotational spring from its potential V = ½k(φ − φ0)² (generalised force
 −∇V, torque dV/dφ), a rotational damper from its dissipation function R = ½d φ̇² (generalised force
-−(∂R/∂φ̇)∇φ, torque ∂R/∂φ̇), each derivative taken on Jets. 3D rotational elements stay with the
-numpy evaluators (see :class:`OracleRotational`).
+−(∂R/∂φ̇)∇φ, torque ∂R/∂φ̇), each derivative taken on Jets; in 3D (:class:`OracleSpatialRotational`) about an axis fixed in
+body a, with the angle from the relative rotation's quaternion and the rate from ω̃ = Ṙ Rᵀ
+(:mod:`inerter.oracle.rotational`).
 """
 from __future__ import annotations
 
@@ -31,155 +32,9 @@ from types import SimpleNamespace
 import numpy as np
 
 from inerter.common.errors import MIN_LENGTH, InerterError, TerminalsMeet
-
-
-class Jet:
-    """A number with its gradient g (w.r.t. n chosen coordinates) and its first and second
-    derivatives d1, d2 along a curve q(t) = q + q̇ t (so d2 = q̇ᵀ∇²f q̇)."""
-
-    __slots__ = ("v", "d1", "d2", "g")
-
-    def __init__(self, v, d1, d2, g):
-        self.v, self.d1, self.d2, self.g = v, d1, d2, g
-
-    @staticmethod
-    def constant(value, n):
-        return Jet(float(value), 0.0, 0.0, np.zeros(n))
-
-    def __add__(self, o):
-        if not isinstance(o, Jet):
-            return Jet(self.v + o, self.d1, self.d2, self.g)
-        return Jet(self.v + o.v, self.d1 + o.d1, self.d2 + o.d2, self.g + o.g)
-
-    __radd__ = __add__
-
-    def __neg__(self):
-        return Jet(-self.v, -self.d1, -self.d2, -self.g)
-
-    def __sub__(self, o):
-        return self + (-o)
-
-    def __rsub__(self, o):
-        return (-self) + o
-
-    def __mul__(self, o):
-        if not isinstance(o, Jet):
-            return Jet(self.v * o, self.d1 * o, self.d2 * o, self.g * o)
-        return Jet(self.v * o.v,
-                   self.d1 * o.v + self.v * o.d1,
-                   self.d2 * o.v + 2.0 * self.d1 * o.d1 + self.v * o.d2,
-                   self.g * o.v + self.v * o.g)
-
-    __rmul__ = __mul__
-
-    def reciprocal(self):
-        return self._chain(1.0 / self.v, -1.0 / self.v ** 2, 2.0 / self.v ** 3)
-
-    def __truediv__(self, o):
-        return self * (o.reciprocal() if isinstance(o, Jet) else 1.0 / o)
-
-    def __rtruediv__(self, o):
-        return self.reciprocal() * o
-
-    def _chain(self, f0, f1, f2):
-        """Apply a scalar function with value f0 and derivatives f1, f2 at self.v."""
-        return Jet(f0, f1 * self.d1, f1 * self.d2 + f2 * self.d1 * self.d1, f1 * self.g)
-
-
-def jsqrt(x: Jet) -> Jet:
-    s = math.sqrt(x.v)
-    return x._chain(s, 0.5 / s, -0.25 / (s * x.v))
-
-
-def jsin(x: Jet) -> Jet:
-    s, c = math.sin(x.v), math.cos(x.v)
-    return x._chain(s, c, -s)
-
-
-def jcos(x: Jet) -> Jet:
-    s, c = math.sin(x.v), math.cos(x.v)
-    return x._chain(c, -s, -c)
-
-
-def jpow(x: Jet, p: float) -> Jet:
-    """x**p for x > 0."""
-    return x._chain(x.v ** p, p * x.v ** (p - 1.0), p * (p - 1.0) * x.v ** (p - 2.0))
-
-
-def jabs(x: Jet) -> Jet:
-    return x._chain(abs(x.v), math.copysign(1.0, x.v), 0.0)
-
-
-def jlogcosh(x: Jet) -> Jet:
-    """ln cosh x, written |x| + ln(1 + e^{−2|x|}) − ln 2 so that it does not overflow."""
-    a = abs(x.v)
-    t = math.tanh(x.v)
-    return x._chain(a + math.log1p(math.exp(-2.0 * a)) - math.log(2.0), t, 1.0 - t * t)
-
-
-def point_position(point, coords):
-    """r = R + A ū written out from the rotation's definition, on Jets (or floats): in 2D from
-    the angle, in 3D from the (not necessarily unit) quaternion p, A = I + 2/|p|² (w[v]× + [v]×²)."""
-    if point.body < 0:
-        return list(point.local)
-    if len(coords) == 3:
-        x, y, th = coords
-        ux, uy = point.local
-        c, s = jcos(th), jsin(th)
-        return [x + c * ux - s * uy, y + s * ux + c * uy]
-    X, Y, Z, w, a, b, c = coords
-    u = point.local
-    k = 2.0 / (w * w + a * a + b * b + c * c)
-    vec = (a, b, c)
-    t = [vec[1] * u[2] - vec[2] * u[1], vec[2] * u[0] - vec[0] * u[2], vec[0] * u[1] - vec[1] * u[0]]  # v × u
-    tt = [vec[1] * t[2] - vec[2] * t[1], vec[2] * t[0] - vec[0] * t[2], vec[0] * t[1] - vec[1] * t[0]]  # v × (v × u)
-    return [P + u[i] + k * (w * t[i] + tt[i]) for i, P in enumerate((X, Y, Z))]
-
-
-def _plain(q, point):
-    """A point's body coordinates as constant Jets (None for the ground): (x, y, θ) or (R, p)."""
-    if point.body < 0:
-        return None
-    return [Jet.constant(x, 1) for x in q[point.qi:point.qi + (3 if len(point.local) == 2 else 7)]]
-
-
-def _position(q, point):
-    """r of a point at pose q, as floats."""
-    return [c.v if isinstance(c, Jet) else float(c) for c in point_position(point, _plain(q, point))]
-
-
-def _seed(q, v, qi, vi, dim, n, k):
-    """Jets for one body's coordinates along the motion, with gradients w.r.t. its velocity
-    coordinates (placed at columns k...). 2D: q = (x, y, θ), q̇ = v, q̈|v̇=0 = 0. 3D: R with
-    Ṙ = v; quaternion p with ṗ = ½ p⊗(0, ω) and p̈|ω̇=0 = ½ ṗ⊗(0, ω) = −¼|ω|² p."""
-    if dim == 2:
-        jets = []
-        for j in range(3):
-            g = np.zeros(n)
-            g[k + j] = 1.0
-            jets.append(Jet(float(q[qi + j]), float(v[vi + j]), 0.0, g))
-        return jets
-    jets = []
-    for j in range(3):
-        g = np.zeros(n)
-        g[k + j] = 1.0
-        jets.append(Jet(float(q[qi + j]), float(v[vi + j]), 0.0, g))
-    p = np.asarray(q[qi + 3:qi + 7], dtype=float)
-    w = np.asarray(v[vi + 3:vi + 6], dtype=float)
-
-    def rate(pp, ww):                                          # ½ p ⊗ (0, ω)
-        a, b, c = ww
-        return 0.5 * np.array((-pp[1] * a - pp[2] * b - pp[3] * c, pp[0] * a + pp[2] * c - pp[3] * b,
-                               pp[0] * b + pp[3] * a - pp[1] * c, pp[0] * c + pp[1] * b - pp[2] * a))
-    pdot = rate(p, w)
-    pddot = rate(pdot, w)
-    basis = [rate(p, e) for e in np.eye(3)]
-    for i in range(4):
-        g = np.zeros(n)
-        for j in range(3):
-            g[k + 3 + j] = basis[j][i]
-        jets.append(Jet(float(p[i]), float(pdot[i]), float(pddot[i]), g))
-    return jets
+from inerter.oracle.jets import (
+    Jet, angular_velocity, cross, dot, jabs, jcos, jlogcosh, jpow, jsin, jsqrt, parts, point_position, position, seed)
+from inerter.oracle.rotational import OracleRotational, OracleSpatialRotational
 
 
 class _BodyPoint:
@@ -216,7 +71,7 @@ class DistanceProbe:
         nvb = 3 if self.dim == 2 else 6
         for p in (self.pair.a, self.pair.b):
             if p.body >= 0 and p.body not in coords:
-                coords[p.body] = _seed(q, v, p.qi, p.dofs[0], self.dim, n, k)
+                coords[p.body] = seed(q, v, p.qi, p.dofs[0], self.dim, n, k)
                 k += nvb
         ra = point_position(self.pair.a, coords.get(self.pair.a.body))
         rb = point_position(self.pair.b, coords.get(self.pair.b.body))
@@ -250,81 +105,8 @@ class DistanceProbe:
 
     def distance(self, q):
         """|r(q)|, whatever the probe differentiates."""
-        ra, rb = _position(q, self.pair.a), _position(q, self.pair.b)
+        ra, rb = position(q, self.pair.a), position(q, self.pair.b)
         return math.sqrt(sum((b - a) ** 2 for a, b in zip(ra, rb)))
-
-
-class OracleRotational:
-    """A planar rotational spring or damper between two bodies' angles (or a body and the ground),
-    from its potential or its dissipation function, differentiated on Jets.
-
-    φ(q) = θ_b − θ_a is a Jet with its gradient ∇φ over the angles and φ̇ = ∇φ·q̇ along the motion.
-    Spring: V(φ) = ½k(φ − φ0)²; the generalised force is −∇V (chain rule on the Jets: V.g), the
-    torque dV/dφ (V on a Jet seeded dφ = 1). Damper: R(φ̇) = ½d φ̇² (Rayleigh); the generalised
-    force is −(∂R/∂φ̇)∇φ, since ∂φ̇/∂q̇ = ∇φ, the torque ∂R/∂φ̇ (R on a Jet seeded dφ̇ = 1). Neither
-    law is read from :mod:`inerter.elements`: these two functions are the definitions.
-
-    The mechanism builds these through ``OracleElement.rotational`` for planar scenes only. In 3D
-    the evaluators' φ (rotation about an axis fixed in body a) equals an exact derivation only
-    while the relative rotation stays about that axis, so an oracle there would disagree off the
-    revolute joint's manifold by construction, not by a mistake."""
-
-    def __init__(self, spec, index_a, index_b, free_angle):
-        self.name = spec.name
-        self.kind = spec.type
-        self.coefficient = float(spec.coefficient)
-        self.coefficient_name = {"rotational_spring": "k", "rotational_damper": "d"}[spec.type]
-        self.free_angle = float(free_angle)
-        self.ia, self.ib = index_a, index_b
-        self.dofs = [i for i in (index_a, index_b) if i >= 0]
-
-    def _definition(self, x):
-        """V(φ) of a spring, R(φ̇) of a damper, on a Jet (or a float)."""
-        if self.kind == "rotational_spring":
-            d = x - self.free_angle
-            return 0.5 * self.coefficient * (d * d)
-        return 0.5 * self.coefficient * (x * x)
-
-    def angle(self, q, v):
-        """φ as a Jet over the velocity coordinates in `dofs` (gradient ∇φ, first derivative φ̇)."""
-        n = len(self.dofs)
-        phi = Jet.constant(0.0, n)
-        for sign, i in ((1.0, self.ib), (-1.0, self.ia)):
-            if i >= 0:
-                g = np.zeros(n)
-                g[self.dofs.index(i)] = 1.0
-                phi = phi + sign * Jet(float(q[i]), float(v[i]), 0.0, g)
-        return phi
-
-    def _torque(self, phi):
-        """dV/dφ (spring) or ∂R/∂φ̇ (damper), by differentiation of the definition."""
-        x = phi.v if self.kind == "rotational_spring" else phi.d1
-        return self._definition(Jet(x, 1.0, 0.0, np.zeros(0))).d1
-
-    def geometry(self, q, v):
-        return self.angle(q, v)
-
-    def add_force(self, q, v, Q, geo=None):
-        phi = geo or self.angle(q, v)
-        if self.kind == "rotational_spring":
-            Q[self.dofs] -= self._definition(phi).g               # −∇V
-        else:
-            Q[self.dofs] -= self._torque(phi) * phi.g             # −(∂R/∂φ̇) ∇φ
-
-    def add_mass(self, q, v, M, geo=None):
-        pass
-
-    def outputs(self, q, v, a):
-        phi = self.angle(q, v)
-        return phi.v, phi.d1, self._torque(phi)
-
-    def kinetic(self, q, v):
-        return 0.0
-
-    def potential(self, q):
-        if self.kind != "rotational_spring":
-            return 0.0
-        return self._definition(self.angle(q, np.zeros_like(q)).v)
 
 
 class OracleDevice:
@@ -460,24 +242,6 @@ class OracleDevice:
         return tuple(values[suffix] for suffix, _, _ in self.spec.outputs())
 
 
-def _cross(a, b):
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _parts(jets):
-    """(values, first derivatives, second derivatives along the motion, gradients) of Jets, as arrays."""
-    return (np.array([j.v for j in jets]), np.array([j.d1 for j in jets]), np.array([j.d2 for j in jets]),
-            np.array([j.g for j in jets]))
-
-
-def _vee(W):
-    return np.array((W[2, 1], W[0, 2], W[1, 0]))
-
-
 class DeviceBodies:
     """An inerter device's housing, rod and flywheel as rigid bodies whose poses are functions of
     the pose q, and their kinetic energy's terms in Eq. (33), written from the definitions.
@@ -525,10 +289,10 @@ class DeviceBodies:
             e1 = [Jet.constant(0.0, n), Jet.constant(0.0, n), Jet.constant(1.0, n)]
         else:
             a1 = self._axis(coords, body_a, n)
-            w = _cross(a1, u)
-            wn = jsqrt(_dot(w, w))
+            w = cross(a1, u)
+            wn = jsqrt(dot(w, w))
             e1 = [c / wn for c in w]
-        e2 = _cross(u, e1)
+        e2 = cross(u, e1)
         return [[e1[i], e2[i], u[i]] for i in range(3)]
 
     def _axis(self, coords, point_a, n):
@@ -551,13 +315,13 @@ class DeviceBodies:
         if self.dim == 2:
             ra, rb = ra + [Jet.constant(0.0, n)], rb + [Jet.constant(0.0, n)]
         r = [b - a for a, b in zip(ra, rb)]
-        L = jsqrt(_dot(r, r))
+        L = jsqrt(dot(r, r))
         u = [c / L for c in r]
         M, Q, T = np.zeros((n, n)), np.zeros(n), 0.0
         R = self._frame(coords, probe.pair.a, u, n) if self.spin else None
         for m, end, x, It, J, turns in self.bodies:
             c = [p + x * e for p, e in zip(ra if end == "a" else rb, u)]
-            cv, cd, cdd, cg = _parts(c)
+            cv, cd, cdd, cg = parts(c)
             M += m * cg.T @ cg
             Q -= m * cg.T @ (cdd - field)                       # inertia (absolute) and weight
             T += 0.5 * m * float(cd @ cd) - m * float(self.gravity @ cv)
@@ -579,12 +343,7 @@ class DeviceBodies:
 
     @staticmethod
     def _rotation(R, inertia):
-        Rv, Rd, Rdd, Rg = _parts([x for row in R for x in row])
-        Rv, Rd, Rdd, Rg = Rv.reshape(3, 3), Rd.reshape(3, 3), Rdd.reshape(3, 3), Rg.reshape(3, 3, -1)
-        W = Rd @ Rv.T
-        w = _vee(W)
-        alpha0 = _vee(Rdd @ Rv.T + Rd @ Rd.T)
-        wg = np.array([_vee(Rg[:, :, i] @ Rv.T) for i in range(Rg.shape[2])]).T     # ∂ω/∂v, 3 × n
+        Rv, w, wg, alpha0 = angular_velocity(R)
         I = Rv @ inertia @ Rv.T
         M = wg.T @ I @ wg
         Q = -wg.T @ (I @ alpha0 + np.cross(w, I @ w))
@@ -592,17 +351,19 @@ class DeviceBodies:
 
     @staticmethod
     def _transverse(u, It):
-        _, ud, udd, ug = _parts(u)
+        _, ud, udd, ug = parts(u)
         return It * ug.T @ ug, -It * ug.T @ udd, 0.5 * It * float(ud @ ud)
 
 
 class OracleElement:
     """Spring, damper or inerter (with its device, :class:`OracleDevice`) through L(q) and its
-    derivatives. As the mechanism's element factory it builds the planar rotational elements too
-    (:attr:`rotational`)."""
+    derivatives. As the mechanism's element factory it builds the rotational elements too, planar
+    (:attr:`rotational`) and 3D (:attr:`spatial_rotational`)."""
 
     #: The factory of planar rotational elements, ``rotational(spec, index_a, index_b, free_angle)``.
     rotational = OracleRotational
+    #: The factory of 3D rotational elements, ``spatial_rotational(spec, frame_a, frame_b, q0)``.
+    spatial_rotational = OracleSpatialRotational
 
     def __init__(self, spec, pair, centripetal, free_length, labels, mech):
         self.name = spec.name
@@ -616,7 +377,7 @@ class OracleElement:
         direction = None
         if spec.type == "inerter" and mech.scene.small_displacement:
             # the small-displacement law: s = ê0·r, ê0 the direction at the scene's pose; F = b s̈
-            r0 = np.subtract(_position(mech.initial_q, pair.b), _position(mech.initial_q, pair.a))
+            r0 = np.subtract(position(mech.initial_q, pair.b), position(mech.initial_q, pair.a))
             direction = r0 / np.linalg.norm(r0)
             self.centripetal = True                     # F = b s̈ as it is: no |ṙ⊥|²/L to remove
         self.fixed_direction = direction

@@ -27,8 +27,10 @@ from inerter.engine.simulation import Settings, Stepper, integrate
 #: Tolerances at which the oracle is solved (DOP853).
 ORACLE_RTOL = 1e-12
 ORACLE_ATOL = 1e-14
-#: Kinds of [[metrics]] that read their signal between the samples (through ``Result.dense``).
-DENSE_METRICS = ("free_oscillation", "harmonics", "steady_state", "peak")
+#: Kinds of [[metrics]] that read their signal between the samples (through ``Result.dense``) over
+#: whole windows: the compiled run keeps its dense output at every step for them. A peak reads it
+#: only around its candidates, which a run's LocalDense integrates again (engine.compiled).
+DENSE_METRICS = ("free_oscillation", "harmonics", "steady_state")
 
 
 def load(path, **overrides) -> "Model":
@@ -170,8 +172,9 @@ class Model:
         side, and ``result.run.extra["path"]`` says so) or "numpy" (the readable reference). The
         oracle always runs its own numpy evaluation.
         With `metrics`, the scene's [[metrics]] are computed from the integrator's dense output (the
-        compiled loop keeps it only then, and for a scene with device events, whose times it refines:
-        :meth:`Result.events`)."""
+        compiled loop keeps it at every step for a metric that reads whole windows of it, and for a
+        scene with device events, whose times it refines: :meth:`Result.events`; a peak reads it
+        only around its candidates, whose sample intervals are integrated again)."""
         s = self.settings(stop_time=stop_time, output_interval=output_interval, method=method, rtol=rtol,
                           atol=atol, constraint=constraint, step=step)
         if path == "compiled" and not self.is_oracle:
@@ -189,6 +192,8 @@ class Model:
         else:
             raise SceneError("simulate()", "path", path, "'numpy' or 'compiled'", "unknown path")
         result = Result(self, s, run)
+        if hasattr(run.dense, "windings_at"):      # a LocalDense: integrated again from a sample's angles
+            run.dense.windings_at = lambda k: result._windings_at(result.time[k])
         if metrics and run.status == "ok":
             result.metrics = compute_metrics(self, result)
         return result
@@ -370,9 +375,10 @@ class Result:
     def dense(self, name):
         """A callable t ↦ signal(t), vectorised over t (a 1-D array of the values), through the
         integrator's dense output: on a compiled run, the states from the kept steps' polynomials
-        and the signal from the kernels, in one compiled call; on the numpy path, scipy's dense
-        output and the numpy signals. Where the run kept none (RK4, whose fixed steps give no
-        polynomial, or a run without metrics): a cubic spline through the samples. A derived output:
+        (or, where the run kept none, from the sample intervals read, integrated again:
+        ``engine.compiled.LocalDense``) and the signal from the kernels, in one compiled call; on the
+        numpy path, scipy's dense output and the numpy signals. Where there is none (RK4, whose
+        fixed steps give no polynomial): a cubic spline through the samples. A derived output:
         its expression on the dense values of the outputs it reads. A 3D rotational element's angle
         is wound on from the sample before the first t along the times asked for (give them in
         increasing order; inerter.elements.winding)."""

@@ -96,7 +96,7 @@ def test_each_method_winds(path, method):
     assert np.abs(r["torsion.phi_rel"] - closed_form(r.time, w0, phi0)).max() < 2e-4
 
 
-@pytest.mark.parametrize("path", ["numpy", "compiled"])
+@pytest.mark.parametrize("path", ["numpy", "compiled", "compiled-built-where-read"])
 def test_the_dense_output_reads_the_wound_angle_between_samples(path):
     """The dense output of φ and τ (DOP853's polynomials) at times between samples in a window
     late in the run where φ > π throughout (its first time more than half a turn from φ = 0)
@@ -107,9 +107,14 @@ def test_the_dense_output_reads_the_wound_angle_between_samples(path):
     w0, phi0 = CASES["spun"]
     model = inerter.load(BAR_3D, w=w0, phi0=phi0)
     settings = model.settings()
-    run = (compiled.integrate_compiled(model.mechanism, settings, dense=True) if path == "compiled"
-           else model.simulate(path="numpy", metrics=False).run)
-    result = Result(model, settings, run)
+    if path == "compiled-built-where-read":     # no dense output kept: each interval read is integrated again
+        result = model.simulate(metrics=False)
+        run = result.run
+        assert isinstance(run.dense, compiled.LocalDense)
+    else:
+        run = (compiled.integrate_compiled(model.mechanism, settings, dense=True) if path == "compiled"
+               else model.simulate(path="numpy", metrics=False).run)
+        result = Result(model, settings, run)
     assert path == "numpy" or run.extra["path"] == "compiled"
     t = np.linspace(2.55, 2.7, 16)                # φ > π throughout: 3.33 sin 3t
     reference = closed_form(t, w0, phi0)

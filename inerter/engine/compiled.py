@@ -718,6 +718,8 @@ class Kernel:
         the 3D rotational elements' angles where `times` start (default: those at t = 0), from which
         their angles wind on along `times` (Kernel.wound_from_start)."""
         times = np.ascontiguousarray(times, dtype=float).reshape(-1)
+        if isinstance(sol, LocalDense):
+            return self._local_dense_signal(sol, index, times, inputs, alpha)
         if not isinstance(sol, DenseOutput):
             return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha, windings)
         need, comps = self._reads(index)
@@ -727,6 +729,18 @@ class Kernel:
                                     self._inputs(inputs), float(alpha), int(index), need, self.params,
                                     np.empty(len(self._layout)), out)
         return out[:k], int(k)
+
+    def _local_dense_signal(self, sol, index, times, inputs, alpha):
+        """:meth:`dense_signal` on a :class:`LocalDense`, one sample interval after the other, each
+        from the angles at its first sample."""
+        out = np.empty(len(times))
+        first_bad = len(times)
+        for k, where, piece in sol.pieces(times):
+            values, good = self.dense_signal(piece, index, times[where], inputs, alpha, sol.windings(k))
+            out[where[:good]] = values
+            if good < len(where):
+                first_bad = min(first_bad, int(where[good]))
+        return out[:first_bad], first_bad
 
     def signal_order(self, signals):
         """Indices taking the kernel's signal layout to the order of `signals.names` before the
@@ -928,9 +942,11 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     on the compiled right-hand side (and their dense output).
 
     `dense`: keep the dense output of every accepted step of DOP853 and RK45 (scipy's polynomials,
-    the same the samples are taken from), as ``Run.dense``, a :class:`DenseOutput`; without it,
-    or with RK4 (fixed step: metrics use a cubic spline through the samples), ``Run.dense`` is None.
-    The samples are the same either way."""
+    the same the samples are taken from), as ``Run.dense``, a :class:`DenseOutput`. Without it,
+    ``Run.dense`` is a :class:`LocalDense`, which integrates again the sample intervals it is read
+    in: what reads a few of them (a peak's refinement) does not make the whole run pay for a dense
+    output at every step. With RK4 (fixed step: metrics use a cubic spline through the samples),
+    ``Run.dense`` is None. The samples are the same either way."""
     from inerter.engine.simulation import integrate
 
     why = unsupported(mech)
@@ -1003,6 +1019,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     sol = None
     if keep[2][_k.KEPT_COUNT] > 0:
         sol = DenseOutput(_RK_CODE[settings.method], keep[0], keep[1], int(keep[2][_k.KEPT_COUNT]))
+    elif tables is not None and k > 1:
+        sol = LocalDense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, tables)
     run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
                       int(evals), cpu, None)
     return _kernel_run(run, kernel, "compiled", unsettled)
@@ -1055,6 +1073,76 @@ class DenseOutput:
         out = np.empty((self.n, len(times)))
         _k.dense_states(self.method_code, self.nodes, self.coeffs, self.count, times, out)
         return out[:, 0] if scalar else out
+
+
+class LocalDense:
+    """The dense output of a compiled DOP853 or RK45 run that kept none, built where it is read:
+    each sample interval a time falls in is integrated again from the run's state at the sample
+    before it (its 3D rotational elements' angles wound as the run's were there, :attr:`windings_at`),
+    with the run's method, tolerances, inputs and α, running on through the same kinks and
+    restarting at the same jumps, and its steps' polynomials kept as a whole run's are (one
+    :class:`DenseOutput` per interval). It agrees with the dense output the run would have kept to
+    the run's tolerance (the same equations under the same error control, from states that agree
+    at the samples), not bit for bit. ``sol(t)`` as :class:`DenseOutput`; ``sol.ts``: the samples."""
+
+    def __init__(self, kernel, settings, inputs, grid, states, switches, kinks, tables):
+        self.kernel, self.settings, self.inputs, self.tables = kernel, settings, inputs, tables
+        self.grid, self.states, self.switches, self.kinks = grid, states, switches, kinks
+        self.ts = grid
+        self.n = states.shape[1]
+        self.intervals = {}                  # sample index k → DenseOutput over [grid[k], grid[k + 1]]
+        #: The right-hand side's evaluations spent integrating intervals again.
+        self.evaluations = 0
+        #: k ↦ the 3D rotational elements' angles at sample k (None: those at t = 0); set by the Result.
+        self.windings_at = None
+
+    def pieces(self, times):
+        """[(sample index k, the indices of `times` in k's interval, its DenseOutput)], integrating
+        the intervals not integrated yet."""
+        t = np.asarray(times, dtype=float).reshape(-1)
+        ks = np.clip(np.searchsorted(self.grid, t, side="right") - 1, 0, len(self.grid) - 2)
+        out = []
+        for k in np.unique(ks):
+            k = int(k)
+            if k not in self.intervals:
+                self.intervals[k] = self._integrate(k)
+            out.append((k, np.flatnonzero(ks == k), self.intervals[k]))
+        return out
+
+    def windings(self, k):
+        return self.windings_at(k) if self.windings_at is not None else None
+
+    def _integrate(self, k):
+        """The DenseOutput of the steps from sample k to sample k + 1."""
+        s, kernel = self.settings, self.kernel
+        t0, t_end = float(self.grid[k]), float(self.grid[k + 1])
+        ends = sorted(d for d in self.switches if t0 < d < t_end) + [t_end]
+        keep = _dense_keep(s.method, self.tables, self.n, True)
+        y = self.states[k].copy()
+        A, B, C, E, E3, D, Pm = self.tables
+        with kernel.wound_from_start(self.windings(k)):
+            for t1 in ends:
+                seg_out = np.empty((2, len(y)))
+                seg_out[0] = y
+                status, _, _, evals, _, _, keep, _ = _k.integrate_rk(
+                    _RK_CODE[s.method], y, t0, t1, np.array((t0, t1)), seg_out, float(s.rtol), float(s.atol),
+                    0.0, int(s.max_steps), self.inputs, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm,
+                    _monitor(s.method), t1 if t1 in self.switches else 0.0, self.kinks, keep)
+                if status != 0:
+                    raise SimulationError(f"the dense output between t = {t0:.6g} s and {t_end:.6g} s: the "
+                                          f"{s.method} integrator failed on integrating that interval again "
+                                          f"({failure_text(kernel, status, s.method, 0.0, y, t0)})", t0)
+                self.evaluations += int(evals)
+                y, t0 = seg_out[-1].copy(), t1
+        return DenseOutput(_RK_CODE[s.method], keep[0], keep[1], int(keep[2][_k.KEPT_COUNT]))
+
+    def __call__(self, t):
+        times = np.asarray(t, dtype=float)
+        flat = times.reshape(-1)
+        out = np.empty((self.n, len(flat)))
+        for _, where, sol in self.pieces(flat):
+            out[:, where] = sol(flat[where])
+        return out[:, 0] if times.ndim == 0 else out
 
 
 class CompiledStepper(Stepper):

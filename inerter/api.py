@@ -210,7 +210,9 @@ class Model:
     def stepper(self, method=None, rtol=None, atol=None, path="compiled", stop_time=None) -> Stepper:
         """A co-simulation stepper at t = 0. `path` = "compiled" (the default): each step one call
         of the compiled integrator loop where :func:`inerter.engine.compiled.compiled_stepper` can
-        take the scene (the numpy stepper otherwise; ``stepper.path`` says which); "numpy": the
+        take the scene (DOP853, RK45, RK4); with an implicit method or the projection treatment,
+        scipy's stepper on the compiled right-hand side; the numpy stepper where the kernels do not
+        take the scene (``stepper.path`` says which); "numpy": the
         readable reference. On both paths the adaptive integrators run on across communication
         points, their steps clipped to `stop_time` where it is given."""
         s = self.settings(method=method, rtol=rtol, atol=atol)
@@ -219,9 +221,12 @@ class Model:
             stepper = compiled.compiled_stepper(self.mechanism, s, self.signals, stop_time)
             if stepper is not None:
                 return stepper
-            if len(self.mechanism.z0) and not compiled.unsupported(self.mechanism):
-                # internal states: scipy's steppers on the kernels' right-hand side, which has them
-                return Stepper(compiled.kernel_mechanism(self.mechanism), s, self.signals, stop_time)
+            if not compiled.unsupported(self.mechanism):
+                # an implicit method or the projection treatment: scipy's steppers on the kernels'
+                # right-hand side, as a whole run takes them (integrate_compiled)
+                stepper = Stepper(compiled.kernel_mechanism(self.mechanism), s, self.signals, stop_time)
+                stepper.path = "scipy stepper, compiled right-hand side"
+                return stepper
         elif path != "numpy" and path != "compiled":
             raise SceneError("stepper()", "path", path, "'numpy' or 'compiled'", "unknown path")
         return Stepper(self.mechanism, s, self.signals, stop_time)

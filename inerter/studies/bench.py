@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import datetime
 import gc
 import math
 import sys
@@ -271,6 +272,7 @@ def write_outputs(study: Study, out: Path, ratio_to: str | None = None, title: s
         for p in study.points:
             w.writerow([p.series, f"{p.setting:g}", f"{p.error:.6g}", f"{p.cpu:.6g}", p.steps, p.evaluations, p.status])
     lines = [f"# Work-precision: {study.scene}", "",
+             f"`python benchmarks/work_precision.py`, {datetime.date.today()}, on a 2-core machine. "
              f"Simulated 0-{study.stop_time:g} s; error = max |{study.signal} - oracle| over the output samples "
              "(oracle: DOP853 on the element forces from d²L/dt², rtol 1e-12, atol 1e-14); CPU time of the "
              f"integration ({REPEATS_TEXT}). Settings: rtol (atol = rtol/100), RK4 and MuJoCo: step (s).",

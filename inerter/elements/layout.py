@@ -2,7 +2,8 @@
 
 A translational element is one row of ``el_int`` (kind, terminals) and one of ``el_real`` (its
 numbers); a rotational element one row of ``rot_int`` and one of ``rot_real``. The laws of
-:mod:`inerter.elements` read their parameters from the real row through these names.
+:mod:`inerter.elements` read their parameters from the real row through these names. The joints'
+tables (``jt_int``, ``jt_real``) and the point forces' are named here too, beside them.
 """
 
 # -- el_int: a translational element's integers
@@ -86,15 +87,33 @@ PHI_REF = 14             # 3D: the element's wound angle at the last accepted st
 ROT_REAL_COLUMNS_2D = 2
 ROT_REAL_COLUMNS_3D = 15
 
-# -- jt_real of a 3D joint (after its dot-1 pairs at 0..17 and dot-2 vectors at 18..23): a screw
-#    joint's row (inerter.model.joints.Screw), read where column SCREW_ROW of jt_int is 1
-SCREW_ROW = 6            # jt_int: 1 where the joint has the screw row
-SCREW = 24               # jt_real: the screw's axis s̄ in a's frame (3 columns)
+# -- jt_int: a joint's integers (a 2D joint's row holds the first three columns)
+JOINT_KIND = 0           # its kind's code: 2D kernels.REVOLUTE or PRISMATIC (a 2D screw too); 3D a label
+                         # (compiled_spatial._JOINT_KIND) that the kernels do not read: the counts below say
+                         # which rows the joint has. Its points a and b are in columns POINT_A and POINT_B, as
+                         # in el_int (the kernels read both tables' terminals the same way, kernels._row_pair)
+COINCIDENT = 3           # 3D: 1 where it has the three coincident rows r_b − r_a = 0
+DOT1_ROWS = 4            # 3D: how many dot-1 rows s_a·s_b = 0 (≤ 3; their vectors from DOT1 of jt_real)
+DOT2_ROWS = 5            # 3D: how many dot-2 rows s_a·(r_b − r_a) = 0 (≤ 2; their vectors from DOT2)
+SCREW_ROW = 6            # 3D: 1 where the joint has the screw row (inerter.model.joints.Screw)
+JOINT_INT_COLUMNS_2D = 3
+JOINT_INT_COLUMNS_3D = 7
+
+# -- jt_real of a 2D joint (inerter.model.joints.Prismatic2D; all 0.0 for a revolute joint)
+PRISMATIC_NORMAL = 0     # n̄, the normal to the slide's axis t̄ in a's frame (t̄ turned by +90°; 2 columns)
+PRISMATIC_PHI0 = 2       # φ0, the relative angle θ_b − θ_a the joint holds (rad; a 2D screw's at advance x₀)
+PRISMATIC_RATIO = 3      # ρ = 2π/p of a 2D screw (rack and pinion): b's turn per unit of advance (rad/m); 0.0: none
+PRISMATIC_ADVANCE0 = 4   # x₀, a 2D screw's initial advance t·(r_b − r_a) along t = A_a t̄ (m)
+JOINT_REAL_COLUMNS_2D = 5
+
+# -- jt_real of a 3D joint (the vectors of its rows, inerter.model.joints.SpatialJoint; unused columns 0.0)
+DOT1 = 0                 # dot-1 row k's s̄_a in a's frame and s̄_b in b's frame at DOT1 + 6k (6 columns, k < 3)
+DOT2 = 18                # dot-2 row k's s̄_a in a's frame at DOT2 + 3k (3 columns, k < 2)
+SCREW = 24               # the screw's axis s̄ in a's frame (3 columns), read where SCREW_ROW of jt_int is 1
 SCREW_REL0 = 27          # the initial relative orientation A_aᵀ A_b (9 columns, row-major)
 SCREW_RATIO = 36         # ρ = 2π/p: the turn of b relative to a per unit of b's advance along the axis (rad/m)
 SCREW_ADVANCE0 = 37      # the initial advance s·(r_b − r_a) (m)
-JOINT_REAL_COLUMNS = 38
-JOINT_INT_COLUMNS = 7
+JOINT_REAL_COLUMNS_3D = 38
 
 # -- point forces (not element kinds, but tables of the same engine): fa_int, fa_real, pd_int,
 #    pd_real, in_int; a force's real row starts with its direction's DIM components (2 or 3), and the

@@ -359,6 +359,38 @@ _STATUS_TEXT = {
 # ------------------------------------------------------------------------------------------------
 # Flattening a compiled mechanism into arrays
 # ------------------------------------------------------------------------------------------------
+def _joint_rows2(mech, pidx, angle_index, q0):
+    """The ``jt_int`` and ``jt_real`` rows of a 2D scene's joints (columns named in
+    :mod:`inerter.elements.layout`; `angle_index(body)`: the index of its angle in q, −1 for the
+    ground): a prismatic joint's φ0, ratio and initial advance from the mechanism's joint."""
+    scene = mech.scene
+    mech_joints = _by_name(getattr(mech, "joints", []))
+    jt_int, jt_real = [], []
+    for j in scene.joints.values():
+        row_int = [0] * layout.JOINT_INT_COLUMNS_2D
+        row_real = [0.0] * layout.JOINT_REAL_COLUMNS_2D            # a revolute joint's: all 0.0
+        row_int[layout.POINT_A] = pidx[j.point_a]
+        row_int[layout.POINT_B] = pidx[j.point_b]
+        if j.type == "revolute":
+            row_int[layout.JOINT_KIND] = _k_code("REVOLUTE")
+        else:
+            row_int[layout.JOINT_KIND] = _k_code("PRISMATIC")      # a 2D screw: a prismatic joint that turns
+            axis = j.axis
+            ia, ib = angle_index(scene.points[j.point_a].body), angle_index(scene.points[j.point_b].body)
+            mj = mech_joints.get(j.name)
+            phi0 = getattr(mj, "phi0", None)
+            if phi0 is None:
+                phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
+            row_real[layout.PRISMATIC_NORMAL] = -float(axis[1])    # the axis turned by +90°
+            row_real[layout.PRISMATIC_NORMAL + 1] = float(axis[0])
+            row_real[layout.PRISMATIC_PHI0] = float(phi0)
+            row_real[layout.PRISMATIC_RATIO] = float(getattr(mj, "ratio", 0.0))
+            row_real[layout.PRISMATIC_ADVANCE0] = float(getattr(mj, "advance0", 0.0))
+        jt_int.append(tuple(row_int))
+        jt_real.append(tuple(row_real))
+    return jt_int, jt_real
+
+
 def flatten(mech) -> dict:
     """The arrays the kernels run on, from a 2D mechanism and its scene (index maps in
     ``mech.scene`` order: bodies, points, joints, elements, forces)."""
@@ -379,23 +411,7 @@ def flatten(mech) -> dict:
         return 3 * i + 2 if i >= 0 else -1
 
     q0 = np.asarray(mech.q0, dtype=float)
-    mech_joints = _by_name(getattr(mech, "joints", []))
-    jt_int, jt_real = [], []
-    for j in scene.joints.values():
-        a, b = pidx[j.point_a], pidx[j.point_b]
-        if j.type == "revolute":
-            jt_int.append((_k_code("REVOLUTE"), a, b))
-            jt_real.append((0.0, 0.0, 0.0, 0.0, 0.0))
-        else:
-            axis = j.axis
-            ia, ib = angle_index(scene.points[j.point_a].body), angle_index(scene.points[j.point_b].body)
-            mj = mech_joints.get(j.name)
-            phi0 = getattr(mj, "phi0", None)
-            if phi0 is None:
-                phi0 = (q0[ib] if ib >= 0 else 0.0) - (q0[ia] if ia >= 0 else 0.0)
-            jt_int.append((_k_code("PRISMATIC"), a, b))        # a 2D screw: a prismatic joint that turns
-            jt_real.append((-float(axis[1]), float(axis[0]), float(phi0), float(getattr(mj, "ratio", 0.0)),
-                            float(getattr(mj, "advance0", 0.0))))
+    jt_int, jt_real = _joint_rows2(mech, pidx, angle_index, q0)
 
     def rotational(e, me):          # bodies' angle indices; φ0 from the mechanism's element
         ia, ib = angle_index(e.body_a), angle_index(e.body_b)
@@ -426,7 +442,8 @@ def flatten(mech) -> dict:
                 el_real=arr(el_real, layout.ELEMENT_REAL_COLUMNS, float),
                 rot_int=arr(rot_int, layout.ROT_INT_COLUMNS, np.int64),
                 rot_real=arr(rot_real, layout.ROT_REAL_COLUMNS_2D, float),
-                jt_int=arr(jt_int, 3, np.int64), jt_real=arr(jt_real, 5, float),
+                jt_int=arr(jt_int, layout.JOINT_INT_COLUMNS_2D, np.int64),
+                jt_real=arr(jt_real, layout.JOINT_REAL_COLUMNS_2D, float),
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 9, float),
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 5, float),
                 in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
@@ -464,7 +481,8 @@ def sparsity(flat) -> np.ndarray:
         a, b = row_int[layout.POINT_A], row_int[layout.POINT_B]
         dofs = [d for p in (a, b) if pbody[p] >= 0 for d in range(3 * pbody[p], 3 * pbody[p] + 3)]
         S[np.ix_(dofs, dofs)] = True
-    for j, (_, a, b) in enumerate(flat["jt_int"]):
+    for j, row_int in enumerate(flat["jt_int"]):
+        a, b = row_int[layout.POINT_A], row_int[layout.POINT_B]
         dofs = [d for p in (a, b) if pbody[p] >= 0 for d in range(3 * pbody[p], 3 * pbody[p] + 3)]
         rows = [n + 2 * j, n + 2 * j + 1]
         S[np.ix_(rows, dofs)] = True

@@ -17,22 +17,20 @@ from inerter.elements import layout
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.model.joints import Coincident, SpatialJoint
 
-# Joint kinds (column 0 of ``jt_int``), as in :mod:`inerter.engine.kernels` (its 3D section).
+# Joint kinds (column JOINT_KIND of ``jt_int``), as in :mod:`inerter.engine.kernels` (its 3D section).
 _JOINT_KIND = {"spherical": 0, "revolute": 1, "fixed": 2, "prismatic": 3, "cylindrical": 4, "universal": 5,
                "planar": 6, "screw": 7}
-#: Width of a ``jt_real`` row: three dot-1 pairs (s̄_a, s̄_b), two dot-2 vectors s̄_a, a screw row's numbers.
-JOINT_WIDTH = layout.JOINT_REAL_COLUMNS
-DOT2 = 18
 
 
 def _joint_rows3(mech, pidx):
-    """The ``jt_int`` and ``jt_real`` rows of a 3D scene's joints (see :func:`flatten3`)."""
+    """The ``jt_int`` and ``jt_real`` rows of a 3D scene's joints (see :func:`flatten3`; columns
+    named in :mod:`inerter.elements.layout`)."""
     scene = mech.scene
     mech_joints = _by_name(mech.joints)
     jt_int, jt_real = [], []
     for j in scene.joints.values():
         mj = mech_joints[j.name]
-        real = np.zeros(JOINT_WIDTH)
+        real = np.zeros(layout.JOINT_REAL_COLUMNS_3D)
         if isinstance(mj, Coincident):
             coincident, dot1, dot2 = True, [], []
         elif isinstance(mj, SpatialJoint):
@@ -42,18 +40,27 @@ def _joint_rows3(mech, pidx):
         if len(dot1) > 3 or len(dot2) > 2:
             raise ValueError(f"joint {j.name!r}: more dot-1/dot-2 rows than the kernels take")
         for k, (va, vb) in enumerate(dot1):
-            real[6 * k:6 * k + 3] = va.local
-            real[6 * k + 3:6 * k + 6] = vb.local
+            c = layout.DOT1 + 6 * k
+            real[c:c + 3] = va.local
+            real[c + 3:c + 6] = vb.local
         for k, va in enumerate(dot2):
-            real[DOT2 + 3 * k:DOT2 + 3 * k + 3] = va.local
+            c = layout.DOT2 + 3 * k
+            real[c:c + 3] = va.local
         screw = getattr(mj, "screw", None)
         if screw is not None:
             real[layout.SCREW:layout.SCREW + 3] = screw.axis
             real[layout.SCREW_REL0:layout.SCREW_REL0 + 9] = screw.rel0.ravel()
             real[layout.SCREW_RATIO] = screw.ratio
             real[layout.SCREW_ADVANCE0] = screw.advance0
-        jt_int.append((_JOINT_KIND[j.type], pidx[j.point_a], pidx[j.point_b], int(bool(coincident)),
-                       len(dot1), len(dot2), int(screw is not None)))
+        row = [0] * layout.JOINT_INT_COLUMNS_3D
+        row[layout.JOINT_KIND] = _JOINT_KIND[j.type]
+        row[layout.POINT_A] = pidx[j.point_a]
+        row[layout.POINT_B] = pidx[j.point_b]
+        row[layout.COINCIDENT] = int(bool(coincident))
+        row[layout.DOT1_ROWS] = len(dot1)
+        row[layout.DOT2_ROWS] = len(dot2)
+        row[layout.SCREW_ROW] = int(screw is not None)
+        jt_int.append(tuple(row))
         jt_real.append(real)
     return jt_int, jt_real
 
@@ -81,10 +88,11 @@ def flatten3(mech) -> dict:
     * ``jt_int`` (joints, 7): kind (0 spherical, 1 revolute, 2 fixed, 3 prismatic, 4 cylindrical,
       5 universal, 6 planar, 7 screw: a label; the kernels evaluate the rows the counts give), point a,
       point b, coincident rows (1: three rows r_b − r_a = 0), number of dot-1 rows, number of
-      dot-2 rows, a screw row (1: one, :class:`inerter.model.joints.Screw`); the joint's rows are
-      in that order. ``jt_real`` (joints, 38): the dot-1 pairs (s̄_a in a's frame, s̄_b in b's
-      frame) at columns 6k..6k+5 (k < 3), the dot-2 vectors s̄_a at columns 18 + 3k (k < 2), the
-      screw's numbers from column layout.SCREW on; unused columns are 0.
+      dot-2 rows, a screw row (1: one, :class:`inerter.model.joints.Screw`), in columns JOINT_KIND,
+      POINT_A, POINT_B, COINCIDENT, DOT1_ROWS, DOT2_ROWS, SCREW_ROW of :mod:`inerter.elements.layout`;
+      the joint's rows are in that order. ``jt_real`` (joints, 38): the dot-1 pairs (s̄_a in a's
+      frame, s̄_b in b's frame) at columns DOT1 + 6k (k < 3), the dot-2 vectors s̄_a at columns
+      DOT2 + 3k (k < 2), the screw's numbers from column SCREW on; unused columns are 0.
     * ``fa_int`` (forces, 2): point, time function (0 constant, 1 sine, 2 step); ``fa_real``
       (forces, 10): direction (3), value, amplitude, frequency, phase, offset, time, initial.
     * ``pd_int`` (pd forces, 1): point; ``pd_real`` (pd forces, 6): direction (3), kp, kd, reference.
@@ -111,7 +119,7 @@ def flatten3(mech) -> dict:
         mass[n + 9 * i:n + 9 * i + 9] = M0[k:k + 3, k:k + 3].ravel()
 
     jt_int, jt_real = _joint_rows3(mech, pidx)
-    m = sum(3 * c + d1 + d2 + sc for _, _, _, c, d1, d2, sc in jt_int)
+    m = sum(_row_count(row) for row in jt_int)
 
     def rotational(e, me):          # body indices; the axis, the initial relative orientation, φ_ref = 0
         extra = [*np.asarray(me.axis, dtype=float), *np.asarray(me.rel0, dtype=float).ravel(), 0.0]
@@ -134,7 +142,8 @@ def flatten3(mech) -> dict:
                 el_real=arr(el_real, layout.ELEMENT_REAL_COLUMNS, float),
                 rot_int=arr(rot_int, layout.ROT_INT_COLUMNS, np.int64),
                 rot_real=arr(rot_real, layout.ROT_REAL_COLUMNS_3D, float),
-                jt_int=arr(jt_int, layout.JOINT_INT_COLUMNS, np.int64), jt_real=arr(jt_real, JOINT_WIDTH, float),
+                jt_int=arr(jt_int, layout.JOINT_INT_COLUMNS_3D, np.int64),
+                jt_real=arr(jt_real, layout.JOINT_REAL_COLUMNS_3D, float),
                 fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 10, float),
                 pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 6, float),
                 in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
@@ -159,7 +168,14 @@ BODY_OUTPUTS = ("q[1]", "q[2]", "q[3]", "q[4]", "euler[1]", "euler[2]", "euler[3
 
 def _joint_rows(flat):
     """Number of constraint rows of each joint, in order."""
-    return [3 * c + d1 + d2 + sc for _, _, _, c, d1, d2, sc in flat["jt_int"]]
+    return [_row_count(row) for row in flat["jt_int"]]
+
+
+def _row_count(row_int):
+    """Number of constraint rows of the joint of ``jt_int`` row `row_int`: 3 coincident, its dot-1
+    and dot-2 rows, its screw row."""
+    return (3 * row_int[layout.COINCIDENT] + row_int[layout.DOT1_ROWS] + row_int[layout.DOT2_ROWS]
+            + row_int[layout.SCREW_ROW])
 
 
 def sparsity3(flat) -> np.ndarray:
@@ -182,8 +198,8 @@ def sparsity3(flat) -> np.ndarray:
             d = dofs(row_int[layout.POINT_A], row_int[layout.POINT_B])
             S[np.ix_(d, d)] = True
     row = n
-    for (_, a, b, *_), k in zip(flat["jt_int"], _joint_rows(flat)):
-        d = dofs(a, b)
+    for row_int, k in zip(flat["jt_int"], _joint_rows(flat)):
+        d = dofs(row_int[layout.POINT_A], row_int[layout.POINT_B])
         rows = list(range(row, row + k))
         S[np.ix_(rows, d)] = True
         S[np.ix_(d, rows)] = True

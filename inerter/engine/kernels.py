@@ -28,14 +28,16 @@ from inerter.elements.base import axial_scalars, rarely
 from inerter.elements.device import MODE_SOLVES
 from inerter.elements.inerter import settle
 from inerter.elements.winding import wound
-from inerter.elements.layout import (AXIS, BODY_A, BODY_B, DEVICE, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY,
-                                     F_INITIAL, F_OFFSET, F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA, KIND,
-                                     MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE, PHI_REF, POINT_A,
-                                     POINT_B, REL0, ROT_KIND, SCREW, SCREW_ADVANCE0,
+from inerter.elements.layout import (AXIS, BODY_A, BODY_B, COINCIDENT, DEVICE, DOT1, DOT1_ROWS, DOT2,
+                                     DOT2_ROWS, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY,
+                                     F_INITIAL, F_OFFSET, F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA,
+                                     JOINT_KIND, KIND, MEET_LIMIT, MOUNT, MOUNT_AXIS, PD_KD, PD_KP, PD_REFERENCE,
+                                     PHI_REF, POINT_A, POINT_B, PRISMATIC_ADVANCE0, PRISMATIC_NORMAL,
+                                     PRISMATIC_PHI0, PRISMATIC_RATIO, REL0, ROT_KIND, SCREW, SCREW_ADVANCE0,
                                      SCREW_RATIO, SCREW_REL0, SCREW_ROW, STATE,
                                      STATES)
 
-# Joint kinds.
+# Joint kinds (column JOINT_KIND of a 2D scene's ``jt_int``).
 REVOLUTE, PRISMATIC = 0, 1
 # Time functions of applied forces.
 F_CONSTANT, F_SINE, F_STEP = 0, 1, 2
@@ -331,10 +333,10 @@ def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
     """A 2D prismatic joint's two rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0 with n = A_a n̄; a 2D
     screw (rack and pinion, joints.Prismatic2D) turns b by ρ per unit of advance along the axis
     t = A_a t̄ (n = t turned by +90°): its first row is θ_b − θ_a − φ0 − ρ (t·d − x₀) = 0."""
-    nbx = jt_real[jn, 0]
-    nby = jt_real[jn, 1]
-    phi0 = jt_real[jn, 2]
-    rho = jt_real[jn, 3]
+    nbx = jt_real[jn, PRISMATIC_NORMAL]
+    nby = jt_real[jn, PRISMATIC_NORMAL + 1]
+    phi0 = jt_real[jn, PRISMATIC_PHI0]
+    rho = jt_real[jn, PRISMATIC_RATIO]
     tha = q[3 * ba + 2] if ba >= 0 else 0.0
     thb = q[3 * bb + 2] if bb >= 0 else 0.0
     wa = v[3 * ba + 2] if ba >= 0 else 0.0
@@ -372,7 +374,7 @@ def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
     gamma2 = -((nx * anx + ny * any_) - wa * wa * c2 + 2.0 * wa * (npx * rdx + npy * rdy))
     gamma1 = 0.0
     if rho != 0.0:
-        c1, cd1, gamma1 = _screw2(v, AB, perm, off, row, ba, bb, rho, jt_real[jn, 4], nx, ny, c1, cd1,
+        c1, cd1, gamma1 = _screw2(v, AB, perm, off, row, ba, bb, rho, jt_real[jn, PRISMATIC_ADVANCE0], nx, ny, c1, cd1,
                                   rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby, wa)
     rhs[perm[row]] = gamma1 - 2.0 * alpha * cd1 - alpha * alpha * c1
     rhs[perm[row + 1]] = gamma2 - 2.0 * alpha * cd2 - alpha * alpha * c2
@@ -426,7 +428,7 @@ def assemble(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     row = n
     for jn in range(jt_int.shape[0]):
         ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, v, jt_int, jn, pbody, ploc)
-        if jt_int[jn, 0] == REVOLUTE:
+        if jt_int[jn, JOINT_KIND] == REVOLUTE:
             _revolute2(AB, perm, off, rhs, row, alpha, ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby)
         else:
             _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
@@ -651,13 +653,13 @@ def constraint_residual2(q, P):
     z = np.zeros(q.shape[0])
     for jn in range(jt_int.shape[0]):
         ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby = _row_pair(q, z, jt_int, jn, pbody, ploc)
-        if jt_int[jn, 0] == REVOLUTE:
+        if jt_int[jn, JOINT_KIND] == REVOLUTE:
             worst = max(worst, abs(rx), abs(ry))
         else:
             tha = q[3 * ba + 2] if ba >= 0 else 0.0
             thb = q[3 * bb + 2] if bb >= 0 else 0.0
-            nbx = jt_real[jn, 0]
-            nby = jt_real[jn, 1]
+            nbx = jt_real[jn, PRISMATIC_NORMAL]
+            nby = jt_real[jn, PRISMATIC_NORMAL + 1]
             c = math.cos(tha)
             s = math.sin(tha)
             if ba < 0:
@@ -665,7 +667,8 @@ def constraint_residual2(q, P):
                 s = 0.0
             nx = c * nbx - s * nby
             ny = s * nbx + c * nby
-            turn = thb - tha - jt_real[jn, 2] - jt_real[jn, 3] * (ny * rx - nx * ry - jt_real[jn, 4])
+            turn = thb - tha - jt_real[jn, PRISMATIC_PHI0] - jt_real[jn, PRISMATIC_RATIO] * (
+                ny * rx - nx * ry - jt_real[jn, PRISMATIC_ADVANCE0])
             worst = max(worst, abs(turn), abs(nx * rx + ny * ry))
     return worst
 
@@ -732,6 +735,35 @@ def signal_values(q, v, z, qdd, P, out):
     return _signals_of(q, v, z, qdd, P, out)
 
 
+@njit(cache=True, inline="always")
+def _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez, gq, width,
+                     energy, out, k):
+    """Translational element e's outputs from out[k] on (s_rel, v_rel, the axial force F and its
+    kind's extra outputs) and its energy added to `energy`, in 2D (z components 0.0) and 3D, from
+    its terminals' geometry (:func:`_element`, :func:`_element3`) and gq = gᵀq̈ at the accelerations
+    (`width`: velocity coordinates per body, 3 or 6). Returns (energy, the next k)."""
+    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+    if b != 0.0:
+        # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 17-19, 25): the inertance part of F = b d²L/dt², Eq. (9) / (8)
+        F += b * gq
+    x = _states(z, el_int, e)
+    if rarely(el_int[e, STATES] != 0):
+        F += law.state_force(kind, el_real[e], L, along, x)
+        energy += law.state_energy(kind, el_real[e], L, along, x)
+    energy += law.energy(kind, el_real[e], L, along)
+    if rarely(el_real[e, INERTIA] != 0.0):
+        energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, width)
+    out[k] = terminals.reported_distance(el_real[e], L, distance)
+    out[k + 1] = along
+    out[k + 2] = F
+    k += 3
+    if rarely(el_real[e, DEVICE] != 0.0):                          # a device's outputs
+        _, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
+        k = law.extra_outputs(kind, el_real[e], L, along, an, perp2, gq, x, out, k)
+    return energy, k
+
+
 @njit(cache=True)
 def signal_values2(q, v, z, qdd, P, out):
     """Every point's position and velocity (4 per point), every translational element's s_rel,
@@ -762,25 +794,9 @@ def signal_values2(q, v, z, qdd, P, out):
             q, v, e, el_int, el_real, pbody, ploc)
         if meets:
             status = TERMINALS_MEET
-        F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
         gq = _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
-        if b != 0.0:
-            # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 17-19): the inertance part of F = b d²L/dt², Eq. (9) / (8)
-            F += b * gq
-        x = _states(z, el_int, e)
-        if rarely(el_int[e, STATES] != 0):
-            F += law.state_force(kind, el_real[e], L, along, x)
-            energy += law.state_energy(kind, el_real[e], L, along, x)
-        energy += law.energy(kind, el_real[e], L, along)
-        if rarely(el_real[e, INERTIA] != 0.0):
-            energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 3)
-        out[k] = terminals.reported_distance(el_real[e], L, distance)
-        out[k + 1] = along
-        out[k + 2] = F
-        k += 3
-        if rarely(el_real[e, DEVICE] != 0.0):                          # a device's outputs
-            _, an, perp2 = axial_scalars(rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)
-            k = law.extra_outputs(kind, el_real[e], L, along, an, perp2, gq, x, out, k)
+        energy, k = _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, 0.0, anx, any_, 0.0,
+                                     ex, ey, 0.0, gq, 3, energy, out, k)
     for e in range(rot_int.shape[0]):
         ia, ib, phi, w = _rotational2(q, v, e, rot_int)
         kind = rot_int[e, ROT_KIND]
@@ -1161,12 +1177,11 @@ def signal_history(times, states, inputs, alpha, need_acc, P, out):
 # point's H = [I, −A ũ] gives sᵀH = [sᵀ, (ū × Aᵀs)ᵀ]; :func:`_wcol` computes the second part, which
 # is also the ω-columns of ∂(s·(A s̄))/∂ω of the dot-1 and dot-2 joint rows.
 
-# Joint kinds (column 0 of ``jt_int`` in 3D; every kind is evaluated from the row counts in columns 3-5).
+# Joint kinds (column JOINT_KIND of ``jt_int`` in 3D; every kind is evaluated from its row counts, columns
+# COINCIDENT, DOT1_ROWS, DOT2_ROWS and SCREW_ROW).
 SPHERICAL, REVOLUTE3, FIXED, PRISMATIC3 = 0, 1, 2, 3
 # A body's coordinates with a quaternion orientation (R, p); with Z-X-Z Euler angles: 6 (R, φ θ ψ).
 QUATERNION_COORDS = 7
-# Offset of the dot-2 vectors in a row of ``jt_real`` (after three dot-1 pairs).
-DOT2 = 18
 
 
 # ------------------------------------------------------------------------------------------------
@@ -1498,8 +1513,8 @@ def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
     """Joint jn's rows from `row` on (joints.py): C_v (and its transpose) and γ − 2αĊ − α²C,
     Ċ = C_v v, for its coincident, dot-1 and dot-2 rows. Returns the next row."""
     pbody, ploc, jt_int, jt_real = P[PBODY], P[PLOC], P[JT_INT], P[JT_REAL]
-    pa = jt_int[jn, 1]
-    pb = jt_int[jn, 2]
+    pa = jt_int[jn, POINT_A]
+    pb = jt_int[jn, POINT_B]
     ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
     lax = ploc[pa, 0]
     lay = ploc[pa, 1]
@@ -1507,7 +1522,7 @@ def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
     lbx = ploc[pb, 0]
     lby = ploc[pb, 1]
     lbz = ploc[pb, 2]
-    if jt_int[jn, 3]:
+    if jt_int[jn, COINCIDENT]:
         # coincident points: C = r, C_v = H, γ = −a_n (Eqs. 18-19, 25)
         for i in range(3):
             sx = 1.0 if i == 0 else 0.0
@@ -1521,9 +1536,9 @@ def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
             row += 1
     wax, way, waz = _omega(v, ba)
     wbx, wby, wbz = _omega(v, bb)
-    for d in range(jt_int[jn, 4]):
+    for d in range(jt_int[jn, DOT1_ROWS]):
         # dot-1: s_a·s_b = 0 for body-fixed s_a = A_a s̄_a, s_b = A_b s̄_b
-        j = 6 * d
+        j = DOT1 + 6 * d
         sax = jt_real[jn, j]
         say = jt_real[jn, j + 1]
         saz = jt_real[jn, j + 2]
@@ -1539,7 +1554,7 @@ def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
                   + (a0 * bb0 + a1 * bb1 + a2 * bb2))
         rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
         row += 1
-    for d in range(jt_int[jn, 5]):
+    for d in range(jt_int[jn, DOT2_ROWS]):
         # dot-2: s_a·(r_b − r_a) = 0
         j = DOT2 + 3 * d
         sax = jt_real[jn, j]
@@ -1698,15 +1713,15 @@ def constraint_residual3(q, P):
     z = np.zeros(P[DIMS][N_VELOCITY])
     for jn in range(jt_int.shape[0]):
         ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(
-            q, z, jt_int[jn, 1], jt_int[jn, 2], pbody, ploc)
-        if jt_int[jn, 3]:
+            q, z, jt_int[jn, POINT_A], jt_int[jn, POINT_B], pbody, ploc)
+        if jt_int[jn, COINCIDENT]:
             worst = max(worst, abs(rx), abs(ry), abs(rz))
-        for d in range(jt_int[jn, 4]):
-            j = 6 * d
+        for d in range(jt_int[jn, DOT1_ROWS]):
+            j = DOT1 + 6 * d
             a0, a1, a2 = matrix9_apply(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
             b0, b1, b2 = matrix9_apply(Ab, jt_real[jn, j + 3], jt_real[jn, j + 4], jt_real[jn, j + 5])
             worst = max(worst, abs(a0 * b0 + a1 * b1 + a2 * b2))
-        for d in range(jt_int[jn, 5]):
+        for d in range(jt_int[jn, DOT2_ROWS]):
             j = DOT2 + 3 * d
             a0, a1, a2 = matrix9_apply(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
             worst = max(worst, abs(a0 * rx + a1 * ry + a2 * rz))
@@ -1828,25 +1843,9 @@ def signal_values3(q, v, z, qdd, P, out):
             q, v, e, el_int, el_real, pbody, ploc, ga, gb)
         if meets:
             status = TERMINALS_MEET
-        F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
         gq = _gq3(qdd, ba, bb, ga, gb)
-        if b != 0.0:
-            # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 19, 25): the inertance part of F = b d²L/dt², Eq. (9) / (8)
-            F += b * gq
-        x = _states(z, el_int, e)
-        if rarely(el_int[e, STATES] != 0):
-            F += law.state_force(kind, el_real[e], L, along, x)
-            energy += law.state_energy(kind, el_real[e], L, along, x)
-        energy += law.energy(kind, el_real[e], L, along)
-        if rarely(el_real[e, INERTIA] != 0.0):
-            energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, 6)
-        out[k] = terminals.reported_distance(el_real[e], L, distance)
-        out[k + 1] = along
-        out[k + 2] = F
-        k += 3
-        if rarely(el_real[e, DEVICE] != 0.0):                          # a device's outputs
-            _, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
-            k = law.extra_outputs(kind, el_real[e], L, along, an, perp2, gq, x, out, k)
+        energy, k = _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_, anz,
+                                     ex, ey, ez, gq, 6, energy, out, k)
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
         energy += law.rotational_energy(rot_int[e, ROT_KIND], rot_real[e], phi, w)

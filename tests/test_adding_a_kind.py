@@ -7,7 +7,8 @@ the definition goes (:func:`inerter.oracle.derivation.require_definitions`).
 
 Only the numpy path runs in the copy: a new kind changes the compiled kernels' cache key (their
 sources include ``inerter/elements/*.py``), so a compiled run would compile them all again (minutes).
-The test checks that nothing is compiled: the copy's kernel cache (``INERTER_CACHE_DIR``, fresh and
+Of the compiled path, the test checks the element's row in the kernels' tables (its coefficient and
+free length, which the kernels' law reads), built without compiling. It checks that nothing is compiled: the copy's kernel cache (``INERTER_CACHE_DIR``, fresh and
 empty) stays empty, the kernels' module is never imported, and numba writes no cache file anywhere
 in the copy."""
 from __future__ import annotations
@@ -114,6 +115,11 @@ model = inerter.load(sys.argv[1])
 result = model.simulate(path="numpy", metrics=False)
 out = {"package": inerter.__file__, "path": result.run.extra.get("path"), "status": result.run.status,
        "t": result.time.tolist(), "x": result["P.r[1]"].tolist(), "f": result["pre.f"].tolist()}
+from inerter.elements import layout
+from inerter.engine.tables import element_tables          # the compiled kernels' tables, built uncompiled
+pidx = {name: i for i, name in enumerate(model.scene.points)}
+row = element_tables(model.mechanism, pidx, None)["el_real"][0]
+out["row"] = {"k": row[layout.COEFFICIENT], "free": row[layout.FREE_LENGTH]}
 try:
     model.oracle()
     out["oracle"] = None
@@ -170,6 +176,9 @@ def test_a_kind_added_as_documented_runs_and_the_oracle_refuses_it(copy_with_new
     assert t[-1] == pytest.approx(3.0)
     assert np.max(np.abs(x - (L0 + D0 * np.cos(w * t)))) <= TOL_X
     assert np.max(np.abs(f - K * D0 * np.cos(w * t))) <= K * TOL_X
+    # The compiled path's row of the element (its tables, built without compiling) has the kind's
+    # coefficient and free length, as the numpy path's element has: the kernels read L0 there.
+    assert out["row"] == {"k": K, "free": L0}
     # Nothing compiled: no kernel copy or numba index in the fresh cache, none in the package's copy.
     assert out["kernels_imported"] == []
     assert list(cache.iterdir()) == []

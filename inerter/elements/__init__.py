@@ -17,7 +17,9 @@ rotational element's angle wound on past half a turn), :mod:`.device` and
 :mod:`.device_inertia` (an inerter's device effects), :mod:`.dispatch` and :mod:`.generate` (the
 kernels' dispatch over the kinds, generated).
 
-Adding a kind, e.g. a linear spring with a preload F0 (``elements.NAME.type = "preloaded_spring"``):
+Adding a kind, e.g. a linear spring whose free length L0 sets its preload
+(``elements.NAME.type = "preloaded_spring"``; its law is the shipped spring's, F = k (L − L0), so
+that only the steps are new):
 
 1. ``inerter/elements/preloaded_spring.py``::
 
@@ -42,9 +44,20 @@ Adding a kind, e.g. a linear spring with a preload F0 (``elements.NAME.type = "p
            return 0.5 * row[COEFFICIENT] * (L - row[FREE_LENGTH]) ** 2
 
 2. ``python -m inerter.elements.generate`` writes the kernels' dispatch (:mod:`.dispatch`; a test
-   fails while it is stale).
-3. Its tests: the law against a closed form, and a scene using it through the engine against the
-   oracle (``tests/test_elements.py`` shows both for the shipped kinds).
+   fails while it is stale). The numpy path (``simulate(path="numpy")``) runs the kind at once; the
+   compiled kernels' cache key covers this package's files, so the next compiled run compiles them
+   again, once (minutes: ``docs/benchmarks/first_use.md``).
+3. Its own definition in the oracle, written again from the kind's potential or dissipation function
+   (a translational kind in :class:`inerter.oracle.derivation.OracleElement`, a rotational one in
+   :mod:`inerter.oracle.rotational`), never read from here: that is what lets the oracle check the
+   law. Until it is written, the engine runs the kind but the oracle refuses a scene with it, in one
+   line: ``SCENE: elements.NAME.type: the oracle has no independent definition of the translational
+   kind 'preloaded_spring' of element 'NAME' yet (...)``.
+4. Its tests: the law against a closed form (``tests/test_elements.py`` does so for the shipped
+   kinds), and a scene using it among those ``tests/test_engine_vs_oracle.py`` runs through the
+   engine and the oracle (every ``scenarios/*.toml``, found by glob, and its ``EXTRA_CASES``).
+   ``tests/test_adding_a_kind.py`` takes this example from this docstring and follows steps 1 and 2
+   in a copy of the package, then checks the numpy path against a closed form and step 3's refusal.
 
 A kind may also report outputs beyond its family's three: a law ``extra_outputs(row, L, Ldot, an,
 perp2, gq, x, out, k)`` (gq = gᵀq̈ at the solved accelerations, x its internal states) that writes

@@ -20,16 +20,17 @@ FORCE_CODE = {"constant": 0, "sine": 1, "step": 2}
 
 def element_row(e, me, pidx, centripetal, meet_limit) -> tuple[tuple, tuple]:
     """The ``el_int`` and ``el_real`` rows of translational element `e` of the scene (`me`: the
-    mechanism's element of that name, whose free length a spring takes, else the scene's, and
+    mechanism's element of that name, whose free length every kind with one takes (a spring, any
+    kind whose :attr:`~inerter.elements.base.ElementKind.free` is declared), else the scene's, and
     whose fixed direction an inerter under the small-displacement law takes; `meet_limit`: its
     column of :func:`meet_limits`)."""
     free = 0.0
-    if e.type == "spring":
+    if elements.KINDS[e.type].free is not None:
         free = getattr(me, "free_length", None)
         if free is None:
             free = e.free_length
         if free is None:
-            raise ValueError(f"spring {e.name}: no free length on the compiled mechanism")
+            raise ValueError(f"{e.type} {e.name}: no free length on the compiled mechanism")
     row_int = [0] * layout.ELEMENT_INT_COLUMNS
     row_int[layout.KIND] = ELEMENT_KIND[e.type]
     row_int[layout.POINT_A] = pidx[e.point_a]

@@ -4,7 +4,8 @@ automatic differentiation (:mod:`.derivation`): F = b·d²L/dt² for an inerter 
 or b·r̈·r̂ without the centripetal term, Eq. 8), k(L − L0) for a spring, c·dL/dt for a damper.
 A planar rotational spring's torque is the derivative of its potential ½k(φ − φ0)², a rotational
 damper's that of its dissipation function ½d φ̇², by the same differentiation. Joints, point forces,
-gravity, ground motion and 3D rotational elements are the numpy Mechanism's own.
+gravity, ground motion and 3D rotational elements are the numpy Mechanism's own. A scene with an
+element of a kind the oracle has no definition of is refused (:func:`require_definitions`).
 
 Layer: beside :mod:`inerter.engine` (neither imports the other), above :mod:`inerter.model`."""
-from inerter.oracle.derivation import OracleElement  # noqa: F401
+from inerter.oracle.derivation import OracleElement, require_definitions  # noqa: F401

@@ -23,6 +23,11 @@ angle φ(q) = θ_b − θ_a: a rotational spring from its potential V = ½k(φ �
 −(∂R/∂φ̇)∇φ, torque ∂R/∂φ̇), each derivative taken on Jets; in 3D (:class:`OracleSpatialRotational`) about an axis fixed in
 body a, with the angle from the relative rotation's quaternion and the rate from ω̃ = Ṙ Rᵀ
 (:mod:`inerter.oracle.rotational`).
+
+Only the kinds written here and in :mod:`.rotational` are derived: a scene with an element of any
+other kind (one added to :mod:`inerter.elements` since) is refused (:func:`require_definitions`)
+until its definition is written here, from the kind's potential or dissipation function, for the
+oracle to check the engine's law against.
 """
 from __future__ import annotations
 
@@ -31,10 +36,46 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from inerter.common.errors import MIN_LENGTH, InerterError, TerminalsMeet
+from inerter.common.errors import MIN_LENGTH, InerterError, SceneError, TerminalsMeet
 from inerter.oracle.jets import (
     Jet, angular_velocity, cross, dot, jabs, jcos, jlogcosh, jpow, jsin, jsqrt, parts, point_position, position, seed)
+from inerter.oracle.rotational import _COEFFICIENT_NAME as _ROTATIONAL_KINDS
 from inerter.oracle.rotational import OracleRotational, OracleSpatialRotational
+
+#: The translational kinds :class:`OracleElement` derives, each with its coefficient's key; with
+#: the rotational ones of :mod:`.rotational`, the kinds the oracle has a definition of.
+_TRANSLATIONAL_KINDS = {"spring": "k", "damper": "c", "inerter": "b"}
+
+#: Where a family's definitions are written: where a new kind's goes.
+_DEFINED_IN = {"translational": "inerter/oracle/derivation.py (OracleElement)",
+               "rotational": "inerter/oracle/rotational.py (_law)"}
+
+
+def undefined_kind(spec, source):
+    """None where the oracle has a definition of scene element `spec`'s kind; else the
+    :class:`SceneError` that refuses it, naming the element, its kind and where its definition goes.
+    (A translational element is one between two points, as the scene reader builds it.)"""
+    family = "translational" if spec.point_a is not None else "rotational"
+    defined = _TRANSLATIONAL_KINDS if family == "translational" else _ROTATIONAL_KINDS
+    if spec.type in defined:
+        return None
+    return SceneError(
+        source, f"elements.{spec.name}.type", spec.type,
+        f"a kind the oracle defines ({', '.join(sorted(defined))}), or this kind's definition written "
+        f"in {_DEFINED_IN[family]} from its potential or dissipation function",
+        f"the oracle has no independent definition of the {family} kind {spec.type!r} of element "
+        f"{spec.name!r} yet")
+
+
+def require_definitions(scene):
+    """Refuse `scene` (:class:`SceneError`, the first such element) where one of its elements is of
+    a kind the oracle has no definition of: the oracle writes each kind's law itself, never reading
+    :mod:`inerter.elements`, which is what makes it a check of the engine, so a kind added there has
+    none until one is written here (:func:`undefined_kind`)."""
+    for spec in scene.elements.values():
+        error = undefined_kind(spec, scene.source)
+        if error is not None:
+            raise error
 
 
 class _BodyPoint:
@@ -59,7 +100,6 @@ class DistanceProbe:
         self.name = name
         self.dim = mech.dim
         if mech.dim == 3 and mech.orientation.kind != "quaternion":
-            from inerter.common.errors import SceneError
             raise SceneError(mech.scene.source, "scene.orientation", mech.orientation.kind,
                              "orientation = \"quaternion\" for the oracle", "the oracle differentiates "
                              "quaternion kinematics only")
@@ -366,12 +406,15 @@ class OracleElement:
     spatial_rotational = OracleSpatialRotational
 
     def __init__(self, spec, pair, centripetal, free_length, labels, mech):
+        error = undefined_kind(spec, mech.scene.source)
+        if error is not None:
+            raise error
         self.name = spec.name
         self.kind = spec.type
         self.device = OracleDevice(spec.device) if getattr(spec, "device", None) is not None else None
         from_device = self.device.inertance() if self.device is not None else None
         self.coefficient = float(spec.coefficient) if from_device is None else from_device
-        self.coefficient_name = {"spring": "k", "damper": "c", "inerter": "b"}[spec.type]
+        self.coefficient_name = _TRANSLATIONAL_KINDS[spec.type]
         self.centripetal = bool(centripetal)
         self.free_length = free_length
         direction = None

@@ -1,7 +1,8 @@
 """Rotational spring between two bodies (or a body and the ground): τ = k (φ − φ0), restoring
 positive. In 2D φ is the difference of the bodies' angles; in 3D the rotation about an axis fixed in
-body a since the initial relative orientation (the engine measures φ; this module holds the law).
-Its potential energy is ½ k (φ − φ0)²."""
+body a since the initial relative orientation, the twist about it where the bodies also swing (the
+engine measures φ and applies τ along its gradient; this module holds the law). Its potential
+energy is ½ k (φ − φ0)²."""
 from inerter.elements.base import ROTATIONAL, ElementKind, Parameter, law
 from inerter.elements.layout import COEFFICIENT, FREE_ANGLE
 

@@ -1318,10 +1318,12 @@ def _rel(Aa, Ab, rot_real, e, i, j):
 
 @njit(cache=True, inline="always")
 def _rotational3(q, v, e, rot_int, rot_real):
-    """A 3D rotational element (``elements.SpatialRotationalElement``): φ about the axis n̄ (fixed in
-    body a) since the initial relative orientation rel0, wound on from its angle at the last
-    accepted step (PHI_REF, inerter.elements.winding), its rate n·(A_b ω_b − A_a ω_a), the torque
-    (restoring positive) and the axis in the global frame n = A_a n̄, with A_a, A_b."""
+    """A 3D rotational element (``elements.SpatialRotationalElement``): φ, the twist about the axis n̄
+    (fixed in body a) of the rotation D since the initial relative orientation rel0, wound on from
+    its angle at the last accepted step (PHI_REF, inerter.elements.winding), its rate
+    φ̇ = g·(A_b ω_b − A_a ω_a), the torque (restoring positive) and g = A_a ∂φ̇/∂Ω (Ω = A_aᵀ(A_b ω_b −
+    A_a ω_a)), the direction it acts along in the global frame (n = A_a n̄ on a revolute joint about
+    n̄), with A_a, A_b."""
     ia = rot_int[e, BODY_A]
     ib = rot_int[e, BODY_B]
     Aa = _rot(q, v, ia)
@@ -1344,7 +1346,12 @@ def _rotational3(q, v, e, rot_int, rot_real):
            + nz * (d20 * nx + d21 * ny + d22 * nz))
     c = 0.5 * (d00 + d11 + d22 - nDn)
     phi = wound(rot_real[e, PHI_REF], math.atan2(s, c))
-    gx, gy, gz = matrix9_apply(Aa, nx, ny, nz)
+    # φ's gradient over the relative angular velocity in a's frame, ∂φ̇/∂Ω = (n̄ + D n̄)/(2h) with
+    # h = hypot(s, c) (the twist quaternion's w² + x²): the torque acts about it, so that a spring's
+    # generalised force is −∇V and w = φ̇; on a revolute joint about n̄ (D n̄ = n̄, h = 1) it is n̄.
+    h2 = 2.0 * math.hypot(s, c)
+    gx, gy, gz = matrix9_apply(Aa, (nx + d00 * nx + d01 * ny + d02 * nz) / h2,
+                               (ny + d10 * nx + d11 * ny + d12 * nz) / h2, (nz + d20 * nx + d21 * ny + d22 * nz) / h2)
     wax, way, waz = _omega(v, ia)
     wbx, wby, wbz = _omega(v, ib)
     ox, oy, oz = matrix9_apply(Ab, wbx, wby, wbz)
@@ -1454,7 +1461,8 @@ def _add_elements3(q, v, z, P, AB, perm, off, gen, agx, agy, agz):
 
 @njit(cache=True, inline="always")
 def _add_rotational3(q, v, P, gen):
-    """Rotational elements about an axis fixed in body a: ∓τ n on the bodies' ω (body frames)."""
+    """Rotational elements about an axis fixed in body a: ∓τ g on the bodies' ω (body frames), g the
+    gradient of the angle (:func:`_rotational3`)."""
     rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)

@@ -363,9 +363,11 @@ class RotationalElement:
 class SpatialRotationalElement:
     """A rotational element about an axis between two 3D bodies (or a body and the ground), of any
     rotational kind. φ is the rotation about the axis (fixed in body a; global for the ground)
-    measured from the initial relative orientation, so φ(0) = 0; exact while the relative rotation
-    is about that axis (as a revolute joint keeps it). It winds on past half a turn from
-    :attr:`reference`, its angle at the last accepted step (inerter.elements.winding)."""
+    measured from the initial relative orientation, so φ(0) = 0: where the relative rotation also
+    swings off the axis, the twist about it (swing-twist decomposition). Its torque acts along φ's
+    gradient g (the axis on a revolute joint about it), so that a spring's force is −∇V and the
+    rate is φ̇. It winds on past half a turn from :attr:`reference`, its angle at the last accepted
+    step (inerter.elements.winding)."""
 
     def __init__(self, spec, frame_a, frame_b, q0):
         self.name = spec.name
@@ -396,8 +398,10 @@ class SpatialRotationalElement:
         n = self.axis
         s = 0.5 * (n[0] * (D[2, 1] - D[1, 2]) + n[1] * (D[0, 2] - D[2, 0]) + n[2] * (D[1, 0] - D[0, 1]))
         c = 0.5 * (np.trace(D) - n @ D @ n)
-        n_w = Aa @ n
-        return wound.py_func(self.reference, math.atan2(s, c)), float(n_w @ (Ab @ wb - Aa @ wa)), n_w, Aa, Ab
+        # φ's gradient over the relative angular velocity in a's frame: (n̄ + D n̄)/(2 hypot(s, c)),
+        # n̄ on a revolute joint about n̄; in the global frame g = A_a of it, and φ̇ = g·(ω_b − ω_a)
+        g = Aa @ ((n + D @ n) / (2.0 * math.hypot(s, c)))
+        return wound.py_func(self.reference, math.atan2(s, c)), float(g @ (Ab @ wb - Aa @ wa)), g, Aa, Ab
 
     def torque(self, q, v, geo=None):
         phi, w, *_ = geo or self.geometry(q, v)
@@ -406,11 +410,11 @@ class SpatialRotationalElement:
     def add_force(self, q, v, Q, geo=None):
         geo = geo or self.geometry(q, v)
         tau = self.torque(q, v, geo)
-        _, _, n_w, Aa, Ab = geo
+        _, _, g, Aa, Ab = geo
         if self.fb.body >= 0:
-            Q[self.fb.vi + 3:self.fb.vi + 6] -= tau * (Ab.T @ n_w)
+            Q[self.fb.vi + 3:self.fb.vi + 6] -= tau * (Ab.T @ g)
         if self.fa.body >= 0:
-            Q[self.fa.vi + 3:self.fa.vi + 6] += tau * (Aa.T @ n_w)
+            Q[self.fa.vi + 3:self.fa.vi + 6] += tau * (Aa.T @ g)
 
     def add_mass(self, q, v, M, geo=None):
         pass

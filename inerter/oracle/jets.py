@@ -79,6 +79,15 @@ def jcos(x: Jet) -> Jet:
     return x._chain(c, -s, -c)
 
 
+def jatan2(y: Jet, x: Jet) -> Jet:
+    """atan2(y, x) on Jets: its value as math.atan2 gives it, its derivatives those of atan of the
+    smaller ratio (y/x, or −x/y where |y| > |x|: atan2 = ±π/2 − atan(x/y)), which never divides by
+    a number near 0 away from x = y = 0."""
+    t = y / x if abs(x.v) >= abs(y.v) else -(x / y)
+    slope = 1.0 / (1.0 + t.v * t.v)
+    return t._chain(math.atan2(y.v, x.v), slope, -2.0 * t.v * slope * slope)
+
+
 def jpow(x: Jet, p: float) -> Jet:
     """x**p for x > 0."""
     return x._chain(x.v ** p, p * x.v ** (p - 1.0), p * (p - 1.0) * x.v ** (p - 2.0))

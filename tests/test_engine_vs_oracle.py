@@ -6,8 +6,8 @@ The element laws are written once (inerter.elements) and serve both the numpy Me
 kernels, so comparing those two paths no longer checks the laws. The oracle
 (`model.oracle().mechanism`) derives each translational element's force by differentiating its
 terminal distance L(q), and each rotational element's torque by differentiating its potential or
-dissipation function, on Jets (inerter.oracle; in 3D its angle from the relative rotation's
-quaternion and its rate from ω̃ = Ṙ Rᵀ): code that shares nothing with the element laws or the
+dissipation function, on Jets (inerter.oracle; in 3D its angle, the twist about its axis, from
+the relative rotation's quaternion): code that shares nothing with the element laws or the
 kernels. Joints, point forces, gravity and the ground motion are the numpy Mechanism's, whose code
 is separate from the kernels', so they are checked here against the kernels too.
 

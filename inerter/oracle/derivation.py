@@ -17,12 +17,11 @@ flywheel or channel fluid, its friction and channel damping from their dissipati
 end stops from their potential and Hunt-Crossley dissipation function.
 An error in either the fast path or this module shows up as a disagreement between the two.
 
-Planar rotational elements (:class:`OracleRotational`) are derived in the same way from the relative
-angle φ(q) = θ_b − θ_a: a rotational spring from its potential V = ½k(φ − φ0)² (generalised force
-−∇V, torque dV/dφ), a rotational damper from its dissipation function R = ½d φ̇² (generalised force
-−(∂R/∂φ̇)∇φ, torque ∂R/∂φ̇), each derivative taken on Jets; in 3D (:class:`OracleSpatialRotational`) about an axis fixed in
-body a, with the angle from the relative rotation's quaternion and the rate from ω̃ = Ṙ Rᵀ
-(:mod:`inerter.oracle.rotational`).
+Rotational elements (:mod:`inerter.oracle.rotational`) are derived in the same way from their angle
+φ(q): a rotational spring from its potential V = ½k(φ − φ0)² (generalised force −∇V, torque
+dV/dφ), a rotational damper from its dissipation function R = ½d φ̇² (generalised force
+−(∂R/∂φ̇)∇φ, torque ∂R/∂φ̇), each derivative taken on Jets; φ = θ_b − θ_a in 2D, in 3D the twist
+about an axis fixed in body a, from the relative rotation's quaternion.
 
 Only the kinds written here and in :mod:`.rotational` are derived: a scene with an element of any
 other kind (one added to :mod:`inerter.elements` since) is refused (:func:`require_definitions`)

@@ -62,7 +62,8 @@ def test_run_on_either_path_writes_the_oracles_figures(tmp_path):
         assert summary["statistics"]["path"] == path
         data = np.genfromtxt(out / "two_bar_2d.csv", delimiter=",", names=True)
         assert len(data) == len(oracle.time) and np.max(np.abs(data["time_s"] - oracle.time)) <= 1e-12, path
-        assert np.max(np.abs(data["Cr2_m"] - oracle["C.r[2]"])) <= 1e-9, (path, np.max(np.abs(data["Cr2_m"] - oracle["C.r[2]"])))
+        worst = float(np.max(np.abs(data["Cr2_m"] - oracle["C.r[2]"])))
+        assert worst <= 1e-9, (path, worst)
 
 
 def test_parse_set_reads_toml_values():

@@ -59,9 +59,10 @@ def test_euler_angle_scenes_run_compiled_and_stop_at_their_singularity():
     the numpy path does (the same number of samples: plumbing of the two paths' checks), naming the
     body. Reference for the samples before it: the closed form of the steady spin about global X
     (the spinner's major axis): the state's Z-X-Z angles φ = ψ = 0, θ = α0 + ω t, the points
-    P = (0, cos θ, sin θ), Q = (0, −sin θ, cos θ), the quaternion (cos θ/2, sin θ/2, 0, 0), within 1e-12 (the Euler rates are constant, so each DOP853 step is exact up to
-    round-off: measured 4e-16), the bound the two paths were held to against each other (the
-    kinematics, rotations.euler_matrix9 and euler_rates, are the same code compiled and not)."""
+    P = (0, cos θ, sin θ), Q = (0, −sin θ, cos θ), the quaternion output (cos θ/2, sin θ/2, 0, 0),
+    within 1e-12 (the Euler rates are constant, so each DOP853 step is exact up to round-off:
+    measured 4e-16), the bound the two paths were held to against each other (the kinematics,
+    rotations.euler_matrix9 and euler_rates, are the same code compiled and not)."""
     model = inerter.load(GIMBAL, **{"scene.orientation": "euler_zxz"})
     result = model.simulate(stop_time=0.1, metrics=False)
     assert result.status == "ok", result.message

@@ -254,23 +254,28 @@ def test_ground_motion_on_the_compiled_path(tmp_path, kind):
 @needs_numba
 @pytest.mark.parametrize("method", ["DOP853", "RK45"])
 def test_compiled_integrator_takes_scipys_steps(method):
-    """Same error control, step-size rule and dense output as scipy: same step count, and the
-    samples agree far below the tolerance."""
+    """Same error control, step-size rule and dense output as scipy: the same step count as scipy's
+    integrator on the oracle's right-hand side (equal to round-off), and the samples agree far
+    below the tolerance (1e-8 at rtol 1e-8)."""
     model = inerter.load(PAPER[1])
     s = model.settings(method=method, stop_time=2.0, rtol=1e-8, atol=1e-10)
     a = compiled.integrate_compiled(model.mechanism, s)
-    b = integrate(model.mechanism, s)
+    b = integrate(model.oracle().mechanism, s)
     assert a.status == "ok" and a.steps == b.steps
     assert a.states.shape == b.states.shape
     assert np.max(np.abs(a.states - b.states)) < 1e-8
 
 
 @needs_numba
-def test_compiled_rk4_matches_numpy_rk4():
+def test_compiled_rk4_matches_the_oracles_rk4():
+    """Reference: the numpy RK4 loop on the oracle's right-hand side (element forces derived from
+    L(q) on Jets): the same steps and evaluations, and states within 1e-11 (m, rad, m/s, rad/s),
+    the bound held against the numpy path before: the same fixed steps on right-hand sides equal to
+    round-off."""
     model = inerter.load(PAPER[1])
     s = model.settings(method="RK4", stop_time=1.0, step=2e-3)
     a = compiled.integrate_compiled(model.mechanism, s)
-    b = integrate(model.mechanism, s)
+    b = integrate(model.oracle().mechanism, s)
     assert a.steps == b.steps and a.evaluations == b.evaluations
     assert np.max(np.abs(a.states - b.states)) < 1e-11
 
@@ -339,10 +344,12 @@ def test_bench_measures_the_fmu_path_against_the_oracle(tmp_path):
 # Outputs, co-simulation stepping and the kernels' on-disk cache
 # ----------------------------------------------------------------------------------------------
 def _step_both(model, stop, step, inputs=None):
+    """The compiled stepper and the oracle's (scipy's integrator on the oracle's right-hand side),
+    stepped over the same communication points with the same inputs."""
     runs = {}
-    for path in ("compiled", "numpy"):
-        st = model.stepper(path=path)
-        assert st.path == path
+    for path in ("compiled", "oracle"):
+        st = model.stepper(path="compiled") if path == "compiled" else model.oracle().stepper()
+        assert st.path == ("compiled" if path == "compiled" else "numpy")
         ys, outs = [], []
         for k in range(1, int(round(stop / step)) + 1):
             for name, value in (inputs or {}).items():
@@ -356,16 +363,17 @@ def _step_both(model, stop, step, inputs=None):
 
 @needs_numba
 @pytest.mark.parametrize("path", [PAPER[1], ROOT / "scenarios" / "two_bar_2d_pd.toml"], ids=lambda p: p.stem)
-def test_where_inputs_change_the_compiled_stepper_restarts_as_the_numpy_stepper(path):
+def test_where_inputs_change_the_compiled_stepper_restarts_as_the_oracles_stepper(path):
     """An input that changes at every communication point: the compiled stepper restarts its DOP853
     loop there with the step size the error control proposed, as the numpy stepper restarts scipy's
-    DOP853. Same steps, so the states agree to round-off carried over 100 restarts: bound 1e-10 (m,
-    rad, m/s) at the scene's tolerance rtol 1e-10; outputs to 1e-9 relative."""
+    DOP853. Reference: the numpy stepper on the oracle (element forces derived from L(q)). Same
+    steps, so the states agree to round-off carried over 100 restarts: bound 1e-10 (m, rad, m/s)
+    at the scene's tolerance rtol 1e-10; outputs to 1e-9 relative (as against the numpy path)."""
     model = inerter.load(path)
     inputs = {name: (lambda t: 5.0 * np.sin(7.0 * t)) for name in model.mechanism.input_names}
     assert inputs
     runs = _step_both(model, 1.0, 0.01, inputs)
-    (ya, oa, sa), (yb, ob, sb) = runs["compiled"], runs["numpy"]
+    (ya, oa, sa), (yb, ob, sb) = runs["compiled"], runs["oracle"]
     assert sa == sb
     assert np.max(np.abs(ya - yb)) <= 1e-10
     assert np.all(np.abs(oa - ob) <= 1e-9 * (1.0 + np.abs(ob)))
@@ -403,33 +411,36 @@ def test_with_inputs_held_the_compiled_stepper_is_the_whole_run(path, method):
 @pytest.mark.parametrize("path, stop", [(ROOT / "scenarios" / "hard" / "step_force_1dof_2d.toml", 2.0),
                                         (ROOT / "scenarios" / "braced_frame_3d.toml", 0.3)],
                          ids=["step force", "ground record"])
-def test_at_jumps_and_kinks_the_compiled_path_steps_as_the_numpy_path(path, stop, method):
+def test_at_jumps_and_kinks_the_compiled_path_steps_as_the_oracle(path, stop, method):
     """A step force's switch (a jump) ends a segment: the compiled whole run and the compiled
     stepper restart there with a fresh first step, the forces evaluated up to the switch with their
     values over the segment. A ground record's samples (kinks) end steps, through which the
     integration runs on with the step size proposed before the clip (RK4: its fixed step). Both as
-    the numpy path. Reference: the numpy path, whole run and stepper: the same number of steps,
-    states within 1e-12 (round-off of different summation orders). The compiled stepper with
+    the numpy path. Reference: the numpy path's integrators on the oracle's right-hand side
+    (element forces derived from L(q)), whole run and stepper: the same number of steps, states
+    within 1e-12 (round-off of right-hand sides computed by different formulas; the bound held
+    against the numpy path before). The compiled stepper with
     inputs held gives the compiled whole run's states to round-off (1e-15 relative; RK4 restarts at
     every communication point, as the numpy stepper's, so it is compared with that one only)."""
     model = inerter.load(path)
     assert model.mechanism.discontinuities or model.mechanism.kinks
     s = model.settings(method=method, stop_time=stop)
     whole = compiled.integrate_compiled(model.mechanism, s)
-    ref = integrate(model.mechanism, s)
+    oracle = model.oracle()
+    ref = integrate(oracle.mechanism, s)
     assert whole.extra["path"] == "compiled" and whole.status == ref.status == "ok"
     assert whole.steps == ref.steps
     assert np.max(np.abs(whole.states - ref.states)) <= 1e-12
     st = model.stepper(method=method, path="compiled", stop_time=stop)
-    numpy_st = model.stepper(method=method, path="numpy", stop_time=stop)
+    oracle_st = oracle.stepper(method=method, stop_time=stop)
     assert st.path == "compiled"
     for k in range(1, len(whole.time)):
         st.step(whole.time[k])
-        numpy_st.step(whole.time[k])
-        assert np.max(np.abs(st.y - numpy_st.y)) <= 1e-12
+        oracle_st.step(whole.time[k])
+        assert np.max(np.abs(st.y - oracle_st.y)) <= 1e-12
         if method != "RK4":
             assert np.all(np.abs(st.y - whole.states[k]) <= 1e-15 * (1.0 + np.abs(whole.states[k])))
-    assert st.steps == numpy_st.steps
+    assert st.steps == oracle_st.steps
     if method != "RK4":
         assert st.steps == whole.steps
 

@@ -233,19 +233,26 @@ def test_peaks_and_their_times_follow_the_two_quarter_periods(tmp_path, dim):
     assert r.run.extra["unsettled"] == 0
 
 
-def test_the_numpy_path_resolves_the_mode_as_the_kernels_do(tmp_path):
-    """Closed form (efficiency_closed_form), and the compiled run as reference: the numpy path
-    (scipy's DOP853 on the readable evaluators, Mechanism.accelerations solving again where the
-    mode flips) follows the closed form over 1 s (two turnarounds) to 1e-7 x0 at rtol 1e-10, and
-    its mode and loss outputs are the compiled run's (the mode exactly, the loss to 1e-6 W)."""
+def test_the_numpy_path_resolves_the_mode_as_the_closed_form(tmp_path):
+    """Closed form (efficiency_closed_form; the oracle does not take a screw efficiency): the numpy
+    path (scipy's DOP853 on the readable evaluators, Mechanism.accelerations solving again where
+    the mode flips) follows it over 1 s (two turnarounds) to 1e-7 x0 at rtol 1e-10; its mode is
+    1 while |x| falls and 0 while it grows (wherever |ẋ| > 1e-6 m/s), and its loss is the law's,
+    p_loss = (b_eff − b) ẍ ẋ with ẍ = −k x/(m + b_eff) at the run's own (x, ẋ), to
+    1e-12 · ½ k x0² = 3e-12 W (round-off of a 4.4 W peak; measured 0), tighter than the 1e-6 W the
+    numpy path was held to against the compiled run."""
     model = _oscillator(tmp_path)
     r = model.simulate(stop_time=1.0, path="numpy", metrics=False)
-    ref = model.simulate(stop_time=1.0, metrics=False)
     assert r.status == "ok" and r.run.extra.get("path", "numpy").startswith("numpy"), r.message
     exact, _, _, _ = efficiency_closed_form(r.time, X0, M, B, K, ETA_F, ETA_B)
-    assert np.max(np.abs(_x(r, 2) - exact)) <= 1e-7 * X0
-    assert np.array_equal(r["inerter.mode"], ref["inerter.mode"])
-    assert np.max(np.abs(r["inerter.p_loss"] - ref["inerter.p_loss"])) <= 1e-6
+    x, v = _x(r, 2), r["spring.v_rel"]
+    assert np.max(np.abs(x - exact)) <= 1e-7 * X0
+    inward, outward = (x * v < 0) & (np.abs(v) > 1e-6), (x * v > 0) & (np.abs(v) > 1e-6)
+    assert inward.sum() > 100 and outward.sum() > 100
+    assert np.all(r["inerter.mode"][inward] == 1.0) and np.all(r["inerter.mode"][outward] == 0.0)
+    beff = np.where(x * v < 0, B / ETA_F, B * ETA_B)
+    p_loss = (beff - B) * (-K * x / (M + beff)) * v
+    assert np.max(np.abs(r["inerter.p_loss"] - p_loss)) <= 1e-12 * 0.5 * K * X0 ** 2
 
 
 def test_energy_plus_the_efficiency_loss_is_the_initial_energy(tmp_path):

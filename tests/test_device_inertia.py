@@ -251,10 +251,12 @@ def test_screw_joint_errors_name_the_field(tmp_path, edit, field, expected):
     assert field in str(err.value) and expected in str(err.value)
 
 
-def test_2d_screw_on_a_moving_rack_kernels_equal_the_numpy_joints(tmp_path):
+def test_2d_screw_on_a_moving_rack_kernels_equal_the_oracle(tmp_path):
     """The 2D screw's rows where the rack turns (its body a pinned to the ground and swinging):
-    the kernels' (kernels._screw2) against the numpy joint's (joints.Prismatic2D), accelerations
-    and multipliers at random states, within 1e-12 of the largest."""
+    the kernels' (kernels._screw2) against the oracle's mechanism, whose joints are the model
+    layer's (joints.Prismatic2D, code separate from the kernels') and whose element forces are
+    derived from L(q): accelerations and multipliers at random states, within 1e-12 of the largest
+    (as against the numpy Mechanism before)."""
     text = (DATA / "screw_nut_2d.toml").read_text(encoding="utf-8")
     text = text.replace('[bodies.pinion]', '[bodies.rack]\nmass = 2.0\ninertia = 0.3\nposition = [0.4, 0]\n'
                         'angle = 0.0\npoints = { R0 = [-0.4, 0], R = [0.1, 0.05] }\n\n[joints.pivot]\n'
@@ -266,8 +268,9 @@ def test_2d_screw_on_a_moving_rack_kernels_equal_the_numpy_joints(tmp_path):
     model = inerter.load(path)
     mech = model.mechanism
     kernel = compiled.compile_mechanism(mech)
+    oracle = model.oracle().mechanism
     for t, q, v in _states(mech, "rack-2d"):
-        y = np.concatenate(mech.accelerations(t, q, v, alpha=0.0))
+        y = np.concatenate(oracle.accelerations(t, q, v, alpha=0.0))
         x = np.concatenate(kernel.accelerations(t, q, v))
         assert np.max(np.abs(x - y)) <= 1e-12 * max(1.0, np.max(np.abs(y)))
     # γ is C's second derivative: along a run (the rack swinging, the pinion falling and turning)
@@ -277,15 +280,17 @@ def test_2d_screw_on_a_moving_rack_kernels_equal_the_numpy_joints(tmp_path):
     assert result["constraint_residual"].max() <= 1e-9
 
 
-def test_screw_joint_kernels_equal_the_numpy_joints(tmp_path):
-    """The kernels' screw row (and the rest of the explicit device's joints) against the numpy
-    joints' (inerter.model.joints.Screw, code of its own): accelerations and multipliers at random
-    states of the explicit 3D device, within 1e-12 of the largest."""
+def test_screw_joint_kernels_equal_the_oracle(tmp_path):
+    """The kernels' screw row (and the rest of the explicit device's joints) against the oracle's
+    mechanism, whose joints are the model layer's (inerter.model.joints.Screw, code of its own) and
+    whose element forces are derived from L(q): accelerations and multipliers at random states of
+    the explicit 3D device, within 1e-12 of the largest (as against the numpy Mechanism before)."""
     model = inerter.load(PEND_EXPLICIT)
     mech = model.mechanism
     kernel = compiled.compile_mechanism(mech)
+    oracle = model.oracle().mechanism
     for t, q, v in _states(mech, "screw-joint"):
-        y = np.concatenate(mech.accelerations(t, q, v, alpha=0.0))
+        y = np.concatenate(oracle.accelerations(t, q, v, alpha=0.0))
         x = np.concatenate(kernel.accelerations(t, q, v))
         assert np.max(np.abs(x - y)) <= 1e-12 * max(1.0, np.max(np.abs(y)))
 

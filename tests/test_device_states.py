@@ -5,8 +5,8 @@ dissipated energy as a state (energy + e_loss = initial energy), end-stop events
 Hertz contact's closed form, the hard cases at the tightest tolerance, and the states through the
 FMU (get/set/serialise state, tunable series stiffness, outputs against the solver).
 
-Every reference is named in its test: a closed form, the ideal inerter's own run, or the initial
-energy.
+Every reference is named in its test: a closed form, an explicit model written from the device's
+definition (backlash), the ideal inerter's own run, or the initial energy.
 """
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 import inerter
 from test_device import OSCILLATOR, _load
@@ -169,26 +170,23 @@ def test_series_compliance_in_3d(tmp_path):
 
 
 def test_an_implicit_stepper_integrates_the_internal_states():
-    """Closed form (two_dof): Radau's co-simulation stepper on the kernels' right-hand side (the
-    compiled loop takes the explicit methods only) carries the series deflection: the mass and
-    E.s_series = x − y at 1 s agree with the 2-DOF response to 1e-7 m (rtol 1e-10), and so do the
-    numpy path's stepper's (the readable evaluators run the same laws uncompiled)."""
+    """Closed form (_series_states, the 2-DOF system's modes): Radau's co-simulation stepper on the
+    kernels' right-hand side (the compiled loop takes the explicit methods only) carries the
+    series deflection, and so does the numpy path's stepper (the readable evaluators): at 1 s the
+    mass's x and ẋ and E.s_series = x − y agree with the 2-DOF response to 1e-7 (m, m/s; rtol
+    1e-10), the force is k_c s to 1e-12 relative, and the energy ½ k x0² to 1e-7 relative (no
+    damping)."""
     model = inerter.load(SERIES)
-    stepper = model.stepper(method="Radau", rtol=1e-10, atol=1e-12)
-    for k in range(1, 101):
-        stepper.step(0.01 * k)
-    out = stepper.outputs()
-    t = np.array([1.0])
-    x_ref = two_dof(1.0, 100.0, 2.0, 400.0, 0.1, t)[0][0]
-    assert abs(out["P.r[1]"] - x_ref) <= 1e-7
-    assert out["inerter.f"] == pytest.approx(400.0 * out["inerter.s_series"], rel=1e-12)
-    assert abs(out["inerter.s_series"]) > 1e-4
-    numpy = model.stepper(method="Radau", rtol=1e-10, atol=1e-12, path="numpy")
-    assert numpy.path == "numpy"
-    for k in range(1, 101):
-        numpy.step(0.01 * k)
-    for name, value in numpy.outputs().items():
-        assert value == pytest.approx(out[name], rel=1e-6, abs=1e-9), name
+    x, v, y = (value[0] for value in _series_states(np.array([1.0])))
+    for path in ("compiled", "numpy"):
+        stepper = model.stepper(method="Radau", rtol=1e-10, atol=1e-12, path=path)
+        for k in range(1, 101):
+            stepper.step(0.01 * k)
+        out = stepper.outputs()
+        assert abs(out["P.r[1]"] - x) <= 1e-7 and abs(out["P.v[1]"] - v) <= 1e-7, path
+        assert abs(out["inerter.s_series"] - (x - y)) <= 1e-7 and abs(x - y) > 1e-4, path
+        assert out["inerter.f"] == pytest.approx(400.0 * out["inerter.s_series"], rel=1e-12), path
+        assert out["energy"] == pytest.approx(0.5 * 100.0 * 0.1 ** 2, rel=1e-7), path
 
 
 # ------------------------------------------------------------------------------------------------
@@ -414,25 +412,80 @@ def test_projection_and_scipys_integrators_carry_the_internal_states():
         np.testing.assert_allclose(r["inerter.f"], 400.0 * r["inerter.s_series"], rtol=1e-12, atol=1e-12)
 
 
+def _series_states(t, m=1.0, k=100.0, b=2.0, kc=400.0, x0=0.1):
+    """Closed form (the modes of two_dof): the mass's x(t) and ẋ(t) and the inerter node's y(t) of
+    the series scene from x = y = x0 at rest; the series deflection is s = x − y."""
+    M, K = np.diag([m, b]), np.array([[k + kc, -kc], [-kc, kc]])
+    Minv_half = np.diag(1.0 / np.sqrt([m, b]))
+    w2, V = np.linalg.eigh(Minv_half @ K @ Minv_half)
+    Phi = Minv_half @ V
+    a = Phi.T @ M @ np.array([x0, x0])
+    w = np.sqrt(w2)
+    modes, rates = a * np.cos(w[None, :] * t[:, None]), -a * w * np.sin(w[None, :] * t[:, None])
+    return (Phi[0] * modes).sum(axis=1), (Phi[0] * rates).sum(axis=1), (Phi[1] * modes).sum(axis=1)
+
+
+def _backlash_model(p, t_eval):
+    """An explicit model of scenarios/hard/backlash_device_2d.toml, written from the device's
+    definition (inerter.elements.device, "Backlash"; Wang & Su 2008, Sec. 3), independently of
+    the package: the mass x on the line O-P (L = 1 + x, no lateral motion), the inerter's node
+    behind a series spring-damper with a dead zone of width Δ,
+    m ẍ = −k x − F + F0 sin 2πft,  b ü = F with u = x − s (so s̈ = ẍ − F/b),
+    F = k_c d + c_c ṡ beyond the gap (d = s ∓ Δ/2), clipped to 0 where it would pull the engaged
+    sides apart, F = 0 inside it. Integrated by scipy's DOP853 at rtol 1e-13, atol 1e-15 (no
+    event location: the error control meets the impacts by shortening the steps, as the engine's).
+    Returns x, ẋ, s, F at `t_eval`."""
+    half = p["gap"] / 2.0
+
+    def force(s, sd):
+        if abs(s) <= half:
+            return 0.0
+        d = s - math.copysign(half, s)
+        f = p["kc"] * d + p["cc"] * sd
+        return max(f, 0.0) if d > 0 else min(f, 0.0)
+
+    def rhs(t, y):
+        x, v, s, sd = y
+        f = force(s, sd)
+        a = (-p["k"] * x - f + p["F0"] * math.sin(2.0 * math.pi * p["f"] * t)) / p["m"]
+        return [v, a, sd, a - f / p["b"]]
+
+    sol = solve_ivp(rhs, (0.0, t_eval[-1]), [0.0, 0.0, 0.0, 0.0], method="DOP853", rtol=1e-13, atol=1e-15,
+                    t_eval=t_eval)
+    assert sol.status == 0, sol.message
+    x, v, s, sd = sol.y
+    return x, v, s, np.array([force(a, b) for a, b in zip(s, sd)])
+
+
+@pytest.mark.parametrize("path", ["compiled", "numpy"])
 @pytest.mark.parametrize("scene, tolerance", [(SERIES, 1e-9), (HARD / "backlash_device_2d.toml", 1e-7)],
                          ids=["series", "backlash"])
-def test_the_numpy_path_integrates_the_internal_states_as_the_kernels_do(scene, tolerance):
-    """Reference: the compiled run. The numpy path (scipy's DOP853 on the readable evaluators,
-    which run the same laws uncompiled) gives every output over 1 s, the series deflection,
-    engagement and dissipated energy included, within `tolerance` of its range (rtol 1e-10). The
-    series scene takes the same steps, and the two differ by round-off (1e-9); the backlash
-    scene's impacts make the error estimates, and so the steps, sensitive to round-off (562
-    against 572), and the runs differ by their global errors: measured 2.2e-9 of the range (the
-    engaged spring's force, k_c = 1e4 N/m times a deflection 2e-12 m apart), bound 1e-7."""
+def test_both_paths_integrate_the_internal_states(scene, tolerance, path):
+    """Over 1 s (DOP853 at the scenes' rtol 1e-10), each path (the compiled loop, and the numpy
+    path: scipy's DOP853 on the readable evaluators; the oracle does not take internal states)
+    against a reference of its own: for the series scene the closed form of its two modes
+    (_series_states), for the backlash scene an explicit model (_backlash_model). The mass's
+    position and velocity, the series deflection, the device's force (and the spring's) within
+    `tolerance` of max(1, the output's range), the tolerances the two paths were held to against
+    each other: 1e-9 (series) and 1e-7 (backlash: the impacts make the steps sensitive to
+    round-off). Measured, worst over the outputs and the paths: 1.4e-10 (series, the force) and
+    8.1e-10 (backlash, the force: 1.5e-8 N of 18 N). E.engaged is 1 exactly where |s| > Δ/2."""
     model = inerter.load(scene)
-    a = model.simulate(stop_time=1.0, metrics=False)
-    b = model.simulate(stop_time=1.0, metrics=False, path="numpy")
-    assert a.status == b.status == "ok" and b.run.extra.get("path", "numpy") == "numpy", b.message
+    r = model.simulate(stop_time=1.0, metrics=False, path=path)
+    assert r.status == "ok", r.message
+    assert r.run.extra.get("path", "numpy") == path
+    p = {name: model.scene.parameters[name].value for name in model.scene.parameters}
     if scene == SERIES:
-        assert a.run.steps == b.run.steps
-    for name in a.names:
-        scale = max(1.0, float(np.max(np.abs(a[name]))))
-        assert np.max(np.abs(a[name] - b[name])) <= tolerance * scale, name
+        x, v, y = _series_states(r.time, p["m"], p["k"], p["b"], p["kc"], p["x0"])
+        s, f = x - y, p["kc"] * (x - y)
+    else:
+        x, v, s, f = _backlash_model(p, r.time)
+        engaged = np.abs(r["inerter.s_series"]) > p["gap"] / 2.0
+        assert np.array_equal(r["inerter.engaged"] == 1.0, engaged)
+    expected = {"P.r[1]": x, "P.v[1]": v, "inerter.s_series": s, "inerter.f": f, "spring.f": p["k"] * x}
+    for name, value in expected.items():
+        scale = max(1.0, float(np.ptp(value)))
+        assert np.max(np.abs(r[name] - value)) <= tolerance * scale, (name, np.max(np.abs(r[name] - value)))
 
 
 def test_the_linearisation_refuses_internal_states():

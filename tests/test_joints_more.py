@@ -250,9 +250,10 @@ d = 0.4
     assert np.max(np.abs(sugar["R_spring.tau"] - plain["s.tau"])) < 1e-9
 
 
-def test_the_new_joints_run_on_the_numpy_path_too(tmp_path):
-    """The model layer's joints (numpy path) and the kernels' rows give the same run."""
+def test_the_new_joints_run_on_the_oracle_too(tmp_path):
+    """The model layer's joints (in the oracle's mechanism, with its element forces derived from
+    L(q)) and the kernels' rows give the same run (1e-9 m, as the numpy path did before)."""
     model = _load(tmp_path, "cylindrical", CYLINDRICAL)
-    fast, slow = _run(model), model.simulate(metrics=False, path="numpy")
+    fast, slow = _run(model), model.oracle().simulate(metrics=False)
     assert slow.status == "ok"
     assert np.max(np.abs(fast["P.r[1]"] - slow["P.r[1]"])) < 1e-9

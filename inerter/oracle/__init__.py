@@ -2,9 +2,10 @@
 checks. Each translational element's terminal distance L(q) is differentiated by forward-mode
 automatic differentiation (:mod:`.derivation`): F = b·d²L/dt² for an inerter (the paper's Eq. 9,
 or b·r̈·r̂ without the centripetal term, Eq. 8), k(L − L0) for a spring, c·dL/dt for a damper.
-A planar rotational spring's torque is the derivative of its potential ½k(φ − φ0)², a rotational
-damper's that of its dissipation function ½d φ̇², by the same differentiation. Joints, point forces,
-gravity, ground motion and 3D rotational elements are the numpy Mechanism's own. A scene with an
+A rotational spring's torque is the derivative of its potential ½k(φ − φ0)², a rotational damper's
+that of its dissipation function ½d φ̇², by the same differentiation, on the relative angle in 2D
+and the twist about the element's axis in 3D (:mod:`.rotational`). Joints, point forces, gravity
+and ground motion are the numpy Mechanism's own. A scene with an
 element of a kind the oracle has no definition of is refused (:func:`require_definitions`).
 
 Layer: beside :mod:`inerter.engine` (neither imports the other), above :mod:`inerter.model`."""

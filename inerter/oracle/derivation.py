@@ -38,7 +38,7 @@ import numpy as np
 from inerter.common.errors import MIN_LENGTH, InerterError, SceneError, TerminalsMeet
 from inerter.oracle.jets import (
     Jet, angular_velocity, cross, dot, jabs, jcos, jlogcosh, jpow, jsin, jsqrt, parts, point_position, position, seed)
-from inerter.oracle.rotational import _COEFFICIENT_NAME as _ROTATIONAL_KINDS
+from inerter.oracle.rotational import COEFFICIENT_NAME as _ROTATIONAL_KINDS
 from inerter.oracle.rotational import OracleRotational, OracleSpatialRotational
 
 #: The translational kinds :class:`OracleElement` derives, each with its coefficient's key; with

@@ -13,7 +13,8 @@ import numpy as np
 from inerter.common.errors import SceneError
 from inerter.oracle.jets import Jet, jatan2, jsqrt, seed
 
-_COEFFICIENT_NAME = {"rotational_spring": "k", "rotational_damper": "d"}
+#: The rotational kinds the oracle defines (:func:`_law`), each with its coefficient's key.
+COEFFICIENT_NAME = {"rotational_spring": "k", "rotational_damper": "d"}
 
 
 def _law(kind, coefficient, free_angle, x):
@@ -46,7 +47,7 @@ class OracleRotational:
         self.name = spec.name
         self.kind = spec.type
         self.coefficient = float(spec.coefficient)
-        self.coefficient_name = _COEFFICIENT_NAME[spec.type]
+        self.coefficient_name = COEFFICIENT_NAME[spec.type]
         self.free_angle = float(free_angle)
         self.ia, self.ib = index_a, index_b
         self.dofs = [i for i in (index_a, index_b) if i >= 0]

@@ -213,8 +213,8 @@ class Model:
         """A co-simulation stepper at t = 0. `path` = "compiled" (the default): each step one call
         of the compiled integrator loop where :func:`inerter.engine.compiled.compiled_stepper` can
         take the scene (DOP853, RK45, RK4); with an implicit method or the projection treatment,
-        scipy's stepper on the compiled right-hand side; the numpy stepper where the kernels do not
-        take the scene (``stepper.path`` says which); "numpy": the
+        scipy's stepper on the compiled right-hand side; both have ``stepper.path`` "compiled", the
+        numpy stepper where the kernels do not take the scene "numpy"; `path` "numpy": the
         readable reference. On both paths the adaptive integrators run on across communication
         points, their steps clipped to `stop_time` where it is given."""
         s = self.settings(method=method, rtol=rtol, atol=atol)
@@ -227,7 +227,7 @@ class Model:
                 # an implicit method or the projection treatment: scipy's steppers on the kernels'
                 # right-hand side, as a whole run takes them (integrate_compiled)
                 stepper = Stepper(compiled.kernel_mechanism(self.mechanism), s, self.signals, stop_time)
-                stepper.path = "scipy stepper, compiled right-hand side"
+                stepper.path = "compiled"           # the engine's (one word: the FMU's log names it)
                 return stepper
         elif path != "numpy" and path != "compiled":
             raise SceneError("stepper()", "path", path, "'numpy' or 'compiled'", "unknown path")

@@ -511,10 +511,16 @@ def test_compiled_stepper_rolls_back_bit_for_bit(change_input):
 
 
 def test_the_compiled_stepper_falls_back_where_the_loop_cannot_go():
-    """Implicit methods, projection and a missing numba: the numpy stepper. 3D scenes with
-    quaternions or Z-X-Z Euler angles, step forces and ground records run compiled."""
+    """Implicit methods and projection: scipy's stepper on the kernels' right-hand side; a missing
+    numba: the numpy stepper. 3D scenes with quaternions or Z-X-Z Euler angles, step forces and
+    ground records run the compiled loop."""
     two_bar = inerter.load(PAPER[1])
-    assert two_bar.stepper(method="Radau", path="compiled").path == "numpy"
+    for kw in ({"method": "Radau"}, {"method": "BDF"}):
+        implicit = two_bar.stepper(path="compiled", **kw)
+        assert implicit.path == ("compiled" if compiled.AVAILABLE else "numpy")
+        assert not hasattr(implicit, "native_table")                     # scipy's stepper, not the loop
+        if compiled.AVAILABLE:
+            assert type(implicit.mech).__name__ == "_KernelMechanism"      # on the kernels' right-hand side
     as_3d = ROOT / "scenarios" / "two_bar_2d_as_3d.toml"
     assert inerter.load(as_3d).stepper(path="compiled").path == ("compiled" if compiled.AVAILABLE else "numpy")
     euler = inerter.load(ROOT / "scenarios" / "gimbal_lock_3d.toml", **{"scene.orientation": "euler_zxz"})

@@ -1117,6 +1117,13 @@ def terminals_meet(gaps, z, y_new, P):
     return False
 
 
+#: Positions in work_arrays' tuple (WORK names them, in this order): the first SOLVER_WORK serve every
+#: evaluation and integrator; then the change-point watch's C_v at a step's start and end, its
+#: scratch, its Gram matrix and whether the start's C_v is known (loop_watch).
+SOLVER_WORK = 9
+CV_START, CV_END, CV_WORK, CV_GRAM, CV_KNOWN = range(SOLVER_WORK, SOLVER_WORK + 5)
+
+
 @njit(cache=True)
 def work_arrays(P, ny, stages):
     """Scratch arrays of the integrators and of the outputs, allocated once per integration:
@@ -1144,7 +1151,7 @@ def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
     Inlined where it is called."""
     nq = P[DIMS][N_COORD]
     nv = nq + P[DIMS][N_VELOCITY]
-    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)[:9]
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)[:SOLVER_WORK]
     _wind_of(y, P)                  # the samples come in time order: each winds on from the last
     if need_acc:
         st = accelerations(t, y[:nq], y[nq:nv], y[nv:], inputs, alpha, P, AB, rhs, gen, sig_acc)
@@ -1465,15 +1472,15 @@ def _add_rotational3(q, v, P, gen):
     gradient of the angle (:func:`_rotational3`)."""
     rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
     for e in range(rot_int.shape[0]):
-        ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
+        ia, ib, Aa, Ab, phi, w, tau, gx, gy, gz = _rotational3(q, v, e, rot_int, rot_real)
         if ib >= 0:
-            tx, ty, tz = matrix9_apply_transposed(Ab, nx, ny, nz)
+            tx, ty, tz = matrix9_apply_transposed(Ab, gx, gy, gz)
             k = 6 * ib + 3
             gen[k] -= tau * tx
             gen[k + 1] -= tau * ty
             gen[k + 2] -= tau * tz
         if ia >= 0:
-            tx, ty, tz = matrix9_apply_transposed(Aa, nx, ny, nz)
+            tx, ty, tz = matrix9_apply_transposed(Aa, gx, gy, gz)
             k = 6 * ia + 3
             gen[k] += tau * tx
             gen[k + 1] += tau * ty
@@ -1855,7 +1862,7 @@ def signal_values3(q, v, z, qdd, P, out):
         energy, k = _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_, anz,
                                      ex, ey, ez, gq, 6, energy, out, k)
     for e in range(rot_int.shape[0]):
-        ia, ib, Aa, Ab, phi, w, tau, nx, ny, nz = _rotational3(q, v, e, rot_int, rot_real)
+        ia, ib, Aa, Ab, phi, w, tau, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
         energy += law.rotational_energy(rot_int[e, ROT_KIND], rot_real[e], phi, w)
         out[k] = phi
         out[k + 1] = w
@@ -2040,7 +2047,7 @@ def loop_watch(t, y, t_new, y_new, inputs, alpha, P, work, monitor):
     C_v at the step's start is the last clear step's C_v at its end, carried in `work`
     (cv_start, with cv_known[0] = 1; the caller sets it to 0 where y did not come from that step):
     one assembly per watched step instead of two, the same values."""
-    C0, C1, R, G, known = work[9], work[10], work[11], work[12], work[13]
+    C0, C1, R, G, known = work[CV_START], work[CV_END], work[CV_WORK], work[CV_GRAM], work[CV_KNOWN]
     joint_jacobian(t_new, y_new, inputs, alpha, P, work, C1)
     if dependence(C1, R) < monitor[MONITOR_DEPENDENT]:
         known[0] = 0.0
@@ -2644,7 +2651,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     failed step's), except at a change point (CHANGE_POINT), where y is the state it stopped at."""
     work = _unowned(work)
     K, y_new, f_new = work[4], work[5], work[6]
-    work[13][0] = 0.0               # C_v at y is not known yet (loop_watch): y may have been set anew
+    work[CV_KNOWN][0] = 0.0         # C_v at y is not known yet (loop_watch): y may have been set anew
     n_stages, order = _rk_shape(method)
     keeping = keep[2][KEPT_ON] == 1
     before = _before(hdr[RK_JUMP])
@@ -3047,9 +3054,9 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, j
 def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work, monitor):
     """:func:`integrate_rk4` from y (overwritten) with the scratch `work` (:func:`work_arrays`, 4 rows
     of stages), an argument so that it can be taken without reference counting (_unowned)."""
-    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)[:9]
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)[:SOLVER_WORK]
     f, k2, k3, k4 = K[0], K[1], K[2], K[3]
-    work[13][0] = 0.0               # C_v at y is not known yet (loop_watch)
+    work[CV_KNOWN][0] = 0.0         # C_v at y is not known yet (loop_watch)
     before = _before(jump)
     ny = y.shape[0]
     t = t0
@@ -3182,6 +3189,7 @@ TABLEAU = (("A", "f2"), ("B", "f1"), ("C", "f1"), ("E", "f1"), ("E3", "f1"), ("D
 WORK = (("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), ("y_new", "f1"), ("f_new", "f1"),
         ("ys", "f1"), ("sig_acc", "f1"), ("cv_start", "f2"), ("cv_end", "f2"), ("cv_work", "f2"), ("cv_gram", "f2"),
         ("cv_known", "f1"))
+assert [name for name, _ in WORK[CV_START:]] == ["cv_start", "cv_end", "cv_work", "cv_gram", "cv_known"]
 #: cosim_scratch (gaps, z, fresh, keep), keep's coefficients (a (0, 1, ny) array) left out: native_step
 #: makes them an empty view of `nodes`.
 COSIM = (("gaps", "f2"), ("z", "f1"), ("fresh", "f1"), ("nodes", "f1"), ("kept", "i1"))
@@ -3340,8 +3348,8 @@ def native_step_on(tab, t, h, P):
     ts, out, inputs, alpha = _f1(tab, S_TS), _f2(tab, S_OUT), _f1(tab, S_INPUTS), clock[CLOCK_ALPHA]
     w = S_WORK                                  # as WORK lists them
     work = (_f2(tab, w), _f1(tab, w + 1), _f1(tab, w + 2), _f1(tab, w + 3), _f2(tab, w + 4), _f1(tab, w + 5),
-            _f1(tab, w + 6), _f1(tab, w + 7), _f1(tab, w + 8), _f2(tab, w + 9), _f2(tab, w + 10), _f2(tab, w + 11),
-            _f2(tab, w + 12), _f1(tab, w + 13))
+            _f1(tab, w + 6), _f1(tab, w + 7), _f1(tab, w + 8), _f2(tab, w + CV_START), _f2(tab, w + CV_END),
+            _f2(tab, w + CV_WORK), _f2(tab, w + CV_GRAM), _f1(tab, w + CV_KNOWN))
     raw, order, values = _f1(tab, S_RAW), _i1(tab, S_ORDER), _f1(tab, S_VALUES)
     if tab[TABLE_METHOD] == NATIVE_RK4:
         st, steps, t_reached, t_fail = rk4_cosim_step(y, now, t_end, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), ts, out,

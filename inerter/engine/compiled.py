@@ -954,6 +954,16 @@ def _dense_keep(method, tables, ny, dense):
     return np.empty(room + 1), np.empty((room, rows, ny)), kept
 
 
+def _rk_segment(kernel, settings, tables, y, t0, t1, seg, seg_out, max_steps, inputs, switches, kinks, keep):
+    """kernels.integrate_rk from (t0, y) to t1 with the run's method, tolerances and α, a fresh first
+    step, through the `kinks`, ending before the jump at t1 where t1 is one of the `switches`;
+    sampled at `seg`, steps kept in `keep`. Returns what integrate_rk returns."""
+    A, B, C, E, E3, D, Pm = tables
+    return _k.integrate_rk(_RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol),
+                           float(settings.atol), 0.0, max_steps, inputs, float(settings.alpha), kernel.params,
+                           A, B, C, E, E3, D, Pm, _monitor(settings.method), t1 if t1 in switches else 0.0, kinks, keep)
+
+
 def integrate_compiled(mech, settings, inputs=None, dense=False):
     """Integrate like :func:`inerter.engine.simulation.integrate`, in one compiled loop for DOP853, RK45
     and RK4 with Baumgarte stabilisation; other methods and ``projection`` use scipy's integrators
@@ -1012,11 +1022,9 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
                 y, t0, t1, seg, seg_out, float(settings.step), int(settings.max_steps) - steps, inp, alpha,
                 kernel.params, t1 if t1 in switches else 0.0, kinks, _monitor("RK4"))
         else:
-            A, B, C, E, E3, D, Pm = tables
-            status, done, s_steps, s_evals, t_reached, h, keep, y_reached = _k.integrate_rk(
-                _RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol), float(settings.atol), 0.0,
-                int(settings.max_steps) - steps, inp, alpha, kernel.params, A, B, C, E, E3, D, Pm,
-                _monitor(settings.method), t1 if t1 in switches else 0.0, kinks, keep)
+            status, done, s_steps, s_evals, t_reached, h, keep, y_reached = _rk_segment(
+                kernel, settings, tables, y, t0, t1, seg, seg_out, int(settings.max_steps) - steps, inp, switches,
+                kinks, keep)
         steps += int(s_steps)
         evals += int(s_evals)
         written = min(done - 1, last - k)                         # grid samples among seg_out[1:done]
@@ -1137,15 +1145,13 @@ class LocalDense:
         ends = sorted(d for d in self.switches if t0 < d < t_end) + [t_end]
         keep = _dense_keep(s.method, self.tables, self.n, True)
         y = self.states[k].copy()
-        A, B, C, E, E3, D, Pm = self.tables
         with kernel.wound_from_start(self.windings(k)):
             for t1 in ends:
                 seg_out = np.empty((2, len(y)))
                 seg_out[0] = y
-                status, _, _, evals, _, _, keep, _ = _k.integrate_rk(
-                    _RK_CODE[s.method], y, t0, t1, np.array((t0, t1)), seg_out, float(s.rtol), float(s.atol),
-                    0.0, int(s.max_steps), self.inputs, float(s.alpha), kernel.params, A, B, C, E, E3, D, Pm,
-                    _monitor(s.method), t1 if t1 in self.switches else 0.0, self.kinks, keep)
+                status, _, _, evals, _, _, keep, _ = _rk_segment(
+                    kernel, s, self.tables, y, t0, t1, np.array((t0, t1)), seg_out, int(s.max_steps), self.inputs,
+                    self.switches, self.kinks, keep)
                 if status != 0:
                     raise SimulationError(f"the dense output between t = {t0:.6g} s and {t_end:.6g} s: the "
                                           f"{s.method} integrator failed on integrating that interval again "

@@ -56,7 +56,7 @@ from inerter.common.errors import SimulationError
 from inerter.engine.simulation import Run, Stepper, jumps
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
-from inerter.elements import device, layout
+from inerter.elements import ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
 from inerter.model.mechanism import DEPENDENT_RATIO, wound_from
@@ -457,8 +457,8 @@ def signal_layout(flat) -> list[str]:
         return signal_layout3(flat)
     names = [f"{p}.{x}" for p in flat["point_names"] for x in ("r[1]", "r[2]", "v[1]", "v[2]")]
     names += [f"{e}.{x}" for e, extra in zip(flat["el_names"], flat["el_extra"])
-              for x in ("s_rel", "v_rel", "f", *extra)]
-    names += [f"{e}.{x}" for e in flat["rot_names"] for x in ("phi_rel", "w_rel", "tau")]
+              for x in (*output_suffixes(TRANSLATIONAL), *extra)]
+    names += [f"{e}.{x}" for e in flat["rot_names"] for x in output_suffixes(ROTATIONAL)]
     return names + ["energy", "constraint_residual"]
 
 

@@ -56,7 +56,7 @@ from inerter.common.errors import SimulationError
 from inerter.engine.simulation import Run, Stepper, jumps
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
-from inerter.elements import ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
+from inerter.elements import FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
 from inerter.model.mechanism import DEPENDENT_RATIO, wound_from
@@ -686,7 +686,7 @@ class Kernel:
     def signal_reads(self, index):
         """(needs the accelerations, the state components it reads) of the signal at `index`: a
         point's coordinate reads its body's coordinates (and velocities, for a velocity); an
-        element's force needs q̈ where its law has an inertance, and a screw efficiency's mode and
+        element's force and power need q̈ where its law has an inertance, and a screw efficiency's mode and
         loss need it; any other signal reads the whole state."""
         flat = self.flat
         width = 2 * flat["dim"]
@@ -710,7 +710,7 @@ class Kernel:
         name = self._layout[index]
         need = False
         for e, (row_int, row_real) in enumerate(zip(flat["el_int"], flat["el_real"])):
-            if name == f"{flat['el_names'][e]}.f":
+            if name in [f"{flat['el_names'][e]}.{suffix}" for suffix in FORCE_OUTPUTS]:
                 need = adds_mass(row_int, row_real)
             elif device.mode_solved.py_func(row_real) and name in (f"{flat['el_names'][e]}.p_loss",
                                                                    f"{flat['el_names'][e]}.mode"):

@@ -1513,10 +1513,11 @@ def _status_text(kernel, status, method, h, y_last, t_last, max_steps):
     names = kernel.flat["el_names"]
     if status == 5 and names:
         q, v, z = (part.copy() for part in kernel.split(y_last))
-        raw = np.empty(len(signal_layout(kernel.flat)))
+        layout_names = signal_layout(kernel.flat)
+        raw = np.empty(len(layout_names))
         _k.signal_values(q, v, z, np.zeros(kernel.n + kernel.m), kernel.params, raw)
-        first = 2 * kernel.flat["dim"] * len(kernel.flat["point_names"])
-        lengths = raw[first:first + 3 * len(names):3]
+        where = {name: i for i, name in enumerate(layout_names)}
+        lengths = raw[[where[f"{name}.s_rel"] for name in names]]
         closest = float(np.min(lengths))
         which = [name for name, L in zip(names, lengths) if L <= closest * (1.0 + 1e-9)]
         spec = kernel.mech.scene.elements[which[0]]

@@ -57,7 +57,8 @@ class Signals:
         if mech.dim == 3:
             for bname in mech.body_names:
                 self._body(mech, bname)
-        self._group([("energy", "J", "kinetic + potential energy, with ½·b·(dL/dt)² per inerter")], False,
+        self._group([("energy", "J", "kinetic + potential energy: the bodies' and every element's E.energy "
+                                "(½·b·(dL/dt)² per inerter)")], False,
                     lambda t, q, v, a, z: (mech.energy(q, v, z) if len(mech.z0) else mech.energy(q, v),))
         self._group([("constraint_residual", "m", "largest |C_i(q)| of the joint constraints (m or rad)")], False,
                     lambda t, q, v, a, z: (mech.constraint_residual(q),))

@@ -438,7 +438,8 @@ def test_flatten3_takes_3d_scenes_of_either_orientation():
 
 
 def test_signal_layout3_order():
-    """The layout is points (r, v: 6 each), translational elements, rotational elements, bodies
+    """The layout is points (r, v: 6 each), translational elements, rotational elements (5 each:
+    elements.FAMILY_OUTPUTS), bodies
     (quaternion, Euler angles, ω: 10 each), then energy and constraint_residual (the order
     signal_values3 writes)."""
     mech = _load(ROOT / "scenarios" / "two_bar_2d_as_3d.toml", True)
@@ -448,8 +449,8 @@ def test_signal_layout3_order():
                           f"{first}.v[3]"]
     assert layout[-2:] == ["energy", "constraint_residual"]
     bodies = 10 * len(mech.body_names)
-    assert layout[-5 - bodies:-2 - bodies] == ["kr.phi_rel", "kr.w_rel", "kr.tau"]
+    assert layout[-7 - bodies:-2 - bodies] == ["kr.phi_rel", "kr.w_rel", "kr.tau", "kr.power", "kr.energy"]
     last = mech.body_names[-1]
     assert layout[-12:-2] == [f"{last}.{x}" for x in ("q[1]", "q[2]", "q[3]", "q[4]", "euler[1]", "euler[2]",
                                                         "euler[3]", "w[1]", "w[2]", "w[3]")]
-    assert len(layout) == 6 * len(mech.point_names) + 3 * len(mech.elements) + bodies + 2
+    assert len(layout) == 6 * len(mech.point_names) + 5 * len(mech.elements) + bodies + 2

@@ -239,7 +239,8 @@ def test_describe_and_outputs_list_the_device(tmp_path):
         assert part in line, line
     names = [o["name"] for o in model.output_info()]
     assert [n for n in names if n.startswith("inerter.")] == [
-        "inerter.s_rel", "inerter.v_rel", "inerter.f", "inerter.w_flywheel", "inerter.f_friction",
+        "inerter.s_rel", "inerter.v_rel", "inerter.f", "inerter.power", "inerter.energy",
+        "inerter.w_flywheel", "inerter.f_friction",
         "inerter.f_stop", "inerter.p_loss"]
     assert model.mechanism.elements[-1].coefficient == pytest.approx(2.533e-5 * (2 * math.pi / 0.01) ** 2, rel=1e-15)
 

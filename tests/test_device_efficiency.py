@@ -454,8 +454,8 @@ def test_describe_and_outputs_list_the_efficiency(tmp_path):
     line = next(t for t in model.terms() if "device" in t)
     assert "efficiency (forward = 0.8, backward = 0.6)" in line, line
     names = [o["name"] for o in model.output_info() if o["name"].startswith("inerter.")]
-    assert names == ["inerter.s_rel", "inerter.v_rel", "inerter.f", "inerter.p_loss", "inerter.mode",
-                     "inerter.e_loss"]
+    assert names == ["inerter.s_rel", "inerter.v_rel", "inerter.f", "inerter.power", "inerter.energy",
+                     "inerter.p_loss", "inerter.mode", "inerter.e_loss"]
 
 
 # ------------------------------------------------------------------------------------------------

@@ -25,7 +25,10 @@ def test_every_kind_declares_its_law_parameters_and_outputs():
         laws = ("inertance", "force", "energy") if kind.family == elements.TRANSLATIONAL else ("torque", "energy")
         for law in laws:
             assert callable(getattr(module, law).py_func), (name, law)
-        assert len(kind.outputs) == 3
+        family = (("s_rel", "v_rel", "f") if kind.family == elements.TRANSLATIONAL else ("phi_rel", "w_rel", "tau"))
+        assert tuple(suffix for suffix, _, _ in kind.outputs) == family + ("power", "energy"), name
+        assert dict((s, u) for s, u, _ in kind.outputs)["power"] == "W", name
+        assert dict((s, u) for s, u, _ in kind.outputs)["energy"] == "J", name
 
 
 def _row(k, free=0.0, centripetal=True):

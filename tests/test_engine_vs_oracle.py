@@ -18,7 +18,9 @@ Three checks per scene:
   random positions (joints violated, 3D quaternions off unit length), with random times, inputs
   and Baumgarte α;
 * outputs at the same states: every signal from the kernels (`Kernel.signal_values`: points' r
-  and v, elements' s_rel, v_rel, f (tau), energy, constraint residual) against the oracle's;
+  and v, elements' s_rel, v_rel, f (tau), power and stored energy, energy, constraint residual)
+  against the oracle's (whose power is its own force times its own dL/dt, whose stored energy is
+  its own T + V);
 * a run: the compiled DOP853 loop against the oracle's DOP853 run, both at rtol 1e-12 and
   atol 1e-14, every output at every sample.
 
@@ -61,10 +63,12 @@ ACC_FLOOR = 1e-2
 
 #: Outputs at one state, in the units of the motion (an element's force divided by its
 #: coefficient: f/k in m, f/c in m/s, f/b in m/s², tau/k in rad, tau/d in rad/s, so that round-off
-#: in a length is not multiplied by a stiff spring's 1e8 N/m), relative to 1 + |value|; an
+#: in a length is not multiplied by a stiff spring's 1e8 N/m; its power and stored energy over the
+#: same coefficient), relative to 1 + |value|; an
 #: inerter's f/b = gᵀq̈ + ... carries the error of q̈ (TOL_ACC), so it is relative to
 #: 1 + |value| + max|q̈| (terminals_meet_2d without the centripetal term, at a random state: f/b =
-#: r̈·r̂ = 0.5 m/s² from terms of 10 m/s² that cancel, 4e-12 apart, 3e-13 of |q̈|).
+#: r̈·r̂ = 0.5 m/s² from terms of 10 m/s² that cancel, 4e-12 apart, 3e-13 of |q̈|), and its power
+#: f·v_rel/b, which carries that error times |v_rel|, to 1 + |value| + max|q̈|·(1 + |v_rel|).
 TOL_OUT = 1e-12
 
 #: The runs, every output at every sample, in the units of the motion (as TOL_OUT), relative to
@@ -94,13 +98,15 @@ RUN_TIME_GROUND_RECORD = 0.5
 #: plumbing, not the elements' physics), the small-displacement inerter law in 2D and 3D (the
 #: oracle differentiates s = ê0·r on Jets), and 3D rotational springs and a damper on spherical
 #: joints, about a vertical and a tilted axis (tests/data/twisted_pair_3d.toml): the relative
-#: rotations swing off the axes, where the angle is the twist about the axis.
+#: rotations swing off the axes, where the angle is the twist about the axis; and a planar
+#: rotational damper beside two rotational springs under gravity (tests/data/rotational_pair_2d.toml).
 EXTRA_CASES = [("gimbal_lock_3d", ROOT / "scenarios" / "gimbal_lock_3d.toml", {"scene.orientation": "euler_zxz"}),
                ("portal_frame_brace_2d-small", ROOT / "scenarios" / "portal_frame_brace_2d.toml",
                 {"effects.small_displacement": True, "drift0": 0.2}),
                ("double_pendulum_3d-small", ROOT / "scenarios" / "double_pendulum_3d.toml",
                 {"effects.small_displacement": True}),
-               ("twisted_pair_3d", ROOT / "tests" / "data" / "twisted_pair_3d.toml", {})]
+               ("twisted_pair_3d", ROOT / "tests" / "data" / "twisted_pair_3d.toml", {}),
+               ("rotational_pair_2d", ROOT / "tests" / "data" / "rotational_pair_2d.toml", {})]
 
 
 @dataclass(frozen=True)
@@ -267,7 +273,8 @@ def _output_scale(model):
     coef = {}
     for e in model.mechanism.elements:
         if e.coefficient > 0:
-            coef[f"{e.name}.tau" if e.kind.startswith("rotational") else f"{e.name}.f"] = e.coefficient
+            force = "tau" if e.kind.startswith("rotational") else "f"
+            coef.update({f"{e.name}.{suffix}": e.coefficient for suffix in (force, "power", "energy")})
         spec = model.scene.elements[e.name]
         if getattr(spec, "device", None) is not None:
             coef.update(device_scales(spec))
@@ -358,17 +365,25 @@ def test_accelerations_equal_the_oracles(reference, case, path):
 @pytest.mark.parametrize("case, path", PARAMS)
 def test_outputs_equal_the_oracles(reference, case, path):
     """Every output (points' r and v; elements' s_rel, v_rel and f, or phi_rel, w_rel and tau, the
-    inerter's f with its acceleration term; energy; constraint residual) from the engine equals the
-    oracle's at the states of `_states` (TOL_OUT, forces over their coefficients)."""
+    inerter's f with its acceleration term, power and stored energy; energy; constraint residual)
+    from the engine equals the oracle's at the states of `_states` (TOL_OUT, forces, powers and
+    energies over their coefficients)."""
     ref = reference(case)
     engine = Engine(ref.model, path)
     names = ref.model.signals.names
-    inerters = np.array([name in {f"{e.name}.f" for e in ref.model.mechanism.inerters} for name in names])
+    index = {name: k for k, name in enumerate(names)}
+    inerter_names = [e.name for e in ref.model.mechanism.inerters]
+    forces = np.array([name in {f"{e}.f" for e in inerter_names} for name in names])
+    # an inerter's power column, with its v_rel column: f·v_rel carries the error of q̈ times |v_rel|
+    powers = [(index[f"{e}.power"], index[f"{e}.v_rel"]) for e in inerter_names]
     for s in ref.states:
         a = engine.outputs(*s) / ref.scale
         b = ref.oracle.signals.evaluate(*s) / ref.scale
         qdd = ref.oracle.mechanism.accelerations(*s)[0]
-        dev = np.abs(a - b) / (1.0 + np.abs(b) + inerters * float(np.max(np.abs(qdd))))
+        carried = forces.astype(float)
+        for k, kv in powers:
+            carried[k] = 1.0 + abs(b[kv])
+        dev = np.abs(a - b) / (1.0 + np.abs(b) + carried * float(np.max(np.abs(qdd))))
         k = int(np.argmax(dev))
         assert dev[k] <= TOL_OUT, (case.id, "t =", s[0], names[k], a[k], b[k])
 

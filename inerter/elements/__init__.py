@@ -59,7 +59,7 @@ that only the steps are new):
    ``tests/test_adding_a_kind.py`` takes this example from this docstring and follows steps 1 and 2
    in a copy of the package, then checks the numpy path against a closed form and step 3's refusal.
 
-A kind may also report outputs beyond its family's three: a law ``extra_outputs(row, L, Ldot, an,
+A kind may also report outputs beyond its family's (:data:`FAMILY_OUTPUTS`): a law ``extra_outputs(row, L, Ldot, an,
 perp2, gq, x, out, k)`` (gq = gᵀq̈ at the solved accelerations, x its internal states) that writes
 them at ``out[k]``... and returns the index after them, and
 ``extra_output_names(spec)`` that names them for a scene element (the inerter's device,
@@ -81,7 +81,8 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from inerter.elements.base import ROTATIONAL, TRANSLATIONAL, ElementKind, Parameter  # noqa: F401
+from inerter.elements.base import (  # noqa: F401
+    FAMILY_OUTPUTS, FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, ElementKind, Parameter, output_suffixes)
 
 _NOT_KINDS = {"base", "layout", "dispatch", "generate", "device", "device_inertia", "terminals", "winding"}
 
@@ -108,8 +109,8 @@ def translational(name: str) -> bool:
 
 
 def outputs(spec) -> tuple[tuple[str, str, str], ...]:
-    """(suffix, unit, description) of every output of scene element `spec`: its family's three
-    and, where its kind has them (an inerter's device), those its law writes after them
+    """(suffix, unit, description) of every output of scene element `spec`: its family's
+    (:data:`FAMILY_OUTPUTS`) and, where its kind has them (an inerter's device), those its law writes after them
     (``extra_outputs``, named by the module's ``extra_output_names(spec)``)."""
     module = MODULE[spec.type]
     extra = getattr(module, "extra_output_names", None)

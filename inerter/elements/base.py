@@ -100,12 +100,34 @@ class ElementKind:
     @property
     def outputs(self) -> tuple[tuple[str, str, str], ...]:
         """(suffix, unit, description) of the outputs every element of the family reports."""
-        if self.family == TRANSLATIONAL:
-            return (("s_rel", "m", "distance between the terminals"),
+        return FAMILY_OUTPUTS[self.family]
+
+
+#: (suffix, unit, description) of the outputs every element of a family reports, in the order the
+#: kernels write them (``E.s_rel``...). ``power`` is what the element absorbs from the mechanism,
+#: force times rate (f·v_rel, τ·ω_rel: positive where it takes energy out of the bodies, the
+#: conservative and non-conservative power of Drake's force elements together); ``energy`` is what
+#: it stores, the terms it adds to the mechanism's energy (a spring's ½k(L − L0)², an inerter's
+#: ½bL̇² and its device's, Sec. 2.2; a damper's 0), so that d(energy)/dt = power for a conservative
+#: element (an inerter with the centripetal term of Eq. 9; not Eq. 8's, whose force misses it).
+FAMILY_OUTPUTS = {
+    TRANSLATIONAL: (("s_rel", "m", "distance between the terminals"),
                     ("v_rel", "m/s", "rate of change of the terminal distance"),
-                    ("f", "N", "axial force, tension positive"))
-        return (("phi_rel", "rad", "relative angle"), ("w_rel", "rad/s", "relative angular velocity"),
-                ("tau", "N.m", "torque (restoring positive)"))
+                    ("f", "N", "axial force, tension positive"),
+                    ("power", "W", "power absorbed from the mechanism, f·v_rel"),
+                    ("energy", "J", "energy stored in the element")),
+    ROTATIONAL: (("phi_rel", "rad", "relative angle"), ("w_rel", "rad/s", "relative angular velocity"),
+                 ("tau", "N.m", "torque (restoring positive)"),
+                 ("power", "W", "power absorbed from the mechanism, tau·w_rel"),
+                 ("energy", "J", "energy stored in the element"))}
+
+#: The outputs of FAMILY_OUTPUTS computed from the force, which an inerter's reads from q̈.
+FORCE_OUTPUTS = ("f", "power", "tau")
+
+
+def output_suffixes(family) -> tuple[str, ...]:
+    """The suffixes of the family's outputs (``E.s_rel``, ...), in the kernels' order."""
+    return tuple(suffix for suffix, _, _ in FAMILY_OUTPUTS[family])
 
 
 @law

@@ -56,7 +56,7 @@ from inerter.common.errors import SimulationError
 from inerter.engine.simulation import Run, Stepper, jumps
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
-from inerter.elements import device, layout
+from inerter.elements import FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
 from inerter.model.mechanism import DEPENDENT_RATIO, wound_from
@@ -457,8 +457,8 @@ def signal_layout(flat) -> list[str]:
         return signal_layout3(flat)
     names = [f"{p}.{x}" for p in flat["point_names"] for x in ("r[1]", "r[2]", "v[1]", "v[2]")]
     names += [f"{e}.{x}" for e, extra in zip(flat["el_names"], flat["el_extra"])
-              for x in ("s_rel", "v_rel", "f", *extra)]
-    names += [f"{e}.{x}" for e in flat["rot_names"] for x in ("phi_rel", "w_rel", "tau")]
+              for x in (*output_suffixes(TRANSLATIONAL), *extra)]
+    names += [f"{e}.{x}" for e in flat["rot_names"] for x in output_suffixes(ROTATIONAL)]
     return names + ["energy", "constraint_residual"]
 
 
@@ -686,7 +686,7 @@ class Kernel:
     def signal_reads(self, index):
         """(needs the accelerations, the state components it reads) of the signal at `index`: a
         point's coordinate reads its body's coordinates (and velocities, for a velocity); an
-        element's force needs q̈ where its law has an inertance, and a screw efficiency's mode and
+        element's force and power need q̈ where its law has an inertance, and a screw efficiency's mode and
         loss need it; any other signal reads the whole state."""
         flat = self.flat
         width = 2 * flat["dim"]
@@ -710,7 +710,7 @@ class Kernel:
         name = self._layout[index]
         need = False
         for e, (row_int, row_real) in enumerate(zip(flat["el_int"], flat["el_real"])):
-            if name == f"{flat['el_names'][e]}.f":
+            if name in [f"{flat['el_names'][e]}.{suffix}" for suffix in FORCE_OUTPUTS]:
                 need = adds_mass(row_int, row_real)
             elif device.mode_solved.py_func(row_real) and name in (f"{flat['el_names'][e]}.p_loss",
                                                                    f"{flat['el_names'][e]}.mode"):
@@ -1513,10 +1513,11 @@ def _status_text(kernel, status, method, h, y_last, t_last, max_steps):
     names = kernel.flat["el_names"]
     if status == 5 and names:
         q, v, z = (part.copy() for part in kernel.split(y_last))
-        raw = np.empty(len(signal_layout(kernel.flat)))
+        layout_names = signal_layout(kernel.flat)
+        raw = np.empty(len(layout_names))
         _k.signal_values(q, v, z, np.zeros(kernel.n + kernel.m), kernel.params, raw)
-        first = 2 * kernel.flat["dim"] * len(kernel.flat["point_names"])
-        lengths = raw[first:first + 3 * len(names):3]
+        where = {name: i for i, name in enumerate(layout_names)}
+        lengths = raw[[where[f"{name}.s_rel"] for name in names]]
         closest = float(np.min(lengths))
         which = [name for name, L in zip(names, lengths) if L <= closest * (1.0 + 1e-9)]
         spec = kernel.mech.scene.elements[which[0]]

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from inerter.elements import layout
+from inerter.elements import ROTATIONAL, TRANSLATIONAL, layout, output_suffixes
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
 from inerter.model.joints import Coincident, SpatialJoint
 
@@ -156,8 +156,8 @@ def signal_layout3(flat) -> list[str]:
     axes = ("r[1]", "r[2]", "r[3]", "v[1]", "v[2]", "v[3]")
     names = [f"{p}.{x}" for p in flat["point_names"] for x in axes]
     names += [f"{e}.{x}" for e, extra in zip(flat["el_names"], flat["el_extra"])
-              for x in ("s_rel", "v_rel", "f", *extra)]
-    names += [f"{e}.{x}" for e in flat["rot_names"] for x in ("phi_rel", "w_rel", "tau")]
+              for x in (*output_suffixes(TRANSLATIONAL), *extra)]
+    names += [f"{e}.{x}" for e in flat["rot_names"] for x in output_suffixes(ROTATIONAL)]
     names += [f"{b}.{x}" for b in flat["body_names"] for x in BODY_OUTPUTS]
     return names + ["energy", "constraint_residual"]
 

@@ -738,8 +738,9 @@ def signal_values(q, v, z, qdd, P, out):
 @njit(cache=True, inline="always")
 def _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez, gq, width,
                      energy, out, k):
-    """Translational element e's outputs from out[k] on (s_rel, v_rel, the axial force F and its
-    kind's extra outputs) and its energy added to `energy`, in 2D (z components 0.0) and 3D, from
+    """Translational element e's outputs from out[k] on (s_rel, v_rel, the axial force F, the power
+    F L̇ it absorbs, the energy it stores, its kind's extra outputs: base.FAMILY_OUTPUTS) and that
+    energy added to `energy`, in 2D (z components 0.0) and 3D, from
     its terminals' geometry (:func:`_element`, :func:`_element3`) and gq = gᵀq̈ at the accelerations
     (`width`: velocity coordinates per body, 3 or 6). Returns (energy, the next k)."""
     pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
@@ -748,28 +749,43 @@ def _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_,
         # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 17-19, 25): the inertance part of F = b d²L/dt², Eq. (9) / (8)
         F += b * gq
     x = _states(z, el_int, e)
+    stored = law.energy(kind, el_real[e], L, along)
     if rarely(el_int[e, STATES] != 0):
         F += law.state_force(kind, el_real[e], L, along, x)
-        energy += law.state_energy(kind, el_real[e], L, along, x)
-    energy += law.energy(kind, el_real[e], L, along)
+        stored += law.state_energy(kind, el_real[e], L, along, x)
     if rarely(el_real[e, INERTIA] != 0.0):
-        energy += _device_energy(q, v, e, pbody, ploc, el_int, el_real, width)
+        stored += _device_energy(q, v, e, pbody, ploc, el_int, el_real, width)
     out[k] = terminals.reported_distance(el_real[e], L, distance)
     out[k + 1] = along
     out[k + 2] = F
-    k += 3
+    out[k + 3] = F * along
+    out[k + 4] = stored
+    k += 5
     if rarely(el_real[e, DEVICE] != 0.0):                          # a device's outputs
         _, an, perp2 = axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
         k = law.extra_outputs(kind, el_real[e], L, along, an, perp2, gq, x, out, k)
-    return energy, k
+    return energy + stored, k
+
+
+@njit(cache=True, inline="always")
+def _rotational_outputs(kind, row, phi, w, tau, energy, out, k):
+    """A rotational element's outputs from out[k] on (φ_rel, ω_rel, τ, the power τ ω_rel it absorbs,
+    the energy it stores: base.FAMILY_OUTPUTS), in 2D and 3D; returns (the next k, `energy` plus its)."""
+    stored = law.rotational_energy(kind, row, phi, w)
+    out[k] = phi
+    out[k + 1] = w
+    out[k + 2] = tau
+    out[k + 3] = tau * w
+    out[k + 4] = stored
+    return k + 5, energy + stored
 
 
 @njit(cache=True)
 def signal_values2(q, v, z, qdd, P, out):
     """Every point's position and velocity (4 per point), every translational element's s_rel,
-    v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd) and its
-    kind's extra outputs (an inerter's device: ``signal_layout``), every
-    rotational element's φ_rel, ω_rel and torque (3 each), the energy (as ``Mechanism.energy``)
+    v_rel, axial force (an inerter's from Eq. 9 or 8 at the accelerations qdd), power and stored energy
+    and its kind's extra outputs (an inerter's device: ``signal_layout``), every
+    rotational element's φ_rel, ω_rel, torque, power and energy, the energy (as ``Mechanism.energy``)
     and the largest constraint residual of a 2D scene. Returns a status code."""
     mass, pbody, ploc, el_int, el_real = P[MASS], P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     rot_int, rot_real, jt_int, gravity, dims = P[ROT_INT], P[ROT_REAL], P[JT_INT], P[GRAVITY], P[DIMS]
@@ -800,11 +816,8 @@ def signal_values2(q, v, z, qdd, P, out):
     for e in range(rot_int.shape[0]):
         ia, ib, phi, w = _rotational2(q, v, e, rot_int)
         kind = rot_int[e, ROT_KIND]
-        energy += law.rotational_energy(kind, rot_real[e], phi, w)
-        out[k] = phi
-        out[k + 1] = w
-        out[k + 2] = law.torque(kind, rot_real[e], phi, w)
-        k += 3
+        k, energy = _rotational_outputs(kind, rot_real[e], phi, w, law.torque(kind, rot_real[e], phi, w), energy,
+                                        out, k)
     out[k] = energy
     out[k + 1] = constraint_residual2(q, P) if jt_int.shape[0] else 0.0
     return status
@@ -1816,9 +1829,9 @@ def wind3(q, v, P):
 @njit(cache=True)
 def signal_values3(q, v, z, qdd, P, out):
     """Every point's position and velocity (6 per point), every translational element's s_rel,
-    v_rel and axial force (3 each; an inerter's from Eq. 9 or 8 at the accelerations qdd) and its
-    kind's extra outputs (an inerter's device: ``signal_layout3``), every rotational element's
-    φ_rel, ω_rel and torque (3 each), every body's orientation and angular velocity
+    v_rel, axial force (an inerter's from Eq. 9 or 8 at the accelerations qdd), power and stored energy
+    and its kind's extra outputs (an inerter's device: ``signal_layout3``), every rotational element's
+    φ_rel, ω_rel, torque, power and energy, every body's orientation and angular velocity
     (BODY_OUTPUTS3 each), the energy (as ``Mechanism.energy``) and the largest constraint
     residual. Returns a status code."""
     mass, pbody, ploc, el_int, el_real = P[MASS], P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
@@ -1863,11 +1876,7 @@ def signal_values3(q, v, z, qdd, P, out):
                                      ex, ey, ez, gq, 6, energy, out, k)
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
-        energy += law.rotational_energy(rot_int[e, ROT_KIND], rot_real[e], phi, w)
-        out[k] = phi
-        out[k + 1] = w
-        out[k + 2] = tau
-        k += 3
+        k, energy = _rotational_outputs(rot_int[e, ROT_KIND], rot_real[e], phi, w, tau, energy, out, k)
     for b in range(nb):
         k = _body_outputs3(q, v, b, dims, out, k)
     out[k] = energy

@@ -1,11 +1,14 @@
 """Output signals, named and united as a Modelica user expects (the FMU uses the same names).
 
 Points: ``P.r[i]`` (m), ``P.v[i]`` (m/s). Translational elements: ``E.s_rel`` (m, terminal
-distance), ``E.v_rel`` (m/s, its rate), ``E.f`` (N, axial force, tension positive); an inerter's
+distance), ``E.v_rel`` (m/s, its rate), ``E.f`` (N, axial force, tension positive), ``E.power``
+(W, f·v_rel: what it absorbs from the mechanism), ``E.energy`` (J, what it stores: its terms of
+``energy``); an inerter's
 device adds ``E.w_flywheel`` (rad/s), ``E.f_friction``, ``E.f_fluid``, ``E.f_stop`` (N),
 ``E.p_loss`` (W), ``E.s_series`` (m), ``E.engaged`` (1) and ``E.e_loss`` (J), those of its effects
 (:mod:`inerter.elements.device`; the last three read the element's internal states). Rotational
-elements: ``E.phi_rel`` (rad), ``E.w_rel`` (rad/s), ``E.tau`` (N.m). 3D bodies: ``B.q[i]`` (unit
+elements: ``E.phi_rel`` (rad), ``E.w_rel`` (rad/s), ``E.tau`` (N.m), ``E.power`` (W, τ·ω_rel),
+``E.energy`` (J). 3D bodies: ``B.q[i]`` (unit
 quaternion w, x, y, z), ``B.euler[i]`` (rad, the scene's ``euler_sequence``), ``B.w[i]`` (rad/s,
 angular velocity in the global frame). Mechanism: ``energy`` (J), ``constraint_residual`` (largest
 |C_i| of the joint constraints, m or rad). Derived outputs (the scene's ``[outputs.derived]``):
@@ -39,20 +42,23 @@ class Signals:
                         False, lambda t, q, v, a, z, p=point: np.concatenate(p.evaluate(q, v)[:2]))
         for e in mech.elements:
             spec = elements.outputs(mech.scene.elements[e.name])
+            family = len(elements.KINDS[e.kind].outputs)
             # an element whose law has an inertance reports a force that depends on q̈
             needs_a = e.kind == "inerter" or (hasattr(e, "inertance") and e.inertance(0.0) != 0.0)
-            # of its three outputs, only the force reads q̈ (the distance and its rate do not); a screw
-            # efficiency's mode and loss are those of the solved L̈ (inerter.elements.device)
+            # of its family's outputs, only the force and the power read q̈ (the distance, its rate and
+            # the stored energy do not); a screw efficiency's mode and loss are those of the solved L̈
+            # (inerter.elements.device)
             efficient = e in mech.efficient
             self._group([(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}") for suffix, unit, text in spec],
                         needs_a, lambda t, q, v, a, z, e=e, k=len(spec): (
                             e.outputs(q, v, a, z) if getattr(e, "n_states", 0) else e.outputs(q, v, a))[:k],
-                        reads=(False, False, needs_a) + tuple(efficient and suffix in ("p_loss", "mode")
-                                                              for suffix, _, _ in spec[3:]))
+                        reads=tuple(needs_a and suffix in elements.FORCE_OUTPUTS for suffix, _, _ in spec[:family])
+                        + tuple(efficient and suffix in ("p_loss", "mode") for suffix, _, _ in spec[family:]))
         if mech.dim == 3:
             for bname in mech.body_names:
                 self._body(mech, bname)
-        self._group([("energy", "J", "kinetic + potential energy, with ½·b·(dL/dt)² per inerter")], False,
+        self._group([("energy", "J", "kinetic + potential energy: the bodies' and every element's E.energy "
+                                "(½·b·(dL/dt)² per inerter)")], False,
                     lambda t, q, v, a, z: (mech.energy(q, v, z) if len(mech.z0) else mech.energy(q, v),))
         self._group([("constraint_residual", "m", "largest |C_i(q)| of the joint constraints (m or rad)")], False,
                     lambda t, q, v, a, z: (mech.constraint_residual(q),))

@@ -124,7 +124,7 @@ def force_rows(scene, pidx, dim) -> tuple[list, list, list, list, list]:
 def element_tables(mech, pidx, rotational) -> dict:
     """The element tables of a mechanism: ``el_int``/``el_real`` rows of its translational elements
     and ``rot_int``/``rot_real`` rows of its rotational ones, with their names, in scene order, and
-    ``el_extra``: each translational element's outputs beyond s_rel, v_rel and f (a device's), and
+    ``el_extra``: each translational element's outputs beyond its family's (a device's), and
     ``n_internal``: the number of internal states z (y = [q, v, z]), each element's at its
     ``el_int[e, STATE]`` (:func:`internal_states`). ``rotational(spec, element)`` gives a
     rotational element's (body a, body b, free angle, extra columns) as the kernels of its
@@ -152,7 +152,7 @@ def element_tables(mech, pidx, rotational) -> dict:
         out[prefix + "_real"].append(row_real)
         out[prefix + "_names"].append(e.name)
         if prefix == "el":
-            out["el_extra"].append([suffix for suffix, _, _ in elements.outputs(e)[3:]])
+            out["el_extra"].append([suffix for suffix, _, _ in elements.outputs(e)[len(elements.FAMILY_OUTPUTS[elements.TRANSLATIONAL]):]])
     out["n_internal"] = offset
     return out
 

@@ -4,7 +4,8 @@
 An element adds to the system mass matrix M (the factor of gᵀq̈ in its law, b for an inerter: M_I
 of Eq. 33) and to the generalised force vector Q, and reports its outputs (Modelica names:
 ``s_rel``, ``v_rel``, ``f`` for translational elements, tension positive; ``phi_rel``, ``w_rel``,
-``tau`` for rotational ones).
+``tau`` for rotational ones; then ``power``, the force times the rate, and ``energy``, what the
+element adds to :meth:`Mechanism.energy`: :data:`inerter.elements.FAMILY_OUTPUTS`).
 
 Translational elements act along the line between their terminals (uniaxial, Sec. 2.2) and enter
 the equations through the generalised force of Eq. (29), Q = −F Hᵀ r̂.
@@ -88,7 +89,7 @@ class TranslationalElement:
             row[layout.DIRECTION:layout.DIRECTION + len(self.slider_axis)] = self.slider_axis
         self.row = row
         self.turns = bool(terminals.turns_with_a.py_func(row))     # its line turns with a's body
-        # the kind's outputs beyond s_rel, v_rel, f (a device's), by its law extra_outputs
+        # the kind's outputs beyond its family's (a device's), by its law extra_outputs
         self.extra = len(device.outputs()) if device is not None else 0
         self._extra = getattr(law, "extra_outputs", None)
         self._extra = self._extra.py_func if self._extra is not None and self.extra else None
@@ -183,12 +184,13 @@ class TranslationalElement:
         return F
 
     def outputs(self, q, v, a, z=None):
-        """(s_rel, v_rel, f) at accelerations `a` (and internal states z), then the kind's extra
-        outputs (a device's)."""
+        """(s_rel, v_rel, f, power f·v_rel, stored energy) at accelerations `a` (and internal states
+        z), then the kind's extra outputs (a device's)."""
         geo = self.geometry(q, v)
         L, Ldot = geo[4], float(geo[1] @ geo[5])
         distance = reported_distance(self.row, L, math.sqrt(float(geo[0] @ geo[0])))
-        values = (distance, Ldot, self.force(q, v, a, geo, z))
+        F = self.force(q, v, a, geo, z)
+        values = (distance, Ldot, F, F * Ldot, self.stored(q, v, z))
         if self._extra is None:
             return values
         extra = np.zeros(self.extra)
@@ -302,6 +304,12 @@ class TranslationalElement:
         geo = self.geometry(q, v)
         return self._energy(self.row, geo[4], float(geo[1] @ geo[5]))
 
+    def stored(self, q, v, z=None) -> float:
+        """The energy it adds to :meth:`Mechanism.energy` (its ``energy`` output): its law's, its
+        device block's kinetic and gravitational energy, its internal states' (z None: zero)."""
+        E = self.kinetic(q, v) + self.potential(q)
+        return E + self.state_energy(q, v, z) if self.n_states else E
+
     def potential(self, q):
         """The part of :meth:`energy` that does not depend on the velocities."""
         return self._energy(self.row, self.length(q), 0.0)
@@ -350,8 +358,10 @@ class RotationalElement:
         return None
 
     def outputs(self, q, v, a):
+        """(φ_rel, ω_rel, τ, power τ ω_rel, stored energy)."""
         phi, w = self.relative(q, v)
-        return phi, w, self._torque(self.row, phi, w)
+        tau = self._torque(self.row, phi, w)
+        return phi, w, tau, tau * w, self._energy(self.row, phi, w)
 
     def kinetic(self, q, v):
         return 0.0
@@ -420,8 +430,10 @@ class SpatialRotationalElement:
         pass
 
     def outputs(self, q, v, a):
+        """(φ_rel, ω_rel, τ, power τ ω_rel, stored energy)."""
         geo = self.geometry(q, v)
-        return geo[0], geo[1], self.torque(q, v, geo)
+        tau = self.torque(q, v, geo)
+        return geo[0], geo[1], tau, tau * geo[1], self._energy(self.row, geo[0], geo[1])
 
     def kinetic(self, q, v):
         return 0.0

@@ -463,14 +463,18 @@ class OracleElement:
             Q[self.probe.dofs] += self.bodies.terms(self.probe, q, v)[1]
 
     def outputs(self, q, v, a):
+        """(distance, dL/dt, F, power, stored energy), then a device's outputs. The power is the
+        force times dL/dt, the rate of the work it takes from the bodies (−Q·q̇ with Q = −F∇L);
+        the stored energy is this element's T + V (:meth:`kinetic`, :meth:`potential`)."""
         L, rdot = self.probe.evaluate(q, v)
         mass, rest = self._force_parts(L, rdot)
         F = rest + (mass * float(L.g @ a[self.probe.dofs]) if mass else 0.0)   # (no q̈ where no inerter)
         distance = L.v if self.fixed_direction is None else self.probe.distance(q)
+        stored = self.kinetic(q, v) + self.potential(q)
         if self.device is None:
-            return distance, L.d1, F
+            return distance, L.d1, F, F * L.d1, stored
         F += self.device.force(L.v, L.d1)
-        return (distance, L.d1, F) + self.device.outputs(L.v, L.d1)
+        return (distance, L.d1, F, F * L.d1, stored) + self.device.outputs(L.v, L.d1)
 
     def length(self, q):
         return self.probe.evaluate(q, np.zeros_like(q))[0].v

@@ -85,8 +85,10 @@ class OracleRotational:
         pass
 
     def outputs(self, q, v, a):
+        """(φ, φ̇, torque, power torque·φ̇, stored energy V: a damper's 0)."""
         phi = self.angle(q, v)
-        return phi.v, phi.d1, self._torque(phi)
+        tau = self._torque(phi)
+        return phi.v, phi.d1, tau, tau * phi.d1, self.kinetic(q, v) + self.potential(q)
 
     def kinetic(self, q, v):
         return 0.0

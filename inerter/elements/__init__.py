@@ -83,7 +83,8 @@ import pkgutil
 
 from inerter.elements.base import ROTATIONAL, TRANSLATIONAL, ElementKind, Parameter  # noqa: F401
 
-_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device", "device_inertia", "terminals", "winding"}
+_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device", "device_inertia", "joint_rows", "terminals",
+              "winding"}
 
 
 def _kind_modules():

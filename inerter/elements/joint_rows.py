@@ -7,7 +7,7 @@ These are scalar functions compiled by :func:`~inerter.elements.base.law`: the e
 coefficients they return into the augmented matrix of Eq. 33, and the readable joints
 (:mod:`inerter.model.joints`) run the same definitions uncompiled and place them into their matrices.
 
-The rows are the standard conditions on points and body-fixed vectors (Nikravesh 1988, Ch. 11;
+The rows are the standard conditions on points and body-fixed vectors (Nikravesh 1988;
 Shabana 2009, the dot-1 and dot-2 constraints, as cited by the paper). A body-fixed vector is
 s = A s̄ (A: the body's rotation, a row-major 9-tuple; ω̄: its angular velocity in the body frame,
 Eq. 22), so ṡ = A(ω̄ × s̄) and a small body-frame rotation δφ̄ moves it by A(δφ̄ × s̄): a row
@@ -59,8 +59,8 @@ def body_vector(A, wx, wy, wz, sx, sy, sz):
 
 @law
 def dot1_row(Aa, wax, way, waz, sax, say, saz, Ab, wbx, wby, wbz, sbx, sby, sbz):
-    """The dot-1 row s_a·s_b = 0 (s_a = A_a s̄_a, s_b = A_b s̄_b; Shabana 2009, Nikravesh 1988
-    Eq. 11.20): (C, its coefficients over ω̄_a, s̄_a × A_aᵀ s_b, and over ω̄_b, s̄_b × A_bᵀ s_a, γ)
+    """The dot-1 row s_a·s_b = 0 (s_a = A_a s̄_a, s_b = A_b s̄_b; Shabana 2009,
+    Nikravesh 1988): (C, its coefficients over ω̄_a, s̄_a × A_aᵀ s_b, and over ω̄_b, s̄_b × A_bᵀ s_a, γ)
     with γ = −(s̈_a·s_b + 2 ṡ_a·ṡ_b + s_a·s̈_b)."""
     a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = body_vector(Aa, wax, way, waz, sax, say, saz)
     b0, b1, b2, bd0, bd1, bd2, bb0, bb1, bb2 = body_vector(Ab, wbx, wby, wbz, sbx, sby, sbz)
@@ -74,7 +74,7 @@ def dot1_row(Aa, wax, way, waz, sax, say, saz, Ab, wbx, wby, wbz, sbx, sby, sbz)
 
 @law
 def dot2_row(Aa, wax, way, waz, sax, say, saz, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz):
-    """The dot-2 row s_a·r = 0, r = r_b − r_a (Shabana 2009, Nikravesh 1988 Eq. 11.21):
+    """The dot-2 row s_a·r = 0, r = r_b − r_a (Shabana 2009, Nikravesh 1988):
     (C, the translational coefficient s_a (on H: −s_aᵀH_a + s_aᵀH_b), the coefficient over ω̄_a
     of s_a's turn, s̄_a × A_aᵀ r, γ) with γ = −(s̈_a·r + 2 ṡ_a·ṙ + s_a·a_n)."""
     a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = body_vector(Aa, wax, way, waz, sax, say, saz)

@@ -1162,8 +1162,8 @@ def signal_history(times, states, inputs, alpha, need_acc, P, out):
 # (``Mechanism.q_index``, ``v_index``); the arrays, with the 3D meaning of each column, come from
 # :func:`inerter.engine.compiled_spatial.flatten3`. Point kinematics (Sec. 3.2, Eqs. 15, 22, 25):
 # r = R + A ū, ṙ = Ṙ + A(ω × ū), r̈ = R̈ − A ũ ω̇ + A(ω × (ω × ū)). A global vector s projected on a
-# point's H = [I, −A ũ] gives sᵀH = [sᵀ, (ū × Aᵀs)ᵀ]; :func:`_wcol` computes the second part, which
-# is also the ω-columns of ∂(s·(A s̄))/∂ω of the dot-1 and dot-2 joint rows.
+# point's H = [I, −A ũ] gives sᵀH = [sᵀ, (ū × Aᵀs)ᵀ]; :func:`_wcol` computes the second part
+# (joint_rows.turned_coefficient, which the joint rows' laws take their ω̄ coefficients from).
 
 # Joint kinds (column JOINT_KIND of ``jt_int`` in 3D; every kind is evaluated from its row counts, columns
 # COINCIDENT, DOT1_ROWS, DOT2_ROWS and SCREW_ROW).
@@ -1493,8 +1493,9 @@ def _add_point_forces3(t, q, v, inputs, P, gen, agx, agy, agz):
 
 @njit(cache=True, inline="always")
 def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
-    """Joint jn's rows from `row` on (joints.py): C_v (and its transpose) and γ − 2αĊ − α²C,
-    Ċ = C_v v, for its coincident, dot-1 and dot-2 rows. Returns the next row."""
+    """Joint jn's rows from `row` on (model/joints.py): C_v (and its transpose) and γ − 2αĊ − α²C,
+    Ċ = C_v v, for its coincident, dot-1 and dot-2 rows (joint_rows.dot1_row, dot2_row) and its
+    screw row (:func:`_screw3`). Returns the next row."""
     pbody, ploc, jt_int, jt_real = P[PBODY], P[PLOC], P[JT_INT], P[JT_REAL]
     pa = jt_int[jn, POINT_A]
     pb = jt_int[jn, POINT_B]

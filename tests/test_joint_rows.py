@@ -58,7 +58,9 @@ def _derivatives(f):
 
 def _bodies(seed):
     rng = np.random.default_rng(seed)
-    make = lambda: Body(rng.normal(size=3), _rotation(rng.normal(size=3)), rng.normal(size=3), rng.normal(size=3))
+
+    def make():
+        return Body(rng.normal(size=3), _rotation(rng.normal(size=3)), rng.normal(size=3), rng.normal(size=3))
     return rng, make(), make()
 
 
@@ -150,7 +152,8 @@ def test_2d_slider_and_screw_rows_rates_are_the_derivatives_of_their_residuals(s
         return Rb + t * Vb + _planar(thb + t * wb, ub) - Ra - t * Va - _planar(tha + t * wa, ua)
 
     r = r_at(0.0)
-    perp = lambda x: np.array((-x[1], x[0]))
+    def perp(x):
+        return np.array((-x[1], x[0]))
     rdot = Vb + wb * perp(_planar(thb, ub)) - Va - wa * perp(_planar(tha, ua))
     an = -wb * wb * _planar(thb, ub) + wa * wa * _planar(tha, ua)
 

@@ -332,8 +332,10 @@ def test_scene_kinematics_match_the_closed_form_and_the_joints(path):
     closed form (`_qdot_closed_form`; the numpy Mechanism's q̇ calls the kernels' own quaternion
     rate uncompiled, so it is no reference), 1e-14 relative to max(1, |q̇|) as before; and the
     constraint residual (constraint_residual3) against the numpy Mechanism's joints
-    (inerter.model.joints, code separate from the kernels'; the oracle takes its joints from that
-    same Mechanism, so it would be the same reference), 1e-12 relative, 1e-15 absolute."""
+    (inerter.model.joints, whose rows are the kernels' own laws, inerter.elements.joint_rows, run
+    uncompiled: this checks the kernels' point kinematics and their reading of the joint tables;
+    the rows themselves are checked in tests/test_joint_rows.py; the oracle takes its joints from
+    that same Mechanism, so it would be the same reference), 1e-12 relative, 1e-15 absolute."""
     mech = _load(path, True)
     kern = Kernel3(mech)
     for _, q, v, _, _ in _states(mech, np.random.default_rng(11)):

@@ -254,8 +254,9 @@ def test_screw_joint_errors_name_the_field(tmp_path, edit, field, expected):
 def test_2d_screw_on_a_moving_rack_kernels_equal_the_oracle(tmp_path):
     """The 2D screw's rows where the rack turns (its body a pinned to the ground and swinging):
     the kernels' (kernels._screw2) against the oracle's mechanism, whose joints are the model
-    layer's (joints.Prismatic2D, code separate from the kernels') and whose element forces are
-    derived from L(q): accelerations and multipliers at random states, within 1e-12 of the largest
+    layer's (joints.Prismatic2D: the same row laws, inerter.elements.joint_rows, placed by code
+    separate from the kernels'; the rows' rates are checked in tests/test_joint_rows.py) and whose
+    element forces are derived from L(q): accelerations and multipliers at random states, within 1e-12 of the largest
     (as against the numpy Mechanism before)."""
     text = (DATA / "screw_nut_2d.toml").read_text(encoding="utf-8")
     text = text.replace('[bodies.pinion]', '[bodies.rack]\nmass = 2.0\ninertia = 0.3\nposition = [0.4, 0]\n'
@@ -282,9 +283,9 @@ def test_2d_screw_on_a_moving_rack_kernels_equal_the_oracle(tmp_path):
 
 def test_screw_joint_kernels_equal_the_oracle(tmp_path):
     """The kernels' screw row (and the rest of the explicit device's joints) against the oracle's
-    mechanism, whose joints are the model layer's (inerter.model.joints.Screw, code of its own) and
-    whose element forces are derived from L(q): accelerations and multipliers at random states of
-    the explicit 3D device, within 1e-12 of the largest (as against the numpy Mechanism before)."""
+    mechanism, whose joints are the model layer's (inerter.model.joints.Screw: the kernels' row law,
+    joint_rows.screw_row, placed by code of its own) and whose element forces are derived from
+    L(q): accelerations and multipliers at random states of the explicit 3D device, within 1e-12 of the largest (as against the numpy Mechanism before)."""
     model = inerter.load(PEND_EXPLICIT)
     mech = model.mechanism
     kernel = compiled.compile_mechanism(mech)

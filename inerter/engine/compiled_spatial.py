@@ -39,13 +39,13 @@ def _joint_rows3(mech, pidx):
             raise ValueError(f"joint {j.name!r}: {type(mj).__name__} is not a 3D joint")
         if len(dot1) > 3 or len(dot2) > 2:
             raise ValueError(f"joint {j.name!r}: more dot-1/dot-2 rows than the kernels take")
-        for k, (va, vb) in enumerate(dot1):
+        for k, (sa, sb) in enumerate(dot1):
             c = layout.DOT1 + 6 * k
-            real[c:c + 3] = va.local
-            real[c + 3:c + 6] = vb.local
-        for k, va in enumerate(dot2):
+            real[c:c + 3] = sa
+            real[c + 3:c + 6] = sb
+        for k, sa in enumerate(dot2):
             c = layout.DOT2 + 3 * k
-            real[c:c + 3] = va.local
+            real[c:c + 3] = sa
         screw = getattr(mj, "screw", None)
         if screw is not None:
             real[layout.SCREW:layout.SCREW + 3] = screw.axis

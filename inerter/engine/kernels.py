@@ -27,6 +27,8 @@ from inerter.elements import dispatch as law
 from inerter.elements.base import axial_scalars, rarely
 from inerter.elements.device import MODE_SOLVES
 from inerter.elements.inerter import settle
+from inerter.elements.joint_rows import (body_vector, dot1_row, dot2_row, screw_residual, screw_row, screw_turn_2d,
+                                         slider_rows_2d, turned_coefficient)
 from inerter.elements.winding import wound
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, COINCIDENT, DEVICE, DOT1, DOT1_ROWS, DOT2,
                                      DOT2_ROWS, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY,
@@ -330,37 +332,24 @@ def _revolute2(AB, perm, off, rhs, row, alpha, ba, bb, rx, ry, rdx, rdy, anx, an
 @njit(cache=True, inline="always")
 def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
                 ba, bb, rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby):
-    """A 2D prismatic joint's two rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0 with n = A_a n̄; a 2D
-    screw (rack and pinion, joints.Prismatic2D) turns b by ρ per unit of advance along the axis
-    t = A_a t̄ (n = t turned by +90°): its first row is θ_b − θ_a − φ0 − ρ (t·d − x₀) = 0."""
-    nbx = jt_real[jn, PRISMATIC_NORMAL]
-    nby = jt_real[jn, PRISMATIC_NORMAL + 1]
-    phi0 = jt_real[jn, PRISMATIC_PHI0]
-    rho = jt_real[jn, PRISMATIC_RATIO]
+    """A 2D prismatic joint's two rows (joint_rows.slider_rows_2d): θ_b − θ_a − φ0 = 0 and
+    n·(r_b − r_a) = 0 with n = A_a n̄, its translational coefficient n placed on the points' H and
+    its turn n⊥·r on θ_a; a 2D screw (rack and pinion, :func:`_screw2`) turns b by ρ per unit of
+    advance along the axis t = A_a t̄ (n = t turned by +90°)."""
     tha = q[3 * ba + 2] if ba >= 0 else 0.0
     thb = q[3 * bb + 2] if bb >= 0 else 0.0
     wa = v[3 * ba + 2] if ba >= 0 else 0.0
     wb = v[3 * bb + 2] if bb >= 0 else 0.0
-    c1 = thb - tha - phi0
-    cd1 = wb - wa
-    if ba >= 0:
-        c = math.cos(tha)
-        s = math.sin(tha)
-        nx = c * nbx - s * nby
-        ny = s * nbx + c * nby
-    else:
-        nx = nbx
-        ny = nby
-    npx = -ny
-    npy = nx
-    c2 = nx * rx + ny * ry
+    c1, cd1, c2, nx, ny, turn, gamma2 = slider_rows_2d(
+        ba >= 0, tha, thb, wa, wb, jt_real[jn, PRISMATIC_PHI0], jt_real[jn, PRISMATIC_NORMAL],
+        jt_real[jn, PRISMATIC_NORMAL + 1], rx, ry, rdx, rdy, anx, any_)
     cd2 = 0.0
     if ba >= 0:
         ka = 3 * ba
         _sym(AB, perm, off, row, ka + 2, -1.0)
         _sym(AB, perm, off, row + 1, ka, -nx)
         _sym(AB, perm, off, row + 1, ka + 1, -ny)
-        h2 = -(nx * tax + ny * tay) + (npx * rx + npy * ry)
+        h2 = -(nx * tax + ny * tay) + turn
         _sym(AB, perm, off, row + 1, ka + 2, h2)
         cd2 += -nx * v[ka] - ny * v[ka + 1] + h2 * v[ka + 2]
     if bb >= 0:
@@ -371,8 +360,8 @@ def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
         h2 = nx * tbx + ny * tby
         _sym(AB, perm, off, row + 1, kb + 2, h2)
         cd2 += nx * v[kb] + ny * v[kb + 1] + h2 * v[kb + 2]
-    gamma2 = -((nx * anx + ny * any_) - wa * wa * c2 + 2.0 * wa * (npx * rdx + npy * rdy))
     gamma1 = 0.0
+    rho = jt_real[jn, PRISMATIC_RATIO]
     if rho != 0.0:
         c1, cd1, gamma1 = _screw2(v, AB, perm, off, row, ba, bb, rho, jt_real[jn, PRISMATIC_ADVANCE0], nx, ny, c1, cd1,
                                   rx, ry, rdx, rdy, anx, any_, tax, tay, tbx, tby, wa)
@@ -383,15 +372,12 @@ def _prismatic2(q, v, AB, perm, off, rhs, row, alpha, jt_real, jn,
 @njit(cache=True, inline="always")
 def _screw2(v, AB, perm, off, row, ba, bb, rho, x0, nx, ny, c1, cd1, rx, ry, rdx, rdy, anx, any_,
             tax, tay, tbx, tby, wa):
-    """The 2D screw's part of its first row, −ρ (t·d − x₀) with t = (n_y, −n_x) (dt/dθ_a = n):
-    C, Ċ and γ = ρ (t·a_n − θ̇_a² t·d + 2 θ̇_a n·ḋ) (joints.Prismatic2D)."""
-    tx = ny
-    ty = -nx
-    td = tx * rx + ty * ry
-    c1 -= rho * (td - x0)
+    """The 2D screw's part of its first row, −ρ (t·d − x₀) (joint_rows.screw_turn_2d): its
+    translational coefficient t (and its turn n·d on θ_a), scaled by −ρ, placed; returns C, Ċ, γ."""
+    c1, tx, ty, turn, gamma1 = screw_turn_2d(rho, x0, c1, nx, ny, wa, rx, ry, rdx, rdy, anx, any_)
     if ba >= 0:
         ka = 3 * ba
-        h = -(-(tx * tax + ty * tay) + (nx * rx + ny * ry))
+        h = -(-(tx * tax + ty * tay) + turn)
         _sym(AB, perm, off, row, ka, rho * tx)
         _sym(AB, perm, off, row, ka + 1, rho * ty)
         _sym(AB, perm, off, row, ka + 2, rho * h)
@@ -403,7 +389,6 @@ def _screw2(v, AB, perm, off, row, ba, bb, rho, x0, nx, ny, c1, cd1, rx, ry, rdx
         _sym(AB, perm, off, row, kb + 1, -rho * ty)
         _sym(AB, perm, off, row, kb + 2, -rho * h)
         cd1 -= rho * (tx * v[kb] + ty * v[kb + 1] + h * v[kb + 2])
-    gamma1 = rho * ((tx * anx + ty * any_) - wa * wa * td + 2.0 * wa * (nx * rdx + ny * rdy))
     return c1, cd1, gamma1
 
 
@@ -658,18 +643,14 @@ def constraint_residual2(q, P):
         else:
             tha = q[3 * ba + 2] if ba >= 0 else 0.0
             thb = q[3 * bb + 2] if bb >= 0 else 0.0
-            nbx = jt_real[jn, PRISMATIC_NORMAL]
-            nby = jt_real[jn, PRISMATIC_NORMAL + 1]
-            c = math.cos(tha)
-            s = math.sin(tha)
-            if ba < 0:
-                c = 1.0
-                s = 0.0
-            nx = c * nbx - s * nby
-            ny = s * nbx + c * nby
-            turn = thb - tha - jt_real[jn, PRISMATIC_PHI0] - jt_real[jn, PRISMATIC_RATIO] * (
-                ny * rx - nx * ry - jt_real[jn, PRISMATIC_ADVANCE0])
-            worst = max(worst, abs(turn), abs(nx * rx + ny * ry))
+            turn, _, c2, nx, ny, _, _ = slider_rows_2d(
+                ba >= 0, tha, thb, 0.0, 0.0, jt_real[jn, PRISMATIC_PHI0], jt_real[jn, PRISMATIC_NORMAL],
+                jt_real[jn, PRISMATIC_NORMAL + 1], rx, ry, 0.0, 0.0, 0.0, 0.0)
+            rho = jt_real[jn, PRISMATIC_RATIO]
+            if rho != 0.0:
+                turn = screw_turn_2d(rho, jt_real[jn, PRISMATIC_ADVANCE0], turn, nx, ny, 0.0, rx, ry,
+                                     0.0, 0.0, 0.0, 0.0)[0]
+            worst = max(worst, abs(turn), abs(c2))
     return worst
 
 
@@ -1194,8 +1175,8 @@ def signal_history(times, states, inputs, alpha, need_acc, P, out):
 # (``Mechanism.q_index``, ``v_index``); the arrays, with the 3D meaning of each column, come from
 # :func:`inerter.engine.compiled_spatial.flatten3`. Point kinematics (Sec. 3.2, Eqs. 15, 22, 25):
 # r = R + A ū, ṙ = Ṙ + A(ω × ū), r̈ = R̈ − A ũ ω̇ + A(ω × (ω × ū)). A global vector s projected on a
-# point's H = [I, −A ũ] gives sᵀH = [sᵀ, (ū × Aᵀs)ᵀ]; :func:`_wcol` computes the second part, which
-# is also the ω-columns of ∂(s·(A s̄))/∂ω of the dot-1 and dot-2 joint rows.
+# point's H = [I, −A ũ] gives sᵀH = [sᵀ, (ū × Aᵀs)ᵀ]; :func:`_wcol` computes the second part
+# (joint_rows.turned_coefficient, which the joint rows' laws take their ω̄ coefficients from).
 
 # Joint kinds (column JOINT_KIND of ``jt_int`` in 3D; every kind is evaluated from its row counts, columns
 # COINCIDENT, DOT1_ROWS, DOT2_ROWS and SCREW_ROW).
@@ -1242,22 +1223,10 @@ def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-@njit(cache=True, inline="always")
-def _wcol(A, lx, ly, lz, sx, sy, sz):
-    """ū × (Aᵀ s): the ω-columns of sᵀ H for a point ū (H = [I, −A ũ], Eq. 22 with body-frame ω)."""
-    tx, ty, tz = matrix9_apply_transposed(A, sx, sy, sz)
-    return _cross(lx, ly, lz, tx, ty, tz)
-
-
-@njit(cache=True, inline="always")
-def _vector(A, wx, wy, wz, sx, sy, sz):
-    """A body-fixed vector s = A s̄, its rate A(ω × s̄) and its acceleration at ω̇ = 0, A(ω × (ω × s̄))."""
-    s0, s1, s2 = matrix9_apply(A, sx, sy, sz)
-    cx, cy, cz = _cross(wx, wy, wz, sx, sy, sz)
-    d0, d1, d2 = matrix9_apply(A, cx, cy, cz)
-    ex, ey, ez = _cross(wx, wy, wz, cx, cy, cz)
-    a0, a1, a2 = matrix9_apply(A, ex, ey, ez)
-    return s0, s1, s2, d0, d1, d2, a0, a1, a2
+#: ū × (Aᵀ s): the ω-columns of sᵀ H for a point ū (H = [I, −A ũ], Eq. 22 with body-frame ω).
+_wcol = turned_coefficient
+#: A body-fixed vector s = A s̄, its rate A(ω × s̄) and its acceleration at ω̇ = 0, A(ω × (ω × s̄)).
+_vector = body_vector
 
 
 # ------------------------------------------------------------------------------------------------
@@ -1414,17 +1383,16 @@ def _jrow(AB, perm, off, row, v, body, A, lx, ly, lz, sx, sy, sz):
 
 
 @njit(cache=True, inline="always")
-def _wrow(AB, perm, off, row, v, body, A, sx, sy, sz, tx, ty, tz):
-    """Row `row` of C_v += ∂(t·(A s̄))/∂ω over a body's ω-columns: s̄ × (Aᵀ t) (∂(A s̄)˙/∂ω = −A s̄~);
-    returns its part of Ċ."""
+def _wrow(AB, perm, off, row, v, body, cx, cy, cz):
+    """Row `row` of C_v += c over a body's ω-columns (and the transpose), c a joint row's coefficient
+    over ω̄ (joint_rows); returns its part of Ċ."""
     if body < 0:
         return 0.0
     k = 6 * body + 3
-    wx, wy, wz = _wcol(A, sx, sy, sz, tx, ty, tz)
-    _sym(AB, perm, off, row, k, wx)
-    _sym(AB, perm, off, row, k + 1, wy)
-    _sym(AB, perm, off, row, k + 2, wz)
-    return wx * v[k] + wy * v[k + 1] + wz * v[k + 2]
+    _sym(AB, perm, off, row, k, cx)
+    _sym(AB, perm, off, row, k + 1, cy)
+    _sym(AB, perm, off, row, k + 2, cz)
+    return cx * v[k] + cy * v[k + 1] + cz * v[k + 2]
 
 
 # ------------------------------------------------------------------------------------------------
@@ -1538,8 +1506,9 @@ def _add_point_forces3(t, q, v, inputs, P, gen, agx, agy, agz):
 
 @njit(cache=True, inline="always")
 def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
-    """Joint jn's rows from `row` on (joints.py): C_v (and its transpose) and γ − 2αĊ − α²C,
-    Ċ = C_v v, for its coincident, dot-1 and dot-2 rows. Returns the next row."""
+    """Joint jn's rows from `row` on (model/joints.py): C_v (and its transpose) and γ − 2αĊ − α²C,
+    Ċ = C_v v, for its coincident, dot-1 and dot-2 rows (joint_rows.dot1_row, dot2_row) and its
+    screw row (:func:`_screw3`). Returns the next row."""
     pbody, ploc, jt_int, jt_real = P[PBODY], P[PLOC], P[JT_INT], P[JT_REAL]
     pa = jt_int[jn, POINT_A]
     pb = jt_int[jn, POINT_B]
@@ -1567,34 +1536,22 @@ def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
     for d in range(jt_int[jn, DOT1_ROWS]):
         # dot-1: s_a·s_b = 0 for body-fixed s_a = A_a s̄_a, s_b = A_b s̄_b
         j = DOT1 + 6 * d
-        sax = jt_real[jn, j]
-        say = jt_real[jn, j + 1]
-        saz = jt_real[jn, j + 2]
-        sbx = jt_real[jn, j + 3]
-        sby = jt_real[jn, j + 4]
-        sbz = jt_real[jn, j + 5]
-        a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, sax, say, saz)
-        b0, b1, b2, bd0, bd1, bd2, bb0, bb1, bb2 = _vector(Ab, wbx, wby, wbz, sbx, sby, sbz)
-        cd = _wrow(AB, perm, off, row, v, ba, Aa, sax, say, saz, b0, b1, b2)
-        cd += _wrow(AB, perm, off, row, v, bb, Ab, sbx, sby, sbz, a0, a1, a2)
-        c = a0 * b0 + a1 * b1 + a2 * b2
-        gamma = -((aa0 * b0 + aa1 * b1 + aa2 * b2) + 2.0 * (ad0 * bd0 + ad1 * bd1 + ad2 * bd2)
-                  + (a0 * bb0 + a1 * bb1 + a2 * bb2))
+        c, cax, cay, caz, cbx, cby, cbz, gamma = dot1_row(
+            Aa, wax, way, waz, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2],
+            Ab, wbx, wby, wbz, jt_real[jn, j + 3], jt_real[jn, j + 4], jt_real[jn, j + 5])
+        cd = _wrow(AB, perm, off, row, v, ba, cax, cay, caz)
+        cd += _wrow(AB, perm, off, row, v, bb, cbx, cby, cbz)
         rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
         row += 1
     for d in range(jt_int[jn, DOT2_ROWS]):
         # dot-2: s_a·(r_b − r_a) = 0
         j = DOT2 + 3 * d
-        sax = jt_real[jn, j]
-        say = jt_real[jn, j + 1]
-        saz = jt_real[jn, j + 2]
-        a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, sax, say, saz)
+        c, a0, a1, a2, cax, cay, caz, gamma = dot2_row(
+            Aa, wax, way, waz, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2],
+            rx, ry, rz, rdx, rdy, rdz, anx, any_, anz)
         cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, -a0, -a1, -a2)
         cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, a0, a1, a2)
-        cd += _wrow(AB, perm, off, row, v, ba, Aa, sax, say, saz, rx, ry, rz)
-        c = a0 * rx + a1 * ry + a2 * rz
-        gamma = -((aa0 * rx + aa1 * ry + aa2 * rz) + 2.0 * (ad0 * rdx + ad1 * rdy + ad2 * rdz)
-                  + (a0 * anx + a1 * any_ + a2 * anz))
+        cd += _wrow(AB, perm, off, row, v, ba, cax, cay, caz)
         rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
         row += 1
     if jt_int[jn, SCREW_ROW]:
@@ -1605,60 +1562,23 @@ def _joint3(q, v, alpha, P, AB, perm, off, rhs, jn, row):
 
 
 @njit(cache=True, inline="always")
-def _screw_residual(Aa, Ab, jr, rx, ry, rz):
-    """A screw row's C = φ − ρ(s·(r_b − r_a) − x₀) mod 2π (joints.Screw.residual; φ as in
-    :func:`_rotational3`, D = (A_aᵀA_b) rel0ᵀ) and its axis s = A_a s̄."""
-    nx, ny, nz = jr[SCREW], jr[SCREW + 1], jr[SCREW + 2]
-    D = np.empty((3, 3))
-    for i in range(3):
-        for j in range(3):
-            x = 0.0
-            for k in range(3):
-                x += (Aa[i] * Ab[k] + Aa[3 + i] * Ab[3 + k] + Aa[6 + i] * Ab[6 + k]) * jr[SCREW_REL0 + 3 * j + k]
-            D[i, j] = x
-    sn = 0.5 * (nx * (D[2, 1] - D[1, 2]) + ny * (D[0, 2] - D[2, 0]) + nz * (D[1, 0] - D[0, 1]))
-    nDn = (nx * (D[0, 0] * nx + D[0, 1] * ny + D[0, 2] * nz) + ny * (D[1, 0] * nx + D[1, 1] * ny + D[1, 2] * nz)
-           + nz * (D[2, 0] * nx + D[2, 1] * ny + D[2, 2] * nz))
-    phi = math.atan2(sn, 0.5 * (D[0, 0] + D[1, 1] + D[2, 2] - nDn))
-    sx, sy, sz = matrix9_apply(Aa, nx, ny, nz)
-    x = phi - jr[SCREW_RATIO] * (sx * rx + sy * ry + sz * rz - jr[SCREW_ADVANCE0])
-    return x - 2.0 * math.pi * round(x / (2.0 * math.pi)), sx, sy, sz
-
-
-@njit(cache=True, inline="always")
 def _screw3(v, alpha, AB, perm, off, rhs, jr, row, ba, bb, Aa, Ab, lax, lay, laz, lbx, lby, lbz,
             rx, ry, rz, rdx, rdy, rdz, anx, any_, anz):
-    """A screw joint's row (joints.Screw): Ċ = s·(ω_b − ω_a) − ρ(s·ḋ + ṡ·d) over the bodies'
-    coordinates, γ = −(ṡ·ω_b − ρ(s̈·d + 2ṡ·ḋ + s·a_n)), with Baumgarte's −2αĊ − α²C."""
-    rho = jr[SCREW_RATIO]
-    nx, ny, nz = jr[SCREW], jr[SCREW + 1], jr[SCREW + 2]
-    c, sx, sy, sz = _screw_residual(Aa, Ab, jr, rx, ry, rz)
+    """A screw joint's row (joint_rows.screw_row) placed: its translational coefficient −ρ s on the
+    points' H, its advance's and its turn's coefficients over ω̄_a and its turn's over ω̄_b, with
+    Baumgarte's −2αĊ − α²C."""
     wax, way, waz = _omega(v, ba)
     wbx, wby, wbz = _omega(v, bb)
-    a0, a1, a2, ad0, ad1, ad2, aa0, aa1, aa2 = _vector(Aa, wax, way, waz, nx, ny, nz)
+    c, tx, ty, tz, cx, cy, cz, nx, ny, nz, bx, by, bz, gamma = screw_row(
+        Aa, wax, way, waz, Ab, wbx, wby, wbz, jr[SCREW], jr[SCREW + 1], jr[SCREW + 2],
+        jr[SCREW_REL0:SCREW_REL0 + 9], jr[SCREW_RATIO], jr[SCREW_ADVANCE0], rx, ry, rz, rdx, rdy, rdz, anx, any_, anz)
     # the advance's part, −ρ × the dot-2 row of s
-    cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, rho * a0, rho * a1, rho * a2)
-    cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, -rho * a0, -rho * a1, -rho * a2)
-    cd += _wrow(AB, perm, off, row, v, ba, Aa, nx, ny, nz, -rho * rx, -rho * ry, -rho * rz)
+    cd = _jrow(AB, perm, off, row, v, ba, Aa, lax, lay, laz, -tx, -ty, -tz)
+    cd += _jrow(AB, perm, off, row, v, bb, Ab, lbx, lby, lbz, tx, ty, tz)
+    cd += _wrow(AB, perm, off, row, v, ba, cx, cy, cz)
     # the turn's part: −s̄·ω̄_a + (A_bᵀ s)·ω̄_b
-    if ba >= 0:
-        k = 6 * ba + 3
-        _sym(AB, perm, off, row, k, -nx)
-        _sym(AB, perm, off, row, k + 1, -ny)
-        _sym(AB, perm, off, row, k + 2, -nz)
-        cd -= nx * wax + ny * way + nz * waz
-    gb = 0.0
-    if bb >= 0:
-        k = 6 * bb + 3
-        tx, ty, tz = matrix9_apply_transposed(Ab, a0, a1, a2)
-        _sym(AB, perm, off, row, k, tx)
-        _sym(AB, perm, off, row, k + 1, ty)
-        _sym(AB, perm, off, row, k + 2, tz)
-        cd += tx * wbx + ty * wby + tz * wbz
-        ox, oy, oz = matrix9_apply(Ab, wbx, wby, wbz)
-        gb = ad0 * ox + ad1 * oy + ad2 * oz
-    gamma = -(gb - rho * ((aa0 * rx + aa1 * ry + aa2 * rz) + 2.0 * (ad0 * rdx + ad1 * rdy + ad2 * rdz)
-                          + (a0 * anx + a1 * any_ + a2 * anz)))
+    cd += _wrow(AB, perm, off, row, v, ba, nx, ny, nz)
+    cd += _wrow(AB, perm, off, row, v, bb, bx, by, bz)
     rhs[perm[row]] = gamma - 2.0 * alpha * cd - alpha * alpha * c
 
 
@@ -1746,15 +1666,19 @@ def constraint_residual3(q, P):
             worst = max(worst, abs(rx), abs(ry), abs(rz))
         for d in range(jt_int[jn, DOT1_ROWS]):
             j = DOT1 + 6 * d
-            a0, a1, a2 = matrix9_apply(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
-            b0, b1, b2 = matrix9_apply(Ab, jt_real[jn, j + 3], jt_real[jn, j + 4], jt_real[jn, j + 5])
-            worst = max(worst, abs(a0 * b0 + a1 * b1 + a2 * b2))
+            c = dot1_row(Aa, 0.0, 0.0, 0.0, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2],
+                         Ab, 0.0, 0.0, 0.0, jt_real[jn, j + 3], jt_real[jn, j + 4], jt_real[jn, j + 5])[0]
+            worst = max(worst, abs(c))
         for d in range(jt_int[jn, DOT2_ROWS]):
             j = DOT2 + 3 * d
-            a0, a1, a2 = matrix9_apply(Aa, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2])
-            worst = max(worst, abs(a0 * rx + a1 * ry + a2 * rz))
+            c = dot2_row(Aa, 0.0, 0.0, 0.0, jt_real[jn, j], jt_real[jn, j + 1], jt_real[jn, j + 2],
+                         rx, ry, rz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)[0]
+            worst = max(worst, abs(c))
         if jt_int[jn, SCREW_ROW]:
-            worst = max(worst, abs(_screw_residual(Aa, Ab, jt_real[jn], rx, ry, rz)[0]))
+            jr = jt_real[jn]
+            c = screw_residual(Aa, Ab, jr[SCREW], jr[SCREW + 1], jr[SCREW + 2], jr[SCREW_REL0:SCREW_REL0 + 9],
+                               jr[SCREW_RATIO], jr[SCREW_ADVANCE0], rx, ry, rz)[0]
+            worst = max(worst, abs(c))
     return worst
 
 

@@ -1,6 +1,11 @@
 """Joint constraints C(q) = 0 with their Jacobian C_v (over velocity coordinates) and the right
 side γ of C_v v̇ = γ (Eq. 26's Q_d). Standard forms (Nikravesh 1988; Shabana 2009, as cited by
 the paper): points that coincide, and the dot-1 / dot-2 conditions on body-fixed vectors.
+
+Each row's C, coefficients and γ are :mod:`inerter.elements.joint_rows`' laws, the definitions the
+engine's kernels compile in, run here as written; this module places their coefficients into
+the joint's rows over the bodies' velocity coordinates (a translational coefficient t as tᵀH on
+the points' Jacobian H, Eq. 22).
 """
 from __future__ import annotations
 
@@ -8,7 +13,7 @@ import math
 
 import numpy as np
 
-from inerter.model.spatial import cross, skew
+from inerter.elements.joint_rows import dot1_row, dot2_row, screw_row, screw_turn_2d, slider_rows_2d
 
 
 class Coincident:
@@ -27,7 +32,8 @@ class Coincident:
 
 class Prismatic2D:
     """Planar slider: no relative rotation, and point b stays on the line through point a along
-    `axis` (fixed in a's body). Rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0, n = A_a n̄."""
+    `axis` (fixed in a's body). Rows: θ_b − θ_a − φ0 = 0 and n·(r_b − r_a) = 0, n = A_a n̄
+    (:func:`~inerter.elements.joint_rows.slider_rows_2d`)."""
 
     kind = "prismatic"
     rows = 2
@@ -41,7 +47,8 @@ class Prismatic2D:
         self.phi0 = float(phi0)
         self.ia, self.ib = angle_index_a, angle_index_b
         # A 2D screw (rack and pinion): b turns by ρ = 2π/p per unit of its advance t·d along the axis
-        # t = A_a t̄ since the initial advance x₀; the first row becomes θ_b − θ_a − φ0 − ρ(t·d − x₀).
+        # t = A_a t̄ since the initial advance x₀; the first row becomes θ_b − θ_a − φ0 − ρ(t·d − x₀)
+        # (joint_rows.screw_turn_2d).
         self.ratio = 2.0 * math.pi / lead if lead else 0.0
         self.advance0 = float(advance0)
         if lead:
@@ -52,107 +59,66 @@ class Prismatic2D:
         d, ddot, a_n, H = pair.evaluate(q, v)
         has_a = pair.a.dofs is not None
         k = len(self.dofs)
+        th_a, wa = (q[self.ia], v[self.ia]) if self.ia >= 0 else (0.0, 0.0)
+        th_b, wb = (q[self.ib], v[self.ib]) if self.ib >= 0 else (0.0, 0.0)
+        c1, _, c2, nx, ny, turn, gamma2 = slider_rows_2d(has_a, th_a, th_b, wa, wb, self.phi0, self.normal[0],
+                                                         self.normal[1], d[0], d[1], ddot[0], ddot[1], a_n[0], a_n[1])
         Cq = np.zeros((2, k))
-        th_a = q[self.ia] if self.ia >= 0 else 0.0
-        th_b = q[self.ib] if self.ib >= 0 else 0.0
-        c1 = th_b - th_a - self.phi0
         if has_a:
             Cq[0, 2] = -1.0
         if pair.b.dofs is not None:
             Cq[0, k - 1] = 1.0
+        Cq[1] = nx * H[0] + ny * H[1]                           # ∂(n·d)/∂q through d
         if has_a:
-            c, s = math.cos(th_a), math.sin(th_a)
-            n = np.array((c * self.normal[0] - s * self.normal[1], s * self.normal[0] + c * self.normal[1]))
-            wa = v[self.ia]
-        else:
-            n, wa = self.normal, 0.0
-        n_perp = np.array((-n[1], n[0]))                       # dn/dθ_a
-        c2 = float(n @ d)
-        Cq[1] = n @ H                                           # ∂(n·d)/∂q through d
-        if has_a:
-            Cq[1, 2] += float(n_perp @ d)                       # ... and through n
-        # C̈ = n·(H q̈ + a_n) + θ̈_a n⊥·d − θ̇_a² n·d + 2 θ̇_a n⊥·ḋ
-        gamma2 = -(float(n @ a_n) - wa * wa * c2 + 2.0 * wa * float(n_perp @ ddot))
+            Cq[1, 2] += turn                                    # ... and through n
         gamma1 = 0.0
         if self.ratio:
-            t = -n_perp                                         # the axis; dt/dθ_a = n
-            c1 -= self.ratio * (float(t @ d) - self.advance0)
-            Cq[0] -= self.ratio * (t @ H)
+            c1, tx, ty, turn, gamma1 = screw_turn_2d(self.ratio, self.advance0, c1, nx, ny, wa, d[0], d[1],
+                                                     ddot[0], ddot[1], a_n[0], a_n[1])
+            Cq[0] -= self.ratio * (tx * H[0] + ty * H[1])
             if has_a:
-                Cq[0, 2] -= self.ratio * float(n @ d)
-            # (t·d)¨ = t·(H q̈ + a_n) + θ̈_a n·d − θ̇_a² t·d + 2 θ̇_a n·ḋ
-            gamma1 = self.ratio * (float(t @ a_n) - wa * wa * float(t @ d) + 2.0 * wa * float(n @ ddot))
+                Cq[0, 2] -= self.ratio * turn
         return np.array((c1, c2)), Cq, np.array((gamma1, gamma2))
 
 
-class _Vector:
-    """A body-fixed unit vector s = A s̄: its value, rate and ∂ṡ/∂ω (body-frame ω)."""
-
-    def __init__(self, frame, local):
-        self.frame = frame
-        self.local = np.asarray(local, dtype=float)
-        self._skew = skew(self.local)
-
-    def evaluate(self, q, v):
-        A, w = self.frame.evaluate(q, v)
-        s = A @ self.local
-        wxs = cross(w, self.local)
-        sdot = A @ wxs
-        s_acc = A @ cross(w, wxs)                            # s̈ at ω̇ = 0
-        return s, sdot, s_acc, -A @ self._skew                  # ∂ṡ/∂ω = −A s̄~
-
-
-def relative_angle(Aa, Ab, rel0, axis):
-    """The rotation of b relative to a about `axis` (a unit vector in a's frame) since the relative
-    orientation rel0 = A_aᵀA_b: with D = (A_aᵀA_b) rel0ᵀ, φ = atan2(½ n̄·vee(D − Dᵀ), ½(tr D − n̄ᵀDn̄)),
-    exact while the relative rotation is about the axis (Shabana 2009, the rotation's axis-angle)."""
-    D = (Aa.T @ Ab) @ rel0.T
-    n = axis
-    s = 0.5 * (n[0] * (D[2, 1] - D[1, 2]) + n[1] * (D[0, 2] - D[2, 0]) + n[2] * (D[1, 0] - D[0, 1]))
-    c = 0.5 * (np.trace(D) - float(n @ D @ n))
-    return math.atan2(s, c)
+def _rotation9(frame, q, v):
+    """A body frame's rotation as the laws take it (a row-major 9-tuple) and its body-frame ω̄."""
+    A, w = frame.evaluate(q, v)
+    return tuple(float(x) for x in A.ravel()), w
 
 
 class Screw:
-    """The screw (helical) row: b turns relative to a about the axis s = A_a s̄ by ρ = 2π/p per unit
-    of its advance along it, C = φ − ρ(s·(r_b − r_a) − x₀) = 0 (mod 2π: φ, the relative turn since
-    the initial pose, :func:`relative_angle`, is an angle). Its Jacobian, taken where the relative
-    rotation is about the axis (the cylindrical rows, or the mechanism's other joints, keep it so):
+    """The screw (helical) row (:func:`~inerter.elements.joint_rows.screw_row`): b turns relative to
+    a about the axis s = A_a s̄ by ρ = 2π/p per unit of its advance along it,
+    C = φ − ρ(s·(r_b − r_a) − x₀) = 0 (mod 2π: φ, the relative turn since the initial pose, is an
+    angle), with its Jacobian taken where the relative rotation is about the axis (the cylindrical
+    rows, or the mechanism's other joints, keep it so)."""
 
-        Ċ = s·(ω_b − ω_a) − ρ (s·(ṙ_b − ṙ_a) + ṡ·(r_b − r_a)),
-
-    over body-frame ω: s·ω_a = s̄·ω̄_a, s·ω_b = (A_bᵀ s)·ω̄_b; the advance's part is the dot-2 row's.
-    γ = −(C̈ at v̇ = 0) = −(ṡ·ω_b − ρ (s̈·d + 2 ṡ·ḋ + s·a_n)) (d/dt(A_b ω̄_b) = A_b ω̄̇_b, and
-    ṡ·ω_a = (ω_a × s)·ω_a = 0)."""
-
-    def __init__(self, frame_a, frame_b, axis, rel0, lead, advance0):
-        self.vector = _Vector(frame_a, axis)
-        self.frame_a, self.frame_b = frame_a, frame_b
+    def __init__(self, axis, rel0, lead, advance0):
         self.axis = np.asarray(axis, dtype=float)
         self.rel0 = np.asarray(rel0, dtype=float)
+        self._rel0 = self.rel0.ravel()
         self.ratio = 2.0 * math.pi / lead
         self.advance0 = float(advance0)
 
-    def residual(self, Aa, Ab, s, d):
-        x = relative_angle(Aa, Ab, self.rel0, self.axis) - self.ratio * (float(s @ d) - self.advance0)
-        return math.remainder(x, 2.0 * math.pi)
-
-    def evaluate(self, q, v, d, ddot, a_n, H, wa_cols, wb_cols):
-        s, sdot, sacc, Ja = self.vector.evaluate(q, v)
-        Aa, _ = self.frame_a.evaluate(q, v)
-        Ab, wb = self.frame_b.evaluate(q, v)
-        row = -self.ratio * (s @ H)
+    def evaluate(self, Aa, wa, Ab, wb, d, ddot, a_n, H, wa_cols, wb_cols):
+        """(C, its row over the joint's dofs, γ) from the bodies' rotations (9-tuples) and ω̄ and
+        the points' relative kinematics; wa_cols, wb_cols: the bodies' ω̄ columns (None: ground)."""
+        c, tx, ty, tz, ax, ay, az, nx, ny, nz, bx, by, bz, gamma = screw_row(
+            Aa, *wa, Ab, *wb, *self.axis, self._rel0, self.ratio, self.advance0, *d, *ddot, *a_n)
+        row = tx * H[0] + ty * H[1] + tz * H[2]
         if wa_cols is not None:
-            row[wa_cols] += -self.axis - self.ratio * (d @ Ja)
+            row[wa_cols] += (ax + nx, ay + ny, az + nz)
         if wb_cols is not None:
-            row[wb_cols] += Ab.T @ s
-        gamma = -(float(sdot @ (Ab @ wb)) - self.ratio * (float(sacc @ d) + 2.0 * float(sdot @ ddot) + float(s @ a_n)))
-        return self.residual(Aa, Ab, s, d), row, gamma
+            row[wb_cols] += (bx, by, bz)
+        return c, row, gamma
 
 
 class SpatialJoint:
     """A 3D joint as rows of three kinds over the two bodies' velocity coordinates:
-    coincident points (3 rows), dot-1 rows s_a·s_b = 0, dot-2 rows s_a·(r_b − r_a) = 0."""
+    coincident points (3 rows), dot-1 rows s_a·s_b = 0, dot-2 rows s_a·(r_b − r_a) = 0
+    (:func:`~inerter.elements.joint_rows.dot1_row`, :func:`~inerter.elements.joint_rows.dot2_row`;
+    `dot1`: pairs (s̄_a, s̄_b) in a's and b's frames, `dot2`: s̄_a)."""
 
     def __init__(self, name, kind, pair, frame_a, frame_b, dot1=(), dot2=(), coincident=True, screw=None):
         self.name, self.kind, self.pair = name, kind, pair
@@ -160,8 +126,9 @@ class SpatialJoint:
         self.has_a = pair.a.dofs is not None
         self.has_b = pair.b.dofs is not None
         self.coincident = coincident
-        self.dot1 = [(_Vector(frame_a, sa), _Vector(frame_b, sb)) for sa, sb in dot1]
-        self.dot2 = [_Vector(frame_a, sa) for sa in dot2]
+        self.frame_a, self.frame_b = frame_a, frame_b
+        self.dot1 = [(np.asarray(sa, dtype=float), np.asarray(sb, dtype=float)) for sa, sb in dot1]
+        self.dot2 = [np.asarray(sa, dtype=float) for sa in dot2]
         self.screw = screw                                       # a Screw row, last
         self.rows = (3 if coincident else 0) + len(self.dot1) + len(self.dot2) + (screw is not None)
         self._wa = slice(3, 6)                                  # a's ω columns within dofs
@@ -169,33 +136,34 @@ class SpatialJoint:
 
     def evaluate(self, q, v):
         d, ddot, a_n, H = self.pair.evaluate(q, v)
+        Aa, wa = _rotation9(self.frame_a, q, v)
+        Ab, wb = _rotation9(self.frame_b, q, v)
         k = len(self.dofs)
         C, rows, gamma = [], [], []
         if self.coincident:
             C.extend(d)
             rows.extend(H)
             gamma.extend(-a_n)
-        for va, vb in self.dot1:
-            sa, sa_dot, sa_acc, Ja = va.evaluate(q, v)
-            sb, sb_dot, sb_acc, Jb = vb.evaluate(q, v)
+        for sa, sb in self.dot1:
+            c, ax, ay, az, bx, by, bz, g = dot1_row(Aa, *wa, *sa, Ab, *wb, *sb)
             row = np.zeros(k)
             if self.has_a:
-                row[self._wa] = sb @ Ja
+                row[self._wa] = (ax, ay, az)
             if self.has_b:
-                row[self._wb] = sa @ Jb
-            C.append(float(sa @ sb))
+                row[self._wb] = (bx, by, bz)
+            C.append(c)
             rows.append(row)
-            gamma.append(-(float(sa_acc @ sb) + 2.0 * float(sa_dot @ sb_dot) + float(sa @ sb_acc)))
-        for va in self.dot2:
-            sa, sa_dot, sa_acc, Ja = va.evaluate(q, v)
-            row = sa @ H
+            gamma.append(g)
+        for sa in self.dot2:
+            c, sx, sy, sz, ax, ay, az, g = dot2_row(Aa, *wa, *sa, *d, *ddot, *a_n)
+            row = sx * H[0] + sy * H[1] + sz * H[2]
             if self.has_a:
-                row[self._wa] += d @ Ja
-            C.append(float(sa @ d))
+                row[self._wa] += (ax, ay, az)
+            C.append(c)
             rows.append(row)
-            gamma.append(-(float(sa_acc @ d) + 2.0 * float(sa_dot @ ddot) + float(sa @ a_n)))
+            gamma.append(g)
         if self.screw is not None:
-            c, row, g = self.screw.evaluate(q, v, d, ddot, a_n, H, self._wa if self.has_a else None,
+            c, row, g = self.screw.evaluate(Aa, wa, Ab, wb, d, ddot, a_n, H, self._wa if self.has_a else None,
                                             self._wb if self.has_b else None)
             C.append(c)
             rows.append(row)
@@ -252,7 +220,7 @@ def make_joint(spec, mech, q0):
     if spec.type == "screw":
         rows = dict(coincident=False) if spec.coupling_only else _cylindrical_rows(axis, p1, p2, in_b, spec)
         d0 = pair.evaluate(q0, z)[0]
-        screw = Screw(fa, fb, axis, Aa.T @ Ab, spec.lead, float((Aa @ axis) @ d0))
+        screw = Screw(axis, Aa.T @ Ab, spec.lead, float((Aa @ axis) @ d0))
         return SpatialJoint(spec.name, "screw", pair, fa, fb, screw=screw, **rows)
     rows = _SPATIAL_ROWS[spec.type](axis, p1, p2, in_b, spec)
     return SpatialJoint(spec.name, spec.type, pair, fa, fb, **rows)

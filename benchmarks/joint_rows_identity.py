@@ -1,0 +1,89 @@
+"""Whether a change to the joints' rows keeps the results: compiled runs and the numpy Mechanism's
+joint rows on scenes with every joint kind, of two source trees, compared.
+
+    git archive 82948a8 | (mkdir -p /tmp/inerter-base-joints && tar -x -C /tmp/inerter-base-joints)
+    PYTHONPATH=/tmp/inerter-base-joints python benchmarks/joint_rows_identity.py snap /tmp/before.npz
+    PYTHONPATH=. python benchmarks/joint_rows_identity.py snap /tmp/after.npz
+    python benchmarks/joint_rows_identity.py compare /tmp/before.npz /tmp/after.npz
+
+`snap` (with the tree under test first on PYTHONPATH) runs every scene of scenarios/,
+scenarios/hard/ and tests/data/ and seven 3D scenes of the joint tests (cylindrical, planar,
+universal, revolute about a tilted axis, prismatic, fixed, a shaken prismatic slider) on the
+compiled path, to min(stop_time, 1 s), and keeps the samples' times, every output and the states;
+and evaluates ``Mechanism.constraints(q, v)`` (C, C_v, γ) at three random states of each scene
+with joints (q0 + 0.3 N(0, 1), v ~ N(0, 1), seed 7). `compare` prints, per scene, whether the runs
+are bit-identical and the largest difference of the numpy rows, relative to max(1, |before|).
+"""
+from __future__ import annotations
+
+import glob
+import os
+import sys
+import tempfile
+
+import numpy as np
+
+
+def _scenes(root):
+    """(key, path) of every scene compared."""
+    sys.path.insert(0, os.path.join(root, "tests"))
+    import test_3d_joints as t3d
+    import test_joints_more as tjm
+    files = sorted(glob.glob(f"{root}/scenarios/*.toml") + glob.glob(f"{root}/scenarios/hard/*.toml")
+                   + glob.glob(f"{root}/tests/data/*.toml"))
+    out = [(os.path.relpath(f, root), f) for f in files]
+    tilted = '[joints.R]\ntype = "revolute"\nbetween = ["O", "T"]\naxis = [0.6, 0.8, 0]\n'
+    extra = {"cylindrical": tjm.HEAD.format(name="cyl", dim=3) + tjm.CYLINDRICAL,
+             "planar": tjm.HEAD.format(name="pl", dim=3) + tjm.PLANAR,
+             "universal": tjm.HEAD.format(name="u", dim=3)
+             + tjm._turned(tjm._pendulum(tjm._universal(0.6), (0.6, 0.4)), 0.6, 0.4),
+             "revolute3": tjm.HEAD.format(name="r", dim=3) + tjm._turned(tjm._pendulum(tilted, (0.6, 0.4)), 0.6, 0.4),
+             "slider3": t3d.SLIDER, "welded3": t3d.WELDED, "shaken3": t3d.SHAKEN}
+    tmp = tempfile.mkdtemp()
+    for key, text in extra.items():
+        path = os.path.join(tmp, f"{key}.toml")
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        out.append((f"{key}.toml", path))
+    return out
+
+
+def snap(out_path):
+    import inerter
+    root = os.path.dirname(os.path.dirname(os.path.abspath(inerter.__file__)))
+    out = {}
+    rng = np.random.default_rng(7)
+    for key, path in _scenes(root):
+        model = inerter.load(path)
+        mech = model.mechanism
+        for i in range(3):
+            q = mech.q0 + 0.3 * rng.standard_normal(mech.q0.shape)
+            v = rng.standard_normal(mech.n)
+            if mech.joints:
+                for name, x in zip(("C", "Cv", "g"), mech.constraints(q, v)):
+                    out[f"{key}|np{i}|{name}"] = x
+        r = model.simulate(stop_time=min(model.scene.experiment.stop_time, 1.0), metrics=False)
+        out[f"{key}|t"], out[f"{key}|y"], out[f"{key}|states"] = r.time, r._all_values(), r.run.states
+        print(key, r.status, r.run.extra.get("path"), len(r.time), flush=True)
+    np.savez(out_path, **out)
+
+
+def compare(path_a, path_b):
+    a, b = np.load(path_a), np.load(path_b)
+    keys = sorted({k.split("|")[0] for k in a.files})
+    same = 0
+    for key in keys:
+        runs = all(np.array_equal(a[f"{key}|{s}"], b[f"{key}|{s}"], equal_nan=True) for s in ("t", "y", "states"))
+        same += runs
+        rows = [np.max(np.abs(a[k] - b[k])) / max(1.0, np.max(np.abs(a[k]))) for k in a.files
+                if k.startswith(f"{key}|np") and a[k].size]
+        numpy = f"{max(rows):.1e}" if rows else "no joints"
+        print(f"{key:50s} run {'bit-identical' if runs else 'DIFFERS':14s} numpy rows {numpy}")
+    print(f"{same}/{len(keys)} runs bit-identical (times, every output, states)")
+
+
+if __name__ == "__main__":
+    if sys.argv[1] == "snap":
+        snap(sys.argv[2])
+    else:
+        compare(sys.argv[2], sys.argv[3])

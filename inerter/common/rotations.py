@@ -30,6 +30,12 @@ def cross(a, b):
     return np.array((a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]))
 
 
+@_scalar
+def cross3(ax, ay, az, bx, by, bz):
+    """a × b on the components of two 3-vectors (the kernels' scalar form of :func:`cross`)."""
+    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+
+
 def skew(u):
     return np.array(((0.0, -u[2], u[1]), (u[2], 0.0, -u[0]), (-u[1], u[0], 0.0)))
 

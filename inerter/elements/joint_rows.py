@@ -28,13 +28,8 @@ import math
 
 import numpy as np
 
-from inerter.common.rotations import matrix9_apply, matrix9_apply_transposed
+from inerter.common.rotations import cross3 as _cross, matrix9_apply, matrix9_apply_transposed
 from inerter.elements.base import law
-
-
-@law
-def _cross(ax, ay, az, bx, by, bz):
-    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
 @law

@@ -18,7 +18,7 @@ from numba.extending import intrinsic, overload
 
 from inerter.scene.ground_motion import (TERM_AMPLITUDE, TERM_AXIS, TERM_FREQUENCY, TERM_PHASE, TERM_START,
                                          TERM_STOP, burst)
-from inerter.common.rotations import (EULER_SINGULARITY, euler_angles9, euler_matrix9, euler_rates,
+from inerter.common.rotations import (EULER_SINGULARITY, cross3, euler_angles9, euler_matrix9, euler_rates,
                                        matrix9_apply, matrix9_apply_transposed, planar_matrix9,
                                        quaternion_matrix9, quaternion_of_matrix9, quaternion_rates)
 
@@ -1218,11 +1218,8 @@ def _omega(v, body):
     return v[k], v[k + 1], v[k + 2]
 
 
-@njit(cache=True, inline="always")
-def _cross(ax, ay, az, bx, by, bz):
-    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
-
-
+#: a × b on components (common.rotations.cross3).
+_cross = cross3
 #: ū × (Aᵀ s): the ω-columns of sᵀ H for a point ū (H = [I, −A ũ], Eq. 22 with body-frame ω).
 _wcol = turned_coefficient
 #: A body-fixed vector s = A s̄, its rate A(ω × s̄) and its acceleration at ω̇ = 0, A(ω × (ω × s̄)).

@@ -10,3 +10,4 @@ element of a kind the oracle has no definition of is refused (:func:`require_def
 
 Layer: beside :mod:`inerter.engine` (neither imports the other), above :mod:`inerter.model`."""
 from inerter.oracle.derivation import OracleElement, require_definitions  # noqa: F401
+from inerter.oracle.mechanism import OracleMechanism  # noqa: F401

@@ -4,9 +4,8 @@ there, never read from :mod:`inerter.model.joints`.
 
 The rows are the standard conditions (Nikravesh 1988; Shabana 2009, as the paper cites them):
 coincident points r_b − r_a = 0, dot-1 rows s_a·s_b = 0 between a vector fixed in a and one fixed
-in b, dot-2 rows s_a·(r_b − r_a) = 0; a body-fixed vector s = A s̄ is written as the difference of
-two of the body's points s̄ apart (:func:`.jets.point_position`), a 3D body's rotation A as the
-three such vectors of its unit axes. With one Jet per row, carrying the velocity coordinates'
+in b, dot-2 rows s_a·(r_b − r_a) = 0; a body-fixed vector is s = A s̄ and a point r = R + A ū, with
+the body's rotation A written on Jets from its angle (2D) or its quaternion (3D, :func:`rotation`). With one Jet per row, carrying the velocity coordinates'
 gradient and the derivatives along the motion (q̇ = B(q) v, and q̈ at v̇ = 0),
 
     C = C.v,   C_v = ∂Ċ/∂v = C.g,   γ = −C̈|v̇=0 = −C.d2,
@@ -27,12 +26,10 @@ keeps it so (the joint's own manifold), not elsewhere.
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
-
 import numpy as np
 
 from inerter.common.errors import SceneError
-from inerter.oracle.jets import Jet, dot, jatan2, point_position, seed
+from inerter.oracle.jets import Jet, dot, jatan2, jcos, jsin, seed
 
 
 def perpendiculars(axis):
@@ -48,41 +45,75 @@ def perpendiculars(axis):
 
 class BodyJets:
     """The Jets of the bodies a joint or a force touches, over their velocity coordinates (each
-    body's 3 or 6 in turn): positions of points and body-fixed vectors on them."""
+    body's 3 or 6 in turn): each body's centre R and rotation A, once, and from them positions of
+    points r = R + A ū and body-fixed vectors A s̄ (Eq. 15)."""
 
-    def __init__(self, mech, points, q, v):
+    def __init__(self, mech, points, q, v, full=False):
+        """`full`: gradients over all the mechanism's velocity coordinates, in its order."""
         self.dim = mech.dim
         bodies = []
         for p in points:
             if p.body >= 0 and p.body not in bodies:
                 bodies.append(p.body)
         nvb = 3 if self.dim == 2 else 6
-        self.n = nvb * len(bodies)
-        self.coords = {b: seed(q, v, mech.q_index[b], mech.v_index[b], self.dim, self.n, nvb * k)
-                       for k, b in enumerate(bodies)}
+        self.n = mech.n if full else nvb * len(bodies)
+        self.coords = {b: seed(q, v, mech.q_index[b], mech.v_index[b], self.dim, self.n,
+                               mech.v_index[b] if full else nvb * k) for k, b in enumerate(bodies)}
+        self.frames = {b: (c[:self.dim], rotation(c)) for b, c in self.coords.items()}
 
     def point(self, p, local=None):
         """r of point p (or of the point at `local` on p's body), as Jets."""
-        where = p if local is None else SimpleNamespace(body=p.body, local=np.asarray(local, dtype=float))
-        r = point_position(where, self.coords.get(p.body))
-        return [c if isinstance(c, Jet) else Jet.constant(c, self.n) for c in r]
+        local = p.local if local is None else local
+        if p.body < 0:
+            return [Jet.constant(x, self.n) for x in local]
+        R, A = self.frames[p.body]
+        return [x + y for x, y in zip(R, _times(A, local))]
 
     def vector(self, p, local):
         """A s̄: the vector `local` fixed in p's body (in the ground's frame for the ground)."""
         if p.body < 0:
             return [Jet.constant(x, self.n) for x in local]
-        tip = self.point(p, local)
-        origin = self.point(p, np.zeros(len(local)))
-        return [t - o for t, o in zip(tip, origin)]
+        return _times(self.frames[p.body][1], local)
 
     def rotation(self, p):
-        """A of p's body as 3 × 3 Jets (its columns the body's unit axes)."""
-        cols = [self.vector(p, e) for e in np.eye(3)]
-        return [[cols[j][i] for j in range(3)] for i in range(3)]
+        """A of p's body as rows of Jets (the identity for the ground)."""
+        if p.body < 0:
+            return [[Jet.constant(float(i == j), self.n) for j in range(self.dim)] for i in range(self.dim)]
+        return self.frames[p.body][1]
 
     def angle(self, p):
         """θ of p's planar body (0 for the ground)."""
         return self.coords[p.body][2] if p.body >= 0 else Jet.constant(0.0, self.n)
+
+
+def rotation(coords):
+    """A body's rotation matrix on Jets from its coordinates: in 2D from the angle θ,
+    [[cos θ, −sin θ], [sin θ, cos θ]]; in 3D from the quaternion p = (w, v), not necessarily of
+    unit length, A = I + 2/|p|² (w[v]× + [v]×²), [v]×² = v vᵀ − |v|² I (Shabana 2009)."""
+    if len(coords) == 3:
+        c, s = jcos(coords[2]), jsin(coords[2])
+        return [[c, -s], [s, c]]
+    w, a, b, c = coords[3:]
+    k = 2.0 / (w * w + a * a + b * b + c * c)
+    aa, bb, cc, ab, ac, bc, wa, wb, wc = a * a, b * b, c * c, a * b, a * c, b * c, w * a, w * b, w * c
+    return [[1.0 - k * (bb + cc), k * (ab - wc), k * (ac + wb)],
+            [k * (ab + wc), 1.0 - k * (aa + cc), k * (bc - wa)],
+            [k * (ac - wb), k * (bc + wa), 1.0 - k * (aa + bb)]]
+
+
+def _times(A, x):
+    """A x for Jets A and floats x, skipping the zero entries of x."""
+    terms = [(j, float(xj)) for j, xj in enumerate(x) if xj != 0.0]
+    if not terms:
+        return [Jet.constant(0.0, A[0][0].g.size) for _ in A]
+    out = []
+    for row in A:
+        j, xj = terms[0]
+        acc = row[j] * xj
+        for j, xj in terms[1:]:
+            acc = acc + row[j] * xj
+        out.append(acc)
+    return out
 
 
 class OracleJoint:

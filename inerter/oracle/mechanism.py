@@ -59,19 +59,15 @@ class OracleMechanism(Mechanism):
         return self._derived
 
     def constraints(self, q, v):
-        """(C, C_v, γ) stacked over the joints, each from its Jets."""
-        C = np.empty(self.m)
-        Cq = np.zeros((self.m, self.n))
-        gamma = np.empty(self.m)
-        row = 0
-        for j in self.derived_joints:
-            c, jac, g = j.evaluate(q, v)
-            k = j.rows
-            C[row:row + k] = c
-            Cq[row:row + k, j.dofs] = jac
-            gamma[row:row + k] = g
-            row += k
-        return C, Cq, gamma
+        """(C, C_v, γ) stacked over the joints: C, its gradient and −C̈|v̇=0 of each row's Jet, on
+        one set of the bodies' Jets (each body's rotation written once per call)."""
+        joints = self.derived_joints
+        if not joints:
+            return np.zeros(0), np.zeros((0, self.n)), np.zeros(0)
+        jets = BodyJets(self, [p for j in joints for p in (j.a, j.b)], q, v, full=True)
+        rows = [r for j in joints for r in j.residuals(jets)]
+        return (np.array([r.v for r in rows]), np.array([r.g for r in rows]),
+                np.array([-r.d2 for r in rows]))
 
     # -- point forces ----------------------------------------------------------------------------
     def _add_point_force(self, Q, point, q, F):

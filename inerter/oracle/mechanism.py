@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from inerter.common.errors import SceneError
 from inerter.model.mechanism import Mechanism
 from inerter.oracle.derivation import OracleElement
 from inerter.oracle.jets import Jet
@@ -70,6 +71,16 @@ class OracleMechanism(Mechanism):
                 np.array([-r.d2 for r in rows]))
 
     # -- point forces ----------------------------------------------------------------------------
+    def _forces(self, scene):
+        """As the Mechanism's; refused in a 3D scene in Z-X-Z Euler angles, where the Jets of a
+        body's pose, written on its quaternion, do not apply."""
+        super()._forces(scene)
+        if self.dim == 3 and self.orientation.kind != "quaternion" and scene.forces:
+            name = next(iter(scene.forces))
+            raise SceneError(scene.source, "scene.orientation", self.orientation.kind,
+                             "orientation = \"quaternion\" for the oracle's point forces",
+                             f"the oracle differentiates quaternion kinematics only (force {name!r})")
+
     def _add_point_force(self, Q, point, q, F):
         """Q += (∂ṙ/∂v)ᵀ F over the point's body (virtual work; nothing for a ground point)."""
         if point.body < 0:

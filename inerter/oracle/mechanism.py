@@ -59,13 +59,25 @@ class OracleMechanism(Mechanism):
             self._derived = [OracleJoint(j, self, self.initial_q) for j in self.scene.joints.values()]
         return self._derived
 
+    def body_jets(self, q, v):
+        """The Jets of the bodies that joints and point forces touch, over all velocity coordinates,
+        at (q, v): kept for the next call at the same state (Eq. 33 asks for the forces and the
+        constraints at one state), so that each body's rotation is written once per state."""
+        key = (np.asarray(q, dtype=float).tobytes(), np.asarray(v, dtype=float).tobytes())
+        cached = self.__dict__.get("_jets")
+        if cached is None or cached[0] != key:
+            points = [p for j in self.derived_joints for p in (j.a, j.b)]
+            points += [p for _, p, _ in self.applied] + [p for _, p in self.feedback + self.input_forces]
+            cached = self._jets = (key, BodyJets(self, points, q, v, full=True))
+        return cached[1]
+
     def constraints(self, q, v):
         """(C, C_v, γ) stacked over the joints: C, its gradient and −C̈|v̇=0 of each row's Jet, on
         one set of the bodies' Jets (each body's rotation written once per call)."""
         joints = self.derived_joints
         if not joints:
             return np.zeros(0), np.zeros((0, self.n)), np.zeros(0)
-        jets = BodyJets(self, [p for j in joints for p in (j.a, j.b)], q, v, full=True)
+        jets = self.body_jets(q, v)
         rows = [r for j in joints for r in j.residuals(jets)]
         return (np.array([r.v for r in rows]), np.array([r.g for r in rows]),
                 np.array([-r.d2 for r in rows]))
@@ -100,6 +112,28 @@ class OracleMechanism(Mechanism):
             rdot = np.array([c.d1 for c in jets.point(point)])
         rate = 0.0 if static else float(d @ rdot)
         return -(f.kp * (float(d @ r) - f.reference) + f.kd * rate) * d
+
+    def point_forces(self, t, q, v, inputs=None):
+        """Σ (∂ṙ/∂v)ᵀ F over the applied, PD and input forces, on one set of the bodies' Jets
+        (∂ṙ/∂v does not depend on v; the PD law reads r and ṙ from the same Jets)."""
+        forces = [(point, fn(t) * np.asarray(f.direction, dtype=float)) for f, point, fn in self.applied]
+        if inputs is not None and len(inputs):
+            forces += [(point, np.asarray(inputs[k * self.dim:(k + 1) * self.dim], dtype=float))
+                       for k, (f, point) in enumerate(self.input_forces)]
+        Q = np.zeros(self.n)
+        if not forces and not self.feedback:
+            return Q
+        jets = self.body_jets(q, v)
+        for f, point in self.feedback:
+            r = jets.point(point)
+            d = np.asarray(f.direction, dtype=float)
+            along = sum(float(di) * c.v for di, c in zip(d, r)) - f.reference
+            rate = sum(float(di) * c.d1 for di, c in zip(d, r))
+            forces.append((point, -(f.kp * along + f.kd * rate) * d))
+        for point, F in forces:
+            if point.body >= 0:
+                Q += sum(float(fi) * c.g for fi, c in zip(F, jets.point(point)))
+        return Q
 
     # -- gravity and the ground motion -----------------------------------------------------------
     def _effects(self, scene):
@@ -138,13 +172,7 @@ class OracleMechanism(Mechanism):
                 e.add_force(q, v, Q, geo)
                 if with_mass:
                     e.add_mass(q, v, M, geo)
-        for f, point, fn in self.applied:
-            self._add_point_force(Q, point, q, fn(t) * np.asarray(f.direction))
-        for f, point in self.feedback:
-            self._add_point_force(Q, point, q, self._pd_force(f, point, q, v))
-        if inputs is not None and len(inputs):
-            for k, (f, point) in enumerate(self.input_forces):
-                self._add_point_force(Q, point, q, inputs[k * self.dim:(k + 1) * self.dim])
+        Q += self.point_forces(t, q, v, inputs)
         if self.ground_motion is not None:
             a_g = self.ground_motion.acceleration(t, inputs, len(self.input_forces) * self.dim)
             Q += self.frame_force(q, a_g)

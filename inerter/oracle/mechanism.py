@@ -13,7 +13,8 @@ and its elements from :class:`~.derivation.OracleElement`.
   and Ṙ are velocity coordinates, so Q is the same at every pose: derived once, at the scene's pose.
 * Ground motion: the bodies' coordinates are relative to the ground, which accelerates by a_g; in
   that frame each body's centre carries the d'Alembert force −m a_g (Shabana 2009, moving frames),
-  whose generalised force is −m (∂ṙ_c/∂v)ᵀ a_g by virtual work. An inerter device's housing, rod
+  whose generalised force is −m (∂Ṙ/∂v)ᵀ a_g by virtual work (∂Ṙ/∂v read off the centres' Jets,
+  the same at every pose). An inerter device's housing, rod
   and flywheel take theirs from :meth:`~.derivation.OracleElement.add_frame_force`.
 
 The bodies' mass matrix M0 = diag(m I, J) and the gyroscopic term −ω × Jω stay the Mechanism's
@@ -139,21 +140,25 @@ class OracleMechanism(Mechanism):
     def _effects(self, scene):
         """As the Mechanism's, with the weight −∂V/∂v derived (V = −Σ m g·R on Jets)."""
         super()._effects(scene)
+        centres = centre_jets(self, self.initial_q, np.zeros(self.n))
+        #: ∂Ṙ/∂v of each body's centre, dim × n: the same at every pose (Ṙ are velocity coordinates).
+        self.centre_rates = [np.array([x.g for x in R]) for R in centres]
         g = scene.effects.get("gravity")
         if self.gravity is None:
             return
-        zero = np.zeros(self.n)
         V = Jet.constant(0.0, self.n)
-        for m, R in zip(self.masses, centre_jets(self, self.initial_q, zero)):
+        for m, R in zip(self.masses, centres):
             for gi, x in zip(g, R):
                 V = V - float(m * gi) * x
         self.gravity = -V.g
 
     def frame_force(self, q, a_g):
-        """The bodies' d'Alembert forces −m a_g at their centres, as generalised forces."""
+        """The bodies' d'Alembert forces −m a_g at their centres, as generalised forces
+        −m (∂Ṙ/∂v)ᵀ a_g (virtual work)."""
         Q = np.zeros(self.n)
-        for m, R in zip(self.masses, centre_jets(self, q, np.zeros(self.n))):
-            Q -= sum(float(m * a) * x.g for a, x in zip(a_g, R))
+        a_g = np.asarray(a_g, dtype=float)
+        for m, G in zip(self.masses, self.centre_rates):
+            Q -= m * (G.T @ a_g)
         return Q
 
     def assemble(self, t, q, v, inputs=None, with_mass=True, z=None):

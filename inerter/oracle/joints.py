@@ -4,14 +4,15 @@ there, never read from :mod:`inerter.model.joints`.
 
 The rows are the standard conditions (Nikravesh 1988; Shabana 2009, as the paper cites them):
 coincident points r_b − r_a = 0, dot-1 rows s_a·s_b = 0 between a vector fixed in a and one fixed
-in b, dot-2 rows s_a·(r_b − r_a) = 0; a body-fixed vector is s = A s̄ and a point r = R + A ū, with
-the body's rotation A written on Jets from its angle (2D) or its quaternion (3D, :func:`rotation`). With one Jet per row, carrying the velocity coordinates'
-gradient and the derivatives along the motion (q̇ = B(q) v, and q̈ at v̇ = 0),
+in b, dot-2 rows s_a·(r_b − r_a) = 0; a body-fixed vector is s = A s̄ and a point r = R + A ū,
+the body's rotation A written on Jets from its angle (2D) or its quaternion (3D, :func:`rotation`).
+With one Jet per row, carrying the velocity coordinates' gradient and the derivatives along the
+motion (q̇ = B(q) v, and q̈ at v̇ = 0),
 
     C = C.v,   C_v = ∂Ċ/∂v = C.g,   γ = −C̈|v̇=0 = −C.d2,
 
 since Ċ = C_v v is linear in v, so C̈ = C_v v̇ + C̈|v̇=0 and C̈ = 0 reads C_v v̇ = γ (Eq. 26's Q_d).
-Each joint's Jets are evaluated once per call and give all its rows.
+The bodies' Jets are evaluated once per state and give all the rows (:class:`BodyJets`).
 
 The rows are chosen as the model's joints choose theirs (the same perpendiculars completing the
 axis, b's copies of a's vectors taken at the initial pose), so that C, C_v, γ and the multipliers λ
@@ -19,17 +20,21 @@ are comparable row by row: the rows define the manifold and what λ means, the d
 the oracle's own. A screw joint's row is the relative turn φ about the axis since the initial pose
 minus ρ = 2π/p times the advance along it, φ from D = A_aᵀA_b R₀ᵀ (R₀ = A_aᵀA_b at t = 0) as
 φ = atan2(½ n̄·vee(D − Dᵀ), ½(tr D − n̄ᵀDn̄)) (the rotation's axis-angle, Shabana 2009), taken
-modulo 2π. Its C_v and γ here are the exact derivatives of that φ; the model writes Ċ's angle part
-as n·(ω_b − ω_a), equal to them where the relative rotation is about the axis and the velocity
-keeps it so (the joint's own manifold), not elsewhere.
+modulo 2π, and its rate is the relative angular velocity about the axis, s·(ω_b − ω_a) (a screw
+turns with the relative spin about its axis), ω from ω̃ = ȦAᵀ on Jets: C_v and γ are that rate's
+gradient and derivative along the motion. On the joint's manifold (the relative rotation about the
+axis) it is φ's own derivative, which the oracle also takes (:attr:`OracleJoint.exact_turn`, used by
+the tests to check it); off the manifold the two differ (by 0.02 to 0.1 in C_v at the random poses
+of tests/test_oracle_joints.py).
 """
 from __future__ import annotations
 
 import math
+
 import numpy as np
 
 from inerter.common.errors import SceneError
-from inerter.oracle.jets import Jet, dot, jatan2, jcos, jsin, seed
+from inerter.oracle.jets import Jet, angular_velocity, dot, jatan2, jcos, jsin, seed
 
 
 def perpendiculars(axis):
@@ -124,6 +129,9 @@ class OracleJoint:
     def __init__(self, spec, mech, q0):
         self.name, self.kind = spec.name, spec.type
         self.mech = mech
+        #: A 3D screw's turn differentiated as the angle φ itself (True) instead of by its
+        #: definition's rate, the relative angular velocity about the axis (module docstring).
+        self.exact_turn = False
         self.a, self.b = mech.points[spec.point_a], mech.points[spec.point_b]
         bodies = []
         for p in (self.a, self.b):
@@ -222,7 +230,9 @@ class OracleJoint:
         return rows
 
     def _screw(self, jets, d):
-        """φ − ρ(s·d − x₀), modulo 2π (φ: the relative turn about the axis since the initial pose)."""
+        """φ − ρ(s·d − x₀), modulo 2π (φ: the relative turn about the axis since the initial pose),
+        its rate the relative angular velocity about the axis (:meth:`_turn_rate`) or, with
+        :attr:`exact_turn`, φ's own derivatives."""
         Aa, Ab = jets.rotation(self.a), jets.rotation(self.b)
         rel = [[sum((Aa[k][i] * Ab[k][j] for k in range(3)), Jet.constant(0.0, jets.n)) for j in range(3)]
                for i in range(3)]                                              # A_aᵀ A_b
@@ -233,8 +243,22 @@ class OracleJoint:
         nDn = sum((D[i][j] * float(n[i] * n[j]) for i in range(3) for j in range(3)), Jet.constant(0.0, jets.n))
         cosine = 0.5 * (D[0][0] + D[1][1] + D[2][2] - nDn)
         s = jets.vector(self.a, self.axis)
-        c = jatan2(sine, cosine) - self.ratio * (dot(s, d) - self.advance0)
+        turn = jatan2(sine, cosine) if self.exact_turn else self._turn_rate(jatan2(sine, cosine).v, Aa, Ab, s)
+        c = turn - self.ratio * (dot(s, d) - self.advance0)
         return c + (math.remainder(c.v, 2.0 * math.pi) - c.v)
+
+    @staticmethod
+    def _turn_rate(phi, Aa, Ab, s):
+        """The turn φ as a Jet whose rate is the relative angular velocity about the axis,
+        φ̇ := s·(ω_b − ω_a), ω̃ = ȦAᵀ of each body's rotation on Jets (:func:`.jets.angular_velocity`):
+        gradient s·∂(ω_b − ω_a)/∂v, and d/dt at v̇ = 0 ṡ·(ω_b − ω_a) + s·(α_b − α_a) with α the
+        angular accelerations at v̇ = 0. On the joint's manifold (the relative rotation about the
+        axis) this is φ's derivative; off it, the rate the joint is defined by (a screw turns with
+        the relative spin about its axis, Shabana 2009)."""
+        _, wa, dwa, alpha_a = angular_velocity(Aa)
+        _, wb, dwb, alpha_b = angular_velocity(Ab)
+        sv, sd = np.array([c.v for c in s]), np.array([c.d1 for c in s])
+        return Jet(phi, float(sv @ (wb - wa)), float(sd @ (wb - wa) + sv @ (alpha_b - alpha_a)), sv @ (dwb - dwa))
 
     def evaluate(self, q, v):
         """(C, C_v over :attr:`dofs`, γ) at (q, v), from one evaluation of the joint's Jets."""

@@ -9,13 +9,14 @@ and its elements from :class:`~.derivation.OracleElement`.
   velocities). A PD actuator along the fixed unit d: F = −[k_p(d·r − ref) + k_d d·ṙ] d, with r and
   ṙ the Jet's value and first derivative.
 * Gravity: the potential V = −Σ m g·r_c of the bodies' centres r_c (the coordinates R), Q = −∂V/∂v
-  (V on Jets of the coordinates, its gradient over the velocity coordinates). V is linear in R
-  and Ṙ are velocity coordinates, so Q is the same at every pose: derived once, at the scene's pose.
+  (V on Jets of the coordinates, its gradient over the velocity coordinates). V is linear in R,
+  whose rates Ṙ are velocity coordinates, so Q is the same at every pose: derived once, at the
+  scene's pose.
 * Ground motion: the bodies' coordinates are relative to the ground, which accelerates by a_g; in
   that frame each body's centre carries the d'Alembert force −m a_g (Shabana 2009, moving frames),
   whose generalised force is −m (∂Ṙ/∂v)ᵀ a_g by virtual work (∂Ṙ/∂v read off the centres' Jets,
-  the same at every pose). An inerter device's housing, rod
-  and flywheel take theirs from :meth:`~.derivation.OracleElement.add_frame_force`.
+  the same at every pose). An inerter device's housing, rod and flywheel take theirs from
+  :meth:`~.derivation.OracleElement.add_frame_force`.
 
 The bodies' mass matrix M0 = diag(m I, J) and the gyroscopic term −ω × Jω stay the Mechanism's
 (rigid-body inertia, which the element and joint derivations do not depend on)."""
@@ -50,6 +51,14 @@ class OracleMechanism(Mechanism):
 
     def __init__(self, scene):
         super().__init__(scene, element_factory=OracleElement)
+
+    def terms(self) -> list[str]:
+        """The Mechanism's description, its first line naming what the oracle derives."""
+        lines = super().terms()
+        lines[0] = lines[0].replace("oracle: element forces from d²L/dt² by automatic differentiation",
+                                    "oracle: element forces, joints, point forces, weight and ground motion by "
+                                    "automatic differentiation")
+        return lines
 
     # -- joints ----------------------------------------------------------------------------------
     @property

@@ -18,7 +18,7 @@ from inerter.engine.events import declares_events, device_events
 from inerter.engine.equilibrium import natural_frequencies, static_equilibrium
 from inerter.model.mechanism import Mechanism
 from inerter.elements.device import MODE_SOLVES
-from inerter.oracle import OracleElement, require_definitions
+from inerter.oracle import OracleMechanism, require_definitions
 from inerter.engine.outputs import Signals
 from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
 from inerter.common.errors import InerterError, SceneError, SimulationError
@@ -53,7 +53,7 @@ class Model:
         self.scene = load_scene(self.path, self.overrides, self.origins)
         if oracle:                        # a kind without the oracle's own definition: refused, by name
             require_definitions(self.scene)
-        self.mechanism = Mechanism(self.scene, element_factory=OracleElement if oracle else None)
+        self.mechanism = OracleMechanism(self.scene) if oracle else Mechanism(self.scene)
         self.signals = Signals(self.mechanism)
         self.is_oracle = oracle
         self._static = None

@@ -8,8 +8,9 @@ kernels, so comparing those two paths no longer checks the laws. The oracle
 terminal distance L(q), and each rotational element's torque by differentiating its potential or
 dissipation function, on Jets (inerter.oracle; in 3D its angle, the twist about its axis, from
 the relative rotation's quaternion): code that shares nothing with the element laws or the
-kernels. Joints, point forces, gravity and the ground motion are the numpy Mechanism's, whose code
-is separate from the kernels', so they are checked here against the kernels too.
+kernels. Its joints (C, C_v, γ from each joint's definition, on Jets), point forces (virtual
+work), weight (−∂V/∂v) and ground motion (d'Alembert forces) are its own too
+(inerter.oracle.mechanism), so they are checked here against the kernels independently.
 
 Three checks per scene:
 

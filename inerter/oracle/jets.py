@@ -138,34 +138,22 @@ def position(q, point):
 def seed(q, v, qi, vi, dim, n, k):
     """Jets for one body's coordinates along the motion, with gradients w.r.t. its velocity
     coordinates (placed at columns k...). 2D: q = (x, y, θ), q̇ = v, q̈|v̇=0 = 0. 3D: R with
-    Ṙ = v; quaternion p with ṗ = ½ p⊗(0, ω) and p̈|ω̇=0 = ½ ṗ⊗(0, ω) = −¼|ω|² p."""
-    if dim == 2:
-        jets = []
-        for j in range(3):
-            g = np.zeros(n)
-            g[k + j] = 1.0
-            jets.append(Jet(float(q[qi + j]), float(v[vi + j]), 0.0, g))
-        return jets
-    jets = []
+    Ṙ = v; quaternion p with ṗ = ½ p⊗(0, ω) = E(p) ω and p̈|ω̇=0 = ½ ṗ⊗(0, ω) = −¼|ω|² p."""
+    size = 3 if dim == 2 else 7
+    G = np.zeros((size, n))
     for j in range(3):
-        g = np.zeros(n)
-        g[k + j] = 1.0
-        jets.append(Jet(float(q[qi + j]), float(v[vi + j]), 0.0, g))
-    p = np.asarray(q[qi + 3:qi + 7], dtype=float)
+        G[j, k + j] = 1.0
+    jets = [Jet(float(q[qi + j]), float(v[vi + j]), 0.0, G[j]) for j in range(3)]
+    if dim == 2:
+        return jets
+    w0, x, y, z = (float(c) for c in q[qi + 3:qi + 7])
+    E = 0.5 * np.array(((-x, -y, -z), (w0, -z, y), (z, w0, -x), (-y, x, w0)))     # ½ p⊗(0, e_j), j = 1..3
+    G[3:, k + 3:k + 6] = E
     w = np.asarray(v[vi + 3:vi + 6], dtype=float)
-
-    def rate(pp, ww):                                          # ½ p ⊗ (0, ω)
-        a, b, c = ww
-        return 0.5 * np.array((-pp[1] * a - pp[2] * b - pp[3] * c, pp[0] * a + pp[2] * c - pp[3] * b,
-                               pp[0] * b + pp[3] * a - pp[1] * c, pp[0] * c + pp[1] * b - pp[2] * a))
-    pdot = rate(p, w)
-    pddot = rate(pdot, w)
-    basis = [rate(p, e) for e in np.eye(3)]
-    for i in range(4):
-        g = np.zeros(n)
-        for j in range(3):
-            g[k + 3 + j] = basis[j][i]
-        jets.append(Jet(float(p[i]), float(pdot[i]), float(pddot[i]), g))
+    pdot = E @ w
+    half_w2 = -0.25 * float(w @ w)
+    for i, pi in enumerate((w0, x, y, z)):
+        jets.append(Jet(pi, float(pdot[i]), half_w2 * pi, G[3 + i]))
     return jets
 
 

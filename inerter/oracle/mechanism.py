@@ -1,0 +1,195 @@
+"""The oracle's mechanism: the compiled :class:`~inerter.model.mechanism.Mechanism` with its joints,
+point forces, gravity and ground motion derived here on Jets (:mod:`.jets`) from their definitions,
+and its elements from :class:`~.derivation.OracleElement`.
+
+* Joints (:mod:`.joints`): C(q) written from each joint's definition, C_v = ∂Ċ/∂v and
+  γ = −C̈|v̇=0 by differentiation.
+* Point forces, by virtual work: a force F at a point r(q) does δW = F·δr = F·(∂ṙ/∂v) δv, so its
+  generalised force is (∂ṙ/∂v)ᵀ F, ∂ṙ/∂v the gradient of r's Jets (Kane & Levinson 1985, partial
+  velocities). A PD actuator along the fixed unit d: F = −[k_p(d·r − ref) + k_d d·ṙ] d, with r and
+  ṙ the Jet's value and first derivative.
+* Gravity: the potential V = −Σ m g·r_c of the bodies' centres r_c (the coordinates R), Q = −∂V/∂v
+  (V on Jets of the coordinates, its gradient over the velocity coordinates). V is linear in R,
+  whose rates Ṙ are velocity coordinates, so Q is the same at every pose: derived once, at the
+  scene's pose.
+* Ground motion: the bodies' coordinates are relative to the ground, which accelerates by a_g; in
+  that frame each body's centre carries the d'Alembert force −m a_g (Shabana 2009, moving frames),
+  whose generalised force is −m (∂Ṙ/∂v)ᵀ a_g by virtual work (∂Ṙ/∂v read off the centres' Jets,
+  the same at every pose). An inerter device's housing, rod and flywheel take theirs from
+  :meth:`~.derivation.OracleElement.add_frame_force`.
+
+The bodies' mass matrix M0 = diag(m I, J) and the gyroscopic term −ω × Jω stay the Mechanism's
+(rigid-body inertia, which the element and joint derivations do not depend on)."""
+from __future__ import annotations
+
+import numpy as np
+
+from inerter.common.errors import SceneError
+from inerter.model.mechanism import Mechanism
+from inerter.oracle.derivation import OracleElement
+from inerter.oracle.jets import Jet
+from inerter.oracle.joints import BodyJets, OracleJoint
+
+
+def centre_jets(mech, q, v):
+    """The bodies' centres R as Jets over all velocity coordinates (Ṙ = v, R̈|v̇=0 = 0)."""
+    out = []
+    for qi, vi in zip(mech.q_index, mech.v_index):
+        jets = []
+        for j in range(mech.dim):
+            g = np.zeros(mech.n)
+            g[vi + j] = 1.0
+            jets.append(Jet(float(q[qi + j]), float(v[vi + j]), 0.0, g))
+        out.append(jets)
+    return out
+
+
+class OracleMechanism(Mechanism):
+    """A scene compiled with the oracle's elements, joints, point forces, gravity and ground motion
+    (module docstring); everything else (coordinates, mass matrix, solution of Eq. 33) is the
+    Mechanism's."""
+
+    def __init__(self, scene):
+        super().__init__(scene, element_factory=OracleElement)
+
+    def terms(self) -> list[str]:
+        """The Mechanism's description, its first line naming what the oracle derives."""
+        lines = super().terms()
+        lines[0] = lines[0].replace("oracle: element forces from d²L/dt² by automatic differentiation",
+                                    "oracle: element forces, joints, point forces, weight and ground motion by "
+                                    "automatic differentiation")
+        return lines
+
+    # -- joints ----------------------------------------------------------------------------------
+    @property
+    def derived_joints(self):
+        """The joints as :class:`.joints.OracleJoint`, built at the scene's pose on first use (the
+        Mechanism assembles its initial pose with :meth:`constraints` while it is being built)."""
+        if "_derived" not in self.__dict__:
+            self._derived = [OracleJoint(j, self, self.initial_q) for j in self.scene.joints.values()]
+        return self._derived
+
+    def body_jets(self, q, v):
+        """The Jets of the bodies that joints and point forces touch, over all velocity coordinates,
+        at (q, v): kept for the next call at the same state (Eq. 33 asks for the forces and the
+        constraints at one state), so that each body's rotation is written once per state."""
+        key = (np.asarray(q, dtype=float).tobytes(), np.asarray(v, dtype=float).tobytes())
+        cached = self.__dict__.get("_jets")
+        if cached is None or cached[0] != key:
+            points = [p for j in self.derived_joints for p in (j.a, j.b)]
+            points += [p for _, p, _ in self.applied] + [p for _, p in self.feedback + self.input_forces]
+            cached = self._jets = (key, BodyJets(self, points, q, v, full=True))
+        return cached[1]
+
+    def constraints(self, q, v):
+        """(C, C_v, γ) stacked over the joints: C, its gradient and −C̈|v̇=0 of each row's Jet, on
+        one set of the bodies' Jets (each body's rotation written once per call)."""
+        joints = self.derived_joints
+        if not joints:
+            return np.zeros(0), np.zeros((0, self.n)), np.zeros(0)
+        jets = self.body_jets(q, v)
+        rows = [r for j in joints for r in j.residuals(jets)]
+        return (np.array([r.v for r in rows]), np.array([r.g for r in rows]),
+                np.array([-r.d2 for r in rows]))
+
+    # -- point forces ----------------------------------------------------------------------------
+    def _forces(self, scene):
+        """As the Mechanism's; refused in a 3D scene in Z-X-Z Euler angles, where the Jets of a
+        body's pose, written on its quaternion, do not apply."""
+        super()._forces(scene)
+        if self.dim == 3 and self.orientation.kind != "quaternion" and scene.forces:
+            name = next(iter(scene.forces))
+            raise SceneError(scene.source, "scene.orientation", self.orientation.kind,
+                             "orientation = \"quaternion\" for the oracle's point forces",
+                             f"the oracle differentiates quaternion kinematics only (force {name!r})")
+
+    def _add_point_force(self, Q, point, q, F):
+        """Q += (∂ṙ/∂v)ᵀ F over the point's body (virtual work; nothing for a ground point)."""
+        if point.body < 0:
+            return
+        jets = BodyJets(self, (point,), q, np.zeros(self.n))
+        dofs = slice(self.v_index[point.body], self.v_index[point.body] + jets.n)
+        Q[dofs] += sum(float(f) * r.g for f, r in zip(F, jets.point(point)))
+
+    def _pd_force(self, f, point, q, v, static=False):
+        """F = −[k_p(d·r − ref) + k_d d·ṙ] d (without the rate term for the static equilibrium)."""
+        d = np.asarray(f.direction, dtype=float)
+        if point.body < 0:
+            r, rdot = np.asarray(point.local, dtype=float), np.zeros(len(d))
+        else:
+            jets = BodyJets(self, (point,), q, v)
+            r = np.array([c.v for c in jets.point(point)])
+            rdot = np.array([c.d1 for c in jets.point(point)])
+        rate = 0.0 if static else float(d @ rdot)
+        return -(f.kp * (float(d @ r) - f.reference) + f.kd * rate) * d
+
+    def point_forces(self, t, q, v, inputs=None):
+        """Σ (∂ṙ/∂v)ᵀ F over the applied, PD and input forces, on one set of the bodies' Jets
+        (∂ṙ/∂v does not depend on v; the PD law reads r and ṙ from the same Jets)."""
+        forces = [(point, fn(t) * np.asarray(f.direction, dtype=float)) for f, point, fn in self.applied]
+        if inputs is not None and len(inputs):
+            forces += [(point, np.asarray(inputs[k * self.dim:(k + 1) * self.dim], dtype=float))
+                       for k, (f, point) in enumerate(self.input_forces)]
+        Q = np.zeros(self.n)
+        if not forces and not self.feedback:
+            return Q
+        jets = self.body_jets(q, v)
+        for f, point in self.feedback:
+            r = jets.point(point)
+            d = np.asarray(f.direction, dtype=float)
+            along = sum(float(di) * c.v for di, c in zip(d, r)) - f.reference
+            rate = sum(float(di) * c.d1 for di, c in zip(d, r))
+            forces.append((point, -(f.kp * along + f.kd * rate) * d))
+        for point, F in forces:
+            if point.body >= 0:
+                Q += sum(float(fi) * c.g for fi, c in zip(F, jets.point(point)))
+        return Q
+
+    # -- gravity and the ground motion -----------------------------------------------------------
+    def _effects(self, scene):
+        """As the Mechanism's, with the weight −∂V/∂v derived (V = −Σ m g·R on Jets)."""
+        super()._effects(scene)
+        centres = centre_jets(self, self.initial_q, np.zeros(self.n))
+        #: ∂Ṙ/∂v of each body's centre, dim × n: the same at every pose (Ṙ are velocity coordinates).
+        self.centre_rates = [np.array([x.g for x in R]) for R in centres]
+        g = scene.effects.get("gravity")
+        if self.gravity is None:
+            return
+        V = Jet.constant(0.0, self.n)
+        for m, R in zip(self.masses, centres):
+            for gi, x in zip(g, R):
+                V = V - float(m * gi) * x
+        self.gravity = -V.g
+
+    def frame_force(self, q, a_g):
+        """The bodies' d'Alembert forces −m a_g at their centres, as generalised forces
+        −m (∂Ṙ/∂v)ᵀ a_g (virtual work)."""
+        Q = np.zeros(self.n)
+        a_g = np.asarray(a_g, dtype=float)
+        for m, G in zip(self.masses, self.centre_rates):
+            Q -= m * (G.T @ a_g)
+        return Q
+
+    def assemble(self, t, q, v, inputs=None, with_mass=True, z=None):
+        """M + M_I and Q_e + Q_Iv as :meth:`Mechanism.assemble`, with the weight, the point forces
+        and the ground motion's forces derived here."""
+        M = self.M0.copy() if with_mass else None
+        Q = np.zeros(self.n) if self.gravity is None else self.gravity.copy()
+        if self.dim == 3:
+            for i, J in enumerate(self.inertia_body):
+                k = self.v_index[i] + 3
+                w = v[k:k + 3]
+                Q[k:k + 3] -= np.cross(w, J @ w)                # gyroscopic term, body frame
+        for group in self.groups:
+            geo = group[0].geometry(q, v)
+            for e in group:
+                e.add_force(q, v, Q, geo)
+                if with_mass:
+                    e.add_mass(q, v, M, geo)
+        Q += self.point_forces(t, q, v, inputs)
+        if self.ground_motion is not None:
+            a_g = self.ground_motion.acceleration(t, inputs, len(self.input_forces) * self.dim)
+            Q += self.frame_force(q, a_g)
+            for e in self.inerters:
+                e.add_frame_force(q, v, Q, a_g)
+        return M, Q

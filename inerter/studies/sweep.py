@@ -310,7 +310,7 @@ def run_one(task: dict) -> dict:
         else:
             from inerter.api import load
             result = load(scene, **task["overrides"]).simulate(stop_time=task["stop_time"],
-                                                               path=task.get("path", "numpy"))
+                                                               path=task.get("path", "compiled"))
         status, error = result.status, ("" if result.status == "ok" else result.message)
         metrics = {k: v for k, v in result.metrics.items()
                    if isinstance(v, (int, float)) and not isinstance(v, bool)}

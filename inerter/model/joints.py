@@ -171,8 +171,11 @@ class SpatialJoint:
         return np.array(C), np.array(rows), np.array(gamma)
 
 
-def _perpendiculars(axis):
-    """Two unit vectors completing `axis` to a right-handed orthonormal frame."""
+def perpendiculars(axis):
+    """Two unit vectors completing `axis` to a right-handed orthonormal frame: n̂ × h normalised,
+    h the x axis (the y axis where n̂ is within about 26° of x), then n̂ × that. A convention, not
+    physics: it picks which rows a joint's axis condition is written as (and so what its
+    multipliers λ mean), and the oracle's joints take the same (inerter.oracle.joints)."""
     a = np.asarray(axis, dtype=float)
     a = a / np.linalg.norm(a)
     helper = np.array((1.0, 0.0, 0.0)) if abs(a[0]) < 0.9 else np.array((0.0, 1.0, 0.0))
@@ -216,7 +219,7 @@ def make_joint(spec, mech, q0):
         dot1 = [(ex, in_b(ey)), (ey, in_b(ez)), (ez, in_b(ex))]
         return SpatialJoint(spec.name, "fixed", pair, fa, fb, dot1=dot1)
     axis = np.asarray(spec.axis, dtype=float)
-    p1, p2 = _perpendiculars(axis)
+    p1, p2 = perpendiculars(axis)
     if spec.type == "screw":
         rows = dict(coincident=False) if spec.coupling_only else _cylindrical_rows(axis, p1, p2, in_b, spec)
         d0 = pair.evaluate(q0, z)[0]

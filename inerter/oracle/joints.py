@@ -15,8 +15,9 @@ since Ċ = C_v v is linear in v, so C̈ = C_v v̇ + C̈|v̇=0 and C̈ = 0 reads 
 The bodies' Jets are evaluated once per state and give all the rows (:class:`BodyJets`).
 
 The rows are chosen as the model's joints choose theirs (the same perpendiculars completing the
-axis, b's copies of a's vectors taken at the initial pose), so that C, C_v, γ and the multipliers λ
-are comparable row by row: the rows define the manifold and what λ means, the derivation here is
+axis, :func:`inerter.model.joints.perpendiculars`, a convention the two share; b's copies of a's
+vectors taken at the initial pose), so that C, C_v, γ and the multipliers λ are comparable row by
+row: the rows define the manifold and what λ means, the derivation here is
 the oracle's own. A screw joint's row is the relative turn φ about the axis since the initial pose
 minus ρ = 2π/p times the advance along it, φ from D = A_aᵀA_b R₀ᵀ (R₀ = A_aᵀA_b at t = 0) as
 φ = atan2(½ n̄·vee(D − Dᵀ), ½(tr D − n̄ᵀDn̄)) (the rotation's axis-angle, Shabana 2009), taken
@@ -34,18 +35,8 @@ import math
 import numpy as np
 
 from inerter.common.errors import SceneError
+from inerter.model.joints import perpendiculars
 from inerter.oracle.jets import Jet, angular_velocity, dot, jatan2, jcos, jsin, seed
-
-
-def perpendiculars(axis):
-    """Two unit vectors completing `axis` to a right-handed orthonormal frame: n̂ × h normalised,
-    h the x axis (the y axis where n̂ is within about 26° of x), then n̂ × that."""
-    a = np.asarray(axis, dtype=float)
-    a = a / np.linalg.norm(a)
-    helper = np.array((1.0, 0.0, 0.0)) if abs(a[0]) < 0.9 else np.array((0.0, 1.0, 0.0))
-    p1 = np.cross(a, helper)
-    p1 /= np.linalg.norm(p1)
-    return p1, np.cross(a, p1)
 
 
 class BodyJets:

@@ -12,7 +12,7 @@ kernels. Its joints (C, C_v, γ from each joint's definition, on Jets), point fo
 work), weight (−∂V/∂v) and ground motion (d'Alembert forces) are its own too
 (inerter.oracle.mechanism), so they are checked here against the kernels independently.
 
-Three checks per scene:
+Three checks per scene (four with internal states):
 
 * accelerations: `Kernel.accelerations` (q̈ and λ of Eq. 33) against the oracle mechanism's at the
   initial state, at samples of the oracle's run, at those positions with random velocities, and at
@@ -28,6 +28,11 @@ Three checks per scene:
 An inerter's device (scenarios/two_bar_2d_device.toml) is covered as any element: the oracle derives
 it from its kinetic energy, dissipation function and contact potential; its outputs are compared
 over the slope of their laws (device_scales), as a force over its coefficient.
+A device's internal states (series compliance, backlash, dissipated energy: series_inerter_2d, the
+hard backlash_device_2d, end_stop_device_2d, stick_slip_device_2d, tests/data/device_combo_series_3d)
+are compared as the motion is: the states carry z (y = [q, v, z]), ż is a fourth check
+(test_state_rates_equal_the_oracles), and the oracle derives them from an extended Lagrangian in
+which the series deflection is a coordinate (inerter.oracle.series).
 
 Tolerances (module constants below, each with its reason) are as tight as those of the
 numpy-vs-compiled checks these replace (accelerations 1e-12 relative, outputs 1e-12) or tighter

@@ -14,7 +14,9 @@ Under the small-displacement law: F = b s̈ with s(q) = ê0·r(q), ê0 the initi
 ê0 (generalised force −F ∇s), s differentiated on Jets as L is.
 An inerter's device (:class:`OracleDevice`) takes its inertance from the kinetic energy of its
 flywheel or channel fluid, its friction and channel damping from their dissipation function, its
-end stops from their potential and Hunt-Crossley dissipation function.
+end stops from their potential and Hunt-Crossley dissipation function. With series compliance
+(and backlash) the inerter strokes with u = L − s, s one more coordinate of the element
+(:mod:`.series`, :meth:`OracleElement.extended`); its flywheel, friction and channel then act on u̇.
 An error in either the fast path or this module shows up as a disagreement between the two.
 
 Rotational elements (:mod:`inerter.oracle.rotational`) are derived in the same way from their angle

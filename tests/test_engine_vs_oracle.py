@@ -99,6 +99,24 @@ TOL_RUN = 2e-10
 RUN_TIME = 2.0
 RUN_TIME_GROUND_RECORD = 0.5
 
+#: The hard cases whose contacts (a device's end stops, backlash) make the runs part: the contact
+#: forces' kinks (the clip at 0, δⁿ at first touch) and the damping's jump at engagement are where
+#: DOP853's error estimate no longer bounds the step's error, so two runs of the same equations whose
+#: right-hand sides differ by round-off take different steps there and part by far more than RTOL
+#: per step. Measured over 2 s against TOL_RUN = 2e-10: backlash_device_2d 4.0e-10 (eq9, from
+#: 1.82 s) and 4.0e-8 (eq8, from 1.1 s), end_stop_device_2d 1.5e-8 (from its first contact at
+#: 0.17 s), device_combo_series_3d 1.5e-8 (eq9, from 0.75 s) and 1.0e-7 (eq8, from 0.42 s); the
+#: oracle's own run at ATOL 1e-14 against its run at ATOL 1e-15 parts by as much (4.0e-8 on
+#: backlash_device_2d-eq8, 1.1e-7 on end_stop_device_2d-eq9), so the integrator, not the laws,
+#: sets that difference. Their
+#: laws are held to TOL_ACC and TOL_OUT at the states of `_states`, the run's samples past many
+#: contacts included (the oracle's run goes on to RUN_TIME), and the engine's runs to TOL_RUN over
+#: RUN_TIME_IMPACTS = 0.15 s against the first samples of the oracle's: the first backlash
+#: engagements (0.05 s, device_combo_series_3d 0.03 s) and device_combo_series_3d's first stop
+#: contact (0.13 s), but not end_stop_device_2d's (0.17 s).
+IMPACT_CASES = {"backlash_device_2d", "end_stop_device_2d", "device_combo_series_3d"}
+RUN_TIME_IMPACTS = 0.15
+
 #: Cases that are not shipped scenes as they stand: Z-X-Z Euler angles (gimbal_lock_3d has no
 #: elements, so there the oracle is the numpy Mechanism itself: this case checks the kinematics'
 #: plumbing, not the elements' physics), the small-displacement inerter law in 2D and 3D (the
@@ -432,11 +450,15 @@ def test_a_run_equals_the_oracles(reference, case, path):
     elements meet at 1.11 s) stops at the same sample on both."""
     ref = reference(case)
     engine = Engine(ref.model, path)
-    run, values = engine.run(ref.settings, ref.inputs)
+    settings, n = ref.settings, len(ref.run.time)
+    if case.path.stem in IMPACT_CASES:          # the runs part at contacts: the first RUN_TIME_IMPACTS
+        settings = ref.model.settings(method="DOP853", stop_time=RUN_TIME_IMPACTS, rtol=RTOL, atol=ATOL)
+        n = int(np.searchsorted(ref.run.time, RUN_TIME_IMPACTS * (1.0 + 1e-12), side="right"))
+    run, values = engine.run(settings, ref.inputs)
     assert run.status == ref.run.status, (run.message, ref.run.message)
-    assert np.array_equal(run.time, ref.run.time)
+    assert np.array_equal(run.time, ref.run.time[:n])
     names = ref.model.signals.names
-    a, b = values / ref.scale, ref.outputs / ref.scale
+    a, b = values / ref.scale, ref.outputs[:n] / ref.scale
     dev = np.abs(a - b) / np.maximum(1.0, np.max(np.abs(b), axis=0))
     i, k = np.unravel_index(int(np.argmax(dev)), dev.shape)
     assert dev[i, k] <= TOL_RUN, (case.id, "t =", run.time[i], names[k], a[i, k], b[i, k])

@@ -165,6 +165,12 @@ class OracleDevice:
     * End stops: penetration δ = L_min − L or L − L_max, the potential V = k_s δⁿ⁺¹/(n+1) and
       the Hunt-Crossley dissipation R = ½ c_s δⁿ δ̇²; a contact pushes only, so its normal force is
       N = max(0, dV/dδ + ∂R/∂δ̇), acting as −N (lower stop) or +N (upper) along the element.
+    * Series compliance and backlash (:mod:`.series`): the inerter strokes with u = L − s, s one
+      more coordinate; T(u̇), D(u̇) on the inerter's own stroke rate, the stops still on L.
+    * Dissipated energy: ż = p_loss, the power of D, of the contacts and of the series connection
+      (:meth:`loss`).
+    A screw efficiency is refused (b_eff switches with the sign of L̈: no energy or dissipation
+    function gives it), and so is a mount beside a compliance.
     """
 
     def __init__(self, device):

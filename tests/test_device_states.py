@@ -462,7 +462,8 @@ def _backlash_model(p, t_eval):
                          ids=["series", "backlash"])
 def test_both_paths_integrate_the_internal_states(scene, tolerance, path):
     """Over 1 s (DOP853 at the scenes' rtol 1e-10), each path (the compiled loop, and the numpy
-    path: scipy's DOP853 on the readable evaluators; the oracle does not take internal states)
+    path: scipy's DOP853 on the readable evaluators; the engine against the oracle's derivation of
+    the internal states is tests/test_engine_vs_oracle.py)
     against a reference of its own: for the series scene the closed form of its two modes
     (_series_states), for the backlash scene an explicit model (_backlash_model). The mass's
     position and velocity, the series deflection, the device's force (and the spring's) within

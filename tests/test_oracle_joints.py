@@ -100,7 +100,7 @@ def test_joint_rows_equal_the_models(path):
 def _oracle_takes(path):
     try:
         inerter.load(path).oracle()
-    except inerter.InerterError:            # an inerter device with internal states: not derived
+    except inerter.InerterError:            # an inerter device with a screw efficiency: not derived
         return False
     return True
 

@@ -8,7 +8,11 @@ and the twist about the element's axis in 3D (:mod:`.rotational`). The joints' C
 from each joint's definition in the scene and differentiated on the same Jets, C_v = ∂Ċ/∂v and
 γ = −C̈|v̇=0 (:mod:`.joints`); point forces enter by virtual work, the weight as −∂V/∂v of
 V = −Σ m g·R and the ground motion as the bodies' d'Alembert forces −m a_g (:class:`OracleMechanism`,
-:mod:`.mechanism`). The coordinates, the bodies' mass matrix and gyroscopic term and the solution
+:mod:`.mechanism`). An inerter device's internal states (series compliance,
+backlash, dissipated energy) come from an extended Lagrangian in which the series node's
+deflection s is one more coordinate (:mod:`.series`), solved with the rest in one system for
+(v̇, s̈, λ) on the engine's layout of z; a screw efficiency, which no energy or dissipation
+function gives, is refused. The coordinates, the bodies' mass matrix and gyroscopic term and the solution
 of Eq. (33) are the model's Mechanism's. A scene with an element of a kind the oracle has no
 definition of is refused (:func:`require_definitions`), and so is a 3D scene with joints or point
 forces in Z-X-Z Euler angles (the Jets are written on quaternions).

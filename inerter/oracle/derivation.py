@@ -14,7 +14,9 @@ Under the small-displacement law: F = b s̈ with s(q) = ê0·r(q), ê0 the initi
 ê0 (generalised force −F ∇s), s differentiated on Jets as L is.
 An inerter's device (:class:`OracleDevice`) takes its inertance from the kinetic energy of its
 flywheel or channel fluid, its friction and channel damping from their dissipation function, its
-end stops from their potential and Hunt-Crossley dissipation function.
+end stops from their potential and Hunt-Crossley dissipation function. With series compliance
+(and backlash) the inerter strokes with u = L − s, s one more coordinate of the element
+(:mod:`.series`, :meth:`OracleElement.extended`); its flywheel, friction and channel then act on u̇.
 An error in either the fast path or this module shows up as a disagreement between the two.
 
 Rotational elements (:mod:`inerter.oracle.rotational`) are derived in the same way from their angle
@@ -40,6 +42,7 @@ from inerter.oracle.jets import (
     Jet, angular_velocity, cross, dot, jabs, jcos, jlogcosh, jpow, jsin, jsqrt, parts, point_position, position, seed)
 from inerter.oracle.rotational import COEFFICIENT_NAME as _ROTATIONAL_KINDS
 from inerter.oracle.rotational import OracleRotational, OracleSpatialRotational
+from inerter.oracle.series import SeriesConnection
 
 #: The translational kinds :class:`OracleElement` derives, each with its coefficient's key; with
 #: the rotational ones of :mod:`.rotational`, the kinds the oracle has a definition of.
@@ -162,19 +165,30 @@ class OracleDevice:
     * End stops: penetration δ = L_min − L or L − L_max, the potential V = k_s δⁿ⁺¹/(n+1) and
       the Hunt-Crossley dissipation R = ½ c_s δⁿ δ̇²; a contact pushes only, so its normal force is
       N = max(0, dV/dδ + ∂R/∂δ̇), acting as −N (lower stop) or +N (upper) along the element.
+    * Series compliance and backlash (:mod:`.series`): the inerter strokes with u = L − s, s one
+      more coordinate; T(u̇), D(u̇) on the inerter's own stroke rate, the stops still on L.
+    * Dissipated energy: ż = p_loss, the power of D, of the contacts and of the series connection
+      (:meth:`loss`).
+    A screw efficiency is refused (b_eff switches with the sign of L̈: no energy or dissipation
+    function gives it), and so is a mount beside a compliance.
     """
 
     def __init__(self, device):
         self.spec = device
-        states = [n for n in ("compliance", "backlash", "dissipated_energy") if device.has(n)]
-        if states:
-            raise InerterError(f"the oracle derives an inerter device from L(q) and its rate only; "
-                               f"device.{states[0]} has internal states (series deflection, dissipated "
-                               f"energy), which it does not derive: check such a scene against closed forms")
         if device.has("efficiency"):
             raise InerterError("the oracle derives an inerter device from its energies and dissipation function; "
                                "device.efficiency makes b depend on the sign of L̈ (and on L̇, switched or "
                                "smoothed), which no such function gives: check such a scene against closed forms")
+        if device.has("compliance") and device.has("mount"):
+            raise InerterError("the oracle's series connection spins the flywheel with the inerter's own stroke u; "
+                               "device.mount's gyroscopic terms take it from L: no derivation of both together")
+        #: The series connection (:mod:`.series`), or None: the inerter then strokes with L itself.
+        self.series = (SeriesConnection(device.values("compliance"),
+                                        device.values("backlash")["gap"] if device.has("backlash") else None)
+                       if device.has("compliance") else None)
+        #: The dissipated energy as a state (ż = p_loss), after the series' (s, ṡ) in z.
+        self.keeps_loss = device.has("dissipated_energy")
+        self.n_states = (2 if self.series is not None else 0) + (1 if self.keeps_loss else 0)
         self.flywheel = device.values("flywheel") if device.has("flywheel") else None
         self.friction = device.values("friction") if device.has("friction") else None
         self.stops = device.values("end_stops") if device.has("end_stops") else None
@@ -258,26 +272,43 @@ class OracleDevice:
         return 0.0 if hit is None else self._stop_potential(Jet(hit[0], 0.0, 0.0, np.zeros(0))).v
 
     def add_force(self, L, Q, dofs):
-        """Q −= ∂D/∂q̇ (D on the Jet of L̇ with gradient ∇L) and the contact's −F∇L."""
-        rate = Jet(L.d1, 0.0, 0.0, L.g)
-        D = self.dissipation(rate)
-        if isinstance(D, Jet):
-            Q[dofs] -= D.g
+        """Q −= ∂D/∂q̇ (D on the Jet of L̇ with gradient ∇L) and the contact's −F∇L. In series D acts
+        on the inerter's own stroke rate u̇ (:meth:`OracleElement.extended`): only the contact here."""
+        if self.series is None:
+            D = self.dissipation(Jet(L.d1, 0.0, 0.0, L.g))
+            if isinstance(D, Jet):
+                Q[dofs] -= D.g
         F, _ = self.contact(L.v, L.d1)
         Q[dofs] -= F * L.g
 
-    def force(self, L, rate):
-        """The device's axial force ∂D/∂L̇ + the contact's (floats)."""
+    def stroke_rate(self, rate, x):
+        """The inerter's own stroke rate: u̇ = L̇ − ṡ in series (x = the element's states), L̇ without."""
+        return rate - x[1] if self.series is not None else rate
+
+    def force(self, L, rate, x=None):
+        """The device's axial force on the terminals beyond b L̈ (floats): ∂D/∂L̇ and the contact's;
+        in series the connection's force (:class:`.series.SeriesConnection`) and the contact's."""
+        if self.series is not None:
+            return self.series.force(x[0], x[1])[0] + self.contact(L, rate)[0]
         return self._slope(self.dissipation, rate) + self.contact(L, rate)[0]
 
-    def outputs(self, L, rate):
-        """The device's outputs, in the order its scene element names them."""
-        friction = self._slope(lambda x: self._parts(x)[0], rate)
-        channel = self._slope(lambda x: self._parts(x)[1], rate)
-        stop, stop_loss = self.contact(L, rate)
-        values = {"w_flywheel": self.ratio * rate if self.flywheel is not None else 0.0,
-                  "f_friction": friction, "f_fluid": channel, "f_stop": stop,
-                  "p_loss": (friction + channel) * rate + stop_loss}
+    def loss(self, L, rate, x):
+        """The dissipated power (W): ∂D/∂u̇ · u̇ (D's power on the stroke it resists), the contact's
+        and the series connection's (:meth:`.series.SeriesConnection.loss`)."""
+        ud = self.stroke_rate(rate, x)
+        p = self._slope(self.dissipation, ud) * ud + self.contact(L, rate)[1]
+        return p + (self.series.loss(x[0], x[1]) if self.series is not None else 0.0)
+
+    def outputs(self, L, rate, x):
+        """The device's outputs, in the order its scene element names them (x: the element's states)."""
+        ud = self.stroke_rate(rate, x)
+        values = {"w_flywheel": self.ratio * ud if self.flywheel is not None else 0.0,
+                  "f_friction": self._slope(lambda y: self._parts(y)[0], ud),
+                  "f_fluid": self._slope(lambda y: self._parts(y)[1], ud),
+                  "f_stop": self.contact(L, rate)[0], "p_loss": self.loss(L, rate, x),
+                  "e_loss": x[-1] if self.keeps_loss else 0.0}
+        if self.series is not None:
+            values.update(s_series=x[0], engaged=self.series.force(x[0], x[1])[1])
         return tuple(values[suffix] for suffix, _, _ in self.spec.outputs())
 
 
@@ -428,18 +459,75 @@ class OracleElement:
         dev = getattr(spec, "device", None)
         self.bodies = (DeviceBodies(dev, mech.dim, mech.scene.effects.get("gravity"))
                        if dev is not None and dev.inertia() else None)
+        #: The series connection (in the device), or None; the count of the element's states in z
+        #: (the mechanism sets its slice, ``states``): (s, ṡ) in series, then the dissipated energy.
+        self.series = self.device.series if self.device is not None else None
+        self.n_states = self.device.n_states if self.device is not None else 0
+        self.states = slice(0, 0)
+
+    def _rest(self, L, rdot):
+        """L̈ at q̈ = 0 under the scene's law: q̇ᵀ∇²Lq̇ (Eq. 9), less |ṙ⊥|²/L without the
+        centripetal term (F = b r̈·r̂, Eq. 8)."""
+        rest = L.d2                                             # q̇ᵀ∇²Lq̇: L̈ = ∇L·q̈ + this
+        if not self.centripetal:
+            rest -= (float(rdot @ rdot) - L.d1 * L.d1) / L.v    # remove |ṙ⊥|²/L: F = b r̈·r̂ (Eq. 8)
+        return rest
 
     def _force_parts(self, L, rdot):
-        """F = a·q̈ part (gradient factor) + the rest: returns (mass factor, rest)."""
+        """F = a·q̈ part (gradient factor) + the rest: returns (mass factor, rest). In series the
+        inerter acts through the connection (:meth:`extended`): none here."""
         b = self.coefficient
         if self.kind == "spring":
             return 0.0, b * (L.v - self.free_length)            # Eq. (5)
         if self.kind == "damper":
             return 0.0, b * L.d1                                # c dL/dt, Eq. (6)
-        rest = L.d2                                             # q̇ᵀ∇²Lq̇: L̈ = ∇L·q̈ + this
-        if not self.centripetal:
-            rest -= (float(rdot @ rdot) - L.d1 * L.d1) / L.v    # remove |ṙ⊥|²/L: F = b r̈·r̂ (Eq. 8)
-        return b, b * rest
+        if self.series is not None:
+            return 0.0, 0.0
+        return b, b * self._rest(L, rdot)
+
+    def _x(self, z):
+        """Its internal states in z (zero where z is not given)."""
+        return np.zeros(self.n_states) if z is None else np.asarray(z[self.states], dtype=float)
+
+    def stroke(self, q, v, z):
+        """The inerter's own stroke u = L − s as a Jet over (its dofs, ṡ): u̇ = gᵀv − ṡ, its
+        gradient γ = [g; −1], its second derivative at v̇ = 0, s̈ = 0 that of L under the law."""
+        L, rdot = self.probe.evaluate(q, v)
+        s, sdot = self._x(z)[:2]
+        return Jet(L.v - s, L.d1 - sdot, self._rest(L, rdot), np.append(L.g, -1.0))
+
+    def extended(self, q, v, z):
+        """(mass block, generalised force) of the series connection over (its dofs, s), from the
+        extended Lagrangian of :mod:`.series`: T_I = ½ b u̇² gives b γγᵀ and −b ü₀ γ; R's D(u̇)
+        −∂D/∂(v, ṡ) (D on the Jet of u̇, gradient γ); V and R's c_c ṡ² the −F on s."""
+        u = self.stroke(q, v, z)
+        b = self.coefficient
+        M = b * np.outer(u.g, u.g)
+        Q = -b * u.d2 * u.g
+        D = self.device.dissipation(Jet(u.d1, 0.0, 0.0, u.g))
+        if isinstance(D, Jet):
+            Q -= D.g
+        x = self._x(z)
+        Q[-1] -= self.series.force(x[0], x[1])[0]              # −∂V/∂s − ∂R/∂ṡ, clipped (unilateral)
+        return M, Q
+
+    def state_rates(self, q, v, z, sdd, dz):
+        """dz[its states]: (ṡ, s̈) in series (s̈ from the extended system, `sdd`), then ż = p_loss."""
+        x = self._x(z)
+        out = []
+        if self.series is not None:
+            out += [x[1], sdd]
+        if self.device.keeps_loss:
+            L, _ = self.probe.evaluate(q, v)
+            out.append(self.device.loss(L.v, L.d1, x))
+        dz[self.states] = out
+
+    def state_energy(self, q, v, z):
+        """In series: ½ b u̇² and the connection's V (the element's ½ b L̇² is then left out)."""
+        if self.series is None:
+            return 0.0
+        u = self.stroke(q, v, z)
+        return 0.5 * self.coefficient * u.d1 ** 2 + self.series.potential(self._x(z)[0])
 
     def geometry(self, q, v):
         return self.probe.evaluate(q, v)
@@ -449,7 +537,8 @@ class OracleElement:
             return
         L, _ = geo or self.probe.evaluate(q, v)
         idx = self.probe.dofs
-        M[np.ix_(idx, idx)] += self.coefficient * np.outer(L.g, L.g)
+        if self.series is None:
+            M[np.ix_(idx, idx)] += self.coefficient * np.outer(L.g, L.g)
         if self.bodies is not None:
             M[np.ix_(idx, idx)] += self.bodies.terms(self.probe, q, v)[0]
 
@@ -462,19 +551,21 @@ class OracleElement:
         if self.bodies is not None:
             Q[self.probe.dofs] += self.bodies.terms(self.probe, q, v)[1]
 
-    def outputs(self, q, v, a):
+    def outputs(self, q, v, a, z=None):
         """(distance, dL/dt, F, power, stored energy), then a device's outputs. The power is the
         force times dL/dt, the rate of the work it takes from the bodies (−Q·q̇ with Q = −F∇L);
-        the stored energy is this element's T + V (:meth:`kinetic`, :meth:`potential`)."""
+        the stored energy is this element's T + V (:meth:`kinetic`, :meth:`potential`, and its
+        internal states' :meth:`state_energy`). In series F is the connection's force."""
         L, rdot = self.probe.evaluate(q, v)
         mass, rest = self._force_parts(L, rdot)
         F = rest + (mass * float(L.g @ a[self.probe.dofs]) if mass else 0.0)   # (no q̈ where no inerter)
         distance = L.v if self.fixed_direction is None else self.probe.distance(q)
-        stored = self.kinetic(q, v) + self.potential(q)
+        stored = self.kinetic(q, v) + self.potential(q) + (self.state_energy(q, v, z) if self.n_states else 0.0)
         if self.device is None:
             return distance, L.d1, F, F * L.d1, stored
-        F += self.device.force(L.v, L.d1)
-        return (distance, L.d1, F, F * L.d1, stored) + self.device.outputs(L.v, L.d1)
+        x = self._x(z)
+        F += self.device.force(L.v, L.d1, x)
+        return (distance, L.d1, F, F * L.d1, stored) + self.device.outputs(L.v, L.d1, x)
 
     def length(self, q):
         return self.probe.evaluate(q, np.zeros_like(q))[0].v
@@ -486,9 +577,11 @@ class OracleElement:
                                    - self.bodies.terms(self.probe, q, v)[1])
 
     def kinetic(self, q, v):
+        """½ b L̇² (none in series: the inerter's ½ b u̇² is in :meth:`state_energy`) and a
+        device's parts' kinetic and gravitational energy."""
         if self.kind != "inerter":
             return 0.0
-        T = 0.5 * self.coefficient * self.probe.evaluate(q, v)[0].d1 ** 2
+        T = 0.0 if self.series is not None else 0.5 * self.coefficient * self.probe.evaluate(q, v)[0].d1 ** 2
         return T if self.bodies is None else T + self.bodies.terms(self.probe, q, v)[2]
 
     def potential(self, q):

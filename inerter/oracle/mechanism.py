@@ -18,6 +18,11 @@ and its elements from :class:`~.derivation.OracleElement`.
   the same at every pose). An inerter device's housing, rod and flywheel take theirs from
   :meth:`~.derivation.OracleElement.add_frame_force`.
 
+* Internal states (an inerter device's series deflection s, its rate, its dissipated energy; the
+  engine's z layout, each element's slice ``states``): each series connection's s is one more
+  coordinate (:mod:`.series`); Lagrange's equations on (v, ṡ) with the joints' rows give one system
+  for (v̇, s̈, λ) (:meth:`OracleMechanism.extended_accelerations`), ż = (ṡ, s̈, p_loss).
+
 The bodies' mass matrix M0 = diag(m I, J) and the gyroscopic term −ω × Jω stay the Mechanism's
 (rigid-body inertia, which the element and joint derivations do not depend on)."""
 from __future__ import annotations
@@ -51,6 +56,10 @@ class OracleMechanism(Mechanism):
 
     def __init__(self, scene):
         super().__init__(scene, element_factory=OracleElement)
+        #: The elements with a series connection, each with one more coordinate s (:mod:`.series`),
+        #: numbered after the n velocity coordinates in the extended system.
+        self.series = [e for e in self.stateful if getattr(e, "series", None) is not None]
+        self._solved = None                 # (state, s̈) of the last extended solve
 
     def terms(self) -> list[str]:
         """The Mechanism's description, its first line naming what the oracle derives."""
@@ -193,3 +202,60 @@ class OracleMechanism(Mechanism):
             for e in self.inerters:
                 e.add_frame_force(q, v, Q, a_g)
         return M, Q
+
+    # -- internal states -------------------------------------------------------------------------
+    def _accelerations(self, t, q, v, inputs, alpha, z):
+        """(v̇, λ): Eq. (33), extended by the series connections' coordinates where there are some."""
+        if not self.series:
+            return super()._accelerations(t, q, v, inputs, alpha, z)
+        a, sdd, lam = self.extended_accelerations(t, q, v, inputs, alpha, z)
+        return a, lam
+
+    def extended_accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
+        """(v̇, s̈, λ) from one system: the bodies' and elements' M and Q (:meth:`assemble`), each
+        series element's block over (its dofs, its s) (:meth:`~.derivation.OracleElement.extended`:
+        [[b g gᵀ, −b g], [−b gᵀ, b]] and its forces) and the joints' rows, padded with zeros in
+        the s columns (a joint does not touch the series node), with Baumgarte's α as Eq. (33)."""
+        z = self.z0 if z is None else np.asarray(z, dtype=float)
+        n, N, m = self.n, self.n + len(self.series), self.m
+        M, Q = self.assemble(t, q, v, inputs, z=z)
+        K, rhs = np.zeros((N + m, N + m)), np.zeros(N + m)
+        K[:n, :n], rhs[:n] = M, Q
+        for k, e in enumerate(self.series):
+            idx = np.append(e.probe.dofs, n + k)
+            Me, Qe = e.extended(q, v, z)
+            K[np.ix_(idx, idx)] += Me
+            rhs[idx] += Qe
+        if m:
+            C, Cq, gamma = self.constraints(q, v)
+            K[:n, N:], K[N:, :n] = Cq.T, Cq
+            rhs[N:] = gamma - 2.0 * alpha * (Cq @ v) - alpha * alpha * C     # Baumgarte
+        x = self._solve(K, rhs, t)
+        self._solved = (self._state_key(q, v, z, x[:n]), x[n:N].copy())
+        return x[:n], x[n:N], x[N:]
+
+    @staticmethod
+    def _state_key(q, v, z, a):
+        return b"".join(np.asarray(y, dtype=float).tobytes() for y in (q, v, z, a))
+
+    def _series_accelerations(self, q, v, z, a):
+        """s̈ at the accelerations a: the last extended solve's at this state, else each series
+        coordinate's own row of that system, b s̈ − b gᵀv̇ = Q_s, solved for s̈ (the s rows couple
+        to nothing but their element's dofs)."""
+        if self._solved is not None and self._solved[0] == self._state_key(q, v, z, a):
+            return self._solved[1]
+        out = np.zeros(len(self.series))
+        for k, e in enumerate(self.series):
+            Me, Qe = e.extended(q, v, z)
+            out[k] = (Qe[-1] - Me[-1, :-1] @ a[e.probe.dofs]) / Me[-1, -1]
+        return out
+
+    def state_rates(self, q, v, z, a) -> np.ndarray:
+        """ż at (q, v, z) and the accelerations a: (ṡ, s̈) of each series connection, then the
+        dissipated energy's rate p_loss, in each element's slice of z (the engine's layout)."""
+        z = np.asarray(z, dtype=float)
+        dz = np.zeros(len(z))
+        sdd = dict(zip(map(id, self.series), self._series_accelerations(q, v, z, a))) if self.series else {}
+        for e in self.stateful:
+            e.state_rates(q, v, z, sdd.get(id(e), 0.0), dz)
+        return dz

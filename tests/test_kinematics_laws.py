@@ -67,7 +67,8 @@ def test_planar_point_rates_are_the_derivatives_of_its_position(seed):
 @pytest.mark.parametrize("seed", range(5))
 def test_spatial_point_rates_are_the_derivatives_of_its_position(seed):
     rng = np.random.default_rng(seed)
-    A, R, V, w, local = _random_rotation(), rng.normal(size=3), rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+    A = _random_rotation()
+    R, V, w, local = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
 
     def at(t):
         return R + t * V + (A @ _turn(t * w)) @ local
@@ -95,7 +96,8 @@ def test_planar_point_force_is_the_virtual_work_of_its_force(seed):
 def test_spatial_point_force_is_the_virtual_work_of_its_force(seed):
     """δ = (δR, δφ̄): R + εδR, A exp(ε δφ̄̃) (a body-frame turn, as ω̄ is a body-frame rate)."""
     rng = np.random.default_rng(seed)
-    A, R, local, F, delta = _random_rotation(), rng.normal(size=3), rng.normal(size=3), rng.normal(size=3), rng.normal(size=6)
+    A = _random_rotation()
+    R, local, F, delta = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3), rng.normal(size=6)
     eps = 1e-6
 
     def r(s):

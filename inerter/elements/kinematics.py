@@ -24,14 +24,19 @@ from inerter.elements.joint_rows import body_vector, turned_coefficient
 
 
 @law
+def planar_turned(th, lx, ly):
+    """A(θ) ū, a body-fixed vector ū of a planar body in the global frame (Eq. 15)."""
+    c = math.cos(th)
+    s = math.sin(th)
+    return c * lx - s * ly, s * lx + c * ly
+
+
+@law
 def planar_point(x, y, th, vx, vy, w, lx, ly):
     """A point ū of a planar body: (r, ṙ, A ū, acc) with r = R + A ū (Eq. 15),
     ṙ = Ṙ + θ̇ A_θ ū (Eq. 16), A_θ ū = (−(A ū)_y, (A ū)_x) the θ-column of H, and
     acc = −θ̇² A ū, so that r̈ = H q̈ + acc (Eq. 17; a pair's a_n = acc_b − acc_a, Eq. 19)."""
-    c = math.cos(th)
-    s = math.sin(th)
-    ax = c * lx - s * ly
-    ay = s * lx + c * ly
+    ax, ay = planar_turned(th, lx, ly)
     return x + ax, y + ay, vx - w * ay, vy + w * ax, ax, ay, -w * w * ax, -w * w * ay
 
 
@@ -55,10 +60,7 @@ def spatial_turn_row(A, lx, ly, lz, tx, ty, tz):
 def planar_point_force(th, lx, ly, fx, fy):
     """Hᵀ F for a force F at a point ū of a planar body (virtual work, δr = H δq, Eq. 16): F on
     x and y, and A_θ ū · F on θ."""
-    c = math.cos(th)
-    s = math.sin(th)
-    ax = c * lx - s * ly
-    ay = s * lx + c * ly
+    ax, ay = planar_turned(th, lx, ly)
     return fx, fy, -ay * fx + ax * fy
 
 

@@ -2,8 +2,8 @@
 Eqs. 15-17, 22, 25; the virtual work of a force at a point).
 
 Scalar functions compiled by :func:`~inerter.elements.base.law`: the engine's kernels inline them
-(``kernels._point``, ``_point3``, ``_point_force``, ``_point_force3``, the PD actuators and the 3D
-bodies' gyroscopic term), and the readable model (:mod:`inerter.model.planar`,
+(``kernels._point``, ``_point3``, ``_point_force``, ``_point_force3``, the PD actuators, the ground
+motion's frame force and the 3D bodies' gyroscopic term), and the readable model (:mod:`inerter.model.planar`,
 :mod:`inerter.model.spatial`, :class:`inerter.model.mechanism.Mechanism`) runs the same definitions
 uncompiled and places what they return into its vectors and matrices. They sit here, below the
 model and beside the element laws that take their results, because the elements' terminals, the
@@ -79,6 +79,14 @@ def pd_magnitude(dx, dy, dz, reference, kp, kd, rx, ry, rz, vx, vy, vz):
     along = dx * rx + dy * ry + dz * rz - reference
     rate = dx * vx + dy * vy + dz * vz
     return -(kp * along + kd * rate)
+
+
+@law
+def frame_force(m, agx, agy, agz):
+    """m a_g of a body of mass m on a ground moving with the acceleration a_g: the coordinates
+    are relative to the ground frame, so each body's R feels −m a_g (d'Alembert's force of the
+    frame's acceleration; the caller subtracts this)."""
+    return m * agx, m * agy, m * agz
 
 
 @law

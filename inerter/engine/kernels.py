@@ -29,7 +29,7 @@ from inerter.elements.device import MODE_SOLVES
 from inerter.elements.inerter import settle
 from inerter.elements.joint_rows import (body_vector, dot1_row, dot2_row, screw_residual, screw_row, screw_turn_2d,
                                          slider_rows_2d)
-from inerter.elements.kinematics import (gyroscopic, pd_magnitude, planar_point, planar_point_force,
+from inerter.elements.kinematics import (frame_force, gyroscopic, pd_magnitude, planar_point, planar_point_force,
                                          spatial_point, spatial_point_force, spatial_turn_row)
 from inerter.elements.twist import planar_relative, spatial_twist
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, COINCIDENT, DEVICE, DOT1, DOT1_ROWS, DOT2,
@@ -303,8 +303,9 @@ def _add_point_forces2(t, q, v, inputs, P, gen, agx, agy, agz):
             _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], inputs[2 * f], inputs[2 * f + 1], gen)
     if dims[GROUND_MODE] != GROUND_NONE:
         for k in range(0, dims[N_VELOCITY], 3):
-            gen[k] -= mass[k] * agx
-            gen[k + 1] -= mass[k] * agy
+            fx, fy, _ = frame_force(mass[k], agx, agy, 0.0)
+            gen[k] -= fx
+            gen[k + 1] -= fy
 
 
 @njit(cache=True, inline="always")
@@ -1446,9 +1447,10 @@ def _add_point_forces3(t, q, v, inputs, P, gen, agx, agy, agz):
                           inputs[3 * f], inputs[3 * f + 1], inputs[3 * f + 2], gen)
     if dims[GROUND_MODE] != GROUND_NONE:
         for k in range(0, dims[N_VELOCITY], 6):
-            gen[k] -= mass[k] * agx
-            gen[k + 1] -= mass[k] * agy
-            gen[k + 2] -= mass[k] * agz
+            fx, fy, fz = frame_force(mass[k], agx, agy, agz)
+            gen[k] -= fx
+            gen[k + 1] -= fy
+            gen[k + 2] -= fz
 
 
 @njit(cache=True, inline="always")

@@ -34,6 +34,7 @@ from inerter.model.spatial import EULER_SINGULARITY, Orientation, RotationCache,
 # the kernels' laws, run uncompiled
 _gyroscopic = kinematics.gyroscopic.py_func
 _pd_magnitude = kinematics.pd_magnitude.py_func
+_frame_force = kinematics.frame_force.py_func
 
 #: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
 ASSEMBLY_TOLERANCE = 1e-6
@@ -674,8 +675,10 @@ class Mechanism:
                 self._add_point_force(Q, point, q, inputs[k * self.dim:(k + 1) * self.dim])
         if self.ground_motion is not None:
             a_g = self.ground_motion.acceleration(t, inputs, len(self.input_forces) * self.dim)
+            a3 = np.zeros(3)
+            a3[:self.dim] = a_g
             for i, m in enumerate(self.masses):            # bodies move relative to the ground frame
-                Q[self.v_index[i]:self.v_index[i] + self.dim] -= m * a_g
+                Q[self.v_index[i]:self.v_index[i] + self.dim] -= _frame_force(m, *a3)[:self.dim]
             for e in self.inerters:                         # and so do a device's housing, rod, flywheel
                 e.add_frame_force(q, v, Q, a_g)
         return M, Q

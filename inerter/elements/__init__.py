@@ -85,8 +85,8 @@ import pkgutil
 from inerter.elements.base import (  # noqa: F401
     FAMILY_OUTPUTS, FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, ElementKind, Parameter, output_suffixes)
 
-_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device", "device_inertia", "joint_rows", "terminals",
-              "winding"}
+_NOT_KINDS = {"base", "layout", "dispatch", "generate", "device", "device_inertia", "joint_rows", "kinematics",
+              "terminals", "twist", "winding"}
 
 
 def _kind_modules():

@@ -427,12 +427,8 @@ def flatten(mech) -> dict:
 
     fa_int, fa_real, pd_int, pd_real, in_int = force_rows(scene, pidx, 2)
 
-    g = scene.effects.get("gravity")
-    has_gravity = g is not None and any(g)
-    gravity = np.zeros(n)
-    if has_gravity:
-        for i, b in enumerate(scene.bodies.values()):
-            gravity[3 * i:3 * i + 2] = b.mass * np.asarray(g, dtype=float)[:2]
+    has_gravity = mech.gravity is not None          # m g on each body's R (Mechanism._effects)
+    gravity = np.array(mech.gravity, dtype=float) if has_gravity else np.zeros(n)
 
     def arr(rows, width, dtype):
         return np.array(rows, dtype=dtype).reshape(-1, width)

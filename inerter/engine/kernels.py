@@ -28,8 +28,10 @@ from inerter.elements.base import axial_scalars, rarely
 from inerter.elements.device import MODE_SOLVES
 from inerter.elements.inerter import settle
 from inerter.elements.joint_rows import (body_vector, dot1_row, dot2_row, screw_residual, screw_row, screw_turn_2d,
-                                         slider_rows_2d, turned_coefficient)
-from inerter.elements.winding import wound
+                                         slider_rows_2d)
+from inerter.elements.kinematics import (frame_force, gyroscopic, pd_magnitude, planar_point, planar_point_force,
+                                         spatial_point, spatial_point_force, spatial_turn_row)
+from inerter.elements.twist import planar_relative, spatial_twist
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, COINCIDENT, DEVICE, DOT1, DOT1_ROWS, DOT2,
                                      DOT2_ROWS, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY,
                                      F_INITIAL, F_OFFSET, F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA,
@@ -88,30 +90,27 @@ def _force_magnitude(fa_real, f, code, value, t):
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
 def _point(q, v, body, lx, ly):
-    """(rx, ry, vx, vy, ux, uy, w): position, velocity, A ū and the body's angular velocity."""
+    """(rx, ry, vx, vy, ux, uy, accx, accy, w): position, velocity, A ū, the acceleration term
+    −θ̇² A ū and the body's angular velocity (kinematics.planar_point; a ground point is fixed)."""
     if body < 0:
-        return lx, ly, 0.0, 0.0, 0.0, 0.0, 0.0
+        return lx, ly, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     k = 3 * body
-    th = q[k + 2]
-    c = math.cos(th)
-    s = math.sin(th)
-    ax = c * lx - s * ly
-    ay = s * lx + c * ly
-    w = v[k + 2]
-    return q[k] + ax, q[k + 1] + ay, v[k] - w * ay, v[k + 1] + w * ax, ax, ay, w
+    rx, ry, vx, vy, ax, ay, cx, cy = planar_point(q[k], q[k + 1], q[k + 2], v[k], v[k + 1], v[k + 2], lx, ly)
+    return rx, ry, vx, vy, ax, ay, cx, cy, v[k + 2]
 
 
 @njit(cache=True, inline="always")
 def _pair(q, v, ba, lax, lay, bb, lbx, lby):
     """Relative kinematics b − a: r, ṙ, a_n (Eq. 19) and the θ-columns of H (A_θ ū of each end)."""
-    rax, ray, vax, vay, uax, uay, wa = _point(q, v, ba, lax, lay)
-    rbx, rby, vbx, vby, ubx, uby, wb = _point(q, v, bb, lbx, lby)
+    rax, ray, vax, vay, uax, uay, cax, cay, _ = _point(q, v, ba, lax, lay)
+    rbx, rby, vbx, vby, ubx, uby, cbx, cby, _ = _point(q, v, bb, lbx, lby)
     rx = rbx - rax
     ry = rby - ray
     rdx = vbx - vax
     rdy = vby - vay
-    anx = wa * wa * uax - wb * wb * ubx
-    any_ = wa * wa * uay - wb * wb * uby
+    # a_n = acc_b − acc_a = (θ̇ᵃ)² Aᵃūᵃ − (θ̇ᵇ)² Aᵇūᵇ (Eq. 19)
+    anx = cbx - cax
+    any_ = cby - cay
     # A_θ ū = (−u_y, u_x)
     return rx, ry, rdx, rdy, anx, any_, -uay, uax, -uby, ubx
 
@@ -232,8 +231,7 @@ def _rotational2(q, v, e, rot_int):
     relative angle φ = θ_b − θ_a and its rate."""
     ia = rot_int[e, BODY_A]
     ib = rot_int[e, BODY_B]
-    phi = (q[ib] if ib >= 0 else 0.0) - (q[ia] if ia >= 0 else 0.0)
-    w = (v[ib] if ib >= 0 else 0.0) - (v[ia] if ia >= 0 else 0.0)
+    phi, w = planar_relative(q, v, ia, ib)
     return ia, ib, phi, w
 
 
@@ -293,12 +291,11 @@ def _add_point_forces2(t, q, v, inputs, P, gen, agx, agy, agz):
         _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], mag * fa_real[f, 0], mag * fa_real[f, 1], gen)
     for f in range(pd_int.shape[0]):
         p = pd_int[f, FORCE_POINT]
-        rx, ry, vx, vy, ux, uy, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
+        rx, ry, vx, vy, ux, uy, _, _, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
         dx = pd_real[f, 0]
         dy = pd_real[f, 1]
-        along = dx * rx + dy * ry - pd_real[f, 2 + PD_REFERENCE]
-        rate = dx * vx + dy * vy
-        mag = -(pd_real[f, 2 + PD_KP] * along + pd_real[f, 2 + PD_KD] * rate)
+        mag = pd_magnitude(dx, dy, 0.0, pd_real[f, 2 + PD_REFERENCE], pd_real[f, 2 + PD_KP], pd_real[f, 2 + PD_KD],
+                           rx, ry, 0.0, vx, vy, 0.0)
         _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], mag * dx, mag * dy, gen)
     if inputs.shape[0] > 0:
         for f in range(in_int.shape[0]):
@@ -306,8 +303,9 @@ def _add_point_forces2(t, q, v, inputs, P, gen, agx, agy, agz):
             _point_force(q, v, pbody[p], ploc[p, 0], ploc[p, 1], inputs[2 * f], inputs[2 * f + 1], gen)
     if dims[GROUND_MODE] != GROUND_NONE:
         for k in range(0, dims[N_VELOCITY], 3):
-            gen[k] -= mass[k] * agx
-            gen[k + 1] -= mass[k] * agy
+            fx, fy, _ = frame_force(mass[k], agx, agy, 0.0)
+            gen[k] -= fx
+            gen[k + 1] -= fy
 
 
 @njit(cache=True, inline="always")
@@ -480,14 +478,10 @@ def _point_force(q, v, body, lx, ly, Fx, Fy, gen):
     if body < 0:
         return
     k = 3 * body
-    th = q[k + 2]
-    c = math.cos(th)
-    s = math.sin(th)
-    ax = c * lx - s * ly
-    ay = s * lx + c * ly
-    gen[k] += Fx
-    gen[k + 1] += Fy
-    gen[k + 2] += -ay * Fx + ax * Fy
+    gx, gy, gt = planar_point_force(q[k + 2], lx, ly, Fx, Fy)
+    gen[k] += gx
+    gen[k + 1] += gy
+    gen[k + 2] += gt
 
 
 # ------------------------------------------------------------------------------------------------
@@ -774,7 +768,7 @@ def signal_values2(q, v, z, qdd, P, out):
     status = OK
     k = 0
     for p in range(pbody.shape[0]):
-        rx, ry, vx, vy, ux, uy, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
+        rx, ry, vx, vy, ux, uy, _, _, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
         out[k] = rx
         out[k + 1] = ry
         out[k + 2] = vx
@@ -812,7 +806,7 @@ def signal_values2(q, v, z, qdd, P, out):
 def _terminal2(q, v, body, lx, ly, H, col, rv, vv, acc):
     """A 2D terminal: r, ṙ and its acceleration at v̇ = 0 (−θ̇² A ū, Eq. 17) into rv, vv, acc (z = 0),
     and ∂ṙ/∂v = [I, A_θ ū] (Eq. 16) into H's columns col … col + 2 (none for the ground)."""
-    rx, ry, vx, vy, ux, uy, w = _point(q, v, body, lx, ly)
+    rx, ry, vx, vy, ux, uy, _, _, w = _point(q, v, body, lx, ly)
     rv[0], rv[1], rv[2] = rx, ry, 0.0
     vv[0], vv[1], vv[2] = vx, vy, 0.0
     acc[0], acc[1], acc[2] = -w * w * ux, -w * w * uy, 0.0
@@ -1176,7 +1170,8 @@ def signal_history(times, states, inputs, alpha, need_acc, P, out):
 # :func:`inerter.engine.compiled_spatial.flatten3`. Point kinematics (Sec. 3.2, Eqs. 15, 22, 25):
 # r = R + A ū, ṙ = Ṙ + A(ω × ū), r̈ = R̈ − A ũ ω̇ + A(ω × (ω × ū)). A global vector s projected on a
 # point's H = [I, −A ũ] gives sᵀH = [sᵀ, (ū × Aᵀs)ᵀ]; :func:`_wcol` computes the second part
-# (joint_rows.turned_coefficient, which the joint rows' laws take their ω̄ coefficients from).
+# (kinematics.spatial_turn_row: joint_rows.turned_coefficient, which the joint rows' laws take their
+# ω̄ coefficients from). The points' kinematics and forces are the laws of inerter.elements.kinematics.
 
 # Joint kinds (column JOINT_KIND of ``jt_int`` in 3D; every kind is evaluated from its row counts, columns
 # COINCIDENT, DOT1_ROWS, DOT2_ROWS and SCREW_ROW).
@@ -1221,7 +1216,7 @@ def _omega(v, body):
 #: a × b on components (common.rotations.cross3).
 _cross = cross3
 #: ū × (Aᵀ s): the ω-columns of sᵀ H for a point ū (H = [I, −A ũ], Eq. 22 with body-frame ω).
-_wcol = turned_coefficient
+_wcol = spatial_turn_row
 #: A body-fixed vector s = A s̄, its rate A(ω × s̄) and its acceleration at ω̇ = 0, A(ω × (ω × s̄)).
 _vector = body_vector
 
@@ -1236,10 +1231,9 @@ def _point3(q, v, body, A, lx, ly, lz):
     if body < 0:
         return lx, ly, lz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     wx, wy, wz = _omega(v, body)
-    u0, u1, u2, d0, d1, d2, a0, a1, a2 = _vector(A, wx, wy, wz, lx, ly, lz)
     k = 6 * body
     j = _coords_per_body(q, v) * body
-    return q[j] + u0, q[j + 1] + u1, q[j + 2] + u2, v[k] + d0, v[k + 1] + d1, v[k + 2] + d2, a0, a1, a2
+    return spatial_point(A, q[j], q[j + 1], q[j + 2], v[k], v[k + 1], v[k + 2], wx, wy, wz, lx, ly, lz)
 
 
 @njit(cache=True, inline="always")
@@ -1294,55 +1288,19 @@ def _element3(q, v, e, el_int, el_real, pbody, ploc, ga, gb):
 
 
 @njit(cache=True, inline="always")
-def _rel(Aa, Ab, rot_real, e, i, j):
-    """D[i, j] of D = (A_aᵀ A_b) rel0ᵀ, rel0 row-major in rot_real's REL0 columns."""
-    x = 0.0
-    for k in range(3):
-        x += (Aa[i] * Ab[k] + Aa[3 + i] * Ab[3 + k] + Aa[6 + i] * Ab[6 + k]) * rot_real[e, REL0 + 3 * j + k]
-    return x
-
-
-@njit(cache=True, inline="always")
 def _rotational3(q, v, e, rot_int, rot_real):
-    """A 3D rotational element (``elements.SpatialRotationalElement``): φ, the twist about the axis n̄
-    (fixed in body a) of the rotation D since the initial relative orientation rel0, wound on from
-    its angle at the last accepted step (PHI_REF, inerter.elements.winding), its rate
-    φ̇ = g·(A_b ω_b − A_a ω_a), the torque (restoring positive) and g = A_a ∂φ̇/∂Ω (Ω = A_aᵀ(A_b ω_b −
-    A_a ω_a)), the direction it acts along in the global frame (n = A_a n̄ on a revolute joint about
-    n̄), with A_a, A_b."""
+    """A 3D rotational element (``evaluators.SpatialRotationalElement``): its bodies, A_a, A_b, the
+    twist φ about the axis n̄ fixed in body a (wound on from PHI_REF), its rate φ̇, the torque
+    (restoring positive) and the direction g it acts along in the global frame
+    (:func:`inerter.elements.twist.spatial_twist`)."""
     ia = rot_int[e, BODY_A]
     ib = rot_int[e, BODY_B]
     Aa = _rot(q, v, ia)
     Ab = _rot(q, v, ib)
-    nx = rot_real[e, AXIS]
-    ny = rot_real[e, AXIS + 1]
-    nz = rot_real[e, AXIS + 2]
-    # D = (A_aᵀ A_b) rel0ᵀ: the rotation since t = 0, in a's frame
-    d00 = _rel(Aa, Ab, rot_real, e, 0, 0)
-    d01 = _rel(Aa, Ab, rot_real, e, 0, 1)
-    d02 = _rel(Aa, Ab, rot_real, e, 0, 2)
-    d10 = _rel(Aa, Ab, rot_real, e, 1, 0)
-    d11 = _rel(Aa, Ab, rot_real, e, 1, 1)
-    d12 = _rel(Aa, Ab, rot_real, e, 1, 2)
-    d20 = _rel(Aa, Ab, rot_real, e, 2, 0)
-    d21 = _rel(Aa, Ab, rot_real, e, 2, 1)
-    d22 = _rel(Aa, Ab, rot_real, e, 2, 2)
-    s = 0.5 * (nx * (d21 - d12) + ny * (d02 - d20) + nz * (d10 - d01))
-    nDn = (nx * (d00 * nx + d01 * ny + d02 * nz) + ny * (d10 * nx + d11 * ny + d12 * nz)
-           + nz * (d20 * nx + d21 * ny + d22 * nz))
-    c = 0.5 * (d00 + d11 + d22 - nDn)
-    phi = wound(rot_real[e, PHI_REF], math.atan2(s, c))
-    # φ's gradient over the relative angular velocity in a's frame, ∂φ̇/∂Ω = (n̄ + D n̄)/(2h) with
-    # h = hypot(s, c) (the twist quaternion's w² + x²): the torque acts about it, so that a spring's
-    # generalised force is −∇V and w = φ̇; on a revolute joint about n̄ (D n̄ = n̄, h = 1) it is n̄.
-    h2 = 2.0 * math.hypot(s, c)
-    gx, gy, gz = matrix9_apply(Aa, (nx + d00 * nx + d01 * ny + d02 * nz) / h2,
-                               (ny + d10 * nx + d11 * ny + d12 * nz) / h2, (nz + d20 * nx + d21 * ny + d22 * nz) / h2)
     wax, way, waz = _omega(v, ia)
     wbx, wby, wbz = _omega(v, ib)
-    ox, oy, oz = matrix9_apply(Ab, wbx, wby, wbz)
-    px, py, pz = matrix9_apply(Aa, wax, way, waz)
-    w = gx * (ox - px) + gy * (oy - py) + gz * (oz - pz)
+    phi, w, gx, gy, gz = spatial_twist(Aa, Ab, rot_real[e], REL0, rot_real[e, AXIS], rot_real[e, AXIS + 1],
+                                       rot_real[e, AXIS + 2], rot_real[e, PHI_REF], wax, way, waz, wbx, wby, wbz)
     tau = law.torque(rot_int[e, ROT_KIND], rot_real[e], phi, w)
     return ia, ib, Aa, Ab, phi, w, tau, gx, gy, gz
 
@@ -1353,11 +1311,11 @@ def _point_force3(q, v, body, lx, ly, lz, Fx, Fy, Fz, gen):
     if body < 0:
         return
     A = _rot(q, v, body)
-    mx, my, mz = _wcol(A, lx, ly, lz, Fx, Fy, Fz)
+    gx, gy, gz, mx, my, mz = spatial_point_force(A, lx, ly, lz, Fx, Fy, Fz)
     k = 6 * body
-    gen[k] += Fx
-    gen[k + 1] += Fy
-    gen[k + 2] += Fz
+    gen[k] += gx
+    gen[k + 1] += gy
+    gen[k + 2] += gz
     gen[k + 3] += mx
     gen[k + 4] += my
     gen[k + 5] += mz
@@ -1408,13 +1366,7 @@ def _add_bodies3(v, P, AB, perm, off, gen):
         for i in range(3):
             for j in range(3):
                 _addK(AB, perm, off, k + 3 + i, k + 3 + j, mass[J + 3 * i + j])
-        wx = v[k + 3]
-        wy = v[k + 4]
-        wz = v[k + 5]
-        hx = mass[J] * wx + mass[J + 1] * wy + mass[J + 2] * wz
-        hy = mass[J + 3] * wx + mass[J + 4] * wy + mass[J + 5] * wz
-        hz = mass[J + 6] * wx + mass[J + 7] * wy + mass[J + 8] * wz
-        cx, cy, cz = _cross(wx, wy, wz, hx, hy, hz)
+        cx, cy, cz = gyroscopic(mass, J, v[k + 3], v[k + 4], v[k + 5])
         gen[k + 3] -= cx
         gen[k + 4] -= cy
         gen[k + 5] -= cz
@@ -1485,9 +1437,8 @@ def _add_point_forces3(t, q, v, inputs, P, gen, agx, agy, agz):
         dx = pd_real[f, 0]
         dy = pd_real[f, 1]
         dz = pd_real[f, 2]
-        along = dx * rx + dy * ry + dz * rz - pd_real[f, 3 + PD_REFERENCE]
-        rate = dx * vx + dy * vy + dz * vz
-        mag = -(pd_real[f, 3 + PD_KP] * along + pd_real[f, 3 + PD_KD] * rate)
+        mag = pd_magnitude(dx, dy, dz, pd_real[f, 3 + PD_REFERENCE], pd_real[f, 3 + PD_KP], pd_real[f, 3 + PD_KD],
+                           rx, ry, rz, vx, vy, vz)
         _point_force3(q, v, b, ploc[p, 0], ploc[p, 1], ploc[p, 2], mag * dx, mag * dy, mag * dz, gen)
     if inputs.shape[0] > 0:
         for f in range(in_int.shape[0]):
@@ -1496,9 +1447,10 @@ def _add_point_forces3(t, q, v, inputs, P, gen, agx, agy, agz):
                           inputs[3 * f], inputs[3 * f + 1], inputs[3 * f + 2], gen)
     if dims[GROUND_MODE] != GROUND_NONE:
         for k in range(0, dims[N_VELOCITY], 6):
-            gen[k] -= mass[k] * agx
-            gen[k + 1] -= mass[k] * agy
-            gen[k + 2] -= mass[k] * agz
+            fx, fy, fz = frame_force(mass[k], agx, agy, agz)
+            gen[k] -= fx
+            gen[k + 1] -= fy
+            gen[k + 2] -= fz
 
 
 @njit(cache=True, inline="always")
@@ -2700,7 +2652,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
 @njit(cache=True, inline="always")
 def _point_value2(q, v, p, c, P):
     pbody, ploc = P[PBODY], P[PLOC]
-    rx, ry, vx, vy, ux, uy, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
+    rx, ry, vx, vy, ux, uy, _, _, w = _point(q, v, pbody[p], ploc[p, 0], ploc[p, 1])
     if c == 0:
         return rx
     if c == 1:

@@ -19,13 +19,14 @@ import numpy as np
 from inerter import elements
 from inerter.common.errors import MIN_LENGTH, TerminalsMeet  # noqa: F401  (re-exported)
 from inerter.common.rotations import matrix9_apply, planar_matrix9
-from inerter.elements import device, device_inertia, layout, terminals
+from inerter.elements import device, device_inertia, layout, terminals, twist
 from inerter.elements.base import axial_scalars as _compiled_axial_scalars
-from inerter.elements.winding import wound
 from inerter.model.planar import PointPair
 
 
 axial_scalars = _compiled_axial_scalars.py_func     # the kernels' definition, run uncompiled
+_planar_relative = twist.planar_relative.py_func
+_spatial_twist = twist.spatial_twist.py_func
 
 
 acting_line = terminals.acting_line.py_func         # the element's geometry, as the kernels inline it
@@ -40,8 +41,7 @@ def rotation(point, q):
         return terminals.IDENTITY
     if len(point.local) == 2:
         return planar_matrix9.py_func(q[point.qi + 2])
-    o = point.orientation
-    return tuple(point.cache.matrix(o, q[point.qi + 3:point.qi + 3 + o.size]).ravel().tolist())
+    return point.rotation9(q)
 
 
 def slider_direction(point, axis, q) -> np.ndarray:
@@ -337,9 +337,8 @@ class RotationalElement:
         self.row = np.array([self.coefficient, self.free_angle])
 
     def relative(self, q, v):
-        phi = (q[self.ib] if self.ib >= 0 else 0.0) - (q[self.ia] if self.ia >= 0 else 0.0)
-        w = (v[self.ib] if self.ib >= 0 else 0.0) - (v[self.ia] if self.ia >= 0 else 0.0)
-        return phi, w
+        """(φ, φ̇), twist.planar_relative."""
+        return _planar_relative(q, v, self.ia, self.ib)
 
     def torque(self, q, v):
         return self._torque(self.row, *self.relative(q, v))
@@ -394,6 +393,7 @@ class SpatialRotationalElement:
         Aa, _ = frame_a.evaluate(q0, z)
         Ab, _ = frame_b.evaluate(q0, z)
         self.rel0 = Aa.T @ Ab
+        self._rel0 = tuple(self.rel0.ravel().tolist())
         #: φ_ref: the angle at the last accepted step (0 at t = 0), moved on by :meth:`wind`.
         self.reference = 0.0
 
@@ -402,16 +402,13 @@ class SpatialRotationalElement:
         self.reference = self.geometry(q, np.zeros(len(q)))[0]
 
     def geometry(self, q, v):
+        """(φ, φ̇, g, A_a, A_b): twist.spatial_twist."""
         Aa, wa = self.fa.evaluate(q, v)
         Ab, wb = self.fb.evaluate(q, v)
-        D = (Aa.T @ Ab) @ self.rel0.T                  # rotation since t = 0, in a's frame
         n = self.axis
-        s = 0.5 * (n[0] * (D[2, 1] - D[1, 2]) + n[1] * (D[0, 2] - D[2, 0]) + n[2] * (D[1, 0] - D[0, 1]))
-        c = 0.5 * (np.trace(D) - n @ D @ n)
-        # φ's gradient over the relative angular velocity in a's frame: (n̄ + D n̄)/(2 hypot(s, c)),
-        # n̄ on a revolute joint about n̄; in the global frame g = A_a of it, and φ̇ = g·(ω_b − ω_a)
-        g = Aa @ ((n + D @ n) / (2.0 * math.hypot(s, c)))
-        return wound.py_func(self.reference, math.atan2(s, c)), float(g @ (Ab @ wb - Aa @ wa)), g, Aa, Ab
+        phi, w, gx, gy, gz = _spatial_twist(tuple(Aa.ravel().tolist()), tuple(Ab.ravel().tolist()), self._rel0, 0,
+                                            n[0], n[1], n[2], self.reference, *wa.tolist(), *wb.tolist())
+        return phi, w, np.array((gx, gy, gz)), Aa, Ab
 
     def torque(self, q, v, geo=None):
         phi, w, *_ = geo or self.geometry(q, v)

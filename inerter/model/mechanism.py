@@ -22,14 +22,19 @@ import numpy as np
 
 from inerter.model import evaluators as el
 from inerter import elements
-from inerter.elements import layout
+from inerter.elements import kinematics, layout
 from inerter.elements.device import MODE_SOLVES
 from inerter.common.errors import SceneError, SimulationError
 from inerter.model.joints import make_joint
 from inerter.model.planar import PointKinematics, PointPair
 from inerter.scene.reader import GROUND, Scene
 from inerter.scene.units import for_reading
-from inerter.model.spatial import EULER_SINGULARITY, Orientation, RotationCache, SpatialPoint, cross
+from inerter.model.spatial import EULER_SINGULARITY, Orientation, RotationCache, SpatialPoint
+
+# the kernels' laws, run uncompiled
+_gyroscopic = kinematics.gyroscopic.py_func
+_pd_magnitude = kinematics.pd_magnitude.py_func
+_frame_force = kinematics.frame_force.py_func
 
 #: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
 ASSEMBLY_TOLERANCE = 1e-6
@@ -188,6 +193,7 @@ class Mechanism:
         self.M0 = np.zeros((self.n, self.n))
         q0, v0 = [], []
         self.inertia_body = []
+        self._inertia9 = []
         for i, b in enumerate(scene.bodies.values()):
             k = self.v_index[i]
             self.M0[k:k + dim, k:k + dim] = b.mass * np.eye(dim)
@@ -199,6 +205,7 @@ class Mechanism:
                 J = np.array(b.inertia)
                 self.M0[k + 3:k + 6, k + 3:k + 6] = J
                 self.inertia_body.append(J)
+                self._inertia9.append(tuple(J.ravel().tolist()))
                 A = np.array(b.rotation)
                 q0 += [*b.position, *self.orientation.from_matrix(A)]
                 v0 += [*b.velocity, *(A.T @ np.array(b.angular_velocity))]   # ω to the body frame
@@ -648,10 +655,9 @@ class Mechanism:
         if self.gravity is not None:
             Q += self.gravity
         if self.dim == 3:
-            for i, J in enumerate(self.inertia_body):
+            for i, J in enumerate(self._inertia9):
                 k = self.v_index[i] + 3
-                w = v[k:k + 3]
-                Q[k:k + 3] -= cross(w, J @ w)                   # gyroscopic term, body frame
+                Q[k:k + 3] -= _gyroscopic(J, 0, v[k], v[k + 1], v[k + 2])    # ω̄ × Jω̄, body frame
         for group in self.groups:
             geo = group[0].geometry(q, v)
             for e in group:
@@ -669,8 +675,10 @@ class Mechanism:
                 self._add_point_force(Q, point, q, inputs[k * self.dim:(k + 1) * self.dim])
         if self.ground_motion is not None:
             a_g = self.ground_motion.acceleration(t, inputs, len(self.input_forces) * self.dim)
+            a3 = np.zeros(3)
+            a3[:self.dim] = a_g
             for i, m in enumerate(self.masses):            # bodies move relative to the ground frame
-                Q[self.v_index[i]:self.v_index[i] + self.dim] -= m * a_g
+                Q[self.v_index[i]:self.v_index[i] + self.dim] -= _frame_force(m, *a3)[:self.dim]
             for e in self.inerters:                         # and so do a device's housing, rod, flywheel
                 e.add_frame_force(q, v, Q, a_g)
         return M, Q
@@ -680,16 +688,21 @@ class Mechanism:
 
     @staticmethod
     def _pd_force(f, point, q, v, static=False):
-        """A grounded actuator along the fixed direction d: F = −[kp(d·r − ref) + kd d·v] d."""
+        """A grounded actuator along the fixed direction d: F = −[kp(d·r − ref) + kd d·v] d
+        (kinematics.pd_magnitude; `static`: kd's term left out)."""
         r, rdot, _, _ = point.evaluate(q, v)
-        d = np.asarray(f.direction)
-        along = float(d @ r) - f.reference
-        rate = 0.0 if static else float(d @ rdot)
-        return -(f.kp * along + f.kd * rate) * d
+        d = np.zeros(3)
+        d[:len(r)] = f.direction
+        rr, vv = np.zeros(3), np.zeros(3)
+        rr[:len(r)] = r
+        if not static:
+            vv[:len(r)] = rdot
+        return _pd_magnitude(*d, f.reference, f.kp, f.kd, *rr, *vv) * np.asarray(f.direction)
 
     def _add_point_force(self, Q, point, q, F):
-        _, _, H, _ = point.evaluate(q, np.zeros(self.n))
-        Q[point.dofs] += H.T @ F                                  # virtual work: δr = H δq
+        """Hᵀ F into the point's body's coordinates (virtual work, δr = H δq)."""
+        if point.dofs is not None:
+            Q[point.dofs] += point.generalised_force(q, F)
 
     def mass_matrix(self, q, v):
         M = self.M0.copy()

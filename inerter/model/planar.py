@@ -7,11 +7,15 @@ vector A ū turned by +90°.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from inerter.elements import kinematics
+
 DOF_PER_BODY = 3
+
+# the kernels' laws, run uncompiled
+_planar_point = kinematics.planar_point.py_func
+_planar_point_force = kinematics.planar_point_force.py_func
 
 
 class PointKinematics:
@@ -29,21 +33,19 @@ class PointKinematics:
 
     def evaluate(self, q, v):
         """(r, ṙ, H_b, acc): ṙ = H_b q̇_body and r̈ = H_b q̈_body + acc, with
-        H_b = [I, A_θ ū] (Eq. 16) and acc = −θ̇² A ū (Eq. 17)."""
+        H_b = [I, A_θ ū] (Eq. 16) and acc = −θ̇² A ū (Eq. 17), from kinematics.planar_point."""
         if self.body < 0:
             z = np.zeros(2)
             return self.local, z, None, z
         k = self.qi
-        th = q[k + 2]
-        c, s = math.cos(th), math.sin(th)
-        ux, uy = self._lx, self._ly
-        ax, ay = c * ux - s * uy, s * ux + c * uy               # A ū
-        w = float(v[k + 2])
-        r = np.array((q[k] + ax, q[k + 1] + ay))
-        rdot = np.array((v[k] - w * ay, v[k + 1] + w * ax))
+        rx, ry, vx, vy, ax, ay, cx, cy = _planar_point(q[k], q[k + 1], q[k + 2], v[k], v[k + 1], v[k + 2],
+                                                       self._lx, self._ly)
         H = np.array(((1.0, 0.0, -ay), (0.0, 1.0, ax)))         # A_θ ū = (−ay, ax)
-        acc = np.array((-w * w * ax, -w * w * ay))
-        return r, rdot, H, acc
+        return np.array((rx, ry)), np.array((vx, vy)), H, np.array((cx, cy))
+
+    def generalised_force(self, q, F):
+        """Hᵀ F of a force F at the point, over the body's three coordinates (kinematics.planar_point_force)."""
+        return _planar_point_force(q[self.qi + 2], self._lx, self._ly, F[0], F[1])
 
 
 class PointPair:

@@ -649,11 +649,11 @@ class Mechanism:
     # -- forces and dynamics -----------------------------------------------------------------
     def assemble(self, t, q, v, inputs=None, with_mass=True, z=None):
         """M + M_I (Eq. 33) and Q_e + Q_Iv: every force except the inerters' acceleration term; `z`:
-        the internal states (default z0), whose forces an element with some adds."""
+        the internal states (default z0), whose forces an element with some adds. The weight,
+        the point forces and the ground motion's forces are methods of their own
+        (:meth:`point_forces`, :meth:`frame_force`), which the oracle's mechanism derives anew."""
         M = self.M0.copy() if with_mass else None
-        Q = np.zeros(self.n)
-        if self.gravity is not None:
-            Q += self.gravity
+        Q = np.zeros(self.n) if self.gravity is None else self.gravity.copy()
         if self.dim == 3:
             for i, J in enumerate(self._inertia9):
                 k = self.v_index[i] + 3
@@ -664,8 +664,23 @@ class Mechanism:
                 e.add_force(q, v, Q, geo)
                 if with_mass:
                     e.add_mass(q, v, M, geo)
+        self.add_state_forces(q, v, Q, self.z0 if z is None else z)
+        Q += self.point_forces(t, q, v, inputs)
+        if self.ground_motion is not None:
+            a_g = self.ground_motion.acceleration(t, inputs, len(self.input_forces) * self.dim)
+            Q += self.frame_force(q, a_g)
+            for e in self.inerters:                         # a device's housing, rod, flywheel move too
+                e.add_frame_force(q, v, Q, a_g)
+        return M, Q
+
+    def add_state_forces(self, q, v, Q, z):
+        """The forces of the elements with internal states, at those states z."""
         for e in self.stateful:
-            e.add_state_force(q, v, Q, self.z0 if z is None else z)
+            e.add_state_force(q, v, Q, z)
+
+    def point_forces(self, t, q, v, inputs=None):
+        """Σ Hᵀ F over the applied, feedback (PD) and input forces."""
+        Q = np.zeros(self.n)
         for f, point, fn in self.applied:
             self._add_point_force(Q, point, q, fn(t) * np.asarray(f.direction))
         for f, point in self.feedback:
@@ -673,15 +688,17 @@ class Mechanism:
         if inputs is not None and len(inputs):
             for k, (f, point) in enumerate(self.input_forces):
                 self._add_point_force(Q, point, q, inputs[k * self.dim:(k + 1) * self.dim])
-        if self.ground_motion is not None:
-            a_g = self.ground_motion.acceleration(t, inputs, len(self.input_forces) * self.dim)
-            a3 = np.zeros(3)
-            a3[:self.dim] = a_g
-            for i, m in enumerate(self.masses):            # bodies move relative to the ground frame
-                Q[self.v_index[i]:self.v_index[i] + self.dim] -= _frame_force(m, *a3)[:self.dim]
-            for e in self.inerters:                         # and so do a device's housing, rod, flywheel
-                e.add_frame_force(q, v, Q, a_g)
-        return M, Q
+        return Q
+
+    def frame_force(self, q, a_g):
+        """The bodies' −m a_g: their coordinates are relative to the ground frame, which accelerates
+        by a_g (kinematics.frame_force)."""
+        Q = np.zeros(self.n)
+        a3 = np.zeros(3)
+        a3[:self.dim] = a_g
+        for i, m in enumerate(self.masses):
+            Q[self.v_index[i]:self.v_index[i] + self.dim] -= _frame_force(m, *a3)[:self.dim]
+        return Q
 
     def generalized_forces(self, t, q, v, inputs=None):
         return self.assemble(t, q, v, inputs, with_mass=False)[1]

@@ -179,29 +179,9 @@ class OracleMechanism(Mechanism):
             Q -= m * (G.T @ a_g)
         return Q
 
-    def assemble(self, t, q, v, inputs=None, with_mass=True, z=None):
-        """M + M_I and Q_e + Q_Iv as :meth:`Mechanism.assemble`, with the weight, the point forces
-        and the ground motion's forces derived here."""
-        M = self.M0.copy() if with_mass else None
-        Q = np.zeros(self.n) if self.gravity is None else self.gravity.copy()
-        if self.dim == 3:
-            for i, J in enumerate(self.inertia_body):
-                k = self.v_index[i] + 3
-                w = v[k:k + 3]
-                Q[k:k + 3] -= np.cross(w, J @ w)                # gyroscopic term, body frame
-        for group in self.groups:
-            geo = group[0].geometry(q, v)
-            for e in group:
-                e.add_force(q, v, Q, geo)
-                if with_mass:
-                    e.add_mass(q, v, M, geo)
-        Q += self.point_forces(t, q, v, inputs)
-        if self.ground_motion is not None:
-            a_g = self.ground_motion.acceleration(t, inputs, len(self.input_forces) * self.dim)
-            Q += self.frame_force(q, a_g)
-            for e in self.inerters:
-                e.add_frame_force(q, v, Q, a_g)
-        return M, Q
+    def add_state_forces(self, q, v, Q, z):
+        """Nothing: a series connection's forces are terms of its extended system
+        (:meth:`extended_accelerations`), not forces at given states."""
 
     # -- internal states -------------------------------------------------------------------------
     def _accelerations(self, t, q, v, inputs, alpha, z):

@@ -49,6 +49,21 @@ def centre_jets(mech, q, v):
     return out
 
 
+def _virtual_work(F, r):
+    """(∂ṙ/∂v)ᵀ F of a force F at the point whose position's Jets are r (δW = F·δr)."""
+    return sum(float(fi) * c.g for fi, c in zip(F, r))
+
+
+def _pd_law(f, r, static=False):
+    """A PD actuator's force along its fixed unit d, F = −[k_p(d·r − ref) + k_d d·ṙ] d, with r and ṙ
+    the value and first derivative of its point's Jets r (`static`: without the rate term, for the
+    static equilibrium)."""
+    d = np.asarray(f.direction, dtype=float)
+    along = sum(float(di) * c.v for di, c in zip(d, r)) - f.reference
+    rate = 0.0 if static else sum(float(di) * c.d1 for di, c in zip(d, r))
+    return -(f.kp * along + f.kd * rate) * d
+
+
 class OracleMechanism(Mechanism):
     """A scene compiled with the oracle's elements, joints, point forces, gravity and ground motion
     (module docstring); everything else (coordinates, mass matrix, solution of Eq. 33) is the
@@ -118,19 +133,11 @@ class OracleMechanism(Mechanism):
             return
         jets = BodyJets(self, (point,), q, np.zeros(self.n))
         dofs = slice(self.v_index[point.body], self.v_index[point.body] + jets.n)
-        Q[dofs] += sum(float(f) * r.g for f, r in zip(F, jets.point(point)))
+        Q[dofs] += _virtual_work(F, jets.point(point))
 
     def _pd_force(self, f, point, q, v, static=False):
-        """F = −[k_p(d·r − ref) + k_d d·ṙ] d (without the rate term for the static equilibrium)."""
-        d = np.asarray(f.direction, dtype=float)
-        if point.body < 0:
-            r, rdot = np.asarray(point.local, dtype=float), np.zeros(len(d))
-        else:
-            jets = BodyJets(self, (point,), q, v)
-            r = np.array([c.v for c in jets.point(point)])
-            rdot = np.array([c.d1 for c in jets.point(point)])
-        rate = 0.0 if static else float(d @ rdot)
-        return -(f.kp * (float(d @ r) - f.reference) + f.kd * rate) * d
+        """The PD actuator's force (:func:`_pd_law`) at (q, v), for the static equilibrium too."""
+        return _pd_law(f, BodyJets(self, (point,), q, v).point(point), static)
 
     def point_forces(self, t, q, v, inputs=None):
         """Σ (∂ṙ/∂v)ᵀ F over the applied, PD and input forces, on one set of the bodies' Jets
@@ -143,15 +150,10 @@ class OracleMechanism(Mechanism):
         if not forces and not self.feedback:
             return Q
         jets = self.body_jets(q, v)
-        for f, point in self.feedback:
-            r = jets.point(point)
-            d = np.asarray(f.direction, dtype=float)
-            along = sum(float(di) * c.v for di, c in zip(d, r)) - f.reference
-            rate = sum(float(di) * c.d1 for di, c in zip(d, r))
-            forces.append((point, -(f.kp * along + f.kd * rate) * d))
+        forces += [(point, _pd_law(f, jets.point(point))) for f, point in self.feedback]
         for point, F in forces:
             if point.body >= 0:
-                Q += sum(float(fi) * c.g for fi, c in zip(F, jets.point(point)))
+                Q += _virtual_work(F, jets.point(point))
         return Q
 
     # -- gravity and the ground motion -----------------------------------------------------------

@@ -118,8 +118,8 @@ def point_position(point, coords):
     u = point.local
     k = 2.0 / (w * w + a * a + b * b + c * c)
     vec = (a, b, c)
-    t = [vec[1] * u[2] - vec[2] * u[1], vec[2] * u[0] - vec[0] * u[2], vec[0] * u[1] - vec[1] * u[0]]  # v × u
-    tt = [vec[1] * t[2] - vec[2] * t[1], vec[2] * t[0] - vec[0] * t[2], vec[0] * t[1] - vec[1] * t[0]]  # v × (v × u)
+    t = cross(vec, u)                                          # v × u
+    tt = cross(vec, t)                                         # v × (v × u)
     return [P + u[i] + k * (w * t[i] + tt[i]) for i, P in enumerate((X, Y, Z))]
 
 

@@ -2,8 +2,11 @@
 
 The FMU is built first if it is stale, then simulated by ``fmpy.simulate_fmu`` with an explicit
 communication step (fmpy ignores ``step_size`` for co-simulation and would otherwise choose one).
-The result has the same interface as the solver's (time, ``result[name]``, metrics, CSV, summary),
-with metrics from a cubic spline through the samples (no dense output crosses the FMI boundary).
+The result has the same interface as the solver's (time, ``result[name]``, metrics, CSV, summary).
+Its metrics and events read the FMU's own dense output between the samples, from a second instance
+of the FMU stepped to the times they read (:mod:`inerter.fmu.dense`): at the run's accuracy, as the
+solver's. Where the FMU restarts its integration at every communication point (RK4, LSODA, the
+``projection`` treatment) they read a cubic spline through the samples, as the solver's RK4 runs.
 """
 from __future__ import annotations
 
@@ -14,6 +17,7 @@ import numpy as np
 
 from inerter.common.errors import SceneError
 from inerter.engine.simulation import Settings
+from inerter.fmu.dense import FmuDense, reads_the_fmu
 from inerter.api import Model, Result, compute_metrics, csv_header, output_units, sample_spline, to_dataframe
 
 
@@ -80,24 +84,41 @@ class FmuResult:
         self.metrics = {}
         self.metric_errors = {}
         self.communication_step = comm_step
+        #: The FMU stepped again where a metric reads it (:class:`inerter.fmu.dense.FmuDense`), or
+        #: None: a spline through the samples.
+        self.fmu_dense = None
 
     def __getitem__(self, name):
-        if name not in self.names:
-            raise KeyError(f"{name!r} is not an output of the FMU of {self.model.name}")
+        self._check(name)
         return np.asarray(self._table[name], dtype=float)
 
     #: The scene's warnings and the derived outputs without value at some samples, as the solver's.
     warnings = Result.warnings
 
     def dense(self, name):
-        """A cubic spline through the communication-point samples."""
+        """A callable t ↦ output(t): the FMU's own dense output (a second instance stepped to the
+        times asked for, :class:`inerter.fmu.dense.FmuDense`), or, where the FMU restarts its
+        integration at every communication point, a cubic spline through the samples."""
+        if self.fmu_dense is not None and name in self.fmu_dense.names():
+            self._check(name)
+            return lambda t: self.fmu_dense.values(name, t)
         return sample_spline(self.time, self[name])
 
+    def _check(self, name):
+        if name not in self.names:
+            raise KeyError(f"{name!r} is not an output of the FMU of {self.model.name}")
+
     def events(self):
-        """Device events (:meth:`inerter.api.Result.events`), found on the spline through the
-        communication points (no dense output crosses the FMU's boundary)."""
-        from inerter.api import Result
-        return Result.events(self)
+        """Device events (:meth:`inerter.api.Result.events`), their times refined on :meth:`dense`."""
+        try:
+            return Result.events(self)
+        finally:
+            self.close()
+
+    def close(self):
+        """Free the second FMU instance :meth:`dense` reads (a later call makes it again)."""
+        if self.fmu_dense is not None:
+            self.fmu_dense.close()
 
     def summary(self):
         out = Result.summary(self)
@@ -136,16 +157,17 @@ def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None
                   else model.scene.experiment)
     settings = Settings.from_experiment(experiment)
     comm = experiment.communication_step
-    path = fmu_path or build(scene)
+    fmu_file = fmu_path or build(scene)
     messages = []
 
     def logger(component, instance, status, category, message):
         messages.append(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
 
     outputs = [n for n in model.signals.names]
+    starts = start_values(model, overrides)
     t0 = _time.process_time()
-    table = fmpy.simulate_fmu(str(path), stop_time=settings.stop_time, output_interval=comm,
-                              start_values=start_values(model, overrides), output=outputs,
+    table = fmpy.simulate_fmu(str(fmu_file), stop_time=settings.stop_time, output_interval=comm,
+                              start_values=starts, output=outputs,
                               logger=logger, debug_logging=True)   # so the FMU's messages reach `logger`
     cpu = _time.process_time() - t0
     t_last = float(table["time"][-1]) if len(table) else 0.0
@@ -159,6 +181,11 @@ def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None
     path = next((p for p in ("compiled", "numpy") if any(f"{p} path" in m for m in messages)), None)
     run.extra["path"] = f"FMU ({path} path)" if path else "FMU"
     result = FmuResult(model, table, settings, run, comm)
+    if ok and reads_the_fmu(settings):
+        result.fmu_dense = FmuDense(fmu_file, starts, settings.stop_time, result)
     if metrics and ok:
-        result.metrics = compute_metrics(model, result)
+        try:
+            result.metrics = compute_metrics(model, result)
+        finally:
+            result.close()
     return result

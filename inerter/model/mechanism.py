@@ -655,9 +655,7 @@ class Mechanism:
         M = self.M0.copy() if with_mass else None
         Q = np.zeros(self.n) if self.gravity is None else self.gravity.copy()
         if self.dim == 3:
-            for i, J in enumerate(self._inertia9):
-                k = self.v_index[i] + 3
-                Q[k:k + 3] -= _gyroscopic(J, 0, v[k], v[k + 1], v[k + 2])    # ω̄ × Jω̄, body frame
+            Q += self.body_forces(v)
         for group in self.groups:
             geo = group[0].geometry(q, v)
             for e in group:
@@ -672,6 +670,15 @@ class Mechanism:
             for e in self.inerters:                         # a device's housing, rod, flywheel move too
                 e.add_frame_force(q, v, Q, a_g)
         return M, Q
+
+    def body_forces(self, v):
+        """The 3D bodies' velocity forces: −ω̄ × Jω̄ on each body's ω̄ (Euler's equations in the body
+        frame, kinematics.gyroscopic). The oracle's mechanism derives them from T."""
+        Q = np.zeros(self.n)
+        for i, J in enumerate(self._inertia9):
+            k = self.v_index[i] + 3
+            Q[k:k + 3] -= _gyroscopic(J, 0, v[k], v[k + 1], v[k + 2])
+        return Q
 
     def add_state_forces(self, q, v, Q, z):
         """The forces of the elements with internal states, at those states z."""

@@ -23,14 +23,19 @@ and its elements from :class:`~.derivation.OracleElement`.
   coordinate (:mod:`.series`); Lagrange's equations on (v, ṡ) with the joints' rows give one system
   for (v̇, s̈, λ) (:meth:`OracleMechanism.extended_accelerations`), ż = (ṡ, s̈, p_loss).
 
-The bodies' mass matrix M0 = diag(m I, J) and the gyroscopic term −ω × Jω stay the Mechanism's
-(rigid-body inertia, which the element and joint derivations do not depend on)."""
+* The bodies' mass matrix and velocity forces (:mod:`.bodies`): from each body's kinetic energy T
+  on Jets, M's columns as ∂T/∂v at unit velocities, and −ω̄ × ∂T/∂ω̄ on a 3D body's ω̄
+  (Boltzmann–Hamel).
+
+What stays the Mechanism's is the formulation: the coordinates, the assembly of Eq. (33) from the
+terms above and its solution."""
 from __future__ import annotations
 
 import numpy as np
 
 from inerter.common.errors import SceneError
 from inerter.model.mechanism import Mechanism
+from inerter.oracle import bodies
 from inerter.oracle.derivation import OracleElement
 from inerter.oracle.jets import Jet
 from inerter.oracle.joints import BodyJets, OracleJoint
@@ -65,8 +70,8 @@ def _pd_law(f, r, static=False):
 
 
 class OracleMechanism(Mechanism):
-    """A scene compiled with the oracle's elements, joints, point forces, gravity and ground motion
-    (module docstring); everything else (coordinates, mass matrix, solution of Eq. 33) is the
+    """A scene compiled with the oracle's elements, joints, point forces, gravity, ground motion and
+    bodies' inertia (module docstring); the coordinates and the solution of Eq. 33 are the
     Mechanism's."""
 
     def __init__(self, scene):
@@ -76,12 +81,30 @@ class OracleMechanism(Mechanism):
         self.series = [e for e in self.stateful if getattr(e, "series", None) is not None]
         self._solved = None                 # (state, s̈) of the last extended solve
 
+    # -- the bodies' inertia ---------------------------------------------------------------------
+    def _bodies(self, scene):
+        """As the Mechanism's, with the mass matrix derived from the bodies' T (:mod:`.bodies`)."""
+        start = super()._bodies(scene)
+        nvb = self.n // max(len(self.body_names), 1)
+        self._blocks = [bodies.mass_block(b, self.dim) for b in scene.bodies.values()]
+        self.M0 = np.zeros((self.n, self.n))
+        for k, block in zip(self.v_index, self._blocks):
+            self.M0[k:k + nvb, k:k + nvb] = block
+        return start
+
+    def body_forces(self, v):
+        """−ω̄ × ∂T/∂ω̄ on each 3D body's ω̄ (:func:`.bodies.velocity_force`)."""
+        Q = np.zeros(self.n)
+        for k, block in zip(self.v_index, self._blocks):
+            Q[k:k + 6] += bodies.velocity_force(block, v[k:k + 6])
+        return Q
+
     def terms(self) -> list[str]:
         """The Mechanism's description, its first line naming what the oracle derives."""
         lines = super().terms()
         lines[0] = lines[0].replace("oracle: element forces from d²L/dt² by automatic differentiation",
-                                    "oracle: element forces, joints, point forces, weight and ground motion by "
-                                    "automatic differentiation")
+                                    "oracle: element forces, joints, point forces, weight, ground motion and the "
+                                    "bodies' inertia by automatic differentiation")
         return lines
 
     # -- joints ----------------------------------------------------------------------------------

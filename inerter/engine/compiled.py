@@ -57,7 +57,7 @@ from inerter.engine.simulation import Run, Stepper, jumps
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
-from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
+from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows, kernel_tables
 from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
 from inerter.model.mechanism import DEPENDENT_RATIO, wound_from
 
@@ -430,19 +430,10 @@ def flatten(mech) -> dict:
     has_gravity = mech.gravity is not None          # m g on each body's R (Mechanism._effects)
     gravity = np.array(mech.gravity, dtype=float) if has_gravity else np.zeros(n)
 
-    def arr(rows, width, dtype):
-        return np.array(rows, dtype=dtype).reshape(-1, width)
-
-    return dict(n=n, nq=n, dim=2, m=2 * len(jt_int), mass=mass, pbody=pbody, ploc=ploc,
-                el_int=arr(el_int, layout.ELEMENT_INT_COLUMNS, np.int64),
-                el_real=arr(el_real, layout.ELEMENT_REAL_COLUMNS, float),
-                rot_int=arr(rot_int, layout.ROT_INT_COLUMNS, np.int64),
-                rot_real=arr(rot_real, layout.ROT_REAL_COLUMNS_2D, float),
-                jt_int=arr(jt_int, layout.JOINT_INT_COLUMNS_2D, np.int64),
-                jt_real=arr(jt_real, layout.JOINT_REAL_COLUMNS_2D, float),
-                fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 9, float),
-                pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 5, float),
-                in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
+    rows = dict(el_int=el_int, el_real=el_real, rot_int=rot_int, rot_real=rot_real, jt_int=jt_int, jt_real=jt_real,
+                fa_int=fa_int, fa_real=fa_real, pd_int=pd_int, pd_real=pd_real, in_int=in_int)
+    return dict(n=n, nq=n, dim=2, m=2 * len(jt_int), mass=mass, pbody=pbody, ploc=ploc, **kernel_tables(2, rows),
+                gravity=gravity, has_gravity=bool(has_gravity),
                 point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names,
                 el_extra=tables["el_extra"], n_internal=tables["n_internal"])
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from inerter.elements import ROTATIONAL, TRANSLATIONAL, layout, output_suffixes
-from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows
+from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows, kernel_tables
 from inerter.model.joints import Coincident, SpatialJoint
 
 # Joint kinds (column JOINT_KIND of ``jt_int``), as in :mod:`inerter.engine.kernels` (its 3D section).
@@ -134,19 +134,10 @@ def flatten3(mech) -> dict:
     has_gravity = mech.gravity is not None
     gravity = np.array(mech.gravity, dtype=float) if has_gravity else np.zeros(n)
 
-    def arr(rows, width, dtype):
-        return np.ascontiguousarray(np.array(rows, dtype=dtype).reshape(-1, width))
-
+    rows = dict(el_int=el_int, el_real=el_real, rot_int=rot_int, rot_real=rot_real, jt_int=jt_int, jt_real=jt_real,
+                fa_int=fa_int, fa_real=fa_real, pd_int=pd_int, pd_real=pd_real, in_int=in_int)
     return dict(n=n, m=m, nq=nq, dim=3, mass=mass, pbody=pbody, ploc=np.ascontiguousarray(ploc),
-                el_int=arr(el_int, layout.ELEMENT_INT_COLUMNS, np.int64),
-                el_real=arr(el_real, layout.ELEMENT_REAL_COLUMNS, float),
-                rot_int=arr(rot_int, layout.ROT_INT_COLUMNS, np.int64),
-                rot_real=arr(rot_real, layout.ROT_REAL_COLUMNS_3D, float),
-                jt_int=arr(jt_int, layout.JOINT_INT_COLUMNS_3D, np.int64),
-                jt_real=arr(jt_real, layout.JOINT_REAL_COLUMNS_3D, float),
-                fa_int=arr(fa_int, 2, np.int64), fa_real=arr(fa_real, 10, float),
-                pd_int=arr(pd_int, 1, np.int64), pd_real=arr(pd_real, 6, float),
-                in_int=arr(in_int, 1, np.int64), gravity=gravity, has_gravity=bool(has_gravity),
+                **kernel_tables(3, rows), gravity=gravity, has_gravity=bool(has_gravity),
                 point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names,
                 el_extra=tables["el_extra"], n_internal=tables["n_internal"])
 

@@ -3,6 +3,8 @@
 columns are named in :mod:`inerter.elements.layout`."""
 from __future__ import annotations
 
+import numpy as np
+
 from inerter import elements
 from inerter.elements import layout
 from inerter.scene.changes import differences
@@ -119,6 +121,30 @@ def force_rows(scene, pidx, dim) -> tuple[list, list, list, list, list]:
         elif f.function == "input":
             in_int.append((p,))
     return fa_int, fa_real, pd_int, pd_real, in_int
+
+
+def table_widths(dim: int) -> dict[str, int]:
+    """The column count of each table the kernels run on, in a `dim`-D scene (layout's names): a
+    point force's integer row holds its point and time function, its real row the direction's
+    `dim` components and then the time function's numbers (F_*) or the PD law's (PD_*)."""
+    planar = dim == 2
+    return dict(el_int=layout.ELEMENT_INT_COLUMNS, el_real=layout.ELEMENT_REAL_COLUMNS,
+                rot_int=layout.ROT_INT_COLUMNS,
+                rot_real=layout.ROT_REAL_COLUMNS_2D if planar else layout.ROT_REAL_COLUMNS_3D,
+                jt_int=layout.JOINT_INT_COLUMNS_2D if planar else layout.JOINT_INT_COLUMNS_3D,
+                jt_real=layout.JOINT_REAL_COLUMNS_2D if planar else layout.JOINT_REAL_COLUMNS_3D,
+                fa_int=layout.FORCE_FUNCTION + 1, fa_real=dim + layout.F_INITIAL + 1,
+                pd_int=layout.FORCE_POINT + 1, pd_real=dim + layout.PD_REFERENCE + 1,
+                in_int=layout.FORCE_POINT + 1)
+
+
+def kernel_tables(dim: int, rows: dict) -> dict:
+    """The tables `rows` (name → list of rows, :func:`table_widths`' names) as the kernels take
+    them: contiguous 2-D arrays of their widths (int64 or float), empty tables as (0, width)."""
+    widths = table_widths(dim)
+    return {name: np.ascontiguousarray(np.array(rows[name], dtype=np.int64 if name.endswith("_int") else float)
+                                       .reshape(-1, widths[name]))
+            for name in widths}
 
 
 def element_tables(mech, pidx, rotational) -> dict:

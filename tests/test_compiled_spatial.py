@@ -21,7 +21,8 @@ from inerter.common.rotations import axis_angle_matrix, euler_matrix
 
 pytestmark = pytest.mark.skipif(not compiled.AVAILABLE, reason=compiled.WHY_NOT or "numba missing")
 if compiled.AVAILABLE:
-    from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
+    from inerter.engine.compiled_spatial import flatten3, signal_layout3
+    from inerter.engine.compiled import sparsity
     ck = compiled._k                  # the kernels as the package loads them (their on-disk cache)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -397,12 +398,12 @@ def test_parameter_tuple_matches_planar_contract(tmp_path):
 
 def test_sparsity_covers_the_augmented_matrix(tmp_path):
     """Reference: the numpy Mechanism's augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]] at random
-    states: every non-zero lies in sparsity3's pattern (so the band after ordering holds it)."""
+    states: every non-zero lies in sparsity's pattern (so the band after ordering holds it)."""
     paths = SCENES_3D + [_every_branch_scene(tmp_path)]
     rng = np.random.default_rng(5)
     for path in paths:
         mech = _load(path, True)
-        S = sparsity3(flatten3(mech))
+        S = sparsity(flatten3(mech))
         for _, q, v, _, _ in _states(mech, rng, 3):
             K = np.zeros((mech.n + mech.m,) * 2)
             K[:mech.n, :mech.n] = mech.mass_matrix(q, v)

@@ -26,7 +26,7 @@ def _band(S, order):
 def _pattern(path):
     mech = inerter.load(str(path)).mechanism
     if mech.scene.dimension == 3:
-        return compiled.sparsity3(compiled.flatten3(mech))
+        return compiled.sparsity(compiled.flatten3(mech))
     return compiled.sparsity(compiled.flatten(mech))
 
 

@@ -58,7 +58,7 @@ from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows, kernel_tables
-from inerter.engine.compiled_spatial import flatten3, signal_layout3, sparsity3
+from inerter.engine.compiled_spatial import flatten3, joint_row_counts, signal_layout3
 from inerter.model.mechanism import DEPENDENT_RATIO, wound_from
 
 
@@ -454,26 +454,29 @@ def _k_code(name):
 
 
 def sparsity(flat) -> np.ndarray:
-    """Structural pattern of the augmented matrix of Eq. (33) (boolean, (n + m)²)."""
+    """Structural pattern of the augmented matrix of Eq. (33) (boolean, (n + m)²): each body's
+    block (m I and J: 3 velocity coordinates in 2D, 6 in 3D), the couplings of the two bodies of
+    each element with an inertance (M_I), and each joint's rows against both bodies' coordinates."""
     n, m = flat["n"], flat["m"]
-    N = n + m
-    S = np.zeros((N, N), dtype=bool)
-    S[np.arange(n), np.arange(n)] = True
-    for i in range(0, n, 3):
-        S[i:i + 3, i:i + 3] = True
+    width = 3 if flat["dim"] == 2 else 6
+    S = np.zeros((n + m, n + m), dtype=bool)
+    for i in range(0, n, width):
+        S[i:i + width, i:i + width] = True
     pbody = flat["pbody"]
+
+    def dofs(*points):
+        return [d for p in points if pbody[p] >= 0 for d in range(width * pbody[p], width * (pbody[p] + 1))]
+
     for row_int, row_real in zip(flat["el_int"], flat["el_real"]):
-        if not adds_mass(row_int, row_real):
-            continue
-        a, b = row_int[layout.POINT_A], row_int[layout.POINT_B]
-        dofs = [d for p in (a, b) if pbody[p] >= 0 for d in range(3 * pbody[p], 3 * pbody[p] + 3)]
-        S[np.ix_(dofs, dofs)] = True
-    for j, row_int in enumerate(flat["jt_int"]):
-        a, b = row_int[layout.POINT_A], row_int[layout.POINT_B]
-        dofs = [d for p in (a, b) if pbody[p] >= 0 for d in range(3 * pbody[p], 3 * pbody[p] + 3)]
-        rows = [n + 2 * j, n + 2 * j + 1]
-        S[np.ix_(rows, dofs)] = True
-        S[np.ix_(dofs, rows)] = True
+        if adds_mass(row_int, row_real):
+            d = dofs(row_int[layout.POINT_A], row_int[layout.POINT_B])
+            S[np.ix_(d, d)] = True
+    row = n
+    for row_int, k in zip(flat["jt_int"], joint_row_counts(flat)):
+        d = dofs(row_int[layout.POINT_A], row_int[layout.POINT_B])
+        S[np.ix_(range(row, row + k), d)] = True
+        S[np.ix_(d, range(row, row + k))] = True
+        row += k
     return S
 
 
@@ -557,7 +560,7 @@ class Kernel:
         flat = flatten3(mech) if spatial else flatten(mech)
         self.flat = flat
         self.n, self.m, self.nq = flat["n"], flat["m"], flat["nq"]
-        self.perm, self.kl, self.ku = ordering(sparsity3(flat) if spatial else sparsity(flat))
+        self.perm, self.kl, self.ku = ordering(sparsity(flat))
         mode, offset, ground_t, ground_a, ground_terms = ground_arrays(mech)
         euler_axes = EULER_SEQUENCES[mech.scene.euler_sequence]
         # the screw efficiencies whose modes each solve settles: the rigid ones (in series the mode is

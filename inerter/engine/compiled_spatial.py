@@ -157,8 +157,11 @@ def signal_layout3(flat) -> list[str]:
 BODY_OUTPUTS = ("q[1]", "q[2]", "q[3]", "q[4]", "euler[1]", "euler[2]", "euler[3]", "w[1]", "w[2]", "w[3]")
 
 
-def _joint_rows(flat):
-    """Number of constraint rows of each joint, in order."""
+def joint_row_counts(flat) -> list[int]:
+    """The number of constraint rows of each joint, in order: two per 2D joint (Eq. 33's rows of a
+    revolute or slider joint), :func:`_row_count` per 3D joint."""
+    if flat["dim"] == 2:
+        return [2] * len(flat["jt_int"])
     return [_row_count(row) for row in flat["jt_int"]]
 
 
@@ -167,32 +170,3 @@ def _row_count(row_int):
     and dot-2 rows, its screw row."""
     return (3 * row_int[layout.COINCIDENT] + row_int[layout.DOT1_ROWS] + row_int[layout.DOT2_ROWS]
             + row_int[layout.SCREW_ROW])
-
-
-def sparsity3(flat) -> np.ndarray:
-    """Structural pattern of the augmented matrix of Eq. (33) for a 3D mechanism (boolean,
-    (n + m)²): a full 6×6 block per body (m I and J), the couplings of the two bodies of each
-    inerter (M_I), and each joint's rows against both bodies' six velocity coordinates."""
-    n, m = flat["n"], flat["m"]
-    N = n + m
-    S = np.zeros((N, N), dtype=bool)
-    S[np.arange(N), np.arange(N)] = True
-    for i in range(0, n, 6):
-        S[i:i + 6, i:i + 6] = True
-    pbody = flat["pbody"]
-
-    def dofs(*points):
-        return [d for p in points if pbody[p] >= 0 for d in range(6 * pbody[p], 6 * pbody[p] + 6)]
-
-    for row_int, row_real in zip(flat["el_int"], flat["el_real"]):
-        if adds_mass(row_int, row_real):
-            d = dofs(row_int[layout.POINT_A], row_int[layout.POINT_B])
-            S[np.ix_(d, d)] = True
-    row = n
-    for row_int, k in zip(flat["jt_int"], _joint_rows(flat)):
-        d = dofs(row_int[layout.POINT_A], row_int[layout.POINT_B])
-        rows = list(range(row, row + k))
-        S[np.ix_(rows, d)] = True
-        S[np.ix_(d, rows)] = True
-        row += k
-    return S

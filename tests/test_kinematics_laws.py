@@ -9,6 +9,9 @@ against references that do not use them:
 * Hᵀ F against the virtual work F·(r(q + εδ) − r(q − εδ))/(2ε) of a finite displacement δ
   (ε = 1e-6, tolerance 1e-8);
 * the PD magnitude and the gyroscopic term against their closed forms (numpy dot and cross, 1e-14);
+* a body's energy T + V against T = ½ m |Ṙ|² + ½ J θ̇² (2D) or ½ m |Ṙ|² + ½ ω̄ᵀJω̄ (3D) and
+  V = −m g·R written out by hand for a body with round numbers (exact in binary: 1e-14), and
+  against ½ vᵀ diag(m I, J) v − m g·R at a random state (numpy, 1e-12);
 * the twist's gradient g against a central difference of φ under a small global rotation of body b
   (ε = 1e-6, tolerance 1e-8), and φ̇ = g·(ω_b − ω_a) by its definition.
 """
@@ -27,6 +30,8 @@ spatial_point_force = kinematics.spatial_point_force.py_func
 spatial_turn_row = kinematics.spatial_turn_row.py_func
 pd_magnitude = kinematics.pd_magnitude.py_func
 gyroscopic = kinematics.gyroscopic.py_func
+planar_body_energy = kinematics.planar_body_energy.py_func
+spatial_body_energy = kinematics.spatial_body_energy.py_func
 spatial_twist = twist.spatial_twist.py_func
 
 DT = 1e-4
@@ -125,6 +130,34 @@ def test_pd_magnitude_and_gyroscopic_term_are_their_closed_forms():
     J = J @ J.T
     w = RNG.normal(size=3)
     assert np.array(gyroscopic(_nine(J), 0, *w)) == pytest.approx(np.cross(w, J @ w), abs=1e-14)
+
+
+def test_planar_body_energy_is_its_kinetic_energy_and_its_weights_potential():
+    """m = 2 kg, J = 0.5 kg m², Ṙ = (3, −1) m/s, θ̇ = 4 rad/s, R = (1, 2) m, g = (0, −9.75) m/s²:
+    T = ½·2·(9 + 1) + ½·0.5·16 = 14 J and V = −m g·R = −2·(−9.75)·2 = 39 J; without gravity V = 0."""
+    m, J = 2.0, 0.5
+    assert planar_body_energy(m, J, 3.0, -1.0, 4.0, 0.0, -m * 9.75, 1.0, 2.0) == pytest.approx(14.0 + 39.0, abs=1e-14)
+    assert planar_body_energy(m, J, 3.0, -1.0, 4.0, 0.0, 0.0, 1.0, 2.0) == pytest.approx(14.0, abs=1e-14)
+
+
+def test_spatial_body_energy_is_its_kinetic_energy_and_its_weights_potential():
+    """m = 3 kg, J = [[2, 0.5, 0], [0.5, 1, 0], [0, 0, 4]] kg m² (in J[2:11] of a longer array, as
+    the kernels store it), Ṙ = (1, 2, −2) m/s, ω̄ = (1, −2, 0.5) rad/s, R = (0.5, −1, 2) m,
+    g = (0, 0, −9.75) m/s²: T = ½·3·9 + ½ ω̄ᵀJω̄ = 13.5 + ½(2 − 2 + 4 + 1) = 16 J (ω̄ᵀJω̄ = 2·1 +
+    2·0.5·(1·−2) + 1·4 + 4·0.25 = 5) and V = −3·(−9.75)·2 = 58.5 J; then at a random state against
+    ½ vᵀ diag(m I, J) v − m g·R (numpy)."""
+    J = np.array(((2.0, 0.5, 0.0), (0.5, 1.0, 0.0), (0.0, 0.0, 4.0)))
+    stored = np.concatenate(((7.0, 7.0), J.ravel()))
+    weight = (0.0, 0.0, -3.0 * 9.75)
+    E = spatial_body_energy(3.0, stored, 2, 1.0, 2.0, -2.0, 1.0, -2.0, 0.5, *weight, 0.5, -1.0, 2.0)
+    assert E == pytest.approx(16.0 + 58.5, abs=1e-14)
+    J = RNG.normal(size=(3, 3))
+    J = J @ J.T
+    m, v, R, g = 1.7, RNG.normal(size=6), RNG.normal(size=3), RNG.normal(size=3)
+    M = np.diag((m, m, m, 0.0, 0.0, 0.0))
+    M[3:, 3:] = J
+    expected = 0.5 * v @ M @ v - m * g @ R
+    assert spatial_body_energy(m, _nine(J), 0, *v, *(m * g), *R) == pytest.approx(expected, abs=1e-12)
 
 
 @pytest.mark.parametrize("seed", range(5))

@@ -1,11 +1,12 @@
-"""A point's kinematics and a point force's generalised force, written once (paper Sec. 3.1-3.2,
-Eqs. 15-17, 22, 25; the virtual work of a force at a point).
+"""A point's kinematics, a point force's generalised force and a body's energy, written once
+(paper Sec. 3.1-3.2, Eqs. 15-17, 22, 25, 26; the virtual work of a force at a point).
 
 Scalar functions compiled by :func:`~inerter.elements.base.law`: the engine's kernels inline them
 (``kernels._point``, ``_point3``, ``_point_force``, ``_point_force3``, the PD actuators, the ground
-motion's frame force and the 3D bodies' gyroscopic term), and the readable model (:mod:`inerter.model.planar`,
-:mod:`inerter.model.spatial`, :class:`inerter.model.mechanism.Mechanism`) runs the same definitions
-uncompiled and places what they return into its vectors and matrices. They sit here, below the
+motion's frame force, the 3D bodies' gyroscopic term, the bodies' share of the energy output),
+and the readable model (:mod:`inerter.model.planar`, :mod:`inerter.model.spatial`,
+:class:`inerter.model.mechanism.Mechanism`) runs the same definitions uncompiled and places what
+they return into its vectors and matrices (and sums the energies). They sit here, below the
 model and beside the element laws that take their results, because the elements' terminals, the
 joints' rows and the applied forces all start from them.
 
@@ -49,11 +50,8 @@ def spatial_point(A, x, y, z, vx, vy, vz, wx, wy, wz, lx, ly, lz):
     return x + u0, y + u1, z + u2, vx + d0, vy + d1, vz + d2, a0, a1, a2
 
 
-@law
-def spatial_turn_row(A, lx, ly, lz, tx, ty, tz):
-    """tᵀ(−A ũ): the coefficients over ω̄ of t·ṙ for a point ū (the ω̄-columns of tᵀH, Eq. 22),
-    ū × (Aᵀ t); row i of H's ω̄-block is this with t = e_i."""
-    return turned_coefficient(A, lx, ly, lz, tx, ty, tz)
+#: (A, ū, t) ↦ ū × (Aᵀ t) = tᵀ(−A ũ), the ω̄-columns of tᵀH for a point ū (Eq. 22; t = e_i: row i).
+spatial_turn_row = turned_coefficient
 
 
 @law
@@ -90,11 +88,38 @@ def frame_force(m, agx, agy, agz):
 
 
 @law
+def angular_momentum(J, at, wx, wy, wz):
+    """J ω̄, J row-major in J[at:at + 9]: a spatial body's angular momentum about its centre, in
+    its frame (the ω̄-block of its constant mass matrix diag(m I, J) times ω̄)."""
+    hx = J[at] * wx + J[at + 1] * wy + J[at + 2] * wz
+    hy = J[at + 3] * wx + J[at + 4] * wy + J[at + 5] * wz
+    hz = J[at + 6] * wx + J[at + 7] * wy + J[at + 8] * wz
+    return hx, hy, hz
+
+
+@law
 def gyroscopic(J, at, wx, wy, wz):
     """ω̄ × J ω̄, J row-major in J[at:at + 9]: a spatial body's generalised force over ω̄ has
     −ω̄ × J ω̄ (Euler's equations in the body frame, where the mass matrix is the constant
     diag(m I, J))."""
-    hx = J[at] * wx + J[at + 1] * wy + J[at + 2] * wz
-    hy = J[at + 3] * wx + J[at + 4] * wy + J[at + 5] * wz
-    hz = J[at + 6] * wx + J[at + 7] * wy + J[at + 8] * wz
+    hx, hy, hz = angular_momentum(J, at, wx, wy, wz)
     return cross3(wx, wy, wz, hx, hy, hz)
+
+
+@law
+def planar_body_energy(m, J, vx, vy, w, fx, fy, x, y):
+    """A planar body's T + V: its kinetic energy T = ½ m |Ṙ|² + ½ J θ̇² (½ vᵀ M v with the
+    constant centroidal mass matrix diag(m, m, J) of Eq. 26, Shabana 2009) and its weight's
+    potential V = −f·R, f = m g (so that f = −∂V/∂R; f = 0 without gravity)."""
+    return 0.5 * m * (vx * vx + vy * vy) + 0.5 * J * w * w - (fx * x + fy * y)
+
+
+@law
+def spatial_body_energy(m, J, at, vx, vy, vz, wx, wy, wz, fx, fy, fz, x, y, z):
+    """A spatial body's T + V, J its inertia about the centre in its frame, row-major in
+    J[at:at + 9]: T = ½ m |Ṙ|² + ½ ω̄ᵀ J ω̄ (½ vᵀ M v with v = (Ṙ, ω̄) and the constant mass
+    matrix diag(m I, J) of Eq. 26 in centroidal coordinates, Eq. 22 with body-frame ω̄; Shabana
+    2009) and its weight's potential V = −f·R, f = m g (f = −∂V/∂R; f = 0 without gravity)."""
+    hx, hy, hz = angular_momentum(J, at, wx, wy, wz)
+    kinetic = 0.5 * m * (vx * vx + vy * vy + vz * vz) + 0.5 * (wx * hx + wy * hy + wz * hz)
+    return kinetic - (fx * x + fy * y + fz * z)

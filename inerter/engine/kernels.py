@@ -29,8 +29,9 @@ from inerter.elements.device import MODE_SOLVES
 from inerter.elements.inerter import settle
 from inerter.elements.joint_rows import (body_vector, dot1_row, dot2_row, screw_residual, screw_row, screw_turn_2d,
                                          slider_rows_2d)
-from inerter.elements.kinematics import (frame_force, gyroscopic, pd_magnitude, planar_point, planar_point_force,
-                                         spatial_point, spatial_point_force, spatial_turn_row)
+from inerter.elements.kinematics import (frame_force, gyroscopic, pd_magnitude, planar_body_energy, planar_point,
+                                         planar_point_force, spatial_body_energy, spatial_point,
+                                         spatial_point_force, spatial_turn_row)
 from inerter.elements.twist import planar_relative, spatial_twist
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, COINCIDENT, DEVICE, DOT1, DOT1_ROWS, DOT2,
                                      DOT2_ROWS, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY,
@@ -775,11 +776,9 @@ def signal_values2(q, v, z, qdd, P, out):
         out[k + 3] = vy
         k += 4
     energy = 0.0
-    for i in range(n):
-        energy += 0.5 * mass[i] * v[i] * v[i]
-    if dims[HAS_GRAVITY]:
-        for i in range(0, n, 3):
-            energy -= gravity[i] * q[i] + gravity[i + 1] * q[i + 1]
+    for i in range(0, n, 3):        # each body's T + V; `gravity` is all 0 where not declared
+        energy += planar_body_energy(mass[i], mass[i + 2], v[i], v[i + 1], v[i + 2], gravity[i], gravity[i + 1],
+                                     q[i], q[i + 1])
     for e in range(el_int.shape[0]):
         kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets, distance = _element(
             q, v, e, el_int, el_real, pbody, ploc)
@@ -1724,19 +1723,13 @@ def signal_values3(q, v, z, qdd, P, out):
         out[k + 4] = vy
         out[k + 5] = vz
         k += 6
-    # T = ½ vᵀ M0 v with M0 = diag(m I, J) per body
+    # each body's T + V, M0 = diag(m I, J) per body; `gravity` is all 0 where not declared
     energy = 0.0
+    nqb = _coords_per_body(q, v)
     for b in range(nb):
-        i = 6 * b
-        J = n + 9 * b
-        energy += 0.5 * mass[i] * (v[i] * v[i] + v[i + 1] * v[i + 1] + v[i + 2] * v[i + 2])
-        for r in range(3):
-            for c in range(3):
-                energy += 0.5 * v[i + 3 + r] * mass[J + 3 * r + c] * v[i + 3 + c]
-    if dims[HAS_GRAVITY]:
-        for b in range(nb):
-            for i in range(3):
-                energy -= gravity[6 * b + i] * q[_coords_per_body(q, v) * b + i]
+        i, c = 6 * b, nqb * b
+        energy += spatial_body_energy(mass[i], mass, n + 9 * b, v[i], v[i + 1], v[i + 2], v[i + 3], v[i + 4],
+                                      v[i + 5], gravity[i], gravity[i + 1], gravity[i + 2], q[c], q[c + 1], q[c + 2])
     ga = np.empty(6)
     gb = np.empty(6)
     for e in range(el_int.shape[0]):

@@ -35,6 +35,8 @@ from inerter.model.spatial import EULER_SINGULARITY, Orientation, RotationCache,
 _gyroscopic = kinematics.gyroscopic.py_func
 _pd_magnitude = kinematics.pd_magnitude.py_func
 _frame_force = kinematics.frame_force.py_func
+_planar_body_energy = kinematics.planar_body_energy.py_func
+_spatial_body_energy = kinematics.spatial_body_energy.py_func
 
 #: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
 ASSEMBLY_TOLERANCE = 1e-6
@@ -781,16 +783,21 @@ class Mechanism:
     def energy(self, q, v, z=None) -> float:
         """T + V: ½vᵀM v + Σ ½bL̇² (inerters) + elastic and gravity potential. Conserved by the
         corrected model without damping and forcing (the inerter adds ½bL̇² to T, Sec. 2.2)."""
-        E = 0.5 * float(v @ (self.M0 @ v))
+        E = sum(self.body_energy(i, q, v) for i in range(len(self.body_names)))
         for e in self.elements:
             E += e.kinetic(q, v) + e.potential(q)
         for e in self.stateful:                 # a series connection's ½ b u̇² + ½ k_c d²
             E += e.state_energy(q, v, self.z0 if z is None else z)
-        if self.gravity is not None:
-            for i, m in enumerate(self.masses):
-                k, j = self.q_index[i], self.v_index[i]
-                E -= float(self.gravity[j:j + self.dim] @ q[k:k + self.dim])
-        return E
+        return float(E)
+
+    def body_energy(self, i, q, v) -> float:
+        """Body i's ½ vᵀ M0 v over its block and its weight's potential −m g·R
+        (kinematics.planar_body_energy, spatial_body_energy, as the kernels' energy output)."""
+        k, j, dim = self.q_index[i], self.v_index[i], self.dim
+        weight = self.gravity[j:j + dim] if self.gravity is not None else (0.0,) * dim
+        if dim == 2:
+            return _planar_body_energy(self.masses[i], self.M0[j + 2, j + 2], *v[j:j + 3], *weight, *q[k:k + 2])
+        return _spatial_body_energy(self.masses[i], self._inertia9[i], 0, *v[j:j + 6], *weight, *q[k:k + 3])
 
     # -- description -----------------------------------------------------------------------
     def terms(self) -> list[str]:

@@ -87,3 +87,30 @@ def test_only_an_integration_running_across_points_is_read_between_them(method, 
     would change their trajectory, so their metrics read the spline through the samples."""
     from types import SimpleNamespace
     assert reads_the_fmu(SimpleNamespace(method=method, constraint=constraint)) is reads
+
+
+def test_a_sample_without_value_in_both_counts_as_repeated():
+    """A derived output undefined at a sample is NaN in the run and in the second instance alike:
+    that is the run repeated; a NaN on one side only, or a value off by 1e-9, is not."""
+    class Instance:
+        def __init__(self, values):
+            self.values = values
+
+        def getReal(self, refs):
+            return [self.values[r] for r in refs]
+
+        def getFMUstate(self):
+            return "state"
+
+    samples = {"a": np.array([np.nan, 0.0]), "b": np.array([2.0, 0.0])}
+    result = type("Run", (), {"time": np.array([0.0, 1.0]), "names": ["a", "b"],
+                              "__getitem__": lambda self, n: samples[n]})()
+    dense = FmuDense("unused.fmu", {}, 1.0, result)
+    dense._outputs = {"a": 0, "b": 1}
+    dense._fmu = Instance([np.nan, 2.0])
+    dense._keep(0)
+    assert 0 in dense._saved
+    for values in ([0.0, 2.0], [np.nan, 2.0 + 1e-9 * 3.0]):
+        dense._fmu = Instance(values)
+        with pytest.raises(SimulationError, match="does not repeat the run"):
+            dense._keep(0)

@@ -23,9 +23,9 @@ and its elements from :class:`~.derivation.OracleElement`.
   coordinate (:mod:`.series`); Lagrange's equations on (v, ṡ) with the joints' rows give one system
   for (v̇, s̈, λ) (:meth:`OracleMechanism.extended_accelerations`), ż = (ṡ, s̈, p_loss).
 
-* The bodies' mass matrix and velocity forces (:mod:`.bodies`): from each body's kinetic energy T
-  on Jets, M's columns as ∂T/∂v at unit velocities, and −ω̄ × ∂T/∂ω̄ on a 3D body's ω̄
-  (Boltzmann–Hamel).
+* The bodies' mass matrix, velocity forces and energy (:mod:`.bodies`): from each body's kinetic
+  energy T on Jets, M's columns as ∂T/∂v at unit velocities, −ω̄ × ∂T/∂ω̄ on a 3D body's ω̄
+  (Boltzmann–Hamel), and T itself with the weight's V in the mechanism's energy.
 
 What stays the Mechanism's is the formulation: the coordinates, the assembly of Eq. (33) from the
 terms above and its solution."""
@@ -98,6 +98,16 @@ class OracleMechanism(Mechanism):
         for k, block in zip(self.v_index, self._blocks):
             Q[k:k + 6] += bodies.velocity_force(block, v[k:k + 6])
         return Q
+
+    def body_energy(self, i, q, v) -> float:
+        """Body i's T (:func:`.bodies.kinetic_energy`) and its weight's potential V = −m g·R, both
+        written from the scene's body."""
+        body = list(self.scene.bodies.values())[i]
+        k, j, nvb = self.q_index[i], self.v_index[i], 3 if self.dim == 2 else 6
+        T = bodies.kinetic_energy(body, self.dim, v[j:j + nvb]).v
+        g = self.scene.effects.get("gravity")
+        V = 0.0 if self.gravity is None else -float(body.mass) * float(np.dot(g, q[k:k + self.dim]))
+        return T + V
 
     def terms(self) -> list[str]:
         """The Mechanism's description, its first line naming what the oracle derives."""

@@ -707,16 +707,31 @@ class Kernel:
                 need = True             # a rigid screw efficiency's mode and loss: those of the solved L̈
         return need, np.arange(ny, dtype=np.int64)
 
+    def element_slot(self, index) -> tuple[int, int]:
+        """(translational element e, the position of the signal among e's outputs) of the signal at
+        `index` of the layout, (-1, 0) for another signal: a column of it evaluates e's outputs alone
+        (kernels.element_signals2/3)."""
+        if "_slots" not in self.__dict__:
+            self.signal_index("")
+            family = output_suffixes(TRANSLATIONAL)
+            self._slots = {}
+            for e, (name, extra) in enumerate(zip(self.flat["el_names"], self.flat["el_extra"])):
+                start = self._signal_index[f"{name}.{family[0]}"]
+                self._slots.update({start + slot: (e, slot) for slot in range(len(family) + len(extra))})
+        return self._slots.get(index, (-1, 0))
+
     def signal_column(self, index, times, states, inputs=None, alpha=0.0, windings=None):
         """(values, k): the signal at `index` at each sample of a history (rows [q, v, z]), up to the
         first sample k where it cannot be evaluated (k = len(times) when it can at all), with the
         values signal_history gives."""
         need, _ = self._reads(index)
+        element, slot = self.element_slot(index)
         out = np.empty(len(times))
         with self.wound_from_start(windings):
             st, k = _k.signal_column(np.ascontiguousarray(times, dtype=float),
                                      np.ascontiguousarray(states, dtype=float), self._inputs(inputs), float(alpha),
-                                     int(index), need, self.params, np.empty(len(self._layout)), out)
+                                     int(index), int(element), int(slot), need, self.params,
+                                     np.empty(len(self._layout)), out)
         return out[:k], int(k)
 
     def dense_signal(self, sol, index, times, inputs=None, alpha=0.0, windings=None):

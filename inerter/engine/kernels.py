@@ -756,6 +756,17 @@ def _rotational_outputs(kind, row, phi, w, tau, energy, out, k):
     return k + 5, energy + stored
 
 
+@njit(cache=True, inline="always")
+def element_signals2(q, v, z, qdd, P, e, out):
+    """Translational element e's outputs alone, from out[0] on, as :func:`signal_values2` writes
+    them. Returns a status code."""
+    kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets, distance = _element(
+        q, v, e, P[EL_INT], P[EL_REAL], P[PBODY], P[PLOC])
+    _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0,
+                     _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey), 3, 0.0, out, 0)
+    return TERMINALS_MEET if meets else OK
+
+
 @njit(cache=True)
 def signal_values2(q, v, z, qdd, P, out):
     """Every point's position and velocity (4 per point), every translational element's s_rel,
@@ -958,6 +969,17 @@ def _signals_by_dimension(q, v, z, qdd, P, out):
     if is_spatial(P):
         return lambda q, v, z, qdd, P, out: signal_values3(q, v, z, qdd, P, out)
     return lambda q, v, z, qdd, P, out: signal_values2(q, v, z, qdd, P, out)
+
+
+def _element_signals_of(q, v, z, qdd, P, e, out):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_element_signals_of, inline="always")
+def _element_signals_by_dimension(q, v, z, qdd, P, e, out):
+    if is_spatial(P):
+        return lambda q, v, z, qdd, P, e, out: element_signals3(q, v, z, qdd, P, e, out)
+    return lambda q, v, z, qdd, P, e, out: element_signals2(q, v, z, qdd, P, e, out)
 
 
 def _state_rates_of(q, v, z, qdd, P, dz):
@@ -1748,6 +1770,19 @@ def signal_values3(q, v, z, qdd, P, out):
     out[k] = energy
     out[k + 1] = constraint_residual3(q, P) if jt_int.shape[0] else 0.0
     return status
+
+
+@njit(cache=True, inline="always")
+def element_signals3(q, v, z, qdd, P, e, out):
+    """Translational element e's outputs alone, from out[0] on, as :func:`signal_values3` writes
+    them: what a column of one of them needs, without every other signal. Returns a status code."""
+    ga = np.empty(6)
+    gb = np.empty(6)
+    kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element3(
+        q, v, e, P[EL_INT], P[EL_REAL], P[PBODY], P[PLOC], ga, gb)
+    _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez,
+                     _gq3(qdd, ba, bb, ga, gb), 6, 0.0, out, 0)
+    return TERMINALS_MEET if meets else OK
 
 
 @njit(cache=True, inline="always")
@@ -2697,23 +2732,35 @@ def _point_signal(index, P):
 
 
 @njit(cache=True)
-def signal_column(times, states, inputs, alpha, index, need_acc, P, raw, out):
+def signal_column(times, states, inputs, alpha, index, element, slot, need_acc, P, raw, out):
     """out[k] = the signal at `index` of signal_values' layout at each sample of a history (rows
-    [q, v, z]); accelerations from Eq. (33) only when `need_acc`. `raw`: scratch of that layout's
-    length. Returns (status, the first sample where it could not be evaluated)."""
+    [q, v, z]); accelerations from Eq. (33) only when `need_acc`. `element` ≥ 0: the signal is
+    translational element `element`'s output `slot`, evaluated alone (:func:`element_signals2`).
+    `raw`: scratch of that layout's length. Returns (status, the first sample where it could not be
+    evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = states.shape[1]
     nq = P[DIMS][N_COORD]
+    nv = nq + P[DIMS][N_VELOCITY]
     y = np.empty(ny)
     q = y[:nq]
-    v = y[nq:nq + P[DIMS][N_VELOCITY]]
+    v = y[nq:nv]
     work = work_arrays(P, ny, 1)
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)[:SOLVER_WORK]
     point, c = _point_signal(index, P)
     for k in range(states.shape[0]):
         for j in range(ny):
             y[j] = states[k, j]
         if point >= 0:
             out[k] = _point_value_of(q, v, point, c, P)
+        elif element >= 0:
+            _wind_of(y, P)          # as _signals_at: the accelerations read the wound angles
+            st = accelerations(times[k], q, v, y[nv:], inputs, alpha, P, AB, rhs, gen, sig_acc) if need_acc else OK
+            if st == OK:
+                st = _element_signals_of(q, v, y[nv:], sig_acc, P, element, raw)
+            if st != OK:
+                return st, k
+            out[k] = raw[slot]
         else:
             st = _signals_at(times[k], y, inputs, alpha, need_acc, P, work, raw)
             if st != OK:

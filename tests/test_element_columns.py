@@ -46,3 +46,23 @@ def test_an_elements_column_alone_is_every_signals_column(scene):
         checked += 1
     translational = [e for e in model.scene.elements.values() if elements.translational(e.type)]
     assert translational and checked >= len(FAMILY) * len(translational)
+
+
+@pytest.mark.parametrize("scene", SCENES[:3], ids=lambda s: Path(s).stem)
+def test_an_elements_dense_output_alone_is_every_signals(scene):
+    """The same between samples: an element's output on the run's dense output (kernels.dense_signal,
+    through LocalDense's intervals) against every signal at the dense output's states."""
+    model = inerter.load(ROOT / scene, **{"experiment.stop_time": 0.5})
+    result = model.simulate(metrics=False)
+    kernel = compiled.compile_mechanism(model.mechanism)
+    alpha = model.settings().alpha
+    times = np.linspace(0.0, 0.5, 41)[1:-1] + 1e-3
+    states = np.asarray(result.run.dense(times)).T
+    every, _ = kernel.signal_history(model.signals, kernel.signal_order(model.signals), times, states, None, alpha)
+    for i, name in enumerate(model.signals.names):
+        index = kernel.signal_index(name)
+        if index is None or kernel.element_slot(index)[0] < 0:
+            continue
+        alone, k = kernel.dense_signal(result.run.dense, index, times, None, alpha)
+        assert k == len(times)
+        assert np.array_equal(alone, every[:, i], equal_nan=True), name

@@ -746,11 +746,12 @@ class Kernel:
         if not isinstance(sol, DenseOutput):
             return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha, windings)
         need, comps = self._reads(index)
+        element, slot = self.element_slot(index)
         out = np.empty(len(times))
         with self.wound_from_start(windings):
             st, k = _k.dense_signal(sol.method_code, sol.nodes, sol.coeffs, sol.count, times, comps,
-                                    self._inputs(inputs), float(alpha), int(index), need, self.params,
-                                    np.empty(len(self._layout)), out)
+                                    self._inputs(inputs), float(alpha), int(index), int(element), int(slot), need,
+                                    self.params, np.empty(len(self._layout)), out)
         return out[:k], int(k)
 
     def _local_dense_signal(self, sol, index, times, inputs, alpha):

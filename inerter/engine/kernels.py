@@ -2731,41 +2731,47 @@ def _point_signal(index, P):
     return -1, 0
 
 
+@njit(cache=True, inline="always")
+def _signal_at(t, y, inputs, alpha, need_acc, P, work, raw, index, element, slot):
+    """(status, the signal at `index` of signal_values' layout at y = [q, v, z]): translational
+    element `element`'s output `slot` evaluated alone where `element` ≥ 0 (:func:`element_signals2`),
+    else every signal (:func:`_signals_at`); accelerations from Eq. (33) only when `need_acc`."""
+    if element < 0:
+        st = _signals_at(t, y, inputs, alpha, need_acc, P, work, raw)
+        return st, raw[index]
+    nq = P[DIMS][N_COORD]
+    nv = nq + P[DIMS][N_VELOCITY]
+    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)[:SOLVER_WORK]
+    _wind_of(y, P)                  # as _signals_at: the accelerations read the wound angles
+    st = accelerations(t, y[:nq], y[nq:nv], y[nv:], inputs, alpha, P, AB, rhs, gen, sig_acc) if need_acc else OK
+    if st == OK:
+        st = _element_signals_of(y[:nq], y[nq:nv], y[nv:], sig_acc, P, element, raw)
+    return st, raw[slot]
+
+
 @njit(cache=True)
 def signal_column(times, states, inputs, alpha, index, element, slot, need_acc, P, raw, out):
     """out[k] = the signal at `index` of signal_values' layout at each sample of a history (rows
-    [q, v, z]); accelerations from Eq. (33) only when `need_acc`. `element` ≥ 0: the signal is
-    translational element `element`'s output `slot`, evaluated alone (:func:`element_signals2`).
-    `raw`: scratch of that layout's length. Returns (status, the first sample where it could not be
-    evaluated)."""
+    [q, v, z]) (:func:`_signal_at`: `element` ≥ 0, the signal is that translational element's
+    output `slot`, evaluated alone). `raw`: scratch of the layout's length. Returns (status, the
+    first sample where it could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = states.shape[1]
     nq = P[DIMS][N_COORD]
-    nv = nq + P[DIMS][N_VELOCITY]
     y = np.empty(ny)
     q = y[:nq]
-    v = y[nq:nv]
+    v = y[nq:nq + P[DIMS][N_VELOCITY]]
     work = work_arrays(P, ny, 1)
-    AB, rhs, gen, acc, K, y_new, f_new, ys, sig_acc = _unowned(work)[:SOLVER_WORK]
     point, c = _point_signal(index, P)
     for k in range(states.shape[0]):
         for j in range(ny):
             y[j] = states[k, j]
         if point >= 0:
             out[k] = _point_value_of(q, v, point, c, P)
-        elif element >= 0:
-            _wind_of(y, P)          # as _signals_at: the accelerations read the wound angles
-            st = accelerations(times[k], q, v, y[nv:], inputs, alpha, P, AB, rhs, gen, sig_acc) if need_acc else OK
-            if st == OK:
-                st = _element_signals_of(q, v, y[nv:], sig_acc, P, element, raw)
-            if st != OK:
-                return st, k
-            out[k] = raw[slot]
         else:
-            st = _signals_at(times[k], y, inputs, alpha, need_acc, P, work, raw)
+            st, out[k] = _signal_at(times[k], y, inputs, alpha, need_acc, P, work, raw, index, element, slot)
             if st != OK:
                 return st, k
-            out[k] = raw[index]
     return OK, states.shape[0]
 
 
@@ -2775,10 +2781,11 @@ DENSE_BLOCK = 256
 
 
 @njit(cache=True)
-def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, index, need_acc, P, raw, out):
+def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, index, element, slot, need_acc, P, raw,
+                 out):
     """out[k] = the signal at `index` of signal_values' layout at times[k], on the state from a kept
-    dense output (:func:`_dense_block`, only the components `comps` the signal reads). Returns
-    (status, the first time where it could not be evaluated)."""
+    dense output (:func:`_dense_block`, only the components `comps` the signal reads; `element`,
+    `slot`: :func:`_signal_at`). Returns (status, the first time where it could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = coeffs.shape[2]
     nq = P[DIMS][N_COORD]
@@ -2799,10 +2806,9 @@ def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, inde
             if point >= 0:
                 out[k] = _point_value_of(q, v, point, c, P)
             else:
-                st = _signals_at(times[k], y, inputs, alpha, need_acc, P, work, raw)
+                st, out[k] = _signal_at(times[k], y, inputs, alpha, need_acc, P, work, raw, index, element, slot)
                 if st != OK:
                     return st, k
-                out[k] = raw[index]
     return OK, n
 
 

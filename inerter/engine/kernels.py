@@ -1220,6 +1220,8 @@ def _omega(v, body):
     return v[k], v[k + 1], v[k + 2]
 
 
+#: The rotation of the ground, row-major.
+IDENTITY = terminals.IDENTITY
 #: a × b on components (common.rotations.cross3).
 _cross = cross3
 #: ū × (Aᵀ s): the ω-columns of sᵀ H for a point ū (H = [I, −A ũ], Eq. 22 with body-frame ω).
@@ -1244,13 +1246,27 @@ def _point3(q, v, body, A, lx, ly, lz):
 
 
 @njit(cache=True, inline="always")
+def _rotation_of(q, v, body, A, held):
+    """(A of `body`, body): `A` where it is the rotation of body `held` already, else computed
+    (:func:`_rot`), so that a loop over elements computes a body's rotation once for a run of
+    elements on it (the same arithmetic: the same A)."""
+    if body == held:
+        return A, held
+    return _rot(q, v, body), body
+
+
+@njit(cache=True, inline="always")
 def _pair3(q, v, pa, pb, pbody, ploc):
     """Relative kinematics b − a of two points (Eqs. 18, 19, 25): the bodies, their rotations,
     r, ṙ and a_n = acc_b − acc_a."""
+    return _pair_at(q, v, pa, pb, pbody, ploc, _rot(q, v, pbody[pa]), _rot(q, v, pbody[pb]))
+
+
+@njit(cache=True, inline="always")
+def _pair_at(q, v, pa, pb, pbody, ploc, Aa, Ab):
+    """:func:`_pair3` with the bodies' rotations Aa, Ab given."""
     ba = pbody[pa]
     bb = pbody[pb]
-    Aa = _rot(q, v, ba)
-    Ab = _rot(q, v, bb)
     rax, ray, raz, vax, vay, vaz, aax, aay, aaz = _point3(q, v, ba, Aa, ploc[pa, 0], ploc[pa, 1], ploc[pa, 2])
     rbx, rby, rbz, vbx, vby, vbz, abx, aby, abz = _point3(q, v, bb, Ab, ploc[pb, 0], ploc[pb, 1], ploc[pb, 2])
     return (ba, bb, Aa, Ab, rbx - rax, rby - ray, rbz - raz, vbx - vax, vby - vay, vbz - vaz,
@@ -1259,13 +1275,20 @@ def _pair3(q, v, pa, pb, pbody, ploc):
 
 @njit(cache=True, inline="always")
 def _element3(q, v, e, el_int, el_real, pbody, ploc, ga, gb):
+    """:func:`_element_at` with the rotations of its terminals' bodies computed."""
+    return _element_at(q, v, e, el_int, el_real, pbody, ploc, ga, gb,
+                       _rot(q, v, pbody[el_int[e, POINT_A]]), _rot(q, v, pbody[el_int[e, POINT_B]]))
+
+
+@njit(cache=True, inline="always")
+def _element_at(q, v, e, el_int, el_real, pbody, ploc, ga, gb, Aa, Ab):
     """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, L, the direction ê it acts
     along, whether the terminals meet, |r|), the element's geometry from
     :mod:`inerter.elements.terminals` (L is held at MIN_LENGTH where the terminals meet), with
     g = Hᵀ ê written to ga (a's six coordinates) and gb (b's)."""
     pa = el_int[e, POINT_A]
     pb = el_int[e, POINT_B]
-    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
+    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair_at(q, v, pa, pb, pbody, ploc, Aa, Ab)
     row = el_real[e]
     distance = math.sqrt(rx * rx + ry * ry + rz * rz)
     L, ex, ey, ez, meets = terminals.acting_line(row, Aa, rx, ry, rz, distance)
@@ -1389,9 +1412,13 @@ def _add_elements3(q, v, z, P, AB, perm, off, gen, agx, agy, agz):
     status = OK
     ga = carray(_stack(6), 6)       # g over a's and b's coordinates (_stack)
     gb = carray(_stack(6), 6)
+    Aa = Ab = IDENTITY              # the rotations of the bodies ha, hb (none yet): _rotation_of
+    ha = hb = -2
     for e in range(el_int.shape[0]):
-        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element3(
-            q, v, e, el_int, el_real, pbody, ploc, ga, gb)
+        Aa, ha = _rotation_of(q, v, pbody[el_int[e, POINT_A]], Aa, ha)
+        Ab, hb = _rotation_of(q, v, pbody[el_int[e, POINT_B]], Ab, hb)
+        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element_at(
+            q, v, e, el_int, el_real, pbody, ploc, ga, gb, Aa, Ab)
         if meets:
             status = TERMINALS_MEET
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)

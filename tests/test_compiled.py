@@ -105,6 +105,40 @@ def test_band_solve_is_partial_pivoting_bit_for_bit(kl, ku, N):
 
 
 @needs_numba
+def test_band_solve_above_its_stack_rows_is_the_same_elimination():
+    """Above STACK_ROWS rows band_solve keeps its rows' profile on the heap, not on the stack: the
+    same elimination. A block-diagonal system (a random 9 × 9 band block with zero diagonals in
+    places, then the identity) solved whole, N = STACK_ROWS + 9, gives bit for bit the block's
+    solution solved alone (N = 9, the profile on the stack), itself the dense elimination's (the
+    reference of the test above), and b on the identity: the identity's rows hold nothing in the
+    block's columns, so no operation of the block's elimination changes."""
+    from inerter.engine import kernels as ck
+
+    kl, ku, n = 2, 2, 9
+    rng = np.random.default_rng(29)
+    A = np.zeros((n, n))
+    for i in range(n):
+        for j in range(max(0, i - kl), min(n, i + ku + 1)):
+            A[i, j] = 0.0 if (i == j and i % 3 == 1) else rng.standard_normal()
+    assert abs(np.linalg.det(A)) > 1e-6
+    N = ck.STACK_ROWS + n
+    b = rng.standard_normal(N)
+    AB = ck.band_storage(kl, ku, N)
+    AB[:] = 0.0
+    AB[n:, kl] = 1.0
+    for i in range(n):
+        for j in range(max(0, i - kl), min(n, i + ku + 1)):
+            AB[i, kl + j - i] = A[i, j]
+    block = AB[:n].copy()
+    x_block = b[:n].copy()
+    assert ck.band_solve(block, x_block, kl)
+    x = b.copy()
+    assert ck.band_solve(AB, x, kl)
+    assert np.array_equal(x_block, _dense_partial_pivoting(A, b[:n]))
+    assert np.array_equal(x[:n], x_block) and np.array_equal(x[n:], b[n:])
+
+
+@needs_numba
 def test_unowned_views_share_the_arrays_memory():
     """compiled_kernels._unowned gives views of the very arrays passed in (a write through a view is
     a write to the array), of the same shapes and dtypes."""

@@ -244,8 +244,8 @@ def _add_elements2(q, v, z, P, AB, perm, off, gen, agx, agy, agz):
     ground's acceleration (agx, agy, agz) as the bodies do. Returns a status code."""
     pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     status = OK
-    ga = np.empty(3)
-    gb = np.empty(3)
+    ga = carray(_stack(3), 3)       # g over a's and b's coordinates (_stack)
+    gb = carray(_stack(3), 3)
     for e in range(el_int.shape[0]):
         kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets, distance = _element(
             q, v, e, el_int, el_real, pbody, ploc)
@@ -396,6 +396,7 @@ def assemble(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix of Eq. 33) and rhs (permuted) at
     (t, q, v) and the elements' internal states z for a 2D scene; gen: work vector of length n for the generalised forces. Returns a
     status code."""
+    q, v, z, inputs, AB, rhs, gen = _unowned((q, v, z, inputs, AB, rhs, gen))     # its arguments (_unowned)
     mass, pbody, ploc, jt_int, jt_real, gravity, perm, dims = P[MASS], P[PBODY], P[PLOC], P[JT_INT], P[JT_REAL], P[GRAVITY], P[PERM], P[DIMS]
     n = dims[N_VELOCITY]
     off = dims[KL]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
@@ -442,7 +443,8 @@ def ground_acceleration(t, inputs, P):
     ground_a = P[GROUND_A]
     terms = P[GROUND_TERMS]
     dim = dims[DIMENSION]
-    a = np.zeros(3)
+    a = carray(_stack(3), 3)        # _stack: no heap allocation per evaluation
+    a[:] = 0.0
     if dims[GROUND_MODE] == GROUND_INPUT:
         off = dims[GROUND_OFFSET]
         if inputs.shape[0] >= off + dim:
@@ -488,6 +490,10 @@ def _point_force(q, v, body, lx, ly, Fx, Fy, gen):
 # ------------------------------------------------------------------------------------------------
 # Band LU with partial pivoting, stored by rows: O(N kl (kl + ku)), less where rows are sparse
 # ------------------------------------------------------------------------------------------------
+#: The largest system whose rows' profile :func:`band_solve` keeps on the stack (32 KB); above, on the heap.
+STACK_ROWS = 4096
+
+
 @njit(cache=True)
 def band_solve(AB, b, kl):
     """Solve A x = b in place (b becomes x); A in the row-wise band storage of :func:`band_storage`
@@ -506,7 +512,9 @@ def band_solve(AB, b, kl):
     N = b.shape[0]
     W = AB.shape[1]
     F = AB.reshape(N * W)
-    last = np.empty(N, dtype=np.int64)          # last[i]: no nonzero right of column last[i] in row i
+    # last[i]: no nonzero right of column last[i] in row i; on the stack (_stack_ints) up to
+    # STACK_ROWS rows: a heap array cost an allocation per solve, 0.1 µs of a braced frame's 0.3
+    last = carray(_stack_ints(N), N) if N <= STACK_ROWS else np.empty(N, dtype=np.int64)
     for i in range(N):
         j = min(W - 1, kl + N - 1 - i)
         while j > kl and F[i * W + j] == 0.0:
@@ -1234,6 +1242,8 @@ def _omega(v, body):
     return v[k], v[k + 1], v[k + 2]
 
 
+#: The rotation of the ground, row-major.
+IDENTITY = terminals.IDENTITY
 #: a × b on components (common.rotations.cross3).
 _cross = cross3
 #: ū × (Aᵀ s): the ω-columns of sᵀ H for a point ū (H = [I, −A ũ], Eq. 22 with body-frame ω).
@@ -1258,13 +1268,27 @@ def _point3(q, v, body, A, lx, ly, lz):
 
 
 @njit(cache=True, inline="always")
+def _rotation_of(q, v, body, A, held):
+    """(A of `body`, body): `A` where it is the rotation of body `held` already, else computed
+    (:func:`_rot`), so that a loop over elements computes a body's rotation once for a run of
+    elements on it (the same arithmetic: the same A)."""
+    if body == held:
+        return A, held
+    return _rot(q, v, body), body
+
+
+@njit(cache=True, inline="always")
 def _pair3(q, v, pa, pb, pbody, ploc):
     """Relative kinematics b − a of two points (Eqs. 18, 19, 25): the bodies, their rotations,
     r, ṙ and a_n = acc_b − acc_a."""
+    return _pair_at(q, v, pa, pb, pbody, ploc, _rot(q, v, pbody[pa]), _rot(q, v, pbody[pb]))
+
+
+@njit(cache=True, inline="always")
+def _pair_at(q, v, pa, pb, pbody, ploc, Aa, Ab):
+    """:func:`_pair3` with the bodies' rotations Aa, Ab given."""
     ba = pbody[pa]
     bb = pbody[pb]
-    Aa = _rot(q, v, ba)
-    Ab = _rot(q, v, bb)
     rax, ray, raz, vax, vay, vaz, aax, aay, aaz = _point3(q, v, ba, Aa, ploc[pa, 0], ploc[pa, 1], ploc[pa, 2])
     rbx, rby, rbz, vbx, vby, vbz, abx, aby, abz = _point3(q, v, bb, Ab, ploc[pb, 0], ploc[pb, 1], ploc[pb, 2])
     return (ba, bb, Aa, Ab, rbx - rax, rby - ray, rbz - raz, vbx - vax, vby - vay, vbz - vaz,
@@ -1273,13 +1297,20 @@ def _pair3(q, v, pa, pb, pbody, ploc):
 
 @njit(cache=True, inline="always")
 def _element3(q, v, e, el_int, el_real, pbody, ploc, ga, gb):
+    """:func:`_element_at` with the rotations of its terminals' bodies computed."""
+    return _element_at(q, v, e, el_int, el_real, pbody, ploc, ga, gb,
+                       _rot(q, v, pbody[el_int[e, POINT_A]]), _rot(q, v, pbody[el_int[e, POINT_B]]))
+
+
+@njit(cache=True, inline="always")
+def _element_at(q, v, e, el_int, el_real, pbody, ploc, ga, gb, Aa, Ab):
     """A translational element's terminals b − a: (kind, ba, bb, ṙ, a_n, L, the direction ê it acts
     along, whether the terminals meet, |r|), the element's geometry from
     :mod:`inerter.elements.terminals` (L is held at MIN_LENGTH where the terminals meet), with
     g = Hᵀ ê written to ga (a's six coordinates) and gb (b's)."""
     pa = el_int[e, POINT_A]
     pb = el_int[e, POINT_B]
-    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair3(q, v, pa, pb, pbody, ploc)
+    ba, bb, Aa, Ab, rx, ry, rz, rdx, rdy, rdz, anx, any_, anz = _pair_at(q, v, pa, pb, pbody, ploc, Aa, Ab)
     row = el_real[e]
     distance = math.sqrt(rx * rx + ry * ry + rz * rz)
     L, ex, ey, ez, meets = terminals.acting_line(row, Aa, rx, ry, rz, distance)
@@ -1401,11 +1432,15 @@ def _add_elements3(q, v, z, P, AB, perm, off, gen, agx, agy, agz):
     status code."""
     pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
     status = OK
-    ga = np.empty(6)
-    gb = np.empty(6)
+    ga = carray(_stack(6), 6)       # g over a's and b's coordinates (_stack)
+    gb = carray(_stack(6), 6)
+    Aa = Ab = IDENTITY              # the rotations of the bodies ha, hb (none yet): _rotation_of
+    ha = hb = -2
     for e in range(el_int.shape[0]):
-        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element3(
-            q, v, e, el_int, el_real, pbody, ploc, ga, gb)
+        Aa, ha = _rotation_of(q, v, pbody[el_int[e, POINT_A]], Aa, ha)
+        Ab, hb = _rotation_of(q, v, pbody[el_int[e, POINT_B]], Ab, hb)
+        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element_at(
+            q, v, e, el_int, el_real, pbody, ploc, ga, gb, Aa, Ab)
         if meets:
             status = TERMINALS_MEET
         F, b, Ldot = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
@@ -1557,6 +1592,7 @@ def assemble3(t, q, v, z, inputs, alpha, P, AB, rhs, gen):
     """Fill AB (band storage of the permuted augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]]) and rhs
     (permuted [Q_e + Q_Iv, γ − 2αĊ − α²C]) at (t, q, v) for a 3D mechanism, as ``Mechanism.assemble``
     and ``Mechanism.constraints``. gen: work vector of length n. Returns a status code."""
+    q, v, z, inputs, AB, rhs, gen = _unowned((q, v, z, inputs, AB, rhs, gen))     # its arguments (_unowned)
     jt_int, gravity, perm, dims = P[JT_INT], P[GRAVITY], P[PERM], P[DIMS]
     n = dims[N_VELOCITY]
     off = dims[KL]                   # kl: K[i, j] is AB[i, off + j − i] (band_storage)
@@ -1675,8 +1711,8 @@ def state_rates3(q, v, z, qdd, P, dz):
     """dz: the rates of the translational elements' internal states of a 3D scene (as
     :func:`state_rates2`)."""
     el_int, el_real = P[EL_INT], P[EL_REAL]
-    ga = np.empty(6)
-    gb = np.empty(6)
+    ga = carray(_stack(6), 6)       # g over a's and b's coordinates (_stack)
+    gb = carray(_stack(6), 6)
     for e in range(el_int.shape[0]):
         if el_int[e, STATES] == 0:
             continue
@@ -1700,8 +1736,8 @@ def settle3(q, v, qdd, P):
     """Set each screw efficiency's mode of a 3D scene from the solved accelerations q̈ (as
     :func:`settle2`); returns how many changed."""
     el_int, el_real = P[EL_INT], P[EL_REAL]
-    ga = np.empty(6)
-    gb = np.empty(6)
+    ga = carray(_stack(6), 6)       # g over a's and b's coordinates (_stack)
+    gb = carray(_stack(6), 6)
     changed = 0
     for e in range(el_int.shape[0]):
         if el_real[e, EFFICIENCY] == 0.0:
@@ -1752,8 +1788,8 @@ def signal_values3(q, v, z, qdd, P, out):
         i, c = 6 * b, nqb * b
         energy += spatial_body_energy(mass[i], mass, n + 9 * b, v[i], v[i + 1], v[i + 2], v[i + 3], v[i + 4],
                                       v[i + 5], gravity[i], gravity[i + 1], gravity[i + 2], q[c], q[c + 1], q[c + 2])
-    ga = np.empty(6)
-    gb = np.empty(6)
+    ga = carray(_stack(6), 6)       # g over a's and b's coordinates (_stack)
+    gb = carray(_stack(6), 6)
     for e in range(el_int.shape[0]):
         kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element3(
             q, v, e, el_int, el_real, pbody, ploc, ga, gb)
@@ -1819,6 +1855,7 @@ def _rhs(t, y, inputs, alpha, P, AB, rhs, gen, acc, dy):
     elements' internal states' rates at those accelerations (z is empty where the scene declares
     none, and then never evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
+    y, inputs, AB, rhs, gen, acc, dy = _unowned((y, inputs, AB, rhs, gen, acc, dy))     # and its arrays
     n = P[DIMS][N_VELOCITY]
     nq = P[DIMS][N_COORD]
     nv = nq + n
@@ -3167,8 +3204,11 @@ def _unowned(typingctx, arrays):
     (two-bar, 20 s: 78 ms counted, 39 ms not; the same steps, bit for bit the same results).
     So a kernel entered from Python takes P through this at its start, and the loops that call
     kernels take their scratch through it (:func:`rk_advance`, :func:`_rk4_run`,
-    :func:`_signals_at`). Only for a kernel's own arguments: its caller holds them for the whole
-    call, and no kernel returns or keeps them, so the views never outlive the arrays. An array a
+    :func:`_signals_at`); the right-hand side (:func:`_rhs`) and the assemblies take their own
+    arrays through it too, as a counted array (the held inputs, any array from Python) was
+    counted again at each inlined function it entered, at every element
+    (docs/benchmarks/eval_cost_3d.md). Only for a kernel's own arguments: its caller holds them
+    for the whole call, and no kernel returns or keeps them, so the views never outlive the arrays. An array a
     kernel allocates itself may be released after its last use, before the views are: such
     scratch is passed to an inner kernel as an argument instead (:func:`integrate_rk4`)."""
     if not isinstance(arrays, types.BaseTuple) or not all(isinstance(a, types.Array) for a in arrays):
@@ -3183,6 +3223,41 @@ def _unowned(typingctx, arrays):
             tup = builder.insert_value(tup, view._getvalue(), i)
         return tup
     return arrays(arrays), codegen
+
+
+@intrinsic
+def _stack(typingctx, size):
+    """A pointer to `size` float64 (a literal) in the stack frame of the kernel this is compiled into,
+    for ``carray``: numba's ``alloca`` at that function's entry, so allocated once per call of the
+    kernel however often the line runs, and released when it returns. Scratch of a fixed small size
+    (an element's g over its two bodies, the ground's acceleration) without a heap allocation and,
+    having no owner, without reference counting: as ``np.empty(6)``, it cost an allocation per
+    evaluation of Eq. (33) and an atomic count each time it entered an inlined function, i.e. at
+    every element (benchmarks/eval_cost.py; docs/benchmarks/eval_cost_3d.md). Only for scratch that
+    the kernel neither returns nor keeps."""
+    if not isinstance(size, types.IntegerLiteral):
+        return None
+    sig = types.CPointer(types.float64)(size)
+
+    def codegen(context, builder, signature, args):
+        return cgutils.alloca_once(builder, context.get_value_type(types.float64),
+                                   size=signature.args[0].literal_value)
+    return sig, codegen
+
+
+@intrinsic
+def _stack_ints(typingctx, size):
+    """A pointer to `size` int64 (any integer, at most :data:`STACK_ROWS`) on the stack of the kernel
+    this is compiled into, allocated where this line runs and released when that kernel returns:
+    :func:`_stack` for a size known only at run time, so only in a kernel that is called, not
+    inlined, and never in a loop (each run of the line takes more stack)."""
+    if not isinstance(size, types.Integer):
+        return None
+    sig = types.CPointer(types.int64)(size)
+
+    def codegen(context, builder, signature, args):
+        return builder.alloca(context.get_value_type(types.int64), size=args[0])
+    return sig, codegen
 
 
 @njit(cache=True, inline="always")

@@ -1812,8 +1812,8 @@ def signal_values3(q, v, z, qdd, P, out):
 def element_signals3(q, v, z, qdd, P, e, out):
     """Translational element e's outputs alone, from out[0] on, as :func:`signal_values3` writes
     them: what a column of one of them needs, without every other signal. Returns a status code."""
-    ga = np.empty(6)
-    gb = np.empty(6)
+    ga = carray(_stack(6), 6)       # g over a's and b's coordinates (_stack)
+    gb = carray(_stack(6), 6)
     kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element3(
         q, v, e, P[EL_INT], P[EL_REAL], P[PBODY], P[PLOC], ga, gb)
     _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez,

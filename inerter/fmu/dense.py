@@ -46,11 +46,15 @@ class FmuDense:
 
     `fmu_path`, `start_values` and `stop_time` are the run's (as given to ``fmpy.simulate_fmu``);
     `result` is the run's :class:`~inerter.fmu.run.FmuResult` (its ``time`` and samples). The
-    instance is made at the first call and freed by :meth:`close` (a later call makes it again)."""
+    instance is made at the first call and freed by :meth:`close` (a later call makes it again).
+    `instance`: an instantiated ``fmpy.fmi2.FMU2Slave`` of the same FMU whose run is over (a
+    sweep's, kept across runs) to reset and step again instead of making one; :meth:`close` then
+    leaves it instantiated, for its owner to reset."""
 
-    def __init__(self, fmu_path, start_values, stop_time, result):
+    def __init__(self, fmu_path, start_values, stop_time, result, instance=None):
         self.path, self.start_values, self.stop_time = str(fmu_path), dict(start_values), float(stop_time)
         self.result = result
+        self._given = instance
         self.grid = np.asarray(result.time, dtype=float)
         self._fmu = None
         self._saved = {}           # sample index → FMU state
@@ -78,11 +82,13 @@ class FmuDense:
         try:
             for state in self._saved.values():
                 fmu.freeFMUstate(state)
-            fmu.terminate()
-            fmu.freeInstance()
+            if self._given is None:
+                fmu.terminate()
+                fmu.freeInstance()
         finally:
             self._saved.clear()
-            shutil.rmtree(self._dir, ignore_errors=True)
+            if self._given is None:
+                shutil.rmtree(self._dir, ignore_errors=True)
 
     # -- the instance ----------------------------------------------------------------------
     def _variables(self) -> dict:
@@ -97,18 +103,23 @@ class FmuDense:
 
         md = read_model_description(self.path)
         self._outputs = {v.name: v.valueReference for v in md.modelVariables if v.causality == "output"}
-        self._dir = extract(self.path)
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=self._dir,
-                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName="dense output")
-        fmu.instantiate()
+        if self._given is not None:
+            fmu = self._given
+            fmu.reset()
+        else:
+            self._dir = extract(self.path)
+            fmu = FMU2Slave(guid=md.guid, unzipDirectory=self._dir,
+                            modelIdentifier=md.coSimulation.modelIdentifier, instanceName="dense output")
+            fmu.instantiate()
         try:
             fmu.setupExperiment(startTime=float(self.grid[0]), stopTime=self.stop_time)
             fmu.enterInitializationMode()
             apply_start_values(fmu, md, self.start_values)
             fmu.exitInitializationMode()
         except Exception as exc:
-            fmu.freeInstance()
-            shutil.rmtree(self._dir, ignore_errors=True)
+            if self._given is None:
+                fmu.freeInstance()
+                shutil.rmtree(self._dir, ignore_errors=True)
             raise SimulationError(f"the FMU's dense output: a second instance of {self.path} could not be "
                                   f"initialised ({exc})", float(self.grid[0])) from None
         self._fmu, self._time = fmu, float(self.grid[0])

@@ -377,7 +377,9 @@ class FmuSlot:
 
     Each run sets the start values, runs setupExperiment, enter/exitInitializationMode, then
     doStep over the communication step to the stop time, reading every output after each step,
-    as ``fmpy.simulate_fmu`` does (``inerter.fmu.run.simulate_fmu`` gives the same numbers).
+    as ``fmpy.simulate_fmu`` does (``inerter.fmu.run.simulate_fmu`` gives the same numbers). The
+    metrics then read the FMU's dense output from the same instance, reset and stepped again to the
+    times they read (:class:`inerter.fmu.dense.FmuDense`).
     """
 
     instances = 0          # made in this process (the tests check the reuse)
@@ -441,6 +443,7 @@ class FmuSlot:
     def simulate(self, scene, overrides: dict, stop_time=None, step=None):
         from fmpy.fmi1 import FMICallException
 
+        from inerter.fmu.dense import FmuDense, reads_the_fmu
         from inerter.fmu.run import FmuResult, FmuRunInfo, start_values
         from inerter.api import Model, compute_metrics
 
@@ -495,7 +498,12 @@ class FmuSlot:
                           status="ok" if ok else "failed", message=message)
         result = FmuResult(model, table, settings, run, comm)
         if ok:
-            result.metrics = compute_metrics(model, result)
+            if reads_the_fmu(settings):     # the metrics read the FMU's dense output, as simulate_fmu's
+                result.fmu_dense = FmuDense(self.path, start, stop, result, instance=self.fmu)
+            try:
+                result.metrics = compute_metrics(model, result)
+            finally:
+                result.close()
         return result
 
 

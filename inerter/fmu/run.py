@@ -115,6 +115,20 @@ class FmuResult:
         finally:
             self.close()
 
+    def read_the_fmu(self, fmu_path, start_values, instance=None):
+        """Let :meth:`dense` read the FMU itself (:class:`inerter.fmu.dense.FmuDense`: the run's FMU,
+        start values and stop time; `instance`, one to reset and step again) where its integration
+        runs across communication points; elsewhere it stays a spline through the samples."""
+        if reads_the_fmu(self.settings):
+            self.fmu_dense = FmuDense(fmu_path, start_values, self.settings.stop_time, self, instance)
+
+    def compute_metrics(self):
+        """The scene's metrics on :meth:`dense`, into :attr:`metrics`; then the second instance freed."""
+        try:
+            self.metrics = compute_metrics(self.model, self)
+        finally:
+            self.close()
+
     def close(self):
         """Free the second FMU instance :meth:`dense` reads (a later call makes it again)."""
         if self.fmu_dense is not None:
@@ -181,11 +195,8 @@ def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None
     path = next((p for p in ("compiled", "numpy") if any(f"{p} path" in m for m in messages)), None)
     run.extra["path"] = f"FMU ({path} path)" if path else "FMU"
     result = FmuResult(model, table, settings, run, comm)
-    if ok and reads_the_fmu(settings):
-        result.fmu_dense = FmuDense(fmu_file, starts, settings.stop_time, result)
-    if metrics and ok:
-        try:
-            result.metrics = compute_metrics(model, result)
-        finally:
-            result.close()
+    if ok:
+        result.read_the_fmu(fmu_file, starts)
+        if metrics:
+            result.compute_metrics()
     return result

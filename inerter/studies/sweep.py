@@ -443,9 +443,8 @@ class FmuSlot:
     def simulate(self, scene, overrides: dict, stop_time=None, step=None):
         from fmpy.fmi1 import FMICallException
 
-        from inerter.fmu.dense import FmuDense, reads_the_fmu
         from inerter.fmu.run import FmuResult, FmuRunInfo, start_values
-        from inerter.api import Model, compute_metrics
+        from inerter.api import Model
 
         from inerter.engine.simulation import Settings
 
@@ -497,13 +496,9 @@ class FmuSlot:
                           if "constraint_residual" in table.dtype.names else 0.0,
                           status="ok" if ok else "failed", message=message)
         result = FmuResult(model, table, settings, run, comm)
-        if ok:
-            if reads_the_fmu(settings):     # the metrics read the FMU's dense output, as simulate_fmu's
-                result.fmu_dense = FmuDense(self.path, start, stop, result, instance=self.fmu)
-            try:
-                result.metrics = compute_metrics(model, result)
-            finally:
-                result.close()
+        if ok:                              # the metrics read the FMU's dense output, as simulate_fmu's
+            result.read_the_fmu(self.path, start, instance=self.fmu)
+            result.compute_metrics()
         return result
 
 

@@ -422,20 +422,15 @@ def flatten(mech) -> dict:
         return ia, ib, free, ()
 
     tables = element_tables(mech, pidx, rotational)
-    el_int, el_real, el_names = tables["el_int"], tables["el_real"], tables["el_names"]
-    rot_int, rot_real, rot_names = tables["rot_int"], tables["rot_real"], tables["rot_names"]
-
-    fa_int, fa_real, pd_int, pd_real, in_int = force_rows(scene, pidx, 2)
 
     has_gravity = mech.gravity is not None          # m g on each body's R (Mechanism._effects)
     gravity = np.array(mech.gravity, dtype=float) if has_gravity else np.zeros(n)
 
-    rows = dict(el_int=el_int, el_real=el_real, rot_int=rot_int, rot_real=rot_real, jt_int=jt_int, jt_real=jt_real,
-                fa_int=fa_int, fa_real=fa_real, pd_int=pd_int, pd_real=pd_real, in_int=in_int)
-    return dict(n=n, nq=n, dim=2, m=2 * len(jt_int), mass=mass, pbody=pbody, ploc=ploc, **kernel_tables(2, rows),
+    arrays = kernel_tables(2, tables, (jt_int, jt_real), force_rows(scene, pidx, 2))
+    return dict(n=n, nq=n, dim=2, m=2 * len(jt_int), mass=mass, pbody=pbody, ploc=ploc, **arrays,
                 gravity=gravity, has_gravity=bool(has_gravity),
-                point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names,
-                el_extra=tables["el_extra"], n_internal=tables["n_internal"])
+                point_names=point_names, body_names=body_names, el_names=tables["el_names"],
+                rot_names=tables["rot_names"], el_extra=tables["el_extra"], n_internal=tables["n_internal"])
 
 
 def signal_layout(flat) -> list[str]:

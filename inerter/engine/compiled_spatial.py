@@ -126,20 +126,15 @@ def flatten3(mech) -> dict:
         return me.fa.body, me.fb.body, me.free_angle, extra
 
     tables = element_tables(mech, pidx, rotational)
-    el_int, el_real, el_names = tables["el_int"], tables["el_real"], tables["el_names"]
-    rot_int, rot_real, rot_names = tables["rot_int"], tables["rot_real"], tables["rot_names"]
-
-    fa_int, fa_real, pd_int, pd_real, in_int = force_rows(scene, pidx, 3)
 
     has_gravity = mech.gravity is not None
     gravity = np.array(mech.gravity, dtype=float) if has_gravity else np.zeros(n)
 
-    rows = dict(el_int=el_int, el_real=el_real, rot_int=rot_int, rot_real=rot_real, jt_int=jt_int, jt_real=jt_real,
-                fa_int=fa_int, fa_real=fa_real, pd_int=pd_int, pd_real=pd_real, in_int=in_int)
+    arrays = kernel_tables(3, tables, (jt_int, jt_real), force_rows(scene, pidx, 3))
     return dict(n=n, m=m, nq=nq, dim=3, mass=mass, pbody=pbody, ploc=np.ascontiguousarray(ploc),
-                **kernel_tables(3, rows), gravity=gravity, has_gravity=bool(has_gravity),
-                point_names=point_names, body_names=body_names, el_names=el_names, rot_names=rot_names,
-                el_extra=tables["el_extra"], n_internal=tables["n_internal"])
+                **arrays, gravity=gravity, has_gravity=bool(has_gravity),
+                point_names=point_names, body_names=body_names, el_names=tables["el_names"],
+                rot_names=tables["rot_names"], el_extra=tables["el_extra"], n_internal=tables["n_internal"])
 
 
 def signal_layout3(flat) -> list[str]:

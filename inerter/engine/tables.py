@@ -138,10 +138,13 @@ def table_widths(dim: int) -> dict[str, int]:
                 in_int=layout.FORCE_POINT + 1)
 
 
-def kernel_tables(dim: int, rows: dict) -> dict:
-    """The tables `rows` (name → list of rows, :func:`table_widths`' names) as the kernels take
-    them: contiguous 2-D arrays of their widths (int64 or float), empty tables as (0, width)."""
+def kernel_tables(dim: int, element_rows: dict, joint_rows: tuple, forces: tuple) -> dict:
+    """The tables as the kernels take them, each a contiguous 2-D array of its width
+    (:func:`table_widths`; int64 or float), an empty table (0, width): the elements' rows of
+    :func:`element_tables`, the joints' (jt_int, jt_real) and the forces' :func:`force_rows`."""
     widths = table_widths(dim)
+    rows = {**element_rows, **dict(zip(("jt_int", "jt_real"), joint_rows)),
+            **dict(zip(("fa_int", "fa_real", "pd_int", "pd_real", "in_int"), forces))}
     return {name: np.ascontiguousarray(np.array(rows[name], dtype=np.int64 if name.endswith("_int") else float)
                                        .reshape(-1, widths[name]))
             for name in widths}

@@ -765,13 +765,21 @@ def _rotational_outputs(kind, row, phi, w, tau, energy, out, k):
 
 
 @njit(cache=True, inline="always")
+def _element_signals2(q, v, z, qdd, P, e, energy, out, k):
+    """Translational element e's outputs of a 2D scene from out[k] on, at the accelerations qdd
+    (:func:`_element_outputs`): (whether its terminals meet, `energy` plus its, the next k)."""
+    kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets, distance = _element(
+        q, v, e, P[EL_INT], P[EL_REAL], P[PBODY], P[PLOC])
+    energy, k = _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0,
+                                 _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey), 3, energy, out, k)
+    return meets, energy, k
+
+
+@njit(cache=True, inline="always")
 def element_signals2(q, v, z, qdd, P, e, out):
     """Translational element e's outputs alone, from out[0] on, as :func:`signal_values2` writes
     them. Returns a status code."""
-    kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets, distance = _element(
-        q, v, e, P[EL_INT], P[EL_REAL], P[PBODY], P[PLOC])
-    _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0,
-                     _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey), 3, 0.0, out, 0)
+    meets, _, _ = _element_signals2(q, v, z, qdd, P, e, 0.0, out, 0)
     return TERMINALS_MEET if meets else OK
 
 
@@ -799,13 +807,9 @@ def signal_values2(q, v, z, qdd, P, out):
         energy += planar_body_energy(mass[i], mass[i + 2], v[i], v[i + 1], v[i + 2], gravity[i], gravity[i + 1],
                                      q[i], q[i + 1])
     for e in range(el_int.shape[0]):
-        kind, ba, bb, rdx, rdy, anx, any_, tax, tay, tbx, tby, L, ex, ey, meets, distance = _element(
-            q, v, e, el_int, el_real, pbody, ploc)
+        meets, energy, k = _element_signals2(q, v, z, qdd, P, e, energy, out, k)
         if meets:
             status = TERMINALS_MEET
-        gq = _gq2(qdd, ba, bb, tax, tay, tbx, tby, ex, ey)
-        energy, k = _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, 0.0, anx, any_, 0.0,
-                                     ex, ey, 0.0, gq, 3, energy, out, k)
     for e in range(rot_int.shape[0]):
         ia, ib, phi, w = _rotational2(q, v, e, rot_int)
         kind = rot_int[e, ROT_KIND]
@@ -1788,16 +1792,10 @@ def signal_values3(q, v, z, qdd, P, out):
         i, c = 6 * b, nqb * b
         energy += spatial_body_energy(mass[i], mass, n + 9 * b, v[i], v[i + 1], v[i + 2], v[i + 3], v[i + 4],
                                       v[i + 5], gravity[i], gravity[i + 1], gravity[i + 2], q[c], q[c + 1], q[c + 2])
-    ga = carray(_stack(6), 6)       # g over a's and b's coordinates (_stack)
-    gb = carray(_stack(6), 6)
     for e in range(el_int.shape[0]):
-        kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element3(
-            q, v, e, el_int, el_real, pbody, ploc, ga, gb)
+        meets, energy, k = _element_signals3(q, v, z, qdd, P, e, energy, out, k)
         if meets:
             status = TERMINALS_MEET
-        gq = _gq3(qdd, ba, bb, ga, gb)
-        energy, k = _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_, anz,
-                                     ex, ey, ez, gq, 6, energy, out, k)
     for e in range(rot_int.shape[0]):
         ia, ib, Aa, Ab, phi, w, tau, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
         k, energy = _rotational_outputs(rot_int[e, ROT_KIND], rot_real[e], phi, w, tau, energy, out, k)
@@ -1809,15 +1807,23 @@ def signal_values3(q, v, z, qdd, P, out):
 
 
 @njit(cache=True, inline="always")
-def element_signals3(q, v, z, qdd, P, e, out):
-    """Translational element e's outputs alone, from out[0] on, as :func:`signal_values3` writes
-    them: what a column of one of them needs, without every other signal. Returns a status code."""
-    ga = carray(_stack(6), 6)       # g over a's and b's coordinates (_stack)
+def _element_signals3(q, v, z, qdd, P, e, energy, out, k):
+    """Translational element e's outputs of a 3D scene from out[k] on, at the accelerations qdd
+    (:func:`_element_outputs`): (whether its terminals meet, `energy` plus its, the next k)."""
+    ga = carray(_stack(6), 6)       # g over a's and b's coordinates (_stack: once per kernel call)
     gb = carray(_stack(6), 6)
     kind, ba, bb, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, meets, distance = _element3(
         q, v, e, P[EL_INT], P[EL_REAL], P[PBODY], P[PLOC], ga, gb)
-    _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez,
-                     _gq3(qdd, ba, bb, ga, gb), 6, 0.0, out, 0)
+    energy, k = _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez,
+                                 _gq3(qdd, ba, bb, ga, gb), 6, energy, out, k)
+    return meets, energy, k
+
+
+@njit(cache=True, inline="always")
+def element_signals3(q, v, z, qdd, P, e, out):
+    """Translational element e's outputs alone, from out[0] on, as :func:`signal_values3` writes
+    them: what a column of one of them needs, without every other signal. Returns a status code."""
+    meets, _, _ = _element_signals3(q, v, z, qdd, P, e, 0.0, out, 0)
     return TERMINALS_MEET if meets else OK
 
 

@@ -104,23 +104,42 @@ def jlogcosh(x: Jet) -> Jet:
     return x._chain(a + math.log1p(math.exp(-2.0 * a)) - math.log(2.0), t, 1.0 - t * t)
 
 
+def rotation(coords):
+    """A body's rotation matrix from its coordinates, on Jets (or floats): in 2D from the angle θ,
+    [[cos θ, −sin θ], [sin θ, cos θ]]; in 3D from the quaternion p = (w, v), not necessarily of
+    unit length, A = I + 2/|p|² (w[v]× + [v]×²), [v]×² = v vᵀ − |v|² I (Shabana 2009)."""
+    if len(coords) == 3:
+        c, s = jcos(coords[2]), jsin(coords[2])
+        return [[c, -s], [s, c]]
+    w, a, b, c = coords[3:]
+    k = 2.0 / (w * w + a * a + b * b + c * c)
+    aa, bb, cc, ab, ac, bc, wa, wb, wc = a * a, b * b, c * c, a * b, a * c, b * c, w * a, w * b, w * c
+    return [[1.0 - k * (bb + cc), k * (ab - wc), k * (ac + wb)],
+            [k * (ab + wc), 1.0 - k * (aa + cc), k * (bc - wa)],
+            [k * (ac - wb), k * (bc + wa), 1.0 - k * (aa + bb)]]
+
+
+def times(A, x):
+    """A x for A of Jets (or floats) and floats x, skipping the zero entries of x."""
+    terms = [(j, float(xj)) for j, xj in enumerate(x) if xj != 0.0]
+    if not terms:
+        return [row[0] * 0.0 for row in A]
+    out = []
+    for row in A:
+        j, xj = terms[0]
+        acc = row[j] * xj
+        for j, xj in terms[1:]:
+            acc = acc + row[j] * xj
+        out.append(acc)
+    return out
+
+
 def point_position(point, coords):
-    """r = R + A ū written out from the rotation's definition, on Jets (or floats): in 2D from
-    the angle, in 3D from the (not necessarily unit) quaternion p, A = I + 2/|p|² (w[v]× + [v]×²)."""
+    """r = R + A ū (:func:`rotation`), on Jets (or floats); ū for the ground."""
     if point.body < 0:
         return list(point.local)
-    if len(coords) == 3:
-        x, y, th = coords
-        ux, uy = point.local
-        c, s = jcos(th), jsin(th)
-        return [x + c * ux - s * uy, y + s * ux + c * uy]
-    X, Y, Z, w, a, b, c = coords
-    u = point.local
-    k = 2.0 / (w * w + a * a + b * b + c * c)
-    vec = (a, b, c)
-    t = cross(vec, u)                                          # v × u
-    tt = cross(vec, t)                                         # v × (v × u)
-    return [P + u[i] + k * (w * t[i] + tt[i]) for i, P in enumerate((X, Y, Z))]
+    dim = len(point.local)
+    return [P + x for P, x in zip(coords[:dim], times(rotation(coords), point.local))]
 
 
 def plain_coords(q, point):

@@ -36,7 +36,7 @@ import numpy as np
 
 from inerter.common.errors import SceneError
 from inerter.model.joints import perpendiculars
-from inerter.oracle.jets import Jet, angular_velocity, dot, jatan2, jcos, jsin, seed
+from inerter.oracle.jets import Jet, angular_velocity, dot, jatan2, rotation, seed, times
 
 
 class BodyJets:
@@ -63,13 +63,13 @@ class BodyJets:
         if p.body < 0:
             return [Jet.constant(x, self.n) for x in local]
         R, A = self.frames[p.body]
-        return [x + y for x, y in zip(R, _times(A, local))]
+        return [x + y for x, y in zip(R, times(A, local))]
 
     def vector(self, p, local):
         """A s̄: the vector `local` fixed in p's body (in the ground's frame for the ground)."""
         if p.body < 0:
             return [Jet.constant(x, self.n) for x in local]
-        return _times(self.frames[p.body][1], local)
+        return times(self.frames[p.body][1], local)
 
     def rotation(self, p):
         """A of p's body as rows of Jets (the identity for the ground)."""
@@ -80,36 +80,6 @@ class BodyJets:
     def angle(self, p):
         """θ of p's planar body (0 for the ground)."""
         return self.coords[p.body][2] if p.body >= 0 else Jet.constant(0.0, self.n)
-
-
-def rotation(coords):
-    """A body's rotation matrix on Jets from its coordinates: in 2D from the angle θ,
-    [[cos θ, −sin θ], [sin θ, cos θ]]; in 3D from the quaternion p = (w, v), not necessarily of
-    unit length, A = I + 2/|p|² (w[v]× + [v]×²), [v]×² = v vᵀ − |v|² I (Shabana 2009)."""
-    if len(coords) == 3:
-        c, s = jcos(coords[2]), jsin(coords[2])
-        return [[c, -s], [s, c]]
-    w, a, b, c = coords[3:]
-    k = 2.0 / (w * w + a * a + b * b + c * c)
-    aa, bb, cc, ab, ac, bc, wa, wb, wc = a * a, b * b, c * c, a * b, a * c, b * c, w * a, w * b, w * c
-    return [[1.0 - k * (bb + cc), k * (ab - wc), k * (ac + wb)],
-            [k * (ab + wc), 1.0 - k * (aa + cc), k * (bc - wa)],
-            [k * (ac - wb), k * (bc + wa), 1.0 - k * (aa + bb)]]
-
-
-def _times(A, x):
-    """A x for Jets A and floats x, skipping the zero entries of x."""
-    terms = [(j, float(xj)) for j, xj in enumerate(x) if xj != 0.0]
-    if not terms:
-        return [Jet.constant(0.0, A[0][0].g.size) for _ in A]
-    out = []
-    for row in A:
-        j, xj = terms[0]
-        acc = row[j] * xj
-        for j, xj in terms[1:]:
-            acc = acc + row[j] * xj
-        out.append(acc)
-    return out
 
 
 class OracleJoint:

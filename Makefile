@@ -8,6 +8,8 @@ PY      = $(VENV)/bin/python
 # STAMP: the package, its dependencies and the compiled kernels; TEST_STAMP: the test extras too
 STAMP      = $(VENV)/.installed
 TEST_STAMP = $(VENV)/.installed-test
+# the suite on two processes, a test file's tests in one (its module's shared runs computed once)
+PYTEST_WORKERS ?= -n 2 --dist loadfile
 
 .PHONY: demo test venv clean
 
@@ -28,7 +30,7 @@ demo: $(STAMP)
 	$(VENV)/bin/inerter paper --model fmu --out out/paper $(DEMO_ARGS)
 
 test: $(TEST_STAMP)
-	$(PY) -m pytest -q $(PYTEST_ARGS)
+	$(PY) -m pytest -q $(PYTEST_WORKERS) $(PYTEST_ARGS)
 
 clean:
 	rm -rf $(VENV) build out .pytest_cache

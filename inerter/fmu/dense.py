@@ -21,6 +21,7 @@ bit for bit.
 """
 from __future__ import annotations
 
+import bisect
 import shutil
 
 import numpy as np
@@ -56,8 +57,10 @@ class FmuDense:
         self.result = result
         self._given = instance
         self.grid = np.asarray(result.time, dtype=float)
+        self._times = self.grid.tolist()       # the same, for bisect (np.searchsorted of one scalar costs more)
         self._fmu = None
         self._saved = {}           # sample index → FMU state
+        self._kept = []            # the indices of _saved, in increasing order (bisect)
         self._time = 0.0           # where the instance is
         #: doStep calls and FMU-state restores made, for the benchmarks' accounts.
         self.steps = self.restores = 0
@@ -87,6 +90,7 @@ class FmuDense:
                 fmu.freeInstance()
         finally:
             self._saved.clear()
+            self._kept.clear()
             if self._given is None:
                 shutil.rmtree(self._dir, ignore_errors=True)
 
@@ -138,22 +142,23 @@ class FmuDense:
                                   f"gives {worst} = {got[names.index(worst)]!r}, the run gave "
                                   f"{want[names.index(worst)]!r}: it does not repeat the run", float(self.grid[k]))
         self._saved[k] = self._fmu.getFMUstate()
+        bisect.insort(self._kept, k)
 
     # -- stepping --------------------------------------------------------------------------
     def _go_to(self, t: float):
         """Bring the instance to time t: back to a kept state where t is behind it (or a kept
         state lies well ahead of it), then forward, keeping states at the samples it passes."""
-        here = int(np.searchsorted(self.grid, self._time, side="right")) - 1
-        target = int(np.searchsorted(self.grid, t, side="right")) - 1
-        kept = max(k for k in self._saved if k <= target)
+        here = bisect.bisect_right(self._times, self._time) - 1
+        target = bisect.bisect_right(self._times, t) - 1
+        kept = self._kept[bisect.bisect_right(self._kept, target) - 1]     # the latest kept at or before target
         if t < self._time or kept >= here + 2 * SAVE_EVERY:
             self._fmu.setFMUstate(self._saved[kept])
-            self._time = float(self.grid[kept])
+            self._time = self._times[kept]
             self.restores += 1
-        first = (int(np.searchsorted(self.grid, self._time, side="right")) + SAVE_EVERY - 1) // SAVE_EVERY
+        first = (bisect.bisect_right(self._times, self._time) + SAVE_EVERY - 1) // SAVE_EVERY
         for k in range(first * SAVE_EVERY, target + 1, SAVE_EVERY):
             if k not in self._saved:
-                self._step(float(self.grid[k]))
+                self._step(self._times[k])
                 self._keep(k)
         self._step(t)
 

@@ -176,3 +176,26 @@ def test_the_requirements_the_fmu_states_are_the_packages(fmu):
     assert lines == [f"numpy>={bounds['numpy']}", f"scipy>={bounds['scipy']}", f"numba>={bounds['numba']}"]
     note = " ".join(line for line in text.splitlines() if line.startswith("#"))
     assert f"({project['requires-python'].removeprefix('>=')} or later)" in note
+
+
+def test_the_files_found_are_kept_while_the_sources_stand_and_found_again_when_they_change(tmp_path, monkeypatch):
+    """package_files follows the imports once per state of the sources (inerter/fmu/payload.py):
+    asked again with nothing changed it does not parse a module; a slave that imports one more
+    module is a new state, and its answer holds that module."""
+    from inerter.fmu import payload
+    slave = tmp_path / "slave.py"
+    slave.write_text("import inerter.scene.reader\n")
+    first = payload.package_files(slave)
+    assert payload.PACKAGE_DIR / "scene" / "reader.py" in first
+    assert payload.PACKAGE_DIR / "fmu" / "run.py" not in first
+
+    def no_parsing(*_):
+        raise AssertionError("the imports were followed again with no source changed")
+    monkeypatch.setattr(payload, "closure", no_parsing)
+    assert payload.package_files(slave) == first
+    monkeypatch.undo()
+
+    slave.write_text("import inerter.scene.reader\nimport inerter.fmu.run\n")
+    second = payload.package_files(slave)
+    assert payload.PACKAGE_DIR / "fmu" / "run.py" in second
+    assert set(first) < set(second)

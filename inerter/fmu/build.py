@@ -409,7 +409,6 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
                             f"in an installed one: reinstall inerter)")
     model = inerter.load(scene_path)
     units = _check_model(scene_path, model)
-    tunable = model.tunable_parameters()
     name = model.name
     fmu_path = out_dir / f"{name}.fmu"
     hash_path = out_dir / f"{name}{HASH_SUFFIX}"
@@ -417,6 +416,7 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
     if (not force and fmu_path.is_file() and hash_path.is_file()
             and hash_path.read_text().strip() == digest):
         return fmu_path, False
+    tunable = model.tunable_parameters()        # loads the scene once per parameter: only to build
 
     out_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="inerter_fmu_") as tmp:

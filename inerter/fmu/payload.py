@@ -70,11 +70,34 @@ def closure(seeds, package_dir: Path = PACKAGE_DIR) -> set[str]:
     return found
 
 
+#: package_files' answers in this process, by what they were read from (:func:`_sources_state`).
+_FOUND: dict[tuple, list[Path]] = {}
+
+
 def package_files(slave_file: Path, package_dir: Path = PACKAGE_DIR) -> list[Path]:
-    """The files of the package an FMU of the slave `slave_file` needs, sorted."""
+    """The files of the package an FMU of the slave `slave_file` needs, sorted. Following the
+    imports parses every module (about a second); the answer is kept for the process while no
+    file of the package or the slave changes (size or modification time), since every build
+    and every check that an FMU is current asks again."""
+    state = _sources_state(Path(slave_file), Path(package_dir))
+    if state not in _FOUND:
+        _FOUND.clear()
+        _FOUND[state] = _package_files(Path(slave_file), Path(package_dir))
+    return list(_FOUND[state])
+
+
+def _package_files(slave_file: Path, package_dir: Path) -> list[Path]:
     from inerter.engine.compiled import kernel_sources
 
-    seeds = imported_names(Path(slave_file).read_text(encoding="utf-8"), "__main__", False)
+    seeds = imported_names(slave_file.read_text(encoding="utf-8"), "__main__", False)
     files = {module_file(m, package_dir) for m in closure(seeds, package_dir)}
     files.update(package_dir / p.relative_to(PACKAGE_DIR) for p in kernel_sources())
     return sorted(files)
+
+
+def _sources_state(slave_file: Path, package_dir: Path) -> tuple:
+    """(path, size, modification time) of the slave and of every module of the package."""
+    def state(path: Path) -> tuple:
+        st = path.stat()
+        return str(path), st.st_size, st.st_mtime_ns
+    return (state(slave_file), *sorted(state(p) for p in package_dir.rglob("*.py")))

@@ -131,7 +131,7 @@ def unzipped(tmp_path_factory):
 class Instance:
     """One FMU instance through fmpy's low-level API, with its log messages captured."""
 
-    def __init__(self, unzipdir: str, name: str = "instance", messages=None):
+    def __init__(self, unzipdir: str, name: str = "instance", messages=None, logging: bool = True):
         self.md = read_model_description(unzipdir)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.variables = {v.name: v for v in self.md.modelVariables}
@@ -145,7 +145,7 @@ class Instance:
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=unzipdir,
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
                              instanceName=name)
-        self.fmu.instantiate(callbacks=self.callbacks, loggingOn=True)
+        self.fmu.instantiate(callbacks=self.callbacks, loggingOn=logging)
 
     def _log(self, env, instance, status, category, message):
         self.messages.append((status, message.decode("utf-8")))
@@ -196,8 +196,8 @@ def instance(unzipped):
     """instance(fmu, name) -> an instantiated Instance, freed after the test."""
     made = []
 
-    def make(fmu: Path, name: str = "instance") -> Instance:
-        made.append(Instance(unzipped(fmu), name))
+    def make(fmu: Path, name: str = "instance", logging: bool = True) -> Instance:
+        made.append(Instance(unzipped(fmu), name, logging=logging))
         return made[-1]
     yield make
     for inst in reversed(made):
@@ -804,6 +804,29 @@ def test_an_invalid_setting_fails_initialisation_with_fmi2error(fmus, scene, ins
     inst.fmu.reset()
     inst.initialise()
     inst.fmu.doStep(0.0, 0.01)
+
+
+@pytest.mark.parametrize("switched_off", ["at instantiation", "by setDebugLogging"])
+def test_with_logging_off_an_error_is_still_logged(input_fmu, instance, needs_shim, switched_off):
+    """With the importer's logging off (fmpy's default), an fmi2Error or fmi2Discard still comes
+    with its message (the status shim passes on those statuses' messages always), and only those:
+    the fmi2OK messages of initialisation and of a good step are not logged."""
+    inst = instance(input_fmu[1], logging=switched_off != "at instantiation")
+    if switched_off == "by setDebugLogging":
+        inst.fmu.setDebugLogging(False, [])
+        inst.messages.clear()                 # what instantiation logged with logging on
+    raises_status(FMI_ERROR, inst.initialise, {"b": -1.0})
+    [(status, message)] = inst.messages
+    assert status == FMI_ERROR and "inerter.b: out of range" in message and "b = -1.0" in message
+    inst.messages.clear()
+    raises_status(FMI_DISCARD, inst.fmu.doStep, 0.0, 0.01)
+    assert inst.messages and all(s >= FMI_DISCARD for s, _ in inst.messages), inst.messages
+    inst.messages.clear()
+    inst.fmu.reset()
+    inst.initialise()
+    inst.fmu.doStep(0.0, 0.01)
+    raises_status(FMI_ERROR, inst.set, INPUT, math.nan)    # a non-finite input: setReal's fmi2Error
+    assert inst.errors() and "not finite" in inst.errors()[0] and all(s == FMI_ERROR for s, _ in inst.messages)
 
 
 @pytest.mark.parametrize("scene", SCENE_PARAMS)

@@ -837,6 +837,25 @@ def test_a_start_time_other_than_zero_is_refused(fmus, scene, instance, needs_sh
     raises_status(FMI_DISCARD, inst.fmu.doStep, 1.0, 0.01)
 
 
+@pytest.mark.parametrize("stop_time", [-1.0, math.nan])
+def test_a_stop_time_before_the_start_is_refused(input_fmu, instance, needs_shim, stop_time):
+    """fmi2SetupExperiment's stopTime before startTime = 0 (or NaN): exitInitializationMode
+    fmi2Error, logged with the scene file, stopTime, the value and what was expected (a run of no
+    length, stopTime = 0, stays allowed: the outputs at t = 0)."""
+    inst = instance(input_fmu[1], logging=False)
+    inst.fmu.setupExperiment(startTime=0.0, stopTime=stop_time)
+    inst.fmu.enterInitializationMode()
+    raises_status(FMI_ERROR, inst.fmu.exitInitializationMode)
+    [message] = inst.errors()
+    assert f"two_bar_2d.toml: stopTime: before the start (got stopTime = {stop_time!r} s" in message, message
+    assert "expected a stop time ≥ startTime = 0 s" in message
+    raises_status(FMI_DISCARD, inst.fmu.doStep, 0.0, 0.01)
+    inst.fmu.reset()
+    inst.fmu.setupExperiment(startTime=0.0, stopTime=0.0)
+    inst.fmu.enterInitializationMode()
+    inst.fmu.exitInitializationMode()
+
+
 def stepped_pair(fmu: Path, instance) -> tuple[Instance, Instance, float]:
     """Two instances of `fmu` initialised the same way, one step of h done with INPUT at 5 N."""
     h = 0.01

@@ -687,6 +687,10 @@ class InerterSlave(Fmi2Slave):
             self._fail(f"exitInitializationMode: the scene starts at t = 0 s (got startTime = "
                        f"{self._start_time!r} s from fmi2SetupExperiment; expected 0)")
             return
+        if self._stop_time is not None and not self._stop_time >= 0.0:     # NaN too
+            self._fail(f"exitInitializationMode: {self.scene_file}: stopTime: before the start (got stopTime = "
+                       f"{self._stop_time!r} s from fmi2SetupExperiment; expected a stop time ≥ startTime = 0 s)")
+            return
         settings = self._effective_settings()
         try:
             stepper = self._preview_stepper(settings)

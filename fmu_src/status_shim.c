@@ -14,6 +14,14 @@
  * every call is forwarded with the original's component, and the slave's messages reach the
  * importer through the original's logger calls as before.
  *
+ * Which messages reach the importer. pythonfmu's binary passes the slave's messages on only while
+ * the importer has logging on (fmi2Instantiate's loggingOn, fmi2SetDebugLogging), so with logging
+ * off (fmpy's default) an fmi2Error said nothing of its cause. The shim keeps the original's
+ * logging always on, with every category, through its own logger (filtered_log, with the instance
+ * as the original's component environment), and passes on a message when the importer has logging
+ * on, or when its status is fmi2Discard, fmi2Error or fmi2Fatal: the reason for a status the
+ * importer must act on is always logged, as FMI's reference implementations log errors.
+ *
  * The native doStep (inerter/fmu/native.py says the protocol). After fmi2Instantiate and after
  * fmi2Reset (which replaces the slave object) the shim reads the slave's context address through the private Integer value references NATIVE_LINK_VR and
  * NATIVE_LINK_VR + 1. After a doStep the slave took and returned fmi2OK, and after an
@@ -31,8 +39,7 @@
  * about a minute on a machine's first use) would say nothing until its end, so the shim writes the
  * address of live_log and of the instance into the context's CTX_LOG_FUNCTION and CTX_LOG_TARGET:
  * the slave calls it from within the call, on its thread, and the message reaches the importer's
- * logger at once, when the importer turned logging on (at fmi2Instantiate or with
- * fmi2SetDebugLogging), as pythonfmu's binary does.
+ * logger at once, where it passes as the original's messages do (below).
  *
  * Build (inerter/fmu/build.py does it, with the value reference from modelDescription.xml):
  *   gcc -shared -fPIC -O2 -fvisibility=hidden -pthread -DSTATUS_VR=<n> \
@@ -247,11 +254,31 @@ struct instance {
     const int64_t *ctx;       /* the slave's context, or NULL: no native steps */
     int armed;                /* the next doStep may be taken natively */
     int dirty;                /* native steps (or a declined one) the slave has not taken over */
-    fmi2CallbackLogger logger;            /* the importer's, for live_log */
+    fmi2CallbackLogger logger;            /* the importer's, for live_log and filtered_log */
     fmi2ComponentEnvironment environment;
     char *name;                           /* the instance name, copied */
     int logging_on;                       /* as the importer last set it */
+    fmi2CallbackFunctions *functions;     /* the original's: the importer's, logger filtered_log */
 };
+
+/* Whether a message of `status` reaches the importer (see the top): all of them with logging on,
+ * those of a status the importer must act on always. */
+static int passes(const struct instance *w, int status)
+{
+    return w->logging_on || status >= (int)fmi2Discard;
+}
+
+/* The original's logger: the message passed on to the importer's where `passes` lets it. The
+ * original passes each message as the format, with no argument, and so does this. */
+static void filtered_log(fmi2ComponentEnvironment environment, fmi2String instanceName,
+                         fmi2Status status, fmi2String category, fmi2String message, ...)
+{
+    const struct instance *w = (const struct instance *)environment;
+
+    if (w == NULL || w->logger == NULL || !passes(w, (int)status))
+        return;
+    w->logger(w->environment, instanceName, status, category, message);
+}
 
 /* A message from the slave to the importer's logger, now (see the top). The message is passed as
  * the format, with no argument, '%' doubled, as fmi2Instantiate's own. */
@@ -262,7 +289,7 @@ static void live_log(int64_t target, int32_t status, const char *category, const
     const char *from;
     char *text, *to;
 
-    if (w == NULL || w->logger == NULL || !w->logging_on || message == NULL)
+    if (w == NULL || w->logger == NULL || !passes(w, (int)status) || message == NULL)
         return;
     for (from = message; *from != '\0'; from++)
         n += *from == '%' ? 2 : 1;
@@ -445,18 +472,29 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               "logStatusError", "fmi2Instantiate: out of memory");
         return NULL;
     }
-    inner = original.Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation, functions,
-                                 visible, loggingOn);
+    if (functions != NULL) {
+        w->logger = functions->logger;
+        w->environment = functions->componentEnvironment;
+        const fmi2CallbackFunctions filtered = {filtered_log, functions->allocateMemory,
+                                                functions->freeMemory, functions->stepFinished, w};
+        w->functions = malloc(sizeof filtered);
+        if (w->functions == NULL) {
+            free(w);
+            functions->logger(functions->componentEnvironment, instanceName, fmi2Error,
+                              "logStatusError", "fmi2Instantiate: out of memory");
+            return NULL;
+        }
+        memcpy(w->functions, &filtered, sizeof filtered);
+    }
+    w->logging_on = loggingOn == fmi2True;
+    inner = original.Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation,
+                                 w->functions, visible, fmi2True);
     if (inner == NULL) {
+        free(w->functions);
         free(w);
         return NULL;
     }
     w->inner = inner;
-    if (functions != NULL) {
-        w->logger = functions->logger;
-        w->environment = functions->componentEnvironment;
-    }
-    w->logging_on = loggingOn == fmi2True;
     w->name = strdup(instanceName != NULL ? instanceName : "");
     link_context(w);
     return w;
@@ -483,6 +521,7 @@ void fmi2FreeInstance(fmi2Component c)
 {
     if (handle != NULL && c != NULL) {
         original.FreeInstance(INNER(c));
+        free(((struct instance *)c)->functions);
         free(((struct instance *)c)->name);
         free(c);
     }
@@ -493,7 +532,10 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
 {
     ENTER
     ((struct instance *)c)->logging_on = loggingOn == fmi2True;
-    return original.SetDebugLogging(INNER(c), loggingOn, nCategories, categories);
+    /* the original keeps logging every category; filtered_log does what the importer asked */
+    if (loggingOn == fmi2True)
+        return original.SetDebugLogging(INNER(c), fmi2True, nCategories, categories);
+    return original.SetDebugLogging(INNER(c), fmi2True, 0, NULL);
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,

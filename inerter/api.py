@@ -336,6 +336,8 @@ class Result:
                 notes.append(f"{self.model.source}: outputs.derived.{d.name}: no value at {int(missing.sum())} "
                              f"of {len(column)} samples, the first at t = {self.time[missing.argmax()]:.6g} s "
                              f"(written as NaN): the expression is undefined there")
+        if isinstance(self, Result):             # an FMU's outputs wind on at every integrator step
+            notes += coarse_windings(self)
         return notes
 
     def _derived_column(self, name) -> np.ndarray:
@@ -479,6 +481,30 @@ class Result:
     def to_dataframe(self):
         """The time history as a pandas DataFrame (pandas is optional: ``pip install pandas``)."""
         return to_dataframe(self)
+
+
+def coarse_windings(result) -> list[str]:
+    """A note for each 3D rotational element whose relative rotation may turn by more than half a
+    turn between two output samples (|ω_rel| at the interval's ends times its length, more than π).
+    The run's integrator winds its angle on at every step, but its outputs are evaluated sample after
+    sample, each wound on from the last (inerter.elements.winding), so past half a turn between two
+    samples its φ_rel, torque and energy lose whole turns (an FMU's outputs do not: it winds at every
+    step of its integrator)."""
+    notes = []
+    if len(result.time) < 2:
+        return notes
+    dt = np.diff(result.time)
+    for e in result.model.mechanism.winding:
+        rate = np.abs(result[f"{e.name}.w_rel"])
+        turn = np.maximum(rate[:-1], rate[1:]) * dt
+        k = int(np.argmax(turn))
+        if turn[k] > np.pi:
+            notes.append(f"{result.model.source}: elements.{e.name}: its relative rotation turns by up to "
+                         f"{turn[k]:.3g} rad between two output samples (from t = {result.time[k]:.6g} s), more "
+                         f"than half a turn: its phi_rel, tau and energy, and the scene's energy, are wound on "
+                         f"from sample to sample and may have lost whole turns; take experiment.output_interval "
+                         f"below pi/max|w_rel| = {np.pi / float(np.max(rate)):.3g} s")
+    return notes
 
 
 def output_units(result) -> dict[str, str]:

@@ -131,7 +131,7 @@ def unzipped(tmp_path_factory):
 class Instance:
     """One FMU instance through fmpy's low-level API, with its log messages captured."""
 
-    def __init__(self, unzipdir: str, name: str = "instance", messages=None):
+    def __init__(self, unzipdir: str, name: str = "instance", messages=None, logging: bool = True):
         self.md = read_model_description(unzipdir)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.variables = {v.name: v for v in self.md.modelVariables}
@@ -145,7 +145,7 @@ class Instance:
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=unzipdir,
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
                              instanceName=name)
-        self.fmu.instantiate(callbacks=self.callbacks, loggingOn=True)
+        self.fmu.instantiate(callbacks=self.callbacks, loggingOn=logging)
 
     def _log(self, env, instance, status, category, message):
         self.messages.append((status, message.decode("utf-8")))
@@ -196,8 +196,8 @@ def instance(unzipped):
     """instance(fmu, name) -> an instantiated Instance, freed after the test."""
     made = []
 
-    def make(fmu: Path, name: str = "instance") -> Instance:
-        made.append(Instance(unzipped(fmu), name))
+    def make(fmu: Path, name: str = "instance", logging: bool = True) -> Instance:
+        made.append(Instance(unzipped(fmu), name, logging=logging))
         return made[-1]
     yield make
     for inst in reversed(made):
@@ -806,12 +806,54 @@ def test_an_invalid_setting_fails_initialisation_with_fmi2error(fmus, scene, ins
     inst.fmu.doStep(0.0, 0.01)
 
 
+@pytest.mark.parametrize("switched_off", ["at instantiation", "by setDebugLogging"])
+def test_with_logging_off_an_error_is_still_logged(input_fmu, instance, needs_shim, switched_off):
+    """With the importer's logging off (fmpy's default), an fmi2Error or fmi2Discard still comes
+    with its message (the status shim passes on those statuses' messages always), and only those:
+    the fmi2OK messages of initialisation and of a good step are not logged."""
+    inst = instance(input_fmu[1], logging=switched_off != "at instantiation")
+    if switched_off == "by setDebugLogging":
+        inst.fmu.setDebugLogging(False, [])
+        inst.messages.clear()                 # what instantiation logged with logging on
+    raises_status(FMI_ERROR, inst.initialise, {"b": -1.0})
+    [(status, message)] = inst.messages
+    assert status == FMI_ERROR and "inerter.b: out of range" in message and "b = -1.0" in message
+    inst.messages.clear()
+    raises_status(FMI_DISCARD, inst.fmu.doStep, 0.0, 0.01)
+    assert inst.messages and all(s >= FMI_DISCARD for s, _ in inst.messages), inst.messages
+    inst.messages.clear()
+    inst.fmu.reset()
+    inst.initialise()
+    inst.fmu.doStep(0.0, 0.01)
+    raises_status(FMI_ERROR, inst.set, INPUT, math.nan)    # a non-finite input: setReal's fmi2Error
+    assert inst.errors() and "not finite" in inst.errors()[0] and all(s == FMI_ERROR for s, _ in inst.messages)
+
+
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
 def test_a_start_time_other_than_zero_is_refused(fmus, scene, instance, needs_shim):
     inst = instance(fmus[scene])
     raises_status(FMI_ERROR, inst.initialise, None, None, 1.0)
     assert "startTime" in inst.logged()
     raises_status(FMI_DISCARD, inst.fmu.doStep, 1.0, 0.01)
+
+
+@pytest.mark.parametrize("stop_time", [-1.0, math.nan])
+def test_a_stop_time_before_the_start_is_refused(input_fmu, instance, needs_shim, stop_time):
+    """fmi2SetupExperiment's stopTime before startTime = 0 (or NaN): exitInitializationMode
+    fmi2Error, logged with the scene file, stopTime, the value and what was expected (a run of no
+    length, stopTime = 0, stays allowed: the outputs at t = 0)."""
+    inst = instance(input_fmu[1], logging=False)
+    inst.fmu.setupExperiment(startTime=0.0, stopTime=stop_time)
+    inst.fmu.enterInitializationMode()
+    raises_status(FMI_ERROR, inst.fmu.exitInitializationMode)
+    [message] = inst.errors()
+    assert f"two_bar_2d.toml: stopTime: before the start (got stopTime = {stop_time!r} s" in message, message
+    assert "expected a stop time ≥ startTime = 0 s" in message
+    raises_status(FMI_DISCARD, inst.fmu.doStep, 0.0, 0.01)
+    inst.fmu.reset()
+    inst.fmu.setupExperiment(startTime=0.0, stopTime=0.0)
+    inst.fmu.enterInitializationMode()
+    inst.fmu.exitInitializationMode()
 
 
 def stepped_pair(fmu: Path, instance) -> tuple[Instance, Instance, float]:

@@ -11,6 +11,7 @@ the damped oscillator J θ̈ + d θ̇ + k θ = 0 (closed form), and in 3D the sa
 revolute joint plus rotational spring and damper elements declared separately (explicit model).
 """
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +20,7 @@ import inerter
 from inerter.common.errors import SceneError
 
 RTOL, ATOL = 1e-11, 1e-13
+ROOT = Path(__file__).resolve().parents[1]
 HEAD = """
 [scene]
 name = "{name}"
@@ -257,3 +259,18 @@ def test_the_new_joints_run_on_the_oracle_too(tmp_path):
     fast, slow = _run(model), model.oracle().simulate(metrics=False)
     assert slow.status == "ok"
     assert np.max(np.abs(fast["P.r[1]"] - slow["P.r[1]"])) < 1e-9
+
+
+def test_initial_velocities_are_moved_onto_the_joints_by_the_minimum_norm_correction():
+    """As docs/scene_format.md says: the bodies' initial velocities are moved onto the joints'
+    velocity constraints C_q v = 0 by v − C_qᵀ(C_q C_qᵀ)⁻¹C_q v (the explicit formula, the reference
+    here), so a body's rate alone may be given (tests/data/parallelogram_2d.toml: its crank's
+    ω = 3 rad/s), and velocities the joints allow (scenarios/hard/two_bar_free_2d.toml) are kept."""
+    mech = inerter.load(ROOT / "tests" / "data" / "parallelogram_2d.toml").mechanism
+    given = np.asarray(mech._bodies(mech.scene)[1], dtype=float)
+    _, Cq, _ = mech.constraints(mech.q0, np.zeros(mech.n))
+    assert np.max(np.abs(Cq @ given)) > 0.1                               # not allowed as given
+    assert mech.v0 == pytest.approx(given - Cq.T @ np.linalg.solve(Cq @ Cq.T, Cq @ given), abs=1e-12)
+    assert np.max(np.abs(Cq @ mech.v0)) < 1e-12
+    free = inerter.load(ROOT / "scenarios" / "hard" / "two_bar_free_2d.toml").mechanism
+    assert free.v0 == pytest.approx(np.asarray(free._bodies(free.scene)[1], dtype=float), abs=1e-14)

@@ -88,3 +88,20 @@ def test_what_the_oracle_does_not_derive_is_refused_by_name():
     with pytest.raises(inerter.InerterError, match="device.efficiency") as err:
         inerter.load(ROOT / "tests" / "data" / "device_combo_efficiency_series_3d.toml").oracle()
     assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("scene, element", [("device_combo_efficiency_series_3d", "dev"),
+                                            ("device_combo_ground_slider_2d", "dev")])
+def test_the_oracles_refusal_names_the_file_and_the_field(scene, element, capsys, tmp_path):
+    """As every scene error: the file, the element's field, the value and what was expected (through
+    the API and `inerter run --model oracle`, which exits with status 2 and that line)."""
+    from inerter.cli import main
+    from conftest import one_line_error
+    path = ROOT / "tests" / "data" / f"{scene}.toml"
+    with pytest.raises(inerter.SceneError) as err:
+        inerter.load(path).oracle()
+    message = str(err.value)
+    assert message.startswith(f"{path}: elements.{element}.device.efficiency: ")
+    assert "got {'forward': " in message and "expected a device without a screw efficiency" in message
+    assert main(["run", str(path), "--model", "oracle", "--out", str(tmp_path)]) == 2
+    one_line_error(capsys, f"{scene}.toml: elements.{element}.device.efficiency: ", "(got {'forward': ")

@@ -53,7 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from inerter.common.errors import SimulationError
-from inerter.engine.simulation import Run, Stepper, jumps
+from inerter.engine.simulation import Run, Stepper, jumps, output_grid
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
@@ -989,8 +989,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         return _kernel_run(integrate(_KernelMechanism(mech, kernel), settings, inputs), kernel,
                            "scipy integrator, compiled right-hand side", unsettled)
 
-    grid = np.arange(0.0, settings.stop_time + 0.5 * settings.output_interval, settings.output_interval)
-    grid[-1] = min(grid[-1], settings.stop_time)
+    grid = output_grid(settings.stop_time, settings.output_interval)
     out = np.empty((len(grid), kernel.ny))
     y0 = np.concatenate((kernel.q0, kernel.v0, kernel.z0))
     out[0] = y0

@@ -341,12 +341,23 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
         return _integrate(mech, settings, inputs)
 
 
+def output_grid(stop_time: float, interval: float) -> np.ndarray:
+    """The output samples of a run: 0, h, 2h, ... below the stop time, and the stop time itself,
+    always the last (an interval that does not divide the stop time leaves a shorter last one, as an
+    importer's communication steps do). A multiple of h within 1e-9 of the stop time (relative, as
+    fmpy's ``isclose``) is the stop time."""
+    grid = np.arange(0.0, stop_time + 0.5 * interval, interval)
+    if stop_time - grid[-1] > 1e-9 * stop_time:
+        return np.append(grid, stop_time)
+    grid[-1] = stop_time
+    return grid
+
+
 def _integrate(mech, settings: Settings, inputs=None) -> Run:
     """:func:`integrate`, its angles wound on from where the mechanism holds them."""
     n = mech.nq
     fun = derivative(mech, inputs, settings.alpha)
-    grid = np.arange(0.0, settings.stop_time + 0.5 * settings.output_interval, settings.output_interval)
-    grid[-1] = min(grid[-1], settings.stop_time)
+    grid = output_grid(settings.stop_time, settings.output_interval)
     y = initial_state(mech)
     out = np.empty((len(grid), len(y)))
     out[0] = y

@@ -156,8 +156,8 @@ class NativeLink:
 
     def live_log(self, status: int, category: str, message: str) -> bool:
         """Hand `message` to the importer's logger now, through the shim (which wrote its logging
-        function into CTX_LOG_FUNCTION after fmi2Instantiate; it logs only where the importer
-        turned logging on, as pythonfmu does). False where there is no shim to do it: pythonfmu
+        function into CTX_LOG_FUNCTION after fmi2Instantiate; it passes the message on as it does
+        the original's: where the importer turned logging on, or for a status from fmi2Discard up). False where there is no shim to do it: pythonfmu
         then delivers the message when the call in progress returns. Only from the thread of that
         call: FMI 2.0 does not let an FMU call the logger from another."""
         address = int(self.ctx[CTX_LOG_FUNCTION])

@@ -37,7 +37,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from inerter.common.errors import MIN_LENGTH, InerterError, SceneError, TerminalsMeet
+from inerter.common.errors import MIN_LENGTH, SceneError, TerminalsMeet
 from inerter.oracle.jets import (
     Jet, angular_velocity, cross, dot, jabs, jcos, jlogcosh, jpow, jsin, jsqrt, parts, point_position, position, seed)
 from inerter.oracle.rotational import COEFFICIENT_NAME as _ROTATIONAL_KINDS
@@ -173,15 +173,22 @@ class OracleDevice:
     function gives it), and so is a mount beside a compliance.
     """
 
-    def __init__(self, device):
+    def __init__(self, device, source: str = "the oracle", element: str = "inerter"):
+        """`source` (the scene file) and `element` (the element's name) name what is refused."""
         self.spec = device
+        field = f"elements.{element}.device"
         if device.has("efficiency"):
-            raise InerterError("the oracle derives an inerter device from its energies and dissipation function; "
-                               "device.efficiency makes b depend on the sign of L̈ (and on L̇, switched or "
-                               "smoothed), which no such function gives: check such a scene against closed forms")
+            raise SceneError(source, f"{field}.efficiency", device.values("efficiency"),
+                             "a device without a screw efficiency for the oracle (check such a scene against "
+                             "closed forms)",
+                             "the oracle derives an inerter device from its energies and dissipation function; "
+                             "device.efficiency makes b depend on the sign of L̈ (and on L̇, switched or "
+                             "smoothed), which no such function gives")
         if device.has("compliance") and device.has("mount"):
-            raise InerterError("the oracle's series connection spins the flywheel with the inerter's own stroke u; "
-                               "device.mount's gyroscopic terms take it from L: no derivation of both together")
+            raise SceneError(source, f"{field}.mount", device.values("mount"),
+                             "a device with a mount or a compliance for the oracle, not both",
+                             "the oracle's series connection spins the flywheel with the inerter's own stroke u; "
+                             "device.mount's gyroscopic terms take it from L: no derivation of both together")
         #: The series connection (:mod:`.series`), or None: the inerter then strokes with L itself.
         self.series = (SeriesConnection(device.values("compliance"),
                                         device.values("backlash")["gap"] if device.has("backlash") else None)
@@ -441,7 +448,8 @@ class OracleElement:
             raise error
         self.name = spec.name
         self.kind = spec.type
-        self.device = OracleDevice(spec.device) if getattr(spec, "device", None) is not None else None
+        self.device = (OracleDevice(spec.device, mech.scene.source, spec.name)
+                       if getattr(spec, "device", None) is not None else None)
         from_device = self.device.inertance() if self.device is not None else None
         self.coefficient = float(spec.coefficient) if from_device is None else from_device
         self.coefficient_name = _TRANSLATIONAL_KINDS[spec.type]

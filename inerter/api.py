@@ -159,11 +159,11 @@ class Model:
         return self._static_values[signal]
 
     # -- simulation --------------------------------------------------------------------------
-    def settings(self, **overrides) -> Settings:
+    def settings(self, call: str = "simulate()", **overrides) -> Settings:
         """The scene's experiment with `overrides` (None: the scene's value), read and checked by
-        the scene reader's function for ``[experiment]`` (errors name ``simulate()`` and the field)."""
+        the scene reader's function for ``[experiment]`` (errors name the `call` and the field)."""
         given = {k: v for k, v in overrides.items() if v is not None}
-        x = self.scene.experiment_with(given, source=f"{self.source}: simulate()") if given else self.scene.experiment
+        x = self.scene.experiment_with(given, source=f"{self.source}: {call}") if given else self.scene.experiment
         return Settings.from_experiment(x)
 
     def simulate(self, stop_time=None, output_interval=None, method=None, rtol=None, atol=None,
@@ -217,7 +217,7 @@ class Model:
         numpy stepper where the kernels do not take the scene "numpy"; `path` "numpy": the
         readable reference. On both paths the adaptive integrators run on across communication
         points, their steps clipped to `stop_time` where it is given."""
-        s = self.settings(method=method, rtol=rtol, atol=atol)
+        s = self.settings("stepper()", method=method, rtol=rtol, atol=atol)
         if path == "compiled" and not self.is_oracle:
             from inerter.engine import compiled
             stepper = compiled.compiled_stepper(self.mechanism, s, self.signals, stop_time)

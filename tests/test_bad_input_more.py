@@ -209,3 +209,17 @@ def test_a_stiff_spring_does_not_read_as_terminals_meeting(tmp_path, capsys, pat
                  "--path", path, "--out", str(tmp_path)]) == 3
     err = one_line(capsys, str(scene), "the run stopped before its stop time")
     assert "meet" not in err and "max_steps = 2000" in err, err
+
+
+@pytest.mark.parametrize("call", ["simulate", "stepper"])
+def test_a_bad_setting_of_a_call_names_that_call(call):
+    """A solver setting passed to `simulate()` or `stepper()` is refused naming the scene file, the
+    call it was given to, the field, the value and what was expected (stepper() said simulate())."""
+    import inerter
+    from inerter.common.errors import SceneError
+    model = inerter.load(LUMPED)
+    with pytest.raises(SceneError) as refused:
+        getattr(model, call)(method="x")
+    text = str(refused.value)
+    assert f"{call}()" in text and str(LUMPED.name) in text
+    assert "experiment.method" in text and "'x'" in text and "DOP853" in text

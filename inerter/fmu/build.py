@@ -450,24 +450,17 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
         _complete_model_description(built, final, units, digest, Path(tmp) / "shim",
                                     declarations(model, units))
         hash_path.unlink(missing_ok=True)
-        _replace(final, fmu_path)
-    _replace_text(hash_path, digest + "\n")
+        _put(fmu_path, lambda part: shutil.copyfile(final, part))
+    _put(hash_path, lambda part: part.write_text(digest + "\n"))
     return fmu_path, True
 
 
-def _replace(source: Path, target: Path) -> None:
-    """Put `source` at `target` in one step: copied beside it, then renamed over it, so that a
-    process reading `target` meanwhile (another build of the same scene, a test worker beside this
-    one) sees the old file or the new one, never a part."""
+def _put(target: Path, fill) -> None:
+    """Put a file at `target` in one step: `fill(part)` writes it beside `target`, then it is
+    renamed over it, so that a process reading `target` meanwhile (another build of the same
+    scene, a test worker beside this one) sees the old file or the new one, never a part."""
     part = target.with_name(f".{target.name}.{os.getpid()}.part")
-    shutil.copyfile(source, part)
-    os.replace(part, target)
-
-
-def _replace_text(target: Path, text: str) -> None:
-    """`text` into `target` in one step (:func:`_replace`)."""
-    part = target.with_name(f".{target.name}.{os.getpid()}.part")
-    part.write_text(text)
+    fill(part)
     os.replace(part, target)
 
 

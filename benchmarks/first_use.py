@@ -121,7 +121,7 @@ def timed(cmd, cache, source, first_line=None):
 
 
 def default_cache() -> Path:
-    """The user's kernel cache (inerter.engine.compiled._kernel_cache_dir, without importing it)."""
+    """The user's kernel cache (inerter.engine.compiled.cache_root, without importing it)."""
     if os.environ.get("INERTER_CACHE_DIR"):
         return Path(os.environ["INERTER_CACHE_DIR"])
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "inerter"

@@ -199,3 +199,28 @@ def test_the_files_found_are_kept_while_the_sources_stand_and_found_again_when_t
     second = payload.package_files(slave)
     assert payload.PACKAGE_DIR / "fmu" / "run.py" in second
     assert set(first) < set(second)
+
+
+def test_a_new_process_reads_the_files_found_from_their_record(tmp_path, monkeypatch):
+    """The answer is recorded in the kernels' cache folder under a hash of the sources, so a new
+    process (here: the in-process answers forgotten) does not parse again; a record that cannot
+    be read is found again by parsing."""
+    from inerter.fmu import payload
+    monkeypatch.setenv("INERTER_CACHE_DIR", str(tmp_path / "cache"))
+    slave = tmp_path / "slave.py"
+    slave.write_text("import inerter.scene.reader\n")
+    monkeypatch.setattr(payload, "_FOUND", {})
+    found = payload.package_files(slave)
+    records = list((tmp_path / "cache" / "fmu-files").glob("*.json"))
+    assert len(records) == 1
+
+    def no_parsing(*_):
+        raise AssertionError("the imports were followed again though their record was there")
+    monkeypatch.setattr(payload, "_FOUND", {})
+    with monkeypatch.context() as m:
+        m.setattr(payload, "closure", no_parsing)
+        assert payload.package_files(slave) == found
+
+    records[0].write_text("not json")
+    monkeypatch.setattr(payload, "_FOUND", {})
+    assert payload.package_files(slave) == found

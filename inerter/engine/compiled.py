@@ -63,7 +63,7 @@ from inerter.model.mechanism import DEPENDENT_RATIO, wound_from
 
 
 
-def _kernel_cache_dir() -> Path:
+def cache_root() -> Path:
     """Where the kernels' source is copied for numba's on-disk cache: ``$INERTER_CACHE_DIR``, else
     ``$XDG_CACHE_HOME/inerter``, else ``~/.cache/inerter``."""
     if os.environ.get("INERTER_CACHE_DIR"):
@@ -103,7 +103,7 @@ def _import_kernels():
     if name in sys.modules:
         return sys.modules[name]
     try:
-        folder = _kernel_cache_dir() / "kernels" / digest
+        folder = cache_root() / "kernels" / digest
         target = folder / f"{name}.py"
         wrote = not (target.is_file() and target.read_bytes() == text)
         if wrote:

@@ -13,6 +13,9 @@ those files, so the FMU carries them unchanged and finds the kernels its host al
 from __future__ import annotations
 
 import ast
+import hashlib
+import json
+import os
 from pathlib import Path
 
 PACKAGE = "inerter"
@@ -87,12 +90,37 @@ def package_files(slave_file: Path, package_dir: Path = PACKAGE_DIR) -> list[Pat
 
 
 def _package_files(slave_file: Path, package_dir: Path) -> list[Path]:
-    from inerter.engine.compiled import kernel_sources
+    """:func:`package_files` from a record in the kernels' cache folder, named by a hash of the
+    slave's and every module's bytes (a first ask in a process, as every ``inerter run --model
+    fmu`` makes, then costs no parsing); where there is none, the imports followed and recorded."""
+    from inerter.engine.compiled import cache_root, kernel_sources
 
+    record = cache_root() / "fmu-files" / f"{_sources_digest(slave_file, package_dir)}.json"
+    try:
+        return [package_dir / name for name in json.loads(record.read_text(encoding="utf-8"))]
+    except (OSError, ValueError):
+        pass
     seeds = imported_names(slave_file.read_text(encoding="utf-8"), "__main__", False)
     files = {module_file(m, package_dir) for m in closure(seeds, package_dir)}
     files.update(package_dir / p.relative_to(PACKAGE_DIR) for p in kernel_sources())
-    return sorted(files)
+    files = sorted(files)
+    try:                                  # a folder that cannot be written only costs the parsing again
+        record.parent.mkdir(parents=True, exist_ok=True)
+        part = record.with_name(f".{record.name}.{os.getpid()}.part")
+        part.write_text(json.dumps([f.relative_to(package_dir).as_posix() for f in files]), encoding="utf-8")
+        os.replace(part, record)
+    except OSError:
+        pass
+    return files
+
+
+def _sources_digest(slave_file: Path, package_dir: Path) -> str:
+    """sha256 of the slave's bytes and of every module of the package, by its name in the package."""
+    h = hashlib.sha256(slave_file.read_bytes())
+    for path in sorted(package_dir.rglob("*.py")):
+        data = path.read_bytes()
+        h.update(path.relative_to(package_dir).as_posix().encode() + b"\0" + len(data).to_bytes(8, "little") + data)
+    return h.hexdigest()
 
 
 def _sources_state(slave_file: Path, package_dir: Path) -> tuple:

@@ -45,13 +45,13 @@ import importlib.util
 import os
 import pickle
 import sys
-import tempfile
 import threading
 import time as _time
 from pathlib import Path
 
 import numpy as np
 
+from inerter.common.atomic import replace_file
 from inerter.common.errors import SimulationError
 from inerter.engine.simulation import Run, Stepper, jumps, output_grid
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
@@ -108,10 +108,7 @@ def _import_kernels():
         wrote = not (target.is_file() and target.read_bytes() == text)
         if wrote:
             folder.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
-            with os.fdopen(fd, "wb") as fh:
-                fh.write(text)
-            os.replace(tmp, target)          # atomic: concurrent processes see a whole file or none
+            replace_file(target, lambda part: part.write_bytes(text))   # concurrent processes see a whole file
     except OSError:
         from inerter.engine import kernels as compiled_kernels
         return compiled_kernels

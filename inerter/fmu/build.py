@@ -45,7 +45,6 @@ import argparse
 import hashlib
 import keyword
 import math
-import os
 import platform
 import re
 import shutil
@@ -64,6 +63,7 @@ from dataclasses import dataclass, field
 from inerter.fmu import native as fmu_native
 from inerter.fmu import payload as fmu_payload
 from inerter.common import locations
+from inerter.common.atomic import replace_file
 from inerter.common.errors import InerterError
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1]
@@ -450,18 +450,9 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
         _complete_model_description(built, final, units, digest, Path(tmp) / "shim",
                                     declarations(model, units))
         hash_path.unlink(missing_ok=True)
-        _put(fmu_path, lambda part: shutil.copyfile(final, part))
-    _put(hash_path, lambda part: part.write_text(digest + "\n"))
+        replace_file(fmu_path, lambda part: shutil.copyfile(final, part))
+    replace_file(hash_path, lambda part: part.write_text(digest + "\n"))
     return fmu_path, True
-
-
-def _put(target: Path, fill) -> None:
-    """Put a file at `target` in one step: `fill(part)` writes it beside `target`, then it is
-    renamed over it, so that a process reading `target` meanwhile (another build of the same
-    scene, a test worker beside this one) sees the old file or the new one, never a part."""
-    part = target.with_name(f".{target.name}.{os.getpid()}.part")
-    fill(part)
-    os.replace(part, target)
 
 
 def _run_pythonfmu(script: Path, dest: Path, project_files: list[Path]) -> Path:

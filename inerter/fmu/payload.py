@@ -15,8 +15,9 @@ from __future__ import annotations
 import ast
 import hashlib
 import json
-import os
 from pathlib import Path
+
+from inerter.common.atomic import replace_file
 
 PACKAGE = "inerter"
 PACKAGE_DIR = Path(__file__).resolve().parents[1]
@@ -73,29 +74,29 @@ def closure(seeds, package_dir: Path = PACKAGE_DIR) -> set[str]:
     return found
 
 
-#: package_files' answers in this process, by what they were read from (:func:`_sources_state`).
-_FOUND: dict[tuple, list[Path]] = {}
+#: package_files' answers in this process, by :func:`_sources_digest`.
+_FOUND: dict[str, list[Path]] = {}
 
 
 def package_files(slave_file: Path, package_dir: Path = PACKAGE_DIR) -> list[Path]:
     """The files of the package an FMU of the slave `slave_file` needs, sorted. Following the
-    imports parses every module (about a second); the answer is kept for the process while no
-    file of the package or the slave changes (size or modification time), since every build
-    and every check that an FMU is current asks again."""
-    state = _sources_state(Path(slave_file), Path(package_dir))
-    if state not in _FOUND:
+    imports parses every module (about half a second), and every build and every check that an
+    FMU is current asks: the answer is kept under a hash of the slave's and every module's bytes,
+    in this process and as a record in the kernels' cache folder (so a new process, as every
+    ``inerter run --model fmu`` is, reads it)."""
+    slave_file, package_dir = Path(slave_file), Path(package_dir)
+    digest = _sources_digest(slave_file, package_dir)
+    if digest not in _FOUND:
         _FOUND.clear()
-        _FOUND[state] = _package_files(Path(slave_file), Path(package_dir))
-    return list(_FOUND[state])
+        _FOUND[digest] = _recorded_package_files(slave_file, package_dir, digest)
+    return list(_FOUND[digest])
 
 
-def _package_files(slave_file: Path, package_dir: Path) -> list[Path]:
-    """:func:`package_files` from a record in the kernels' cache folder, named by a hash of the
-    slave's and every module's bytes (a first ask in a process, as every ``inerter run --model
-    fmu`` makes, then costs no parsing); where there is none, the imports followed and recorded."""
+def _recorded_package_files(slave_file: Path, package_dir: Path, digest: str) -> list[Path]:
+    """:func:`package_files` from its record, or the imports followed and recorded where there is none."""
     from inerter.engine.compiled import cache_root, kernel_sources
 
-    record = cache_root() / "fmu-files" / f"{_sources_digest(slave_file, package_dir)}.json"
+    record = cache_root() / "fmu-files" / f"{digest}.json"
     try:
         return [package_dir / name for name in json.loads(record.read_text(encoding="utf-8"))]
     except (OSError, ValueError):
@@ -104,11 +105,10 @@ def _package_files(slave_file: Path, package_dir: Path) -> list[Path]:
     files = {module_file(m, package_dir) for m in closure(seeds, package_dir)}
     files.update(package_dir / p.relative_to(PACKAGE_DIR) for p in kernel_sources())
     files = sorted(files)
+    names = json.dumps([f.relative_to(package_dir).as_posix() for f in files])
     try:                                  # a folder that cannot be written only costs the parsing again
         record.parent.mkdir(parents=True, exist_ok=True)
-        part = record.with_name(f".{record.name}.{os.getpid()}.part")
-        part.write_text(json.dumps([f.relative_to(package_dir).as_posix() for f in files]), encoding="utf-8")
-        os.replace(part, record)
+        replace_file(record, lambda part: part.write_text(names, encoding="utf-8"))
     except OSError:
         pass
     return files
@@ -121,11 +121,3 @@ def _sources_digest(slave_file: Path, package_dir: Path) -> str:
         data = path.read_bytes()
         h.update(path.relative_to(package_dir).as_posix().encode() + b"\0" + len(data).to_bytes(8, "little") + data)
     return h.hexdigest()
-
-
-def _sources_state(slave_file: Path, package_dir: Path) -> tuple:
-    """(path, size, modification time) of the slave and of every module of the package."""
-    def state(path: Path) -> tuple:
-        st = path.stat()
-        return str(path), st.st_size, st.st_mtime_ns
-    return (state(slave_file), *sorted(state(p) for p in package_dir.rglob("*.py")))

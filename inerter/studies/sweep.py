@@ -57,6 +57,7 @@ from typing import Any
 
 import numpy as np
 
+from inerter.common.atomic import replace_file
 from inerter.common.errors import InerterError, SceneError
 from inerter.common.options import output_path
 
@@ -284,9 +285,7 @@ def _scene_on_worker(task) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     copy = folder / path.name
     if not copy.is_file():
-        tmp = folder / f".{path.name}.{os.getpid()}"
-        tmp.write_bytes(task["scene_content"])
-        os.replace(tmp, copy)
+        replace_file(copy, lambda part: part.write_bytes(task["scene_content"]))
     return copy
 
 
@@ -577,12 +576,12 @@ class ResultsFile:
         return changed
 
     def _rewrite(self):
-        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
-        with open(tmp, "w", newline="", encoding="utf-8") as fh:
-            writer = csv.DictWriter(fh, self.columns, lineterminator="\n", extrasaction="ignore")
-            writer.writeheader()
-            writer.writerows(self.rows)
-        os.replace(tmp, self.path)
+        def write(part):
+            with open(part, "w", newline="", encoding="utf-8") as fh:
+                writer = csv.DictWriter(fh, self.columns, lineterminator="\n", extrasaction="ignore")
+                writer.writeheader()
+                writer.writerows(self.rows)
+        replace_file(self.path, write)
         if self._fh is not None:
             self._fh.close()
             self._fh = open(self.path, "a", newline="", encoding="utf-8")

@@ -56,8 +56,7 @@ class FmuDense:
         self.path, self.start_values, self.stop_time = str(fmu_path), dict(start_values), float(stop_time)
         self.result = result
         self._given = instance
-        self.grid = np.asarray(result.time, dtype=float)
-        self._times = self.grid.tolist()       # the same, for bisect (np.searchsorted of one scalar costs more)
+        self._times = np.asarray(result.time, dtype=float).tolist()   # a list: bisect, not np.searchsorted per scalar
         self._fmu = None
         self._saved = {}           # sample index → FMU state
         self._kept = []            # the indices of _saved, in increasing order (bisect)
@@ -70,7 +69,7 @@ class FmuDense:
 
     def values(self, name: str, times) -> np.ndarray:
         """The output `name` at `times` (any order, clipped to the run's interval)."""
-        t = np.clip(np.asarray(times, dtype=float).reshape(-1), self.grid[0], self.grid[-1])
+        t = np.clip(np.asarray(times, dtype=float).reshape(-1), self._times[0], self._times[-1])
         out = np.empty(len(t))
         reference = [self._variables()[name]]
         for i in np.argsort(t, kind="stable"):
@@ -116,7 +115,7 @@ class FmuDense:
                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName="dense output")
             fmu.instantiate()
         try:
-            fmu.setupExperiment(startTime=float(self.grid[0]), stopTime=self.stop_time)
+            fmu.setupExperiment(startTime=self._times[0], stopTime=self.stop_time)
             fmu.enterInitializationMode()
             apply_start_values(fmu, md, self.start_values)
             fmu.exitInitializationMode()
@@ -125,8 +124,8 @@ class FmuDense:
                 fmu.freeInstance()
                 shutil.rmtree(self._dir, ignore_errors=True)
             raise SimulationError(f"the FMU's dense output: a second instance of {self.path} could not be "
-                                  f"initialised ({exc})", float(self.grid[0])) from None
-        self._fmu, self._time = fmu, float(self.grid[0])
+                                  f"initialised ({exc})", self._times[0]) from None
+        self._fmu, self._time = fmu, self._times[0]
         self._keep(0)
 
     def _keep(self, k: int):
@@ -138,9 +137,9 @@ class FmuDense:
         off = ~((np.abs(got - want) <= SAMPLE_TOLERANCE * scale) | (np.isnan(got) & np.isnan(want)))
         if np.any(off):             # (a derived output without value there is NaN in both)
             worst = names[int(np.argmax(off))]
-            raise SimulationError(f"the FMU's dense output: a second instance stepped to t = {self.grid[k]:.9g} s "
+            raise SimulationError(f"the FMU's dense output: a second instance stepped to t = {self._times[k]:.9g} s "
                                   f"gives {worst} = {got[names.index(worst)]!r}, the run gave "
-                                  f"{want[names.index(worst)]!r}: it does not repeat the run", float(self.grid[k]))
+                                  f"{want[names.index(worst)]!r}: it does not repeat the run", self._times[k])
         self._saved[k] = self._fmu.getFMUstate()
         bisect.insort(self._kept, k)
 

@@ -33,13 +33,13 @@ oracle to check the engine's law against.
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import numpy as np
 
 from inerter.common.errors import MIN_LENGTH, SceneError, TerminalsMeet
 from inerter.oracle.jets import (
-    Jet, angular_velocity, cross, dot, jabs, jcos, jlogcosh, jpow, jsin, jsqrt, parts, point_position, position, seed)
+    Jet, angular_velocity, cross, dot, jabs, jcos, jlogcosh, jpow, jsin, jsqrt, parts, point_position, position, rotation,
+    seed, times)
 from inerter.oracle.rotational import COEFFICIENT_NAME as _ROTATIONAL_KINDS
 from inerter.oracle.rotational import OracleRotational, OracleSpatialRotational
 from inerter.oracle.series import SeriesConnection
@@ -373,12 +373,10 @@ class DeviceBodies:
         return [[e1[i], e2[i], u[i]] for i in range(3)]
 
     def _axis(self, coords, point_a, n):
-        """a₁ = A_a a̅₁ on Jets (point_position of a̅₁ on body a, less its origin)."""
+        """a₁ = A_a a̅₁ on Jets (:func:`~inerter.oracle.jets.rotation` of body a)."""
         if point_a.body < 0:
             return [Jet.constant(x, n) for x in self.mount]
-        tip = point_position(SimpleNamespace(body=point_a.body, local=self.mount), coords[point_a.body])
-        origin = point_position(SimpleNamespace(body=point_a.body, local=np.zeros(3)), coords[point_a.body])
-        return [a - o for a, o in zip(tip, origin)]
+        return times(rotation(coords[point_a.body]), self.mount)
 
     def terms(self, probe, q, v, frame_acc=None):
         """(M block, Q block, energy: kinetic T − ½ b L̇² and the parts' weight's potential −Σ m g·c)

@@ -134,12 +134,16 @@ def times(A, x):
     return out
 
 
+def placed(R, A, local):
+    """r = R + A ū: the point at ū in a body whose centre is R and rotation A (Jets or floats)."""
+    return [P + x for P, x in zip(R, times(A, local))]
+
+
 def point_position(point, coords):
-    """r = R + A ū (:func:`rotation`), on Jets (or floats); ū for the ground."""
+    """r = R + A ū (:func:`rotation`, :func:`placed`), on Jets (or floats); ū for the ground."""
     if point.body < 0:
         return list(point.local)
-    dim = len(point.local)
-    return [P + x for P, x in zip(coords[:dim], times(rotation(coords), point.local))]
+    return placed(coords[:len(point.local)], rotation(coords), point.local)
 
 
 def plain_coords(q, point):

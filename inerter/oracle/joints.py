@@ -36,7 +36,7 @@ import numpy as np
 
 from inerter.common.errors import SceneError
 from inerter.model.joints import perpendiculars
-from inerter.oracle.jets import Jet, angular_velocity, dot, jatan2, rotation, seed, times
+from inerter.oracle.jets import Jet, angular_velocity, dot, jatan2, placed, rotation, seed, times
 
 
 class BodyJets:
@@ -62,8 +62,7 @@ class BodyJets:
         local = p.local if local is None else local
         if p.body < 0:
             return [Jet.constant(x, self.n) for x in local]
-        R, A = self.frames[p.body]
-        return [x + y for x, y in zip(R, times(A, local))]
+        return placed(*self.frames[p.body], local)
 
     def vector(self, p, local):
         """A s̄: the vector `local` fixed in p's body (in the ground's frame for the ground)."""

@@ -258,7 +258,7 @@ struct instance {
     fmi2ComponentEnvironment environment;
     char *name;                           /* the instance name, copied */
     int logging_on;                       /* as the importer last set it */
-    fmi2CallbackFunctions *functions;     /* the original's: the importer's, logger filtered_log */
+    fmi2CallbackFunctions functions;      /* the original's: the importer's, logger filtered_log */
 };
 
 /* Whether a message of `status` reaches the importer (see the top): all of them with logging on,
@@ -477,20 +477,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         w->environment = functions->componentEnvironment;
         const fmi2CallbackFunctions filtered = {filtered_log, functions->allocateMemory,
                                                 functions->freeMemory, functions->stepFinished, w};
-        w->functions = malloc(sizeof filtered);
-        if (w->functions == NULL) {
-            free(w);
-            functions->logger(functions->componentEnvironment, instanceName, fmi2Error,
-                              "logStatusError", "fmi2Instantiate: out of memory");
-            return NULL;
-        }
-        memcpy(w->functions, &filtered, sizeof filtered);
+        memcpy(&w->functions, &filtered, sizeof filtered);    /* its members are const */
     }
     w->logging_on = loggingOn == fmi2True;
     inner = original.Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation,
-                                 w->functions, visible, fmi2True);
+                                 functions != NULL ? &w->functions : NULL, visible, fmi2True);
     if (inner == NULL) {
-        free(w->functions);
         free(w);
         return NULL;
     }
@@ -521,7 +513,6 @@ void fmi2FreeInstance(fmi2Component c)
 {
     if (handle != NULL && c != NULL) {
         original.FreeInstance(INNER(c));
-        free(((struct instance *)c)->functions);
         free(((struct instance *)c)->name);
         free(c);
     }

@@ -38,6 +38,7 @@ returns a kernel that calls the numpy path and :func:`integrate_compiled` runs
 from __future__ import annotations
 
 import copy
+from collections import namedtuple
 import functools
 import hashlib
 import math
@@ -906,7 +907,27 @@ def _dop853_coefficients():
     return module
 
 
+#: A running integration of kernels.rk_advance, its arrays in the order of kernels.RK_STATE: the
+#: header (RK_T, RK_H, ...), the state y and its derivative f, the state at the step's start and the
+#: step's dense-output coefficients.
+Running = namedtuple("Running", [name for name, _ in _k.RK_STATE]) if _k is not None else None
+
+#: Where the Runge-Kutta matrix A sits in a tableau (:func:`_tables`, in the order of kernels.TABLEAU).
+_TABLEAU_A = [name for name, _ in _k.TABLEAU].index("A") if _k is not None else None
+
+
+def _gaps_stale(scratch):
+    """Mark the terminals' gaps of kernels.cosim_scratch (gaps, z, fresh, keep) as not those of the
+    integration's state: the next step computes them at its start (fresh[0] = 0)."""
+    _gaps, _z, fresh, _keep = scratch
+    fresh[0] = 0.0
+
+
 def _tables(method):
+    """The tableau of `method` as the kernels take it, a plain tuple in the order of
+    kernels.TABLEAU: (A, B, C, E, E3, D, Pm), the Runge-Kutta matrix, weights and nodes, the error
+    weights (E3: DOP853's third-order ones), DOP853's dense-output matrix D and RK45's interpolation
+    matrix Pm (zeros where the method has none)."""
     if method not in _RK_TABLES:
         if method == "DOP853":
             d = _dop853_coefficients()
@@ -945,7 +966,8 @@ def _dense_keep(method, tables, ny, dense):
     (kernels.no_keep, its Python, as band_storage's)."""
     if not dense or tables is None:
         return _k.no_keep.py_func(ny)
-    rows = 8 if method == "DOP853" else 1 + tables[6].shape[1]
+    _A, _B, _C, _E, _E3, _D, Pm = tables
+    rows = 8 if method == "DOP853" else 1 + Pm.shape[1]
     room = 256
     kept = np.zeros(2, dtype=np.int64)
     kept[_k.KEPT_ON] = 1
@@ -1040,8 +1062,9 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
                            states[-1] if stopped is None else stopped, grid[k - 1], int(settings.max_steps))
         message = f"at t = {t_reached:.6g} s: the {settings.method} integrator failed: {why}"
     sol = None
-    if keep[2][_k.KEPT_COUNT] > 0:
-        sol = DenseOutput(_RK_CODE[settings.method], keep[0], keep[1], int(keep[2][_k.KEPT_COUNT]))
+    nodes, coeffs, kept = keep
+    if kept[_k.KEPT_COUNT] > 0:
+        sol = DenseOutput(_RK_CODE[settings.method], nodes, coeffs, int(kept[_k.KEPT_COUNT]))
     elif tables is not None and k > 1:
         sol = LocalDense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, tables)
     run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
@@ -1155,7 +1178,8 @@ class LocalDense:
                                           f"({failure_text(kernel, status, s.method, 0.0, y, t0)})", t0)
                 self.evaluations += int(evals)
                 y, t0 = seg_out[-1].copy(), t1
-        return DenseOutput(_RK_CODE[s.method], keep[0], keep[1], int(keep[2][_k.KEPT_COUNT]))
+        nodes, coeffs, kept = keep
+        return DenseOutput(_RK_CODE[s.method], nodes, coeffs, int(kept[_k.KEPT_COUNT]))
 
     def __call__(self, t):
         times = np.asarray(t, dtype=float)
@@ -1200,7 +1224,7 @@ class CompiledStepper(Stepper):
         self._need_acc = bool(signals.needs_accelerations)
         self._tables = _tables(settings.method) if settings.method in _RK_CODE else None
         self._work = (None if self._tables is None else
-                      _k.work_arrays(kernel.params, kernel.ny, _k.rk_stages(self._tables[0])))
+                      _k.work_arrays(kernel.params, kernel.ny, _k.rk_stages(self._tables[_TABLEAU_A])))
         self._monitor = _monitor(settings.method)
         self._jumps = np.array(getattr(mech, "discontinuities", ()), dtype=float)
         self._kinks = np.array(getattr(mech, "kinks", ()), dtype=float)
@@ -1208,7 +1232,7 @@ class CompiledStepper(Stepper):
         self._raw = np.empty(len(signal_layout(kernel.flat)))
         self._scratch = _k.cosim_scratch(kernel.params, kernel.ny)   # shared with the native steps' table
         self._values = None                   # the outputs at self.time, when the last step made them
-        self._rk = None                       # the running integration: [hdr, y, f, y_prev, dense]
+        self._rk = None                       # the running integration (Running)
         self._rk_inputs = None                # the inputs it runs with
         self._input_moved = False             # an input changed since the last step
         self._native = None                   # the arrays of native steps (native_table), for self._rk
@@ -1222,7 +1246,8 @@ class CompiledStepper(Stepper):
         hdr[_k.RK_H] = self.h or 0.0
         hdr[_k.RK_JUMP] = _k.next_jump(self._jumps, float(self.time))
         self._rk_inputs = self.kernel._inputs(self.inputs.copy())
-        return [hdr, np.array(self.y, dtype=float), np.empty(ny), np.array(self.y, dtype=float), np.zeros((7, ny))]
+        return Running(hdr, np.array(self.y, dtype=float), np.empty(ny), np.array(self.y, dtype=float),
+                       np.zeros((7, ny)))
 
     def set_input(self, name, value):
         old = self.inputs[self.input_index[name]]
@@ -1292,15 +1317,15 @@ class CompiledStepper(Stepper):
         order = self._order if self._order is not None else _NO_ORDER
         values = np.empty(len(order))
         rtol, atol, max_steps = self._tol
-        hdr = rk[0]
+        hdr = rk.hdr
         total_before = hdr[_k.RK_TOTAL]
-        self._scratch[2][0] = 0.0             # the terminals' gaps at rk's y: computed afresh here
+        _gaps_stale(self._scratch)            # the terminals' gaps at rk's y: computed afresh here
         status, signal_status = _k.cosim_step(
-            _RK_CODE[s.method], hdr, rk[1], rk[2], rk[3], rk[4], t_end, np.zeros(1), out, bound, rtol, atol,
+            _RK_CODE[s.method], hdr, rk.y, rk.f, rk.y_prev, rk.dense, t_end, np.zeros(1), out, bound, rtol, atol,
             max_steps, self._rk_inputs, float(s.alpha), kernel.params, self._tables, self._monitor,
             self._work, self._need_acc, self._raw, order, values, self._jumps, self._kinks, self._scratch)
         if status:
-            why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk[1], hdr[_k.RK_T], int(s.max_steps))
+            why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk.y, hdr[_k.RK_T], int(s.max_steps))
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(hdr[_k.RK_T]))
         self._rk = rk
         self._input_moved = False
@@ -1364,12 +1389,12 @@ class CompiledStepper(Stepper):
             native = self._native
             if native is None:
                 ny = self.kernel.ny
-                rk = [np.zeros(_k.RK_HEADER), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros((7, ny))]
+                rk = Running(np.zeros(_k.RK_HEADER), np.empty(ny), np.empty(ny), np.empty(ny), np.zeros((7, ny)))
                 native = self._native = self._native_arrays(
                     rk, np.empty(len(self.kernel._inputs(self.inputs))), 2,
                     (np.zeros((1, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros((1, 1)),
                      np.zeros((1, 1))), _k.work_arrays(self.kernel.params, ny, 1))
-            native["rk"][1][:] = self.y                 # RK4 restarts at every communication point
+            native["rk"].y[:] = self.y                  # RK4 restarts at every communication point
             native["inputs"][:] = self.kernel._inputs(self.inputs)
         else:
             if self._rk is None:
@@ -1379,21 +1404,21 @@ class CompiledStepper(Stepper):
             native = self._native
             if native is None or native["rk"] is not self._rk:
                 native = self._native = self._native_arrays(self._rk, self._rk_inputs, 1, self._tables, self._work)
-        self._scratch[2][0] = 0.0             # the first native step computes the gaps at rk's y
+        _gaps_stale(self._scratch)            # the first native step computes the gaps at rk's y
         clock = native["clock"]
         clock[_k.CLOCK_TIME] = self.time
         clock[_k.CLOCK_BOUND] = self.t_bound
         clock[_k.CLOCK_BUSY] = 0.0
         clock[_k.CLOCK_TOLERANCE] = tolerance
         clock[_k.CLOCK_TAKEN] = 0.0
-        native["steps"] = native["rk"][0][_k.RK_TOTAL]
+        native["steps"] = native["rk"].hdr[_k.RK_TOTAL]
         return native["table"]
 
     def _native_arrays(self, rk, inputs, samples, tables, work) -> dict:
         """The table of native_step over the integration's arrays `rk` ([hdr, y, f, y_prev, dense]),
         with `samples` rows of output states (2 for RK4: the step's start and end)."""
         s, kernel = self.settings, self.kernel
-        ny = len(rk[1])
+        ny = len(rk.y)
         clock = np.zeros(_k.CLOCK_SIZE)
         clock[_k.CLOCK_RTOL], clock[_k.CLOCK_ATOL] = float(s.rtol), float(s.atol)
         clock[_k.CLOCK_ALPHA], clock[_k.CLOCK_STEP] = float(s.alpha), float(s.step or 0.0)
@@ -1450,11 +1475,11 @@ class CompiledStepper(Stepper):
         taken = int(clock[_k.CLOCK_TAKEN])
         if not taken:
             return 0
-        hdr = native["rk"][0]
+        hdr = native["rk"].hdr
         self.time = float(clock[_k.CLOCK_TIME])
         self.t_bound = float(clock[_k.CLOCK_BOUND])
         if rk4:
-            self.y = native["rk"][1].copy()
+            self.y = native["rk"].y.copy()
         else:
             self.y = native["out"][0].copy()
             self.h = float(hdr[_k.RK_H])
@@ -1465,7 +1490,7 @@ class CompiledStepper(Stepper):
         return taken
 
     def get_state(self) -> bytes:
-        rk = None if self._rk is None else [a.copy() for a in self._rk]
+        rk = None if self._rk is None else Running(*(a.copy() for a in self._rk))
         return pickle.dumps((self.time, self.y.copy(), self.h, self.inputs.copy(), self.steps, self.t_bound, rk,
                              self._rk_inputs, self._input_moved, self.kernel.windings.copy()))
 
@@ -1476,7 +1501,7 @@ class CompiledStepper(Stepper):
         self.y = np.array(y)
         self.inputs = np.array(inputs)
         self._values = None
-        self._scratch[2][0] = 0.0             # the terminals' gaps are those of the state left behind
+        _gaps_stale(self._scratch)            # the terminals' gaps are those of the state left behind
 
 
 def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> str:

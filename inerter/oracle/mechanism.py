@@ -37,6 +37,7 @@ from inerter.common.errors import SceneError
 from inerter.model.mechanism import Mechanism
 from inerter.oracle import bodies
 from inerter.oracle.derivation import OracleElement
+from inerter.oracle.efficiency import resolve
 from inerter.oracle.jets import Jet
 from inerter.oracle.joints import BodyJets, OracleJoint
 
@@ -80,6 +81,9 @@ class OracleMechanism(Mechanism):
         #: numbered after the n velocity coordinates in the extended system.
         self.series = [e for e in self.stateful if getattr(e, "series", None) is not None]
         self._solved = None                 # (state, s̈) of the last extended solve
+        #: The elements with a screw efficiency, rigid or in series, whose modes each evaluation
+        #: resolves by trying every assignment (:meth:`accelerations`, :mod:`.efficiency`).
+        self.screws = [e for e in self.elements if getattr(e, "efficiency", None) is not None]
 
     # -- the bodies' inertia ---------------------------------------------------------------------
     def _bodies(self, scene):
@@ -218,12 +222,35 @@ class OracleMechanism(Mechanism):
         """Nothing: a series connection's forces are terms of its extended system
         (:meth:`extended_accelerations`), not forces at given states."""
 
-    # -- internal states -------------------------------------------------------------------------
+    # -- internal states and the screw efficiencies' modes ---------------------------------------
+    def accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
+        """(v̇, λ) of Eq. (33), extended by the series connections' coordinates; with screw
+        efficiencies, in the modes of the one assignment σ ∈ {±1}ⁿ whose solution's stroke
+        accelerations agree with it in sign (:func:`.efficiency.resolve`: one solve per assignment),
+        those modes left set for the outputs and the state rates at this state."""
+        if not self.screws:
+            return self._accelerations(t, q, v, inputs, alpha, z)
+        z = self.z0 if z is None else np.asarray(z, dtype=float)
+
+        def solve():
+            a, sdd, lam = self._solve_modes(t, q, v, inputs, alpha, z)
+            of = dict(zip(map(id, self.series), sdd))
+            return (a, sdd, lam), [e.stroke_acceleration(q, v, z, a, of.get(id(e), 0.0)) for e in self.screws]
+        a, sdd, lam = resolve(self.screws, solve, [e.name for e in self.screws], t)
+        if self.series:                     # the kept assignment's s̈, for the state rates
+            self._solved = (self._state_key(q, v, z, a), sdd.copy())
+        return a, lam
+
+    def _solve_modes(self, t, q, v, inputs, alpha, z):
+        """(v̇, s̈, λ) in the modes set: the extended system, or Eq. (33) where no series connection."""
+        if self.series:
+            return self.extended_accelerations(t, q, v, inputs, alpha, z)
+        a, lam = super()._accelerations(t, q, v, inputs, alpha, z)
+        return a, np.zeros(0), lam
+
     def _accelerations(self, t, q, v, inputs, alpha, z):
         """(v̇, λ): Eq. (33), extended by the series connections' coordinates where there are some."""
-        if not self.series:
-            return super()._accelerations(t, q, v, inputs, alpha, z)
-        a, sdd, lam = self.extended_accelerations(t, q, v, inputs, alpha, z)
+        a, _, lam = self._solve_modes(t, q, v, inputs, alpha, z)
         return a, lam
 
     def extended_accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
@@ -259,11 +286,7 @@ class OracleMechanism(Mechanism):
         to nothing but their element's dofs)."""
         if self._solved is not None and self._solved[0] == self._state_key(q, v, z, a):
             return self._solved[1]
-        out = np.zeros(len(self.series))
-        for k, e in enumerate(self.series):
-            Me, Qe = e.extended(q, v, z)
-            out[k] = (Qe[-1] - Me[-1, :-1] @ a[e.probe.dofs]) / Me[-1, -1]
-        return out
+        return np.array([e.series_acceleration(q, v, z, a) for e in self.series])
 
     def state_rates(self, q, v, z, a) -> np.ndarray:
         """ż at (q, v, z) and the accelerations a: (ṡ, s̈) of each series connection, then the
@@ -272,5 +295,5 @@ class OracleMechanism(Mechanism):
         dz = np.zeros(len(z))
         sdd = dict(zip(map(id, self.series), self._series_accelerations(q, v, z, a))) if self.series else {}
         for e in self.stateful:
-            e.state_rates(q, v, z, sdd.get(id(e), 0.0), dz)
+            e.state_rates(q, v, z, a, sdd.get(id(e), 0.0), dz)
         return dz

@@ -102,6 +102,7 @@ class DistanceProbe:
         self.labels = labels
         self.name = name
         self.dim = mech.dim
+        self._last = None                   # (state, evaluation) of the last call
         if mech.dim == 3 and mech.orientation.kind != "quaternion":
             raise SceneError(mech.scene.source, "scene.orientation", mech.orientation.kind,
                              "orientation = \"quaternion\" for the oracle", "the oracle differentiates "
@@ -122,6 +123,15 @@ class DistanceProbe:
         return coords, as_jet[:len(ra)], as_jet[len(ra):]
 
     def evaluate(self, q, v):
+        """(L as a Jet, ṙ) at (q, v) (s = ê·r for a fixed direction or a joint's axis), kept for the
+        next call at the same state: a screw efficiency's modes are tried by solving the same state's
+        system once per assignment (:func:`.efficiency.resolve`)."""
+        key = (np.asarray(q, dtype=float).tobytes(), np.asarray(v, dtype=float).tobytes())
+        if self._last is None or self._last[0] != key:
+            self._last = (key, self._evaluate(q, v))
+        return self._last[1]
+
+    def _evaluate(self, q, v):
         n = len(self.dofs)
         coords, ra, rb = self.terminals(q, v)
         r = [b - a for a, b in zip(ra, rb)]
@@ -486,8 +496,9 @@ class OracleElement:
         return self.efficiency is not None and self.series is None
 
     def b_eff(self, rate):
-        """b_eff = b (1 + λ(τ)) at the screw's stroke rate in the mode set, b without an efficiency."""
-        if self.efficiency is None:
+        """b_eff = b (1 + λ(τ)) at the screw's stroke rate in the mode set; b without an efficiency,
+        or with no mode set (None: the ideal inerter's term, which each mode scales)."""
+        if self.efficiency is None or self.mode is None:
             return self.coefficient
         return self.coefficient * self.efficiency.factor(self.mode, rate)
 
@@ -551,11 +562,27 @@ class OracleElement:
         its terms' sizes (the scale of its round-off, :func:`.efficiency.resolve`)."""
         if self.series is not None:
             u = self.stroke(q, v, z)
-            ga = float(u.g[:-1] @ a[self.probe.dofs])
-            return ga - sdd + u.d2, abs(ga) + abs(sdd) + abs(u.d2)
+            ga, size = self._along(u.g[:-1], a)
+            return ga - sdd + u.d2, size + abs(sdd) + abs(u.d2)
         L, rdot = self.probe.evaluate(q, v)
-        ga, rest = float(L.g @ a[self.probe.dofs]), self._rest(L, rdot)
-        return ga + rest, abs(ga) + abs(rest)
+        (ga, size), rest = self._along(L.g, a), self._rest(L, rdot)
+        return ga + rest, size + abs(rest)
+
+    def _along(self, g, a):
+        """(gᵀq̈, Σ|g_i q̈_i|) over its dofs."""
+        terms = g * a[self.probe.dofs]
+        return float(np.sum(terms)), float(np.sum(np.abs(terms)))
+
+    def screw_term(self, q, v, z):
+        """(G, ẍ₀, ẋ): the gradient of the screw's stroke rate ẋ over the velocities it touches (∇L,
+        or γ = [∇L; −1] over (its dofs, ṡ) in series), its stroke acceleration at zero accelerations
+        (:meth:`_rest`, or ü₀), and ẋ: its ideal inerter's term is b G Gᵀ in the mass matrix and
+        −b ẍ₀ G in the forces, the term a screw efficiency scales by 1 + λ(τ)."""
+        if self.series is not None:
+            u = self.stroke(q, v, z)
+            return u.g, u.d2, u.d1
+        L, rdot = self.probe.evaluate(q, v)
+        return L.g, self._rest(L, rdot), L.d1
 
     def screw(self, q, v, z, a, sdd=0.0):
         """(b λ(τ) ẍ ẋ, τ): the screw efficiency's lost power and direction in the mode set, at the

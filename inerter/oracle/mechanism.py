@@ -226,39 +226,47 @@ class OracleMechanism(Mechanism):
     def accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
         """(v̇, λ) of Eq. (33), extended by the series connections' coordinates; with screw
         efficiencies, in the modes of the one assignment σ ∈ {±1}ⁿ whose solution's stroke
-        accelerations agree with it in sign (:func:`.efficiency.resolve`: one solve per assignment),
-        those modes left set for the outputs and the state rates at this state."""
+        accelerations agree with it in sign (:func:`.efficiency.resolve`), those modes left set for
+        the outputs and the state rates at this state. The system is assembled once with each
+        screw's ideal inerter term b G Gᵀ, −b ẍ₀ G (G = ∇ẋ over its dofs, and its s in series); each
+        assignment adds λ(τ) times that term (b_eff = b (1 + λ)) and is solved."""
         if not self.screws:
             return self._accelerations(t, q, v, inputs, alpha, z)
         z = self.z0 if z is None else np.asarray(z, dtype=float)
+        for e in self.screws:
+            e.mode = None                   # the ideal inerter's term, b
+        K, rhs = self._system(t, q, v, inputs, alpha, z)
+        series = {id(e): self.n + k for k, e in enumerate(self.series)}
+        terms = [(e, np.append(e.probe.dofs, series[id(e)]) if id(e) in series else np.asarray(e.probe.dofs))
+                 + e.screw_term(q, v, z) for e in self.screws]
 
         def solve():
-            a, sdd, lam = self._solve_modes(t, q, v, inputs, alpha, z)
-            of = dict(zip(map(id, self.series), sdd))
-            return (a, sdd, lam), [e.stroke_acceleration(q, v, z, a, of.get(id(e), 0.0)) for e in self.screws]
-        a, sdd, lam = resolve(self.screws, solve, [e.name for e in self.screws], t)
-        if self.series:                     # the kept assignment's s̈, for the state rates
-            self._solved = (self._state_key(q, v, z, a), sdd.copy())
-        return a, lam
-
-    def _solve_modes(self, t, q, v, inputs, alpha, z):
-        """(v̇, s̈, λ) in the modes set: the extended system, or Eq. (33) where no series connection."""
-        if self.series:
-            return self.extended_accelerations(t, q, v, inputs, alpha, z)
-        a, lam = super()._accelerations(t, q, v, inputs, alpha, z)
-        return a, np.zeros(0), lam
+            Km, r = K.copy(), rhs.copy()
+            for e, idx, G, x0, rate in terms:
+                extra = e.b_eff(rate) - e.coefficient           # b λ(τ) in the mode set
+                Km[np.ix_(idx, idx)] += extra * np.outer(G, G)
+                r[idx] -= extra * x0 * G
+            x = self._solve(Km, r, t)
+            return x, [(float(G @ x[idx]) + x0, float(np.abs(G) @ np.abs(x[idx])) + abs(x0))
+                       for _, idx, G, x0, _ in terms]
+        x = resolve(self.screws, solve, [e.name for e in self.screws], t)
+        n, N = self.n, self.n + len(self.series)
+        self._solved = (self._state_key(q, v, z, x[:n]), x[n:N].copy())
+        return x[:n], x[N:]
 
     def _accelerations(self, t, q, v, inputs, alpha, z):
         """(v̇, λ): Eq. (33), extended by the series connections' coordinates where there are some."""
-        a, _, lam = self._solve_modes(t, q, v, inputs, alpha, z)
+        if not self.series:
+            return super()._accelerations(t, q, v, inputs, alpha, z)
+        a, sdd, lam = self.extended_accelerations(t, q, v, inputs, alpha, z)
         return a, lam
 
-    def extended_accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
-        """(v̇, s̈, λ) from one system: the bodies' and elements' M and Q (:meth:`assemble`), each
-        series element's block over (its dofs, its s) (:meth:`~.derivation.OracleElement.extended`:
-        [[b g gᵀ, −b g], [−b gᵀ, b]] and its forces) and the joints' rows, padded with zeros in
-        the s columns (a joint does not touch the series node), with Baumgarte's α as Eq. (33)."""
-        z = self.z0 if z is None else np.asarray(z, dtype=float)
+    def _system(self, t, q, v, inputs, alpha, z):
+        """(K, rhs) of the extended system in (v̇, s̈, λ): the bodies' and elements' M and Q
+        (:meth:`assemble`), each series element's block over (its dofs, its s)
+        (:meth:`~.derivation.OracleElement.extended`: [[b g gᵀ, −b g], [−b gᵀ, b]] and its forces) and
+        the joints' rows, padded with zeros in the s columns (a joint does not touch the series node),
+        with Baumgarte's α as Eq. (33)."""
         n, N, m = self.n, self.n + len(self.series), self.m
         M, Q = self.assemble(t, q, v, inputs, z=z)
         K, rhs = np.zeros((N + m, N + m)), np.zeros(N + m)
@@ -272,7 +280,13 @@ class OracleMechanism(Mechanism):
             C, Cq, gamma = self.constraints(q, v)
             K[:n, N:], K[N:, :n] = Cq.T, Cq
             rhs[N:] = gamma - 2.0 * alpha * (Cq @ v) - alpha * alpha * C     # Baumgarte
-        x = self._solve(K, rhs, t)
+        return K, rhs
+
+    def extended_accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
+        """(v̇, s̈, λ) from one system (:meth:`_system`), in the screw efficiencies' modes set."""
+        z = self.z0 if z is None else np.asarray(z, dtype=float)
+        n, N = self.n, self.n + len(self.series)
+        x = self._solve(*self._system(t, q, v, inputs, alpha, z), t)
         self._solved = (self._state_key(q, v, z, x[:n]), x[n:N].copy())
         return x[:n], x[n:N], x[N:]
 

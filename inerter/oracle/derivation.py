@@ -17,6 +17,10 @@ flywheel or channel fluid, its friction and channel damping from their dissipati
 end stops from their potential and Hunt-Crossley dissipation function. With series compliance
 (and backlash) the inerter strokes with u = L − s, s one more coordinate of the element
 (:mod:`.series`, :meth:`OracleElement.extended`); its flywheel, friction and channel then act on u̇.
+A screw efficiency (:mod:`.efficiency`) scales the inerter's term, b ∇ẋ∇ẋᵀ in the mass matrix and
+−b ẍ₀ ∇ẋ in the forces (ẋ = L̇, or u̇ in series), by 1 + λ(τ) in the element's mode σ
+(:attr:`OracleElement.mode`), which the mechanism's solve sets by trying every assignment; the screw's
+loss b λ ẍ ẋ joins p_loss.
 An error in either the fast path or this module shows up as a disagreement between the two.
 
 Rotational elements (:mod:`inerter.oracle.rotational`) are derived in the same way from their angle

@@ -23,6 +23,11 @@ and its elements from :class:`~.derivation.OracleElement`.
   coordinate (:mod:`.series`); Lagrange's equations on (v, ṡ) with the joints' rows give one system
   for (v̇, s̈, λ) (:meth:`OracleMechanism.extended_accelerations`), ż = (ṡ, s̈, p_loss).
 
+* Screw efficiencies (:mod:`.efficiency`): the system is assembled once with each efficient
+  element's ideal inerter term and solved once per assignment of their modes σ ∈ {±1}ⁿ, each
+  adding λ(τ) times those terms; the assignment its solution agrees with is kept
+  (:meth:`OracleMechanism.accelerations`).
+
 * The bodies' mass matrix, velocity forces and energy (:mod:`.bodies`): from each body's kinetic
   energy T on Jets, M's columns as ∂T/∂v at unit velocities, −ω̄ × ∂T/∂ω̄ on a 3D body's ω̄
   (Boltzmann–Hamel), and T itself with the weight's V in the mechanism's energy.

@@ -115,4 +115,4 @@ def test_the_oracles_refusal_names_the_file_and_the_field(scene, capsys, tmp_pat
     assert "expected orientation = \"quaternion\" for the oracle" in message
     assert main(["run", str(path), "--model", "oracle", "--set", "scene.orientation=euler_zxz",
                  "--out", str(tmp_path)]) == 2
-    one_line_error(capsys, f"{scene}.toml: scene.orientation: ", "(got euler_zxz")
+    one_line_error(capsys, f"{scene}.toml: scene.orientation: ", "(got 'euler_zxz'")

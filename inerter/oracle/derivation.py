@@ -327,7 +327,8 @@ class OracleDevice:
         """The device's outputs, in the order its scene element names them (x: the element's states;
         `screw`: the screw efficiency's loss and direction τ, :meth:`OracleElement.screw`)."""
         ud = self.stroke_rate(rate, x)
-        values = {"mode": 0.5 * (1.0 + screw[1]), "w_flywheel": self.ratio * ud if self.flywheel is not None else 0.0,
+        values = {"mode": 0.5 * (1.0 + screw[1]),
+                  "w_flywheel": self.ratio * ud if self.flywheel is not None else 0.0,
                   "f_friction": self._slope(lambda y: self._parts(y)[0], ud),
                   "f_fluid": self._slope(lambda y: self._parts(y)[1], ud),
                   "f_stop": self.contact(L, rate)[0], "p_loss": self.loss(L, rate, x, screw[0]),
@@ -541,8 +542,8 @@ class OracleElement:
     def extended(self, q, v, z):
         """(mass block, generalised force) of the series connection over (its dofs, s), from the
         extended Lagrangian of :mod:`.series`: T_I = ½ b u̇² gives b γγᵀ and −b ü₀ γ; R's D(u̇)
-        −∂D/∂(v, ṡ) (D on the Jet of u̇, gradient γ); V and R's c_c ṡ² the −F on s. A screw efficiency scales T_I's terms by 1 + λ(τ) (τ of u̇ and the
-        mode set)."""
+        −∂D/∂(v, ṡ) (D on the Jet of u̇, gradient γ); V and R's c_c ṡ² the −F on s. A screw
+        efficiency scales T_I's terms by 1 + λ(τ) (τ of u̇ and the mode set)."""
         u = self.stroke(q, v, z)
         b = self.b_eff(u.d1)                                    # b_eff on u̇ with a screw efficiency
         M = b * np.outer(u.g, u.g)
@@ -561,21 +562,11 @@ class OracleElement:
         return (Qe[-1] - Me[-1, :-1] @ a[self.probe.dofs]) / Me[-1, -1]
 
     def stroke_acceleration(self, q, v, z, a, sdd=0.0):
-        """(ẍ, scale): the screw's stroke acceleration at the accelerations `a` (and s̈ = `sdd` in
-        series), L̈ = ∇L·q̈ + q̇ᵀ∇²Lq̇ (Eq. 9; Eq. 8's less |ṙ⊥|²/L) or ü = L̈ − s̈, and the sum of
-        its terms' sizes (the scale of its round-off, :func:`.efficiency.resolve`)."""
-        if self.series is not None:
-            u = self.stroke(q, v, z)
-            ga, size = self._along(u.g[:-1], a)
-            return ga - sdd + u.d2, size + abs(sdd) + abs(u.d2)
-        L, rdot = self.probe.evaluate(q, v)
-        (ga, size), rest = self._along(L.g, a), self._rest(L, rdot)
-        return ga + rest, size + abs(rest)
-
-    def _along(self, g, a):
-        """(gᵀq̈, Σ|g_i q̈_i|) over its dofs."""
-        terms = g * a[self.probe.dofs]
-        return float(np.sum(terms)), float(np.sum(np.abs(terms)))
+        """The screw's stroke acceleration at the accelerations `a` (and s̈ = `sdd` in series):
+        L̈ = ∇L·q̈ + q̇ᵀ∇²Lq̇ (Eq. 9; Eq. 8's less |ṙ⊥|²/L), or ü = L̈ − s̈."""
+        G, x0, _ = self.screw_term(q, v, z)
+        accel = float(G[:len(self.probe.dofs)] @ a[self.probe.dofs]) + x0
+        return accel - sdd if self.series is not None else accel
 
     def screw_term(self, q, v, z):
         """(G, ẍ₀, ẋ): the gradient of the screw's stroke rate ẋ over the velocities it touches (∇L,
@@ -593,11 +584,7 @@ class OracleElement:
         accelerations `a` (s̈ = `sdd` in series); (0, 1) without an efficiency."""
         if self.efficiency is None:
             return 0.0, 1.0
-        if self.series is not None:
-            rate = self.stroke(q, v, z).d1
-        else:
-            rate = self.probe.evaluate(q, v)[0].d1
-        accel = self.stroke_acceleration(q, v, z, a, sdd)[0]
+        rate, accel = self.screw_term(q, v, z)[2], self.stroke_acceleration(q, v, z, a, sdd)
         return (self.efficiency.loss(self.coefficient, self.mode, rate, accel),
                 self.efficiency.direction(self.mode, rate))
 

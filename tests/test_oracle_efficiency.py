@@ -3,7 +3,7 @@ forms of tests/test_device_efficiency.py (the 1-DOF mass on a spring with such a
 3D, the exact switch; in series with a spring, against the explicit ODE), its energy balance with
 the efficiency's loss, its resolution of the modes by trying every assignment, the engine against
 it where the scenes of tests/test_engine_vs_oracle.py leave a combination out (2D rigid with v_s > 0,
-2D series with the exact switch), and what it still refuses.
+2D series and 3D rigid with the exact switch), and what it still refuses.
 
 References: the closed form `efficiency_closed_form`, the explicit ODE `series_reference` (both
 tests/test_device_efficiency.py), the initial energy, and the definition written out in a test.
@@ -139,23 +139,25 @@ def resolve_modes(screws, solve):
     return tuple(float(x) for x in solution[0]), tuple(s.mode for s in screws)
 
 
-@pytest.mark.parametrize("series", [False, True], ids=["rigid-vs", "series-switch"])
-def test_the_engine_equals_the_oracle_where_the_scenes_leave_a_combination_out(tmp_path, series):
+@pytest.mark.parametrize("dim, series, vs", [(2, False, 1e-2 * PEAK_SPEED), (2, True, 0.0), (3, False, 0.0)],
+                         ids=["2d-rigid-vs", "2d-series-switch", "3d-rigid-switch"])
+def test_the_engine_equals_the_oracle_where_the_scenes_leave_a_combination_out(tmp_path, dim, series, vs):
     """The engine (compiled kernels, flip-and-resolve; in series its explicit σ = sign(F − F_d))
-    against the oracle (every assignment tried) on the 1-DOF 2D scenes, rigid with v_s = 1e-2 of the
-    peak speed and in series with the exact switch: q̈, ż and every output (E.mode, E.p_loss with
-    the screw's loss) at 40 states, positions and velocities random about the initial ones and the
-    series states random (mm, m/s), to 1e-12 relative to 1 + |value| (test_engine_vs_oracle's
-    TOL_ACC and TOL_OUT; E.mode over its slope 1/(2 v_s) there)."""
+    against the oracle (every assignment tried) on the 1-DOF scenes, in 2D rigid with v_s = 1e-2 of
+    the peak speed and in series with the exact switch, in 3D rigid with the exact switch: q̈, ż and
+    every output (E.mode, E.p_loss with the screw's loss) at 40 states, positions (in 3D quaternions,
+    off unit length) and velocities random about the initial ones and the series states random (mm,
+    m/s), to 1e-12 relative to 1 + |value| (test_engine_vs_oracle's TOL_ACC and TOL_OUT; E.mode over
+    its slope 1/(2 v_s) there)."""
     from inerter.engine import compiled
-    model = _series(tmp_path, vs=0.0) if series else _oscillator(tmp_path, vs=1e-2 * PEAK_SPEED, loss=True)
+    model = _series(tmp_path, vs=vs) if series else _oscillator(tmp_path, dim, vs=vs or None, loss=True)
     oracle = model.oracle()
     kernel = compiled.compile_mechanism(model.mechanism)
     assert kernel.compiled
     order = kernel.signal_order(model.signals)
     scale = np.ones(len(model.signals.names))
-    if not series:
-        scale[model.signals.names.index("inerter.mode")] = 0.5 / (1e-2 * PEAK_SPEED)
+    if vs:
+        scale[model.signals.names.index("inerter.mode")] = 0.5 / vs
     mech, omech = model.mechanism, oracle.mechanism
     rng = np.random.default_rng(11)
     modes = set()

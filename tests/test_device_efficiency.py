@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import inerter
-from inerter.common.errors import InerterError, SceneError, SimulationError
+from inerter.common.errors import SceneError, SimulationError
 from inerter.common.inlined import compiled_copy
 from inerter.elements import device as dev
 from inerter.elements import layout
@@ -234,7 +234,7 @@ def test_peaks_and_their_times_follow_the_two_quarter_periods(tmp_path, dim):
 
 
 def test_the_numpy_path_resolves_the_mode_as_the_closed_form(tmp_path):
-    """Closed form (efficiency_closed_form; the oracle does not take a screw efficiency): the numpy
+    """Closed form (efficiency_closed_form; the oracle against it: tests/test_oracle_efficiency.py): the numpy
     path (scipy's DOP853 on the readable evaluators, Mechanism.accelerations solving again where
     the mode flips) follows it over 1 s (two turnarounds) to 1e-7 x0 at rtol 1e-10; its mode is
     1 while |x| falls and 0 while it grows (wherever |ẋ| > 1e-6 m/s), and its loss is the law's,
@@ -433,19 +433,19 @@ def test_efficiency_errors_name_the_field_value_and_expectation(tmp_path, device
     assert field in text and expected in text and "\n" not in text.strip(), text
 
 
-def test_efficiency_with_a_mount_is_refused_and_the_oracle_and_linearisation_refuse_it(tmp_path):
-    """A mount beside it is a scene error naming device.mount; the oracle, which derives a device
-    from energies and a dissipation function, and the linearisation refuse it with the reason."""
+def test_efficiency_with_a_mount_is_refused_and_the_linearisation_refuses_it(tmp_path):
+    """A mount beside it is a scene error naming device.mount; the linearisation, which needs a
+    smooth mass matrix, refuses it with the reason, on the engine's mechanism and on the oracle's
+    (which derives the efficiency itself: tests/test_oracle_efficiency.py)."""
     text = _with_device(DOUBLE_PENDULUM.read_text(encoding="utf-8"),
                         "[DEVICE.efficiency]\nforward = 0.9\nbackward = 0.8\n[DEVICE.mount]\naxis = [0, 0, 1]\n")
     with pytest.raises(SceneError, match="device.mount"):
         _load(tmp_path, text)
     model = _oscillator(tmp_path)
-    with pytest.raises(InerterError, match="device.efficiency"):
-        model.oracle().simulate(stop_time=0.1, metrics=False)
     from inerter.engine.equilibrium import linearize
-    with pytest.raises(SimulationError, match="efficiency"):
-        linearize(model.mechanism)
+    for mech in (model.mechanism, model.oracle().mechanism):
+        with pytest.raises(SimulationError, match="efficiency"):
+            linearize(mech)
 
 
 def test_describe_and_outputs_list_the_efficiency(tmp_path):

@@ -1,6 +1,7 @@
 """The oracle's inerter device with internal states (inerter.oracle.series): its free series
 oscillator against the closed form of the 2-DOF system, its energy balance with the dissipated
-energy as a state, backlash's unilateral contact against the definition, and the refusals it keeps.
+energy as a state, backlash's unilateral contact against the definition, and the refusals it keeps
+(its screw efficiency: tests/test_oracle_efficiency.py).
 
 References: the closed form `two_dof` (tests/test_device_states.py: the modes of the linear 2-DOF
 system), the initial energy, and the device's definitions written out in each test.
@@ -83,25 +84,35 @@ def test_backlash_contact_is_unilateral_as_defined():
 
 
 def test_what_the_oracle_does_not_derive_is_refused_by_name():
-    """A screw efficiency (b_eff depends on the sign of L̈: no energy or dissipation function) is
-    still refused, by a one-line error naming device.efficiency."""
-    with pytest.raises(inerter.InerterError, match="device.efficiency") as err:
-        inerter.load(ROOT / "tests" / "data" / "device_combo_efficiency_series_3d.toml").oracle()
-    assert "\n" not in str(err.value)
+    """A mount beside a compliance or beside a screw efficiency (the mount's gyroscopic terms spin
+    the flywheel with L̇ and b; the series connection turns it with u̇, the efficiency scales b to
+    b_eff): the scene reader refuses both (check_device, for the engine too), and the oracle's device,
+    built from such a device directly, refuses each by a one-line error naming the field."""
+    from inerter.oracle.derivation import OracleDevice
+    from test_device import _device
+    fly, mount = dict(inertia=1e-4, lead=0.01), dict(axis=(0.0, 0.0, 1.0))
+    for extra, field in ((dict(compliance=dict(stiffness=1e4)), "mount"),
+                         (dict(efficiency=dict(forward=0.9, backward=0.8)), "efficiency")):
+        with pytest.raises(inerter.SceneError) as err:
+            OracleDevice(_device(flywheel=fly, mount=mount, **extra), "scene.toml", "dev")
+        assert str(err.value).startswith(f"scene.toml: elements.dev.device.{field}: "), str(err.value)
+        assert "\n" not in str(err.value)
 
 
-@pytest.mark.parametrize("scene, element", [("device_combo_efficiency_series_3d", "dev"),
-                                            ("device_combo_ground_slider_2d", "dev")])
-def test_the_oracles_refusal_names_the_file_and_the_field(scene, element, capsys, tmp_path):
-    """As every scene error: the file, the element's field, the value and what was expected (through
-    the API and `inerter run --model oracle`, which exits with status 2 and that line)."""
+@pytest.mark.parametrize("scene", ["device_combo_efficiency_series_3d", "device_combo_efficiency_pair_3d"])
+def test_the_oracles_refusal_names_the_file_and_the_field(scene, capsys, tmp_path):
+    """The oracle takes a screw efficiency now (inerter.oracle.efficiency); what it still refuses of
+    such a scene, a 3D scene in Z-X-Z Euler angles (its Jets are written on quaternions), is refused as
+    every scene error: the file, the field, the value and what was expected (through the API and
+    `inerter run --model oracle`, which exits with status 2 and that line)."""
     from inerter.cli import main
     from conftest import one_line_error
     path = ROOT / "tests" / "data" / f"{scene}.toml"
     with pytest.raises(inerter.SceneError) as err:
-        inerter.load(path).oracle()
+        inerter.load(path, **{"scene.orientation": "euler_zxz"}).oracle()
     message = str(err.value)
-    assert message.startswith(f"{path}: elements.{element}.device.efficiency: ")
-    assert "got {'forward': " in message and "expected a device without a screw efficiency" in message
-    assert main(["run", str(path), "--model", "oracle", "--out", str(tmp_path)]) == 2
-    one_line_error(capsys, f"{scene}.toml: elements.{element}.device.efficiency: ", "(got {'forward': ")
+    assert message.startswith(f"{path}: scene.orientation: ")
+    assert "expected orientation = \"quaternion\" for the oracle" in message
+    assert main(["run", str(path), "--model", "oracle", "--set", "scene.orientation=euler_zxz",
+                 "--out", str(tmp_path)]) == 2
+    one_line_error(capsys, f"{scene}.toml: scene.orientation: ", "(got 'euler_zxz'")

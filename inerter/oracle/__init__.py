@@ -11,8 +11,11 @@ V = −Σ m g·R and the ground motion as the bodies' d'Alembert forces −m a_g
 :mod:`.mechanism`). An inerter device's internal states (series compliance,
 backlash, dissipated energy) come from an extended Lagrangian in which the series node's
 deflection s is one more coordinate (:mod:`.series`), solved with the rest in one system for
-(v̇, s̈, λ) on the engine's layout of z; a screw efficiency, which no energy or dissipation
-function gives, is refused. The coordinates, the bodies' mass matrix and gyroscopic term and the solution
+(v̇, s̈, λ) on the engine's layout of z. A screw efficiency scales the inerter's Lagrange term (from
+T = ½ b ẋ², ẋ = L̇, or u̇ in series) by 1 + λ(τ), written from the definition (:mod:`.efficiency`),
+its loss b λ ẍ ẋ joining the dissipated power; its mode σ = sign(ẍ) is the one assignment of the
+scene's efficient elements' signs, of all 2ⁿ tried, that its own solution agrees with (a mount
+beside it is refused). The coordinates, the bodies' mass matrix and gyroscopic term and the solution
 of Eq. (33) are the model's Mechanism's. A scene with an element of a kind the oracle has no
 definition of is refused (:func:`require_definitions`), and so is a 3D scene with joints or point
 forces in Z-X-Z Euler angles (the Jets are written on quaternions).

@@ -17,6 +17,10 @@ flywheel or channel fluid, its friction and channel damping from their dissipati
 end stops from their potential and Hunt-Crossley dissipation function. With series compliance
 (and backlash) the inerter strokes with u = L − s, s one more coordinate of the element
 (:mod:`.series`, :meth:`OracleElement.extended`); its flywheel, friction and channel then act on u̇.
+A screw efficiency (:mod:`.efficiency`) scales the inerter's term, b ∇ẋ∇ẋᵀ in the mass matrix and
+−b ẍ₀ ∇ẋ in the forces (ẋ = L̇, or u̇ in series), by 1 + λ(τ) in the element's mode σ
+(:attr:`OracleElement.mode`), which the mechanism's solve sets by trying every assignment; the screw's
+loss b λ ẍ ẋ joins p_loss.
 An error in either the fast path or this module shows up as a disagreement between the two.
 
 Rotational elements (:mod:`inerter.oracle.rotational`) are derived in the same way from their angle
@@ -42,6 +46,7 @@ from inerter.oracle.jets import (
     seed, times)
 from inerter.oracle.rotational import COEFFICIENT_NAME as _ROTATIONAL_KINDS
 from inerter.oracle.rotational import OracleRotational, OracleSpatialRotational
+from inerter.oracle.efficiency import ScrewEfficiency
 from inerter.oracle.series import SeriesConnection
 
 #: The translational kinds :class:`OracleElement` derives, each with its coefficient's key; with
@@ -101,6 +106,7 @@ class DistanceProbe:
         self.labels = labels
         self.name = name
         self.dim = mech.dim
+        self._last = None                   # (state, evaluation) of the last call
         if mech.dim == 3 and mech.orientation.kind != "quaternion":
             raise SceneError(mech.scene.source, "scene.orientation", mech.orientation.kind,
                              "orientation = \"quaternion\" for the oracle", "the oracle differentiates "
@@ -121,6 +127,15 @@ class DistanceProbe:
         return coords, as_jet[:len(ra)], as_jet[len(ra):]
 
     def evaluate(self, q, v):
+        """(L as a Jet, ṙ) at (q, v) (s = ê·r for a fixed direction or a joint's axis), kept for the
+        next call at the same state: a screw efficiency's modes are tried by solving the same state's
+        system once per assignment (:func:`.efficiency.resolve`)."""
+        key = (np.asarray(q, dtype=float).tobytes(), np.asarray(v, dtype=float).tobytes())
+        if self._last is None or self._last[0] != key:
+            self._last = (key, self._evaluate(q, v))
+        return self._last[1]
+
+    def _evaluate(self, q, v):
         n = len(self.dofs)
         coords, ra, rb = self.terminals(q, v)
         r = [b - a for a, b in zip(ra, rb)]
@@ -169,21 +184,20 @@ class OracleDevice:
       more coordinate; T(u̇), D(u̇) on the inerter's own stroke rate, the stops still on L.
     * Dissipated energy: ż = p_loss, the power of D, of the contacts and of the series connection
       (:meth:`loss`).
-    A screw efficiency is refused (b_eff switches with the sign of L̈: no energy or dissipation
-    function gives it), and so is a mount beside a compliance.
+    * Screw efficiency (:mod:`.efficiency`): the inerter's term scaled by 1 + λ(τ) on the stroke
+      the screw turns with (L, or u in series), its loss b λ ẍ ẋ part of the dissipated power.
+    A mount beside a compliance or beside an efficiency is refused.
     """
 
     def __init__(self, device, source: str = "the oracle", element: str = "inerter"):
         """`source` (the scene file) and `element` (the element's name) name what is refused."""
         self.spec = device
         field = f"elements.{element}.device"
-        if device.has("efficiency"):
+        if device.has("efficiency") and device.has("mount"):
             raise SceneError(source, f"{field}.efficiency", device.values("efficiency"),
-                             "a device without a screw efficiency for the oracle (check such a scene against "
-                             "closed forms)",
-                             "the oracle derives an inerter device from its energies and dissipation function; "
-                             "device.efficiency makes b depend on the sign of L̈ (and on L̇, switched or "
-                             "smoothed), which no such function gives")
+                             "a device with a screw efficiency or a mount for the oracle, not both",
+                             "the mount's gyroscopic terms spin the flywheel with b; the efficiency scales the "
+                             "inerter's term to b_eff: no derivation of both together")
         if device.has("compliance") and device.has("mount"):
             raise SceneError(source, f"{field}.mount", device.values("mount"),
                              "a device with a mount or a compliance for the oracle, not both",
@@ -200,6 +214,8 @@ class OracleDevice:
         self.friction = device.values("friction") if device.has("friction") else None
         self.stops = device.values("end_stops") if device.has("end_stops") else None
         self.fluid = device.values("fluid") if device.has("fluid") else None
+        #: The screw efficiency (:class:`.efficiency.ScrewEfficiency`), or None.
+        self.efficiency = ScrewEfficiency(device.values("efficiency")) if device.has("efficiency") else None
         if self.flywheel is not None:
             lead = self.flywheel.get("lead")
             self.ratio = 2.0 * math.pi / lead if lead is not None else self.flywheel["ratio"]
@@ -299,20 +315,23 @@ class OracleDevice:
             return self.series.force(x[0], x[1])[0] + self.contact(L, rate)[0]
         return self._slope(self.dissipation, rate) + self.contact(L, rate)[0]
 
-    def loss(self, L, rate, x):
-        """The dissipated power (W): ∂D/∂u̇ · u̇ (D's power on the stroke it resists), the contact's
-        and the series connection's (:meth:`.series.SeriesConnection.loss`)."""
+    def loss(self, L, rate, x, screw=0.0):
+        """The dissipated power (W): ∂D/∂u̇ · u̇ (D's power on the stroke it resists), the contact's,
+        the series connection's (:meth:`.series.SeriesConnection.loss`) and `screw`, the screw
+        efficiency's b λ ẍ ẋ (:meth:`OracleElement.screw`)."""
         ud = self.stroke_rate(rate, x)
-        p = self._slope(self.dissipation, ud) * ud + self.contact(L, rate)[1]
+        p = self._slope(self.dissipation, ud) * ud + self.contact(L, rate)[1] + screw
         return p + (self.series.loss(x[0], x[1]) if self.series is not None else 0.0)
 
-    def outputs(self, L, rate, x):
-        """The device's outputs, in the order its scene element names them (x: the element's states)."""
+    def outputs(self, L, rate, x, screw=(0.0, 1.0)):
+        """The device's outputs, in the order its scene element names them (x: the element's states;
+        `screw`: the screw efficiency's loss and direction τ, :meth:`OracleElement.screw`)."""
         ud = self.stroke_rate(rate, x)
-        values = {"w_flywheel": self.ratio * ud if self.flywheel is not None else 0.0,
+        values = {"mode": 0.5 * (1.0 + screw[1]),
+                  "w_flywheel": self.ratio * ud if self.flywheel is not None else 0.0,
                   "f_friction": self._slope(lambda y: self._parts(y)[0], ud),
                   "f_fluid": self._slope(lambda y: self._parts(y)[1], ud),
-                  "f_stop": self.contact(L, rate)[0], "p_loss": self.loss(L, rate, x),
+                  "f_stop": self.contact(L, rate)[0], "p_loss": self.loss(L, rate, x, screw[0]),
                   "e_loss": x[-1] if self.keeps_loss else 0.0}
         if self.series is not None:
             values.update(s_series=x[0], engaged=self.series.force(x[0], x[1])[1])
@@ -470,6 +489,23 @@ class OracleElement:
         self.series = self.device.series if self.device is not None else None
         self.n_states = self.device.n_states if self.device is not None else 0
         self.states = slice(0, 0)
+        #: The screw efficiency (:mod:`.efficiency`), or None, and its mode σ = sign of the screw's
+        #: stroke acceleration (L̈, or ü in series), which the mechanism's solve sets
+        #: (:func:`.efficiency.resolve`).
+        self.efficiency = self.device.efficiency if self.device is not None else None
+        self.mode = 1.0
+
+    def efficient(self) -> bool:
+        """Whether it has a screw efficiency on its terminal distance (rigid: its b_eff is in the mass
+        matrix; in series the efficiency acts on the inerter's own stroke, a coordinate of its own)."""
+        return self.efficiency is not None and self.series is None
+
+    def b_eff(self, rate):
+        """b_eff = b (1 + λ(τ)) at the screw's stroke rate in the mode set; b without an efficiency,
+        or with no mode set (None: the ideal inerter's term, which each mode scales)."""
+        if self.efficiency is None or self.mode is None:
+            return self.coefficient
+        return self.coefficient * self.efficiency.factor(self.mode, rate)
 
     def _rest(self, L, rdot):
         """L̈ at q̈ = 0 under the scene's law: q̇ᵀ∇²Lq̇ (Eq. 9), less |ṙ⊥|²/L without the
@@ -489,6 +525,7 @@ class OracleElement:
             return 0.0, b * L.d1                                # c dL/dt, Eq. (6)
         if self.series is not None:
             return 0.0, 0.0
+        b = self.b_eff(L.d1)                                    # b_eff with a screw efficiency
         return b, b * self._rest(L, rdot)
 
     def _x(self, z):
@@ -505,9 +542,10 @@ class OracleElement:
     def extended(self, q, v, z):
         """(mass block, generalised force) of the series connection over (its dofs, s), from the
         extended Lagrangian of :mod:`.series`: T_I = ½ b u̇² gives b γγᵀ and −b ü₀ γ; R's D(u̇)
-        −∂D/∂(v, ṡ) (D on the Jet of u̇, gradient γ); V and R's c_c ṡ² the −F on s."""
+        −∂D/∂(v, ṡ) (D on the Jet of u̇, gradient γ); V and R's c_c ṡ² the −F on s. A screw
+        efficiency scales T_I's terms by 1 + λ(τ) (τ of u̇ and the mode set)."""
         u = self.stroke(q, v, z)
-        b = self.coefficient
+        b = self.b_eff(u.d1)                                    # b_eff on u̇ with a screw efficiency
         M = b * np.outer(u.g, u.g)
         Q = -b * u.d2 * u.g
         D = self.device.dissipation(Jet(u.d1, 0.0, 0.0, u.g))
@@ -517,15 +555,49 @@ class OracleElement:
         Q[-1] -= self.series.force(x[0], x[1])[0]              # −∂V/∂s − ∂R/∂ṡ, clipped (unilateral)
         return M, Q
 
-    def state_rates(self, q, v, z, sdd, dz):
-        """dz[its states]: (ṡ, s̈) in series (s̈ from the extended system, `sdd`), then ż = p_loss."""
+    def series_acceleration(self, q, v, z, a):
+        """s̈ at the accelerations `a` from the s row of its extended system (:meth:`extended`),
+        (b_eff) s̈ − (b_eff) gᵀv̇ = Q_s, in the mode set."""
+        Me, Qe = self.extended(q, v, z)
+        return (Qe[-1] - Me[-1, :-1] @ a[self.probe.dofs]) / Me[-1, -1]
+
+    def stroke_acceleration(self, q, v, z, a, sdd=0.0):
+        """The screw's stroke acceleration at the accelerations `a` (and s̈ = `sdd` in series):
+        L̈ = ∇L·q̈ + q̇ᵀ∇²Lq̇ (Eq. 9; Eq. 8's less |ṙ⊥|²/L), or ü = L̈ − s̈."""
+        G, x0, _ = self.screw_term(q, v, z)
+        accel = float(G[:len(self.probe.dofs)] @ a[self.probe.dofs]) + x0
+        return accel - sdd if self.series is not None else accel
+
+    def screw_term(self, q, v, z):
+        """(G, ẍ₀, ẋ): the gradient of the screw's stroke rate ẋ over the velocities it touches (∇L,
+        or γ = [∇L; −1] over (its dofs, ṡ) in series), its stroke acceleration at zero accelerations
+        (:meth:`_rest`, or ü₀), and ẋ: its ideal inerter's term is b G Gᵀ in the mass matrix and
+        −b ẍ₀ G in the forces, the term a screw efficiency scales by 1 + λ(τ)."""
+        if self.series is not None:
+            u = self.stroke(q, v, z)
+            return u.g, u.d2, u.d1
+        L, rdot = self.probe.evaluate(q, v)
+        return L.g, self._rest(L, rdot), L.d1
+
+    def screw(self, q, v, z, a, sdd=0.0):
+        """(b λ(τ) ẍ ẋ, τ): the screw efficiency's lost power and direction in the mode set, at the
+        accelerations `a` (s̈ = `sdd` in series); (0, 1) without an efficiency."""
+        if self.efficiency is None:
+            return 0.0, 1.0
+        rate, accel = self.screw_term(q, v, z)[2], self.stroke_acceleration(q, v, z, a, sdd)
+        return (self.efficiency.loss(self.coefficient, self.mode, rate, accel),
+                self.efficiency.direction(self.mode, rate))
+
+    def state_rates(self, q, v, z, a, sdd, dz):
+        """dz[its states]: (ṡ, s̈) in series (s̈ from the extended system, `sdd`), then ż = p_loss
+        (with the screw efficiency's loss at the accelerations `a`)."""
         x = self._x(z)
         out = []
         if self.series is not None:
             out += [x[1], sdd]
         if self.device.keeps_loss:
             L, _ = self.probe.evaluate(q, v)
-            out.append(self.device.loss(L.v, L.d1, x))
+            out.append(self.device.loss(L.v, L.d1, x, self.screw(q, v, z, a, sdd)[0]))
         dz[self.states] = out
 
     def state_energy(self, q, v, z):
@@ -544,7 +616,7 @@ class OracleElement:
         L, _ = geo or self.probe.evaluate(q, v)
         idx = self.probe.dofs
         if self.series is None:
-            M[np.ix_(idx, idx)] += self.coefficient * np.outer(L.g, L.g)
+            M[np.ix_(idx, idx)] += self.b_eff(L.d1) * np.outer(L.g, L.g)
         if self.bodies is not None:
             M[np.ix_(idx, idx)] += self.bodies.terms(self.probe, q, v)[0]
 
@@ -571,7 +643,11 @@ class OracleElement:
             return distance, L.d1, F, F * L.d1, stored
         x = self._x(z)
         F += self.device.force(L.v, L.d1, x)
-        return (distance, L.d1, F, F * L.d1, stored) + self.device.outputs(L.v, L.d1, x)
+        screw = (0.0, 1.0)
+        if self.efficiency is not None:
+            sdd = self.series_acceleration(q, v, z, a) if self.series is not None else 0.0
+            screw = self.screw(q, v, z, a, sdd)
+        return (distance, L.d1, F, F * L.d1, stored) + self.device.outputs(L.v, L.d1, x, screw)
 
     def length(self, q):
         return self.probe.evaluate(q, np.zeros_like(q))[0].v

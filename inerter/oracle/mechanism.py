@@ -23,6 +23,11 @@ and its elements from :class:`~.derivation.OracleElement`.
   coordinate (:mod:`.series`); Lagrange's equations on (v, ṡ) with the joints' rows give one system
   for (v̇, s̈, λ) (:meth:`OracleMechanism.extended_accelerations`), ż = (ṡ, s̈, p_loss).
 
+* Screw efficiencies (:mod:`.efficiency`): the system is assembled once with each efficient
+  element's ideal inerter term and solved once per assignment of their modes σ ∈ {±1}ⁿ, each
+  adding λ(τ) times those terms; the assignment its solution agrees with is kept
+  (:meth:`OracleMechanism.accelerations`).
+
 * The bodies' mass matrix, velocity forces and energy (:mod:`.bodies`): from each body's kinetic
   energy T on Jets, M's columns as ∂T/∂v at unit velocities, −ω̄ × ∂T/∂ω̄ on a 3D body's ω̄
   (Boltzmann–Hamel), and T itself with the weight's V in the mechanism's energy.
@@ -37,6 +42,7 @@ from inerter.common.errors import SceneError
 from inerter.model.mechanism import Mechanism
 from inerter.oracle import bodies
 from inerter.oracle.derivation import OracleElement
+from inerter.oracle.efficiency import resolve
 from inerter.oracle.jets import Jet
 from inerter.oracle.joints import BodyJets, OracleJoint
 
@@ -80,6 +86,9 @@ class OracleMechanism(Mechanism):
         #: numbered after the n velocity coordinates in the extended system.
         self.series = [e for e in self.stateful if getattr(e, "series", None) is not None]
         self._solved = None                 # (state, s̈) of the last extended solve
+        #: The elements with a screw efficiency, rigid or in series, whose modes each evaluation
+        #: resolves by trying every assignment (:meth:`accelerations`, :mod:`.efficiency`).
+        self.screws = [e for e in self.elements if getattr(e, "efficiency", None) is not None]
 
     # -- the bodies' inertia ---------------------------------------------------------------------
     def _bodies(self, scene):
@@ -218,7 +227,38 @@ class OracleMechanism(Mechanism):
         """Nothing: a series connection's forces are terms of its extended system
         (:meth:`extended_accelerations`), not forces at given states."""
 
-    # -- internal states -------------------------------------------------------------------------
+    # -- internal states and the screw efficiencies' modes ---------------------------------------
+    def accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
+        """(v̇, λ) of Eq. (33), extended by the series connections' coordinates; with screw
+        efficiencies, in the modes of the one assignment σ ∈ {±1}ⁿ whose solution's stroke
+        accelerations agree with it in sign (:func:`.efficiency.resolve`), those modes left set for
+        the outputs and the state rates at this state. The system is assembled once with each
+        screw's ideal inerter term b G Gᵀ, −b ẍ₀ G (G = ∇ẋ over its dofs, and its s in series); each
+        assignment adds λ(τ) times that term (b_eff = b (1 + λ)) and is solved."""
+        if not self.screws:
+            return self._accelerations(t, q, v, inputs, alpha, z)
+        z = self.z0 if z is None else np.asarray(z, dtype=float)
+        for e in self.screws:
+            e.mode = None                   # the ideal inerter's term, b
+        K, rhs = self._system(t, q, v, inputs, alpha, z)
+        series = {id(e): self.n + k for k, e in enumerate(self.series)}
+        terms = [(e, np.append(e.probe.dofs, series[id(e)]) if id(e) in series else np.asarray(e.probe.dofs))
+                 + e.screw_term(q, v, z) for e in self.screws]
+
+        def solve():
+            Km, r = K.copy(), rhs.copy()
+            for e, idx, G, x0, rate in terms:
+                extra = e.b_eff(rate) - e.coefficient           # b λ(τ) in the mode set
+                Km[np.ix_(idx, idx)] += extra * np.outer(G, G)
+                r[idx] -= extra * x0 * G
+            x = self._solve(Km, r, t)
+            return x, [(float(G @ x[idx]) + x0, float(np.abs(G) @ np.abs(x[idx])) + abs(x0))
+                       for _, idx, G, x0, _ in terms]
+        x = resolve(self.screws, solve, [e.name for e in self.screws], t)
+        n, N = self.n, self.n + len(self.series)
+        self._solved = (self._state_key(q, v, z, x[:n]), x[n:N].copy())
+        return x[:n], x[N:]
+
     def _accelerations(self, t, q, v, inputs, alpha, z):
         """(v̇, λ): Eq. (33), extended by the series connections' coordinates where there are some."""
         if not self.series:
@@ -226,12 +266,12 @@ class OracleMechanism(Mechanism):
         a, sdd, lam = self.extended_accelerations(t, q, v, inputs, alpha, z)
         return a, lam
 
-    def extended_accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
-        """(v̇, s̈, λ) from one system: the bodies' and elements' M and Q (:meth:`assemble`), each
-        series element's block over (its dofs, its s) (:meth:`~.derivation.OracleElement.extended`:
-        [[b g gᵀ, −b g], [−b gᵀ, b]] and its forces) and the joints' rows, padded with zeros in
-        the s columns (a joint does not touch the series node), with Baumgarte's α as Eq. (33)."""
-        z = self.z0 if z is None else np.asarray(z, dtype=float)
+    def _system(self, t, q, v, inputs, alpha, z):
+        """(K, rhs) of the extended system in (v̇, s̈, λ): the bodies' and elements' M and Q
+        (:meth:`assemble`), each series element's block over (its dofs, its s)
+        (:meth:`~.derivation.OracleElement.extended`: [[b g gᵀ, −b g], [−b gᵀ, b]] and its forces) and
+        the joints' rows, padded with zeros in the s columns (a joint does not touch the series node),
+        with Baumgarte's α as Eq. (33)."""
         n, N, m = self.n, self.n + len(self.series), self.m
         M, Q = self.assemble(t, q, v, inputs, z=z)
         K, rhs = np.zeros((N + m, N + m)), np.zeros(N + m)
@@ -245,7 +285,13 @@ class OracleMechanism(Mechanism):
             C, Cq, gamma = self.constraints(q, v)
             K[:n, N:], K[N:, :n] = Cq.T, Cq
             rhs[N:] = gamma - 2.0 * alpha * (Cq @ v) - alpha * alpha * C     # Baumgarte
-        x = self._solve(K, rhs, t)
+        return K, rhs
+
+    def extended_accelerations(self, t, q, v, inputs=None, alpha=0.0, z=None):
+        """(v̇, s̈, λ) from one system (:meth:`_system`), in the screw efficiencies' modes set."""
+        z = self.z0 if z is None else np.asarray(z, dtype=float)
+        n, N = self.n, self.n + len(self.series)
+        x = self._solve(*self._system(t, q, v, inputs, alpha, z), t)
         self._solved = (self._state_key(q, v, z, x[:n]), x[n:N].copy())
         return x[:n], x[n:N], x[N:]
 
@@ -259,11 +305,7 @@ class OracleMechanism(Mechanism):
         to nothing but their element's dofs)."""
         if self._solved is not None and self._solved[0] == self._state_key(q, v, z, a):
             return self._solved[1]
-        out = np.zeros(len(self.series))
-        for k, e in enumerate(self.series):
-            Me, Qe = e.extended(q, v, z)
-            out[k] = (Qe[-1] - Me[-1, :-1] @ a[e.probe.dofs]) / Me[-1, -1]
-        return out
+        return np.array([e.series_acceleration(q, v, z, a) for e in self.series])
 
     def state_rates(self, q, v, z, a) -> np.ndarray:
         """ż at (q, v, z) and the accelerations a: (ṡ, s̈) of each series connection, then the
@@ -272,5 +314,5 @@ class OracleMechanism(Mechanism):
         dz = np.zeros(len(z))
         sdd = dict(zip(map(id, self.series), self._series_accelerations(q, v, z, a))) if self.series else {}
         for e in self.stateful:
-            e.state_rates(q, v, z, sdd.get(id(e), 0.0), dz)
+            e.state_rates(q, v, z, a, sdd.get(id(e), 0.0), dz)
         return dz

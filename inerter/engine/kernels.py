@@ -1028,6 +1028,63 @@ def wind(y, P):
     _wind_of(y, P)
 
 
+def _record_windings_of(out, k0, k, ny, P):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_record_windings_of, inline="always")
+def _record_windings_by_dimension(out, k0, k, ny, P):
+    """After a loop wrote the samples out[k0:k] (their first `ny` columns: the state), where `out`
+    has a column past the state for each 3D rotational element (a whole run's samples,
+    ``compiled.integrate_compiled``), the φ_ref the integrator holds then into those columns: the
+    angle at an end of the accepted step that covers the samples, on the branch the integrator
+    followed. The outputs at each sample are read wound from it (:func:`signal_history`'s
+    `windings`), not from the sample before, which may lie any number of turns away. Samples
+    exactly as wide as the state (a co-simulation step's) record nothing; nothing in 2D."""
+    if is_spatial(P):
+        def record_spatial(out, k0, k, ny, P):
+            rot_real = P[ROT_REAL]
+            for j in range(k0, k):
+                for e in range(out.shape[1] - ny):
+                    out[j, ny + e] = rot_real[e, PHI_REF]
+        return record_spatial
+    return lambda out, k0, k, ny, P: None
+
+
+def _hold_windings_of(windings, i, P):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_hold_windings_of, inline="always")
+def _hold_windings_by_dimension(windings, i, P):
+    """Before the outputs at row i of a history: each 3D rotational element's φ_ref set to
+    windings[i] (the integrator's, recorded with the sample: :func:`_record_windings_of`), from
+    which the reading there is wound; `windings` without rows: φ_ref left as the row before wound
+    it (the rows come in time order, close enough to each other); nothing in 2D."""
+    if is_spatial(P):
+        def hold_spatial(windings, i, P):
+            if windings.shape[0]:
+                rot_real = P[ROT_REAL]
+                for e in range(windings.shape[1]):
+                    rot_real[e, PHI_REF] = windings[i, e]
+        return hold_spatial
+    return lambda windings, i, P: None
+
+
+@njit(cache=True)
+def windings_along(states, P, out):
+    """out[i] = each 3D rotational element's φ_ref once wound on to states[i] (rows [q, v, z]), row
+    after row from the φ_ref P holds: where the rows are the states an integration accepted, in
+    order (a kept dense output's steps' starts), the values its integrator held there (it winds
+    after every accepted step), so that a time inside a step is read wound from its step's."""
+    P = _unowned(P)                 # entered from Python (_unowned)
+    rot_real = P[ROT_REAL]
+    for i in range(states.shape[0]):
+        _wind_of(states[i], P)
+        for e in range(out.shape[1]):
+            out[i, e] = rot_real[e, PHI_REF]
+
+
 def _settle_of(q, v, qdd, P):
     raise NotImplementedError("compiled code only")
 
@@ -1182,12 +1239,14 @@ def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
 
 
 @njit(cache=True)
-def signal_history(times, states, inputs, alpha, need_acc, P, out):
-    """`signal_values` at every sample of a history (rows [q, v, z]). Returns (status, index of the
-    sample where it was raised)."""
+def signal_history(times, states, windings, inputs, alpha, need_acc, P, out):
+    """`signal_values` at every sample of a history (rows [q, v, z]), each 3D rotational element's
+    angle wound from windings[i] (:func:`_hold_windings_of`). Returns (status, index of the sample
+    where it was raised)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     work = work_arrays(P, states.shape[1], 1)
     for i in range(states.shape[0]):
+        _hold_windings_of(windings, i, P)
         st = _signals_at(times[i], states[i], inputs, alpha, need_acc, P, work, out[i])
         if st != OK:
             return st, i
@@ -2092,6 +2151,7 @@ def _stop_at_change_point(loop, method, hdr, y, y_prev, f_prev, f, dense, Pm, t,
         if t_stop < 0.0:
             return OK, t, k
     limit = t + 1e-12 * max(1.0, t) if loop == LOOP_REACHED else t_stop      # as _rk_sample_covered
+    sampled = k
     while k < ts.shape[0] and ts[k] <= limit:
         if method == NATIVE_RK4:
             h = hdr[RK_H_LAST]
@@ -2099,6 +2159,7 @@ def _stop_at_change_point(loop, method, hdr, y, y_prev, f_prev, f, dense, Pm, t,
         else:
             _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
         k += 1
+    _record_windings_of(out, sampled, k, ny, P)
     if k == ts.shape[0]:
         return OK, t, k
     y[:] = stop[0]
@@ -2617,6 +2678,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     steps_before = hdr[RK_STEPS]
     status = OK
     k = _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k0, out)
+    _record_windings_of(out, k0, k, y.shape[0], P)
     ik = np.searchsorted(kinks, t, side="right")             # the next kink: kinks[ik] > t
     while k < ts.shape[0] and status == OK:
         if keeping and keep[2][KEPT_COUNT] >= keep[1].shape[0]:
@@ -2663,7 +2725,9 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
             if status != OK or k == ts.shape[0]:
                 h_abs = abs(h)
                 break
+        sampled = k
         k = _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
+        _record_windings_of(out, sampled, k, y.shape[0], P)
         if hdr[RK_STEPS] - steps_before > max_steps:
             status = MAX_STEPS
     hdr[RK_T] = t
@@ -2793,10 +2857,11 @@ def _signal_at(t, y, inputs, alpha, need_acc, P, work, raw, index, element, slot
 
 
 @njit(cache=True)
-def signal_column(times, states, inputs, alpha, index, element, slot, need_acc, P, raw, out):
+def signal_column(times, states, windings, inputs, alpha, index, element, slot, need_acc, P, raw, out):
     """out[k] = the signal at `index` of signal_values' layout at each sample of a history (rows
     [q, v, z]) (:func:`_signal_at`: `element` ≥ 0, the signal is that translational element's
-    output `slot`, evaluated alone). `raw`: scratch of the layout's length. Returns (status, the
+    output `slot`, evaluated alone), the 3D rotational elements' angles wound from windings[k]
+    (:func:`_hold_windings_of`). `raw`: scratch of the layout's length. Returns (status, the
     first sample where it could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = states.shape[1]
@@ -2812,6 +2877,7 @@ def signal_column(times, states, inputs, alpha, index, element, slot, need_acc, 
         if point >= 0:
             out[k] = _point_value_of(q, v, point, c, P)
         else:
+            _hold_windings_of(windings, k, P)
             st, out[k] = _signal_at(times[k], y, inputs, alpha, need_acc, P, work, raw, index, element, slot)
             if st != OK:
                 return st, k
@@ -2824,11 +2890,12 @@ DENSE_BLOCK = 256
 
 
 @njit(cache=True)
-def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, index, element, slot, need_acc, P, raw,
-                 out):
+def dense_signal(method, nodes, coeffs, count, times, comps, windings, inputs, alpha, index, element, slot, need_acc,
+                 P, raw, out):
     """out[k] = the signal at `index` of signal_values' layout at times[k], on the state from a kept
     dense output (:func:`_dense_block`, only the components `comps` the signal reads; `element`,
-    `slot`: :func:`_signal_at`). Returns (status, the first time where it could not be evaluated)."""
+    `slot`: :func:`_signal_at`), the 3D rotational elements' angles wound from windings[k]
+    (:func:`_hold_windings_of`). Returns (status, the first time where it could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = coeffs.shape[2]
     nq = P[DIMS][N_COORD]
@@ -2849,6 +2916,7 @@ def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, inde
             if point >= 0:
                 out[k] = _point_value_of(q, v, point, c, P)
             else:
+                _hold_windings_of(windings, k, P)
                 st, out[k] = _signal_at(times[k], y, inputs, alpha, need_acc, P, work, raw, index, element, slot)
                 if st != OK:
                     return st, k
@@ -3073,9 +3141,11 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
             if st != OK:
                 y[:] = y_new                # the state it stopped at (_stop_at_change_point)
                 return st, k, steps, evals, t_stop
+        sampled = k
         while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
             _hermite(y, f, y_new, f_new, h, (grid[k] - t) / h, out, k)
             k += 1
+        _record_windings_of(out, sampled, k, ny, P)
         for i in range(ny):
             y[i] = y_new[i]
             f[i] = f_new[i]

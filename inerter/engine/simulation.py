@@ -372,6 +372,7 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
     first_step = None
     max_drift = mech.constraint_residual(y[:n])
     monitor = StepMonitor(mech, settings.method, settings.max_steps)
+    record = _WindingRecord(mech, len(grid))
     solver = None
     try:
         while t0 < settings.stop_time:
@@ -402,9 +403,7 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
                 dense = solver.dense_output()
                 ts.append(solver.t)
                 interpolants.append(dense)
-                while k < len(grid) and grid[k] <= solver.t + 1e-12 * max(1.0, solver.t):
-                    out[k] = dense(grid[k])
-                    k += 1
+                k = _step_samples(grid, k, solver.t, dense, out, record)
             evaluations += solver.nfev
             y = solver.y
             if project:
@@ -432,7 +431,63 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
         from scipy.integrate import OdeSolution
 
         dense = OdeSolution(np.array(ts), interpolants)
-    return Run(grid[:k].copy(), out[:k].copy(), dense, status, message, steps, evaluations, cpu, max_drift)
+    return Run(grid[:k].copy(), out[:k].copy(), dense, status, message, steps, evaluations, cpu, max_drift,
+               record.extra(k))
+
+
+def _step_samples(grid, k, t, dense, out, record):
+    """out[k:] = the dense output of the step that has just ended at t, at the times of the grid it
+    covers (within 1e-12·max(1 s, t) of its end), recorded with its φ_ref; the first k not written."""
+    first = k
+    while k < len(grid) and grid[k] <= t + 1e-12 * max(1.0, t):
+        out[k] = dense(grid[k])
+        k += 1
+    record.step(first, k)
+    return k
+
+
+class _WindingRecord:
+    """What :func:`integrate` records of its 3D rotational elements' φ_ref (nothing without them):
+    after each accepted step, the φ_ref the step wound them to, and the same for each sample the
+    step covers. A sample's or a dense output's angle is then read wound from the φ_ref of the step
+    that gives it (``Result``), not from the sample before, which may lie any number of turns
+    away; this is right as long as no single step turns an element by half a turn."""
+
+    def __init__(self, mech, samples):
+        self.mech = mech
+        count = len(mech.windings) if hasattr(mech, "windings") else 0
+        self.samples = np.zeros((samples, count)) if count else None     # 0 at t = 0
+        self.steps = []
+
+    def step(self, first, k):
+        """After an accepted step (wound: StepMonitor.after_step) that gave samples first..k − 1."""
+        if self.samples is not None:
+            held = np.array(self.mech.windings, dtype=float)
+            self.steps.append(held)
+            self.samples[first:k] = held
+
+    def extra(self, k) -> dict:
+        """``run.extra``'s "windings" (samples × elements) and "step_windings" (steps × elements,
+        in the order of the dense output's segments); {} without such elements."""
+        if self.samples is None:
+            return {}
+        steps = np.array(self.steps, dtype=float).reshape(-1, self.samples.shape[1])
+        return {"windings": self.samples[:k].copy(), "step_windings": steps}
+
+
+def dense_windings(run, times):
+    """(len(times) × elements) the 3D rotational elements' φ_ref the integrator held in the step of
+    the run's dense output that gives each time (a compiled run's dense output knows its own:
+    ``windings_at``; scipy's, the segment OdeSolution takes, from ``run.extra["step_windings"]``);
+    None where the run recorded none."""
+    sol = run.dense
+    if hasattr(sol, "windings_at"):
+        return sol.windings_at(times)
+    steps = run.extra.get("step_windings")
+    if sol is None or steps is None or not len(steps):
+        return None
+    t = np.asarray(times, dtype=float).reshape(-1)
+    return steps[np.clip(np.searchsorted(sol.ts, t, side="left") - 1, 0, len(steps) - 1)]
 
 
 #: Methods whose integration a :class:`Stepper` keeps running across communication points (the

@@ -275,7 +275,7 @@ class Result:
     def _numpy_rows(self, start) -> list:
         """Every output at the samples from `start` on, by the numpy path's signals, up to a sample
         where they cannot be evaluated (the run is truncated there, with the message). The 3D
-        rotational elements' angles are wound from the φ_ref recorded with each sample
+        rotational elements' angles are wound from the angle recorded with each sample
         (:meth:`_windings`; where none was, sample by sample from t = 0)."""
         run, sig, mech = self.run, self.model.signals, self.model.mechanism
         n, nv = mech.nq, mech.nq + mech.n
@@ -375,17 +375,18 @@ class Result:
         return column if column is not None else self._column(name)
 
     def _windings(self):
-        """(samples × elements) the φ_ref of each 3D rotational element the integrator held at the
-        step that covers each sample (``run.extra["windings"]``, recorded by the integrators), from
-        which the sample's angle is read on the branch the integration followed, however many turns
-        lie between two samples; None where the run recorded none (no such elements)."""
+        """(samples × elements) each 3D rotational element's angle at each sample on the branch its
+        integration followed, recorded by the integrators from the end of the step that covers the
+        sample (``run.extra["windings"]``), from which the sample's outputs are read, however many
+        turns lie between two samples; None where the run recorded none (no such elements)."""
         recorded = self.run.extra.get("windings")
         return None if recorded is None else recorded[:len(self.time)]
 
     def _dense_windings(self, t):
-        """(len(t) × elements) the φ_ref the integrator held in the step that gives each time t of
-        the dense output (:func:`inerter.engine.simulation.dense_windings`); None: none recorded."""
-        return dense_windings(self.run, t)
+        """(len(t) × elements) each 3D rotational element's angle at each time t of the dense output,
+        from the step that gives it (:func:`inerter.engine.simulation.dense_windings`); None: none
+        recorded."""
+        return dense_windings(self.run, t, self.model.mechanism)
 
     def dense(self, name):
         """A callable t ↦ signal(t), vectorised over t (a 1-D array of the values), through the
@@ -395,7 +396,7 @@ class Result:
         numpy path, scipy's dense output and the numpy signals. Where there is none (RK4, whose
         fixed steps give no polynomial): a cubic spline through the samples. A derived output:
         its expression on the dense values of the outputs it reads. A 3D rotational element's angle
-        is read wound from the φ_ref its integrator held in the step that gives each t, the times in
+        is read on the branch its integration followed in the step that gives each t, the times in
         any order (inerter.elements.winding)."""
         self._check_name(name)
         signals = self.model.signals
@@ -495,13 +496,13 @@ class Result:
 def long_step_windings(result) -> list[str]:
     """A note for each 3D rotational element whose relative rotation may turn by more than half a
     turn within one step of RK4 (|ω_rel| at the samples times experiment.step, more than π). Its
-    angle is wound on at every accepted step, each reading taken on the branch nearest the angle
-    at the step before (inerter.elements.winding), and every output reads it wound from the angle
-    its integrator held at the step that covers it, so the output interval does not matter; a step
-    longer than half a turn loses whole turns, in the run's spring torque as in its outputs. Only
-    RK4's step is known here: the adaptive methods' steps are set by their error control, which
-    catches a torque that jumps by 2πk (a spring stiff enough to matter), not a damper's or a
-    weak spring's (docs/hard_cases.md)."""
+    angle is wound on at every accepted step (the branch its rates carry it to: kernels.wind3_step),
+    and every output reads it wound from the angle its integrator held at the step that covers it,
+    so neither the output interval nor a long step loses turns in the outputs; but within a step
+    the stages read the angle on the branch nearest the step's start, and a stage more than half a
+    turn from it reads a spring's torque whole turns off. The adaptive methods' error control
+    rejects such a step where that torque matters (it jumps by 2πk); RK4's fixed step is taken as
+    it is, and known here (docs/hard_cases.md)."""
     notes = []
     settings = result.settings
     if settings.method != "RK4" or len(result.time) < 2:
@@ -516,9 +517,9 @@ def long_step_windings(result) -> list[str]:
         if rate[k] * step > np.pi:
             notes.append(f"{result.model.source}: elements.{e.name}: its relative rotation turns by up to "
                          f"{rate[k] * step:.3g} rad in one RK4 step of experiment.step = {step:.3g} s (at t = "
-                         f"{result.time[k]:.6g} s), more than half a turn: its angle, and with it the torque, "
-                         f"phi_rel, tau and energy, may have lost whole turns; take experiment.step below "
-                         f"pi/max|w_rel| = {np.pi / float(rate[k]):.3g} s")
+                         f"{result.time[k]:.6g} s), more than half a turn: within a step its angle is read within "
+                         f"half a turn of the step's start, so a spring's torque there may be whole turns off; take "
+                         f"experiment.step below pi/max|w_rel| = {np.pi / float(rate[k]):.3g} s")
     return notes
 
 
@@ -731,7 +732,8 @@ def _warm_up_dimensions(dims):
         kernel = compiled._kernel_for(model.mechanism)
         kernel.accelerations(0.0, kernel.q0, kernel.v0)
         if kernel.spatial:        # a dense output's steps' φ_ref (a scene with 3D rotational elements)
-            kernel.windings_along(result.run.states)
+            along = kernel.windings_along(result.time, result.run.states)
+            kernel.windings_between(result.time, result.run.states, along, result.time, result.run.states)
         model.simulate(method="Radau", stop_time=0.02, metrics=False)      # scipy's methods on the kernels
         for method in (*compiled._RK_CODE, "RK4"):             # the co-simulation steps (the FMU's)
             stepper = model.stepper(method=method, path="compiled", stop_time=0.05)

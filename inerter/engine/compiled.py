@@ -597,14 +597,26 @@ class Kernel:
         (kernels._signals_at winds on from each sample to the next; mechanism.wound_from)."""
         return wound_from(self, start)
 
-    def windings_along(self, states, start=None) -> np.ndarray:
+    def windings_along(self, times, states, start=None) -> np.ndarray:
         """(rows × elements) each 3D rotational element's φ_ref once wound on to each row of
-        `states` in turn, from `start` (default 0, the initial pose; kernels.windings_along)."""
+        `states` (at `times`) in turn, each as the end of a step from the row before, from `start`
+        (default 0, the initial pose; kernels.windings_along)."""
         states = np.ascontiguousarray(states, dtype=float)
         out = np.empty((len(states), len(self.windings)))
         if len(states) and self.spatial:
             with self.wound_from_start(start):
-                _k.windings_along(states, self.params, out)
+                _k.windings_along(np.ascontiguousarray(times, dtype=float), states, self.params, out)
+        return out
+
+    def windings_between(self, times0, states0, windings0, times, states) -> np.ndarray:
+        """(rows × elements) each 3D rotational element's angle at each row of `states` (at `times`)
+        on the branch its integration followed, from the row of `states0` (at `times0`, an end of the
+        step that gives the time) where the integrator held `windings0` (kernels.windings_between)."""
+        out = np.empty((len(states), len(self.windings)))
+        if len(states) and self.spatial:
+            f = functools.partial(np.ascontiguousarray, dtype=float)
+            with self.wound_from_start():
+                _k.windings_between(f(times0), f(states0), f(windings0), f(times), f(states), self.params, out)
         return out
 
     @property
@@ -740,7 +752,7 @@ class Kernel:
         """(values, k): the signal at `index` at `times` (in any order) on a dense output, up to the
         first time k where it cannot be evaluated: a :class:`DenseOutput` in one compiled call (only
         the state components the signal reads), another (scipy's OdeSolution) through its states.
-        `windings`: the 3D rotational elements' φ_ref at each time, as signal_history's; a
+        `windings`: the 3D rotational elements' angles at each time, as signal_history's; a
         :class:`DenseOutput` or :class:`LocalDense` gives its own where none are given (each time's
         from the step that covers it: :meth:`DenseOutput.windings_at`)."""
         times = np.ascontiguousarray(times, dtype=float).reshape(-1)
@@ -761,7 +773,7 @@ class Kernel:
 
     def _local_dense_signal(self, sol, index, times, inputs, alpha):
         """:meth:`dense_signal` on a :class:`LocalDense`, one sample interval after the other (each
-        interval's steps wound on from the φ_ref recorded with its first sample)."""
+        interval's steps wound on from the angles recorded with its first sample)."""
         out = np.empty(len(times))
         first_bad = len(times)
         for k, where, piece in sol.pieces(times):
@@ -800,9 +812,9 @@ class Kernel:
     def signal_history(self, signals, order, times, states, inputs=None, alpha=0.0, windings=None):
         """(values, k): every signal at each sample of a history, up to the first sample k where one
         cannot be evaluated (k = len(times) when all can). `windings` (samples × the 3D rotational
-        elements): each sample's angles read wound from its row, the φ_ref the integrator held at
-        the step that covers it (``run.extra["windings"]``), right however many turns lie between
-        two samples; None: wound on from sample to sample from t = 0, right only while no element
+        elements): each sample's angles read wound from its row, the angles the integrator recorded
+        there from the step that covers it (``run.extra["windings"]``), right however many turns
+        lie between two samples; None: wound on from sample to sample from t = 0, right only while no element
         turns by half a turn between two of them."""
         states = np.ascontiguousarray(states, dtype=float)
         raw = np.empty((len(states), len(order)))
@@ -891,13 +903,19 @@ class _KernelMechanism:
     def constraint_residual(self, q):
         return self._kernel.constraint_residual(q)
 
-    def wind(self, y):
+    def wind(self, y, y_old=None, h=0.0):
         """``Mechanism.wind`` on the kernel's tables (kernels.wind; nothing to do in 2D)."""
         if self._kernel.spatial:
-            _k.wind(np.ascontiguousarray(y, dtype=float), self._kernel.params)
+            y = np.ascontiguousarray(y, dtype=float)
+            y_old = y if y_old is None else np.ascontiguousarray(y_old, dtype=float)
+            _k.wind(y, y_old, float(h), self._kernel.params)
 
     def reset_windings(self):
         self._kernel.windings[:] = 0.0
+
+    def angles_between(self, times0, states0, windings0, times, states):
+        """``Mechanism.angles_between`` in the kernels (Kernel.windings_between)."""
+        return self._kernel.windings_between(times0, states0, windings0, times, states)
 
     def wound_from_start(self, start=None):
         """``Mechanism.wound_from_start`` on the kernel's tables (Kernel.wound_from_start)."""
@@ -1128,17 +1146,20 @@ class DenseOutput:
         self._step_windings = None            # each step's φ_ref, once asked for
 
     def windings_at(self, times):
-        """(len(times) × elements) the φ_ref the integrator held in the step that gives each time
-        (the step kernels._step_of takes), from which the angle at the time is read on the branch
-        the integration followed, however far the times lie from each other; None without 3D
-        rotational elements. The steps' φ_ref are those of their starts, wound on from step to step
-        (Kernel.windings_along): the values the integrator held, which winds after each step."""
+        """(len(times) × elements) each 3D rotational element's angle at each time on the branch the
+        integration followed, however far the times lie from each other, from the φ_ref the
+        integrator held in the step that gives the time (the step kernels._step_of takes;
+        Kernel.windings_between); None without such elements. The steps' φ_ref are those of their
+        starts, wound on from step to step as the integrator wound them (Kernel.windings_along)."""
         if self.kernel is None or not len(self.kernel.windings) or not self.count:
             return None
         if self._step_windings is None:
-            self._step_windings = self.kernel.windings_along(self.coeffs[:self.count, 0, :], self.start)
-        step = np.searchsorted(self.ts, np.asarray(times, dtype=float).reshape(-1), side="left") - 1
-        return self._step_windings[np.clip(step, 0, self.count - 1)]
+            self._step_windings = self.kernel.windings_along(self.nodes[:self.count], self.coeffs[:self.count, 0, :],
+                                                             self.start)
+        times = np.asarray(times, dtype=float).reshape(-1)
+        step = np.clip(np.searchsorted(self.ts, times, side="left") - 1, 0, self.count - 1)
+        return self.kernel.windings_between(self.nodes[step], self.coeffs[step, 0, :], self._step_windings[step],
+                                            times, self(times).T)
 
     def __call__(self, t):
         times = np.asarray(t, dtype=float)
@@ -1152,7 +1173,7 @@ class DenseOutput:
 class LocalDense:
     """The dense output of a compiled DOP853 or RK45 run that kept none, built where it is read:
     each sample interval a time falls in is integrated again from the run's state at the sample
-    before it (its 3D rotational elements' angles wound from the φ_ref the run recorded there,
+    before it (its 3D rotational elements' angles wound from the angles the run recorded there,
     `windings`: samples × elements, ``run.extra["windings"]``),
     with the run's method, tolerances, inputs and α, running on through the same kinks and
     restarting at the same jumps, and its steps' polynomials kept as a whole run's are (one
@@ -1184,7 +1205,7 @@ class LocalDense:
         return out
 
     def windings(self, k):
-        """The 3D rotational elements' φ_ref recorded with sample k (None: none, 0 at its start)."""
+        """The 3D rotational elements' angles recorded with sample k (None: none, 0 at its start)."""
         return None if self.recorded is None else self.recorded[k]
 
     def windings_at(self, times):

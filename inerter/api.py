@@ -22,7 +22,7 @@ from inerter.oracle import OracleMechanism, require_definitions
 from inerter.engine.outputs import Signals
 from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
 from inerter.common.errors import InerterError, SceneError, SimulationError
-from inerter.engine.simulation import Settings, Stepper, integrate
+from inerter.engine.simulation import Settings, Stepper, dense_windings, integrate
 
 #: Tolerances at which the oracle is solved (DOP853).
 ORACLE_RTOL = 1e-12
@@ -194,8 +194,6 @@ class Model:
         else:
             raise SceneError("simulate()", "path", path, "'numpy' or 'compiled'", "unknown path")
         result = Result(self, s, run)
-        if hasattr(run.dense, "windings_at"):      # a LocalDense: integrated again from a sample's angles
-            run.dense.windings_at = lambda k: result._windings_at(result.time[k])
         if metrics and run.status == "ok":
             result.metrics = compute_metrics(self, result)
         return result
@@ -267,7 +265,8 @@ class Result:
         kernel = self._kernel
         order = kernel.signal_order(sig) if kernel is not None else None
         if order is not None:
-            compiled_values, start = kernel.signal_history(sig, order, run.time, run.states, None, settings.alpha)
+            compiled_values, start = kernel.signal_history(sig, order, run.time, run.states, None, settings.alpha,
+                                                           self._windings())
             values = list(compiled_values)
         values += self._numpy_rows(start)
         self._values = np.array(values) if values else np.zeros((0, len(sig.names)))
@@ -276,16 +275,20 @@ class Result:
     def _numpy_rows(self, start) -> list:
         """Every output at the samples from `start` on, by the numpy path's signals, up to a sample
         where they cannot be evaluated (the run is truncated there, with the message). The 3D
-        rotational elements' angles are wound on sample by sample from t = 0."""
+        rotational elements' angles are wound from the angle recorded with each sample
+        (:meth:`_windings`; where none was, sample by sample from t = 0)."""
         run, sig, mech = self.run, self.model.signals, self.model.mechanism
         n, nv = mech.nq, mech.nq + mech.n
+        recorded = self._windings()
         rows = []
         with mech.wound_from_start():
-            for y in (run.states[:start] if mech.winding else ()):
+            for y in (run.states[:start] if mech.winding and recorded is None else ()):
                 mech.wind(y)
             for i in range(start, len(run.time)):
                 t, y = run.time[i], run.states[i]
                 try:
+                    if recorded is not None:
+                        mech.windings = recorded[i]
                     mech.wind(y)
                     rows.append(sig.evaluate(t, y[:n], y[n:nv], None, self.settings.alpha, z=y[nv:]))
                 except SimulationError as exc:   # an output undefined at a sample: keep what came before
@@ -308,7 +311,7 @@ class Result:
         if index is None:
             return self._all_values()[:, self.model.signals.index[name]]
         run, alpha = self.run, self.settings.alpha
-        values, k = kernel.signal_column(index, run.time, run.states, None, alpha)
+        values, k = kernel.signal_column(index, run.time, run.states, None, alpha, self._windings())
         if k < len(run.time):
             j = self.model.signals.index[name]
             values = np.array(list(values) + [row[j] for row in self._numpy_rows(k)], dtype=float)
@@ -336,8 +339,7 @@ class Result:
                 notes.append(f"{self.model.source}: outputs.derived.{d.name}: no value at {int(missing.sum())} "
                              f"of {len(column)} samples, the first at t = {self.time[missing.argmax()]:.6g} s "
                              f"(written as NaN): the expression is undefined there")
-        if isinstance(self, Result):             # an FMU's outputs wind on at every integrator step
-            notes += coarse_windings(self)
+        notes += long_step_windings(self)
         return notes
 
     def _derived_column(self, name) -> np.ndarray:
@@ -372,14 +374,19 @@ class Result:
         column = self._columns.get(name)
         return column if column is not None else self._column(name)
 
-    def _windings_at(self, t):
-        """The 3D rotational elements' angles at the last sample at or before t, from which a dense
-        output read from t on winds them on (None: there are none)."""
-        winding = self.model.mechanism.winding
-        if not winding or not len(self.time):
-            return None
-        i = max(int(np.searchsorted(self.time, t, side="right")) - 1, 0)
-        return np.array([self[f"{e.name}.phi_rel"][i] for e in winding])
+    def _windings(self):
+        """(samples × elements) each 3D rotational element's angle at each sample on the branch its
+        integration followed, recorded by the integrators from the end of the step that covers the
+        sample (``run.extra["windings"]``), from which the sample's outputs are read, however many
+        turns lie between two samples; None where the run recorded none (no such elements)."""
+        recorded = self.run.extra.get("windings")
+        return None if recorded is None else recorded[:len(self.time)]
+
+    def _dense_windings(self, t):
+        """(len(t) × elements) each 3D rotational element's angle at each time t of the dense output,
+        from the step that gives it (:func:`inerter.engine.simulation.dense_windings`); None: none
+        recorded."""
+        return dense_windings(self.run, t, self.model.mechanism)
 
     def dense(self, name):
         """A callable t ↦ signal(t), vectorised over t (a 1-D array of the values), through the
@@ -389,8 +396,8 @@ class Result:
         numpy path, scipy's dense output and the numpy signals. Where there is none (RK4, whose
         fixed steps give no polynomial): a cubic spline through the samples. A derived output:
         its expression on the dense values of the outputs it reads. A 3D rotational element's angle
-        is wound on from the sample before the first t along the times asked for (give them in
-        increasing order; inerter.elements.winding)."""
+        is read on the branch its integration followed in the step that gives each t, the times in
+        any order (inerter.elements.winding)."""
         self._check_name(name)
         signals = self.model.signals
         if signals.is_derived(name):
@@ -409,8 +416,11 @@ class Result:
             mech = self.model.mechanism
             nv = n + mech.n
             values = []
-            with mech.wound_from_start(self._windings_at(t[0])):   # angles wound on along t
+            windings = self._dense_windings(t)
+            with mech.wound_from_start():
                 for i, ti in enumerate(t):
+                    if windings is not None:
+                        mech.windings = windings[i]
                     mech.wind(Y[:, i])
                     values.append(fn(ti, Y[:n, i], Y[n:nv, i], None, alpha, Y[nv:, i]))
             return np.array(values)
@@ -422,7 +432,7 @@ class Result:
 
         def compiled_values(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
-            values, k = kernel.dense_signal(sol, index, t, None, alpha, self._windings_at(t[0]))
+            values, k = kernel.dense_signal(sol, index, t, None, alpha, self._dense_windings(t))
             if k < len(t):            # not defined at t[k]: the numpy path's values, or its message
                 values = np.concatenate((values, numpy_values(t[k:])))
             return values
@@ -483,27 +493,33 @@ class Result:
         return to_dataframe(self)
 
 
-def coarse_windings(result) -> list[str]:
+def long_step_windings(result) -> list[str]:
     """A note for each 3D rotational element whose relative rotation may turn by more than half a
-    turn between two output samples (|ω_rel| at the interval's ends times its length, more than π).
-    The run's integrator winds its angle on at every step, but its outputs are evaluated sample after
-    sample, each wound on from the last (inerter.elements.winding), so past half a turn between two
-    samples its φ_rel, torque and energy lose whole turns (an FMU's outputs do not: it winds at every
-    step of its integrator)."""
+    turn within one step of RK4 (|ω_rel| at the samples times experiment.step, more than π). Its
+    angle is wound on at every accepted step (the branch its rates carry it to: kernels.wind3_step),
+    and every output reads it wound from the angle its integrator held at the step that covers it,
+    so neither the output interval nor a long step loses turns in the outputs; but within a step
+    the stages read the angle on the branch nearest the step's start, and a stage more than half a
+    turn from it reads a spring's torque whole turns off. The adaptive methods' error control
+    rejects such a step where that torque matters (it jumps by 2πk); RK4's fixed step is taken as
+    it is, and known here (docs/hard_cases.md)."""
     notes = []
-    if len(result.time) < 2:
+    settings = result.settings
+    if settings.method != "RK4" or len(result.time) < 2:
         return notes
-    dt = np.diff(result.time)
+    step = float(settings.step)
     for e in result.model.mechanism.winding:
-        rate = np.abs(result[f"{e.name}.w_rel"])
-        turn = np.maximum(rate[:-1], rate[1:]) * dt
-        k = int(np.argmax(turn))
-        if turn[k] > np.pi:
+        try:
+            rate = np.abs(result[f"{e.name}.w_rel"])
+        except KeyError:                      # an FMU run that did not record it
+            continue
+        k = int(np.argmax(rate))
+        if rate[k] * step > np.pi:
             notes.append(f"{result.model.source}: elements.{e.name}: its relative rotation turns by up to "
-                         f"{turn[k]:.3g} rad between two output samples (from t = {result.time[k]:.6g} s), more "
-                         f"than half a turn: its phi_rel, tau and energy, and the scene's energy, are wound on "
-                         f"from sample to sample and may have lost whole turns; take experiment.output_interval "
-                         f"below pi/max|w_rel| = {np.pi / float(np.max(rate)):.3g} s")
+                         f"{rate[k] * step:.3g} rad in one RK4 step of experiment.step = {step:.3g} s (at t = "
+                         f"{result.time[k]:.6g} s), more than half a turn: within a step its angle is read within "
+                         f"half a turn of the step's start, so a spring's torque there may be whole turns off; take "
+                         f"experiment.step below pi/max|w_rel| = {np.pi / float(rate[k]):.3g} s")
     return notes
 
 
@@ -715,6 +731,9 @@ def _warm_up_dimensions(dims):
             result.run.max_drift
         kernel = compiled._kernel_for(model.mechanism)
         kernel.accelerations(0.0, kernel.q0, kernel.v0)
+        if kernel.spatial:        # a dense output's steps' φ_ref (a scene with 3D rotational elements)
+            along = kernel.windings_along(result.time, result.run.states)
+            kernel.windings_between(result.time, result.run.states, along, result.time, result.run.states)
         model.simulate(method="Radau", stop_time=0.02, metrics=False)      # scipy's methods on the kernels
         for method in (*compiled._RK_CODE, "RK4"):             # the co-simulation steps (the FMU's)
             stepper = model.stepper(method=method, path="compiled", stop_time=0.05)

@@ -216,8 +216,9 @@ def test_the_ahead_of_time_compilation_covers_every_kernel_called_from_python():
     assert done.returncode == 0, done.stderr
     found = json.loads(done.stdout.strip().splitlines()[-1])
     assert {"signal_values", "rk4_cosim_step", "constraint_residual", "_rhs", "integrate_rk"} <= set(found)
-    # wind moves 3D rotational elements' angles on (scipy's methods); 2D has nothing to wind
-    one_dimension = {"wind"}
+    # wind moves 3D rotational elements' angles on (scipy's methods), windings_along and
+    # windings_between read them along a dense output's steps; 2D has nothing to wind
+    one_dimension = {"wind", "windings_along", "windings_between"}
     missing = {name: count for name, (count, takes_scene) in found.items()
                if count < (2 if takes_scene and name not in one_dimension else 1)}
     assert missing == {}

@@ -598,6 +598,28 @@ class Kernel:
         (kernels._signals_at winds on from each sample to the next; mechanism.wound_from)."""
         return wound_from(self, start)
 
+    def windings_along(self, times, states, start=None) -> np.ndarray:
+        """(rows × elements) each 3D rotational element's φ_ref once wound on to each row of
+        `states` (at `times`) in turn, each as the end of a step from the row before, from `start`
+        (default 0, the initial pose; kernels.windings_along)."""
+        states = np.ascontiguousarray(states, dtype=float)
+        out = np.empty((len(states), len(self.windings)))
+        if len(states) and self.spatial:
+            with self.wound_from_start(start):
+                _k.windings_along(np.ascontiguousarray(times, dtype=float), states, self.params, out)
+        return out
+
+    def windings_between(self, times0, states0, windings0, times, states) -> np.ndarray:
+        """(rows × elements) each 3D rotational element's angle at each row of `states` (at `times`)
+        on the branch its integration followed, from the row of `states0` (at `times0`, an end of the
+        step that gives the time) where the integrator held `windings0` (kernels.windings_between)."""
+        out = np.empty((len(states), len(self.windings)))
+        if len(states) and self.spatial:
+            f = functools.partial(np.ascontiguousarray, dtype=float)
+            with self.wound_from_start():
+                _k.windings_between(f(times0), f(states0), f(windings0), f(times), f(states), self.params, out)
+        return out
+
     @property
     def unsettled(self) -> int:
         """How many evaluations of Eq. (33) kept a solve whose screw efficiencies' modes did not
@@ -716,44 +738,47 @@ class Kernel:
     def signal_column(self, index, times, states, inputs=None, alpha=0.0, windings=None):
         """(values, k): the signal at `index` at each sample of a history (rows [q, v, z]), up to the
         first sample k where it cannot be evaluated (k = len(times) when it can at all), with the
-        values signal_history gives."""
+        values signal_history gives. `windings`: as signal_history's."""
         need, _ = self._reads(index)
         element, slot = self.element_slot(index)
         out = np.empty(len(times))
-        with self.wound_from_start(windings):
+        with self.wound_from_start():
             st, k = _k.signal_column(np.ascontiguousarray(times, dtype=float),
-                                     np.ascontiguousarray(states, dtype=float), self._inputs(inputs), float(alpha),
-                                     int(index), int(element), int(slot), need, self.params,
-                                     np.empty(len(self._layout)), out)
+                                     np.ascontiguousarray(states, dtype=float), _windings_arg(windings),
+                                     self._inputs(inputs), float(alpha), int(index), int(element), int(slot), need,
+                                     self.params, np.empty(len(self._layout)), out)
         return out[:k], int(k)
 
     def dense_signal(self, sol, index, times, inputs=None, alpha=0.0, windings=None):
-        """(values, k): the signal at `index` at `times` on a dense output, up to the first time k
-        where it cannot be evaluated: a :class:`DenseOutput` in one compiled call (only the state
-        components the signal reads), another (scipy's OdeSolution) through its states. `windings`:
-        the 3D rotational elements' angles where `times` start (default: those at t = 0), from which
-        their angles wind on along `times` (Kernel.wound_from_start)."""
+        """(values, k): the signal at `index` at `times` (in any order) on a dense output, up to the
+        first time k where it cannot be evaluated: a :class:`DenseOutput` in one compiled call (only
+        the state components the signal reads), another (scipy's OdeSolution) through its states.
+        `windings`: the 3D rotational elements' angles at each time, as signal_history's; a
+        :class:`DenseOutput` or :class:`LocalDense` gives its own where none are given (each time's
+        from the step that covers it: :meth:`DenseOutput.windings_at`)."""
         times = np.ascontiguousarray(times, dtype=float).reshape(-1)
         if isinstance(sol, LocalDense):
             return self._local_dense_signal(sol, index, times, inputs, alpha)
         if not isinstance(sol, DenseOutput):
             return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha, windings)
+        if windings is None:
+            windings = sol.windings_at(times)
         need, comps = self._reads(index)
         element, slot = self.element_slot(index)
         out = np.empty(len(times))
-        with self.wound_from_start(windings):
+        with self.wound_from_start():
             st, k = _k.dense_signal(sol.method_code, sol.nodes, sol.coeffs, sol.count, times, comps,
-                                    self._inputs(inputs), float(alpha), int(index), int(element), int(slot), need,
-                                    self.params, np.empty(len(self._layout)), out)
+                                    _windings_arg(windings), self._inputs(inputs), float(alpha), int(index),
+                                    int(element), int(slot), need, self.params, np.empty(len(self._layout)), out)
         return out[:k], int(k)
 
     def _local_dense_signal(self, sol, index, times, inputs, alpha):
-        """:meth:`dense_signal` on a :class:`LocalDense`, one sample interval after the other, each
-        from the angles at its first sample."""
+        """:meth:`dense_signal` on a :class:`LocalDense`, one sample interval after the other (each
+        interval's steps wound on from the angles recorded with its first sample)."""
         out = np.empty(len(times))
         first_bad = len(times)
         for k, where, piece in sol.pieces(times):
-            values, good = self.dense_signal(piece, index, times[where], inputs, alpha, sol.windings(k))
+            values, good = self.dense_signal(piece, index, times[where], inputs, alpha)
             out[where[:good]] = values
             if good < len(where):
                 first_bad = min(first_bad, int(where[good]))
@@ -785,14 +810,19 @@ class Kernel:
             return signals.evaluate(t, q, v, inputs, alpha, z=z)
         return signals.complete(raw[order])
 
-    def signal_history(self, signals, order, times, states, inputs=None, alpha=0.0):
+    def signal_history(self, signals, order, times, states, inputs=None, alpha=0.0, windings=None):
         """(values, k): every signal at each sample of a history, up to the first sample k where one
-        cannot be evaluated (k = len(times) when all can)."""
+        cannot be evaluated (k = len(times) when all can). `windings` (samples × the 3D rotational
+        elements): each sample's angles read wound from its row, the angles the integrator recorded
+        there from the step that covers it (``run.extra["windings"]``), right however many turns
+        lie between two samples; None: wound on from sample to sample from t = 0, right only while no element
+        turns by half a turn between two of them."""
         states = np.ascontiguousarray(states, dtype=float)
         raw = np.empty((len(states), len(order)))
         with self.wound_from_start():
-            st, k = _k.signal_history(np.ascontiguousarray(times, dtype=float), states, self._inputs(inputs),
-                                      float(alpha), bool(signals.needs_accelerations), self.params, raw)
+            st, k = _k.signal_history(np.ascontiguousarray(times, dtype=float), states, _windings_arg(windings),
+                                      self._inputs(inputs), float(alpha), bool(signals.needs_accelerations),
+                                      self.params, raw)
         return signals.complete(raw[:k][:, order]), int(k)
 
     def point_positions(self, states) -> dict:
@@ -807,6 +837,17 @@ class Kernel:
             columns = [self.signal_column(2 * d * p + c, times, states)[0] for c in range(d)]
             out[name] = np.column_stack(columns)
         return out
+
+
+#: `windings` for the kernels where none are recorded: each row winds on from the row before.
+_NO_WINDINGS = np.zeros((0, 0))
+
+
+def _windings_arg(windings) -> np.ndarray:
+    """The kernels' `windings` (rows × elements, C-contiguous floats) of the Kernel's argument."""
+    if windings is None or not np.size(windings):
+        return _NO_WINDINGS
+    return np.ascontiguousarray(windings, dtype=float)
 
 
 class NumpyKernel:
@@ -863,13 +904,19 @@ class _KernelMechanism:
     def constraint_residual(self, q):
         return self._kernel.constraint_residual(q)
 
-    def wind(self, y):
+    def wind(self, y, y_old=None, h=0.0):
         """``Mechanism.wind`` on the kernel's tables (kernels.wind; nothing to do in 2D)."""
         if self._kernel.spatial:
-            _k.wind(np.ascontiguousarray(y, dtype=float), self._kernel.params)
+            y = np.ascontiguousarray(y, dtype=float)
+            y_old = y if y_old is None else np.ascontiguousarray(y_old, dtype=float)
+            _k.wind(y, y_old, float(h), self._kernel.params)
 
     def reset_windings(self):
         self._kernel.windings[:] = 0.0
+
+    def angles_between(self, times0, states0, windings0, times, states):
+        """``Mechanism.angles_between`` in the kernels (Kernel.windings_between)."""
+        return self._kernel.windings_between(times0, states0, windings0, times, states)
 
     def wound_from_start(self, start=None):
         """``Mechanism.wound_from_start`` on the kernel's tables (Kernel.wound_from_start)."""
@@ -1009,9 +1056,12 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
                            "scipy integrator, compiled right-hand side", unsettled)
 
     grid = output_grid(settings.stop_time, settings.output_interval)
-    out = np.empty((len(grid), kernel.ny))
+    # each sample's row: its state, then the φ_ref of each 3D rotational element the integrator held
+    # at the step that covers it (kernels._record_windings_of; 0 at t = 0), none without such elements
+    ny = kernel.ny
+    out = np.zeros((len(grid), ny + len(kernel.windings)))
     y0 = np.concatenate((kernel.q0, kernel.v0, kernel.z0))
-    out[0] = y0
+    out[0, :ny] = y0
     inp = kernel._inputs(inputs)
     alpha = float(settings.alpha)
     # One integration per segment between jumps of the right-hand side: it restarts at each (a step
@@ -1034,8 +1084,9 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         seg = np.concatenate(([t0], grid[k:last]))
         if seg[-1] != t1:
             seg = np.append(seg, t1)
-        seg_out = np.empty((len(seg), len(y0)))
-        seg_out[0] = y
+        seg_out = np.empty((len(seg), out.shape[1]))
+        seg_out[0, :ny] = y
+        seg_out[0, ny:] = kernel.windings
         if settings.method == "RK4":
             status, done, s_steps, s_evals, t_reached, y_reached = _k.integrate_rk4(
                 y, t0, t1, seg, seg_out, float(settings.step), int(settings.max_steps) - steps, inp, alpha,
@@ -1052,9 +1103,9 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         if status != 0:
             stopped = y_reached if status == _k.CHANGE_POINT else None      # the state it stopped at there
             break
-        y, t0 = seg_out[-1].copy(), t1
+        y, t0 = seg_out[-1, :ny].copy(), t1
     cpu = _time.process_time() - start
-    states = out[:k].copy()
+    states, windings = out[:k, :ny].copy(), out[:k, ny:].copy()
     if status == 0:
         message = "completed"
     else:
@@ -1064,11 +1115,13 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     sol = None
     nodes, coeffs, kept = keep
     if kept[_k.KEPT_COUNT] > 0:
-        sol = DenseOutput(_RK_CODE[settings.method], nodes, coeffs, int(kept[_k.KEPT_COUNT]))
+        sol = DenseOutput(_RK_CODE[settings.method], nodes, coeffs, int(kept[_k.KEPT_COUNT]), kernel)
     elif tables is not None and k > 1:
-        sol = LocalDense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, tables)
+        sol = LocalDense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, tables, windings)
     run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
                       int(evals), cpu, None)
+    if windings.shape[1]:
+        run.extra["windings"] = windings
     return _kernel_run(run, kernel, "compiled", unsettled)
 
 
@@ -1103,14 +1156,33 @@ class DenseOutput:
     every segment between jumps, one after the other). ``sol(t)`` gives the states at t
     as scipy's ``OdeSolution`` does: shape (ny,) for a scalar t, (ny, len(t)) for an array,
     evaluated in compiled code (:func:`~inerter.engine.kernels.dense_states`). ``sol.ts``: the
-    nodes (the steps' ends)."""
+    nodes (the steps' ends). `kernel`, `start`: the kernel it was integrated on and its 3D rotational
+    elements' φ_ref at the first step's start (None: 0, a whole run's), for :meth:`windings_at`."""
 
-    def __init__(self, method_code, nodes, coeffs, count):
+    def __init__(self, method_code, nodes, coeffs, count, kernel=None, start=None):
         self.method_code = int(method_code)          # 0 DOP853, 1 RK45 (kernels' codes)
         self.nodes, self.coeffs, self.count = nodes, coeffs, int(count)
         self.ts = nodes[:count + 1]
         self.t_min, self.t_max = float(self.ts[0]), float(self.ts[-1])
         self.n = coeffs.shape[2]
+        self.kernel, self.start = kernel, start
+        self._step_windings = None            # each step's φ_ref, once asked for
+
+    def windings_at(self, times):
+        """(len(times) × elements) each 3D rotational element's angle at each time on the branch the
+        integration followed, however far the times lie from each other, from the φ_ref the
+        integrator held in the step that gives the time (the step kernels._step_of takes;
+        Kernel.windings_between); None without such elements. The steps' φ_ref are those of their
+        starts, wound on from step to step as the integrator wound them (Kernel.windings_along)."""
+        if self.kernel is None or not len(self.kernel.windings) or not self.count:
+            return None
+        if self._step_windings is None:
+            self._step_windings = self.kernel.windings_along(self.nodes[:self.count], self.coeffs[:self.count, 0, :],
+                                                             self.start)
+        times = np.asarray(times, dtype=float).reshape(-1)
+        step = np.clip(np.searchsorted(self.ts, times, side="left") - 1, 0, self.count - 1)
+        return self.kernel.windings_between(self.nodes[step], self.coeffs[step, 0, :], self._step_windings[step],
+                                            times, self(times).T)
 
     def __call__(self, t):
         times = np.asarray(t, dtype=float)
@@ -1124,14 +1196,15 @@ class DenseOutput:
 class LocalDense:
     """The dense output of a compiled DOP853 or RK45 run that kept none, built where it is read:
     each sample interval a time falls in is integrated again from the run's state at the sample
-    before it (its 3D rotational elements' angles wound as the run's were there, :attr:`windings_at`),
+    before it (its 3D rotational elements' angles wound from the angles the run recorded there,
+    `windings`: samples × elements, ``run.extra["windings"]``),
     with the run's method, tolerances, inputs and α, running on through the same kinks and
     restarting at the same jumps, and its steps' polynomials kept as a whole run's are (one
     :class:`DenseOutput` per interval). It agrees with the dense output the run would have kept to
     the run's tolerance (the same equations under the same error control, from states that agree
     at the samples), not bit for bit. ``sol(t)`` as :class:`DenseOutput`; ``sol.ts``: the samples."""
 
-    def __init__(self, kernel, settings, inputs, grid, states, switches, kinks, tables):
+    def __init__(self, kernel, settings, inputs, grid, states, switches, kinks, tables, windings=None):
         self.kernel, self.settings, self.inputs, self.tables = kernel, settings, inputs, tables
         self.grid, self.states, self.switches, self.kinks = grid, states, switches, kinks
         self.ts = grid
@@ -1139,8 +1212,7 @@ class LocalDense:
         self.intervals = {}                  # sample index k → DenseOutput over [grid[k], grid[k + 1]]
         #: The right-hand side's evaluations spent integrating intervals again.
         self.evaluations = 0
-        #: k ↦ the 3D rotational elements' angles at sample k (None: those at t = 0); set by the Result.
-        self.windings_at = None
+        self.recorded = windings if windings is not None and np.size(windings) else None
 
     def pieces(self, times):
         """[(sample index k, the indices of `times` in k's interval, its DenseOutput)], integrating
@@ -1156,7 +1228,18 @@ class LocalDense:
         return out
 
     def windings(self, k):
-        return self.windings_at(k) if self.windings_at is not None else None
+        """The 3D rotational elements' angles recorded with sample k (None: none, 0 at its start)."""
+        return None if self.recorded is None else self.recorded[k]
+
+    def windings_at(self, times):
+        """As :meth:`DenseOutput.windings_at`, each time's from the steps of its interval."""
+        if self.recorded is None:
+            return None
+        times = np.asarray(times, dtype=float).reshape(-1)
+        out = np.empty((len(times), self.recorded.shape[1]))
+        for _, where, piece in self.pieces(times):
+            out[where] = piece.windings_at(times[where])
+        return out
 
     def _integrate(self, k):
         """The DenseOutput of the steps from sample k to sample k + 1."""
@@ -1179,7 +1262,7 @@ class LocalDense:
                 self.evaluations += int(evals)
                 y, t0 = seg_out[-1].copy(), t1
         nodes, coeffs, kept = keep
-        return DenseOutput(_RK_CODE[s.method], nodes, coeffs, int(kept[_k.KEPT_COUNT]))
+        return DenseOutput(_RK_CODE[s.method], nodes, coeffs, int(kept[_k.KEPT_COUNT]), kernel, self.windings(k))
 
     def __call__(self, t):
         times = np.asarray(t, dtype=float)

@@ -33,6 +33,7 @@ from inerter.elements.kinematics import (frame_force, gyroscopic, pd_magnitude, 
                                          planar_point_force, spatial_body_energy, spatial_point,
                                          spatial_point_force, spatial_turn_row)
 from inerter.elements.twist import planar_relative, spatial_twist
+from inerter.elements.winding import wound
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, COINCIDENT, DEVICE, DOT1, DOT1_ROWS, DOT2,
                                      DOT2_ROWS, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY,
                                      F_INITIAL, F_OFFSET, F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA,
@@ -1022,10 +1023,110 @@ def _wind_by_dimension(y, P):
     return lambda y, P: None
 
 
+def _wind_step_of(y, y0, h, P):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_wind_step_of, inline="always")
+def _wind_step_by_dimension(y, y0, h, P):
+    """After an accepted step of length h from y0 to y = [q, v, z]: :func:`wind3_step` in 3D;
+    nothing in 2D."""
+    if is_spatial(P):
+        def wind_step_spatial(y, y0, h, P):
+            nq = P[DIMS][N_COORD]
+            nv = nq + P[DIMS][N_VELOCITY]
+            if P[ROT_INT].shape[0]:
+                wind3_step(y[:nq], y[nq:nv], y0[:nq], y0[nq:nv], h, P)
+        return wind_step_spatial
+    return lambda y, y0, h, P: None
+
+
 @njit(cache=True)
-def wind(y, P):
-    """:func:`_wind_of` from Python (the scipy integrators on the compiled right-hand side)."""
-    _wind_of(y, P)
+def wind(y, y0, h, P):
+    """:func:`_wind_step_of` from Python (the scipy integrators on the compiled right-hand side)."""
+    _wind_step_of(y, y0, h, P)
+
+
+def _record_windings_of(out, k0, k, ny, ts, t_end, y_end, P):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_record_windings_of, inline="always")
+def _record_windings_by_dimension(out, k0, k, ny, ts, t_end, y_end, P):
+    """After a loop wrote the samples out[k0:k] at ts[k0:k] (their first `ny` columns: the state)
+    inside the accepted step that ends at (t_end, y_end), to which the integrator has wound φ_ref:
+    where `out` has a column past the state for each 3D rotational element (a whole run's samples,
+    ``compiled.integrate_compiled``), each element's angle at each sample into those columns, on
+    the branch the integration followed (:func:`_angle_from3`, from the step's end). The outputs at
+    each sample are read wound from it (:func:`signal_history`'s `windings`), not from the sample
+    before, which may lie any number of turns away. Samples exactly as wide as the state (a
+    co-simulation step's) record nothing; nothing in 2D."""
+    if is_spatial(P):
+        def record_spatial(out, k0, k, ny, ts, t_end, y_end, P):
+            nq = P[DIMS][N_COORD]
+            nv = nq + P[DIMS][N_VELOCITY]
+            for j in range(k0, k):
+                for e in range(out.shape[1] - ny):
+                    out[j, ny + e] = _angle_from3(out[j, :nq], out[j, nq:nv], y_end[:nq], y_end[nq:nv],
+                                                  ts[j] - t_end, e, P)
+        return record_spatial
+    return lambda out, k0, k, ny, ts, t_end, y_end, P: None
+
+
+def _hold_windings_of(windings, i, P):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_hold_windings_of, inline="always")
+def _hold_windings_by_dimension(windings, i, P):
+    """Before the outputs at row i of a history: each 3D rotational element's φ_ref set to
+    windings[i] (the integrator's, recorded with the sample: :func:`_record_windings_of`), from
+    which the reading there is wound; `windings` without rows: φ_ref left as the row before wound
+    it (the rows come in time order, close enough to each other); nothing in 2D."""
+    if is_spatial(P):
+        def hold_spatial(windings, i, P):
+            if windings.shape[0]:
+                rot_real = P[ROT_REAL]
+                for e in range(windings.shape[1]):
+                    rot_real[e, PHI_REF] = windings[i, e]
+        return hold_spatial
+    return lambda windings, i, P: None
+
+
+@njit(cache=True)
+def windings_along(times, states, P, out):
+    """out[i] = each 3D rotational element's φ_ref once wound on to states[i] (rows [q, v, z] at
+    `times`), row after row from the φ_ref P holds, the first row wound on to, each next one as the
+    end of a step from the row before (:func:`_wind_step_of`): where the rows are the states an
+    integration accepted, in order (a kept dense output's steps' starts), the values its integrator
+    held there, so that a time inside a step is read wound from its step's."""
+    P = _unowned(P)                 # entered from Python (_unowned)
+    rot_real = P[ROT_REAL]
+    for i in range(states.shape[0]):
+        if i == 0:
+            _wind_of(states[i], P)
+        else:
+            _wind_step_of(states[i], states[i - 1], times[i] - times[i - 1], P)
+        for e in range(out.shape[1]):
+            out[i, e] = rot_real[e, PHI_REF]
+
+
+@njit(cache=True)
+def windings_between(times0, states0, windings0, times, states, P, out):
+    """out[i, e] = element e's angle at states[i] (rows [q, v, z] at times[i]: a time of a dense
+    output) on the branch its integration followed, from the state states0[i] at times0[i] (an end
+    of the step that gives the time) where the integrator held φ_ref = windings0[i]
+    (:func:`_angle_from3`): right where the step turns it by more than half a turn too."""
+    P = _unowned(P)                 # entered from Python (_unowned)
+    rot_real = P[ROT_REAL]
+    nq = P[DIMS][N_COORD]
+    nv = nq + P[DIMS][N_VELOCITY]
+    for i in range(states.shape[0]):
+        for e in range(out.shape[1]):
+            rot_real[e, PHI_REF] = windings0[i, e]
+        for e in range(out.shape[1]):
+            out[i, e] = _angle_from3(states[i, :nq], states[i, nq:nv], states0[i, :nq], states0[i, nq:nv],
+                                     times[i] - times0[i], e, P)
 
 
 def _settle_of(q, v, qdd, P):
@@ -1182,12 +1283,14 @@ def _signals_at(t, y, inputs, alpha, need_acc, P, work, out):
 
 
 @njit(cache=True)
-def signal_history(times, states, inputs, alpha, need_acc, P, out):
-    """`signal_values` at every sample of a history (rows [q, v, z]). Returns (status, index of the
-    sample where it was raised)."""
+def signal_history(times, states, windings, inputs, alpha, need_acc, P, out):
+    """`signal_values` at every sample of a history (rows [q, v, z]), each 3D rotational element's
+    angle wound from windings[i] (:func:`_hold_windings_of`). Returns (status, index of the sample
+    where it was raised)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     work = work_arrays(P, states.shape[1], 1)
     for i in range(states.shape[0]):
+        _hold_windings_of(windings, i, P)
         st = _signals_at(times[i], states[i], inputs, alpha, need_acc, P, work, out[i])
         if st != OK:
             return st, i
@@ -1761,6 +1864,34 @@ def wind3(q, v, P):
 
 
 @njit(cache=True)
+def wind3_step(q, v, q0, v0, h, P):
+    """Move each 3D rotational element's φ_ref on to its angle at (q, v), the end of an accepted
+    step of length h from (q0, v0): the reading there on the branch nearest φ_ref + h (φ̇(q0, v0) +
+    φ̇(q, v))/2, where the rates at the step's ends carry the angle (the trapezoidal rule), not
+    nearest φ_ref. A step that turns the relative rotation by more than half a turn (an adaptive
+    method's long step where no force depends on the branch: a damper, a spring too weak to
+    matter; DOP853 at rtol 1e-3 turns a free rotor by 5.5 rad a step) still winds it on. Where the
+    step turns it by less, both branches are the same and φ_ref is the angle read from φ_ref, bit
+    for bit (:func:`inerter.elements.winding.wound` returns the reading itself)."""
+    rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
+    for e in range(rot_int.shape[0]):
+        rot_real[e, PHI_REF] = _angle_from3(q, v, q0, v0, h, e, P)
+
+
+@njit(cache=True, inline="always")
+def _angle_from3(q, v, q0, v0, h, e, P):
+    """Element e's angle at (q, v), h after (q0, v0), where it held φ_ref (h < 0: before): the
+    reading there on the branch nearest φ_ref + h (φ̇(q0, v0) + φ̇(q, v))/2, where the rates carry
+    the angle over h (the trapezoidal rule); the reading as :func:`_rotational3` winds it from
+    φ_ref, bit for bit, where both branches are the same (:func:`inerter.elements.winding.wound`
+    returns it as it is)."""
+    rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
+    at = _rotational3(q, v, e, rot_int, rot_real)
+    rate0 = _rotational3(q0, v0, e, rot_int, rot_real)[5]
+    return wound(rot_real[e, PHI_REF] + 0.5 * h * (rate0 + at[5]), at[4])
+
+
+@njit(cache=True)
 def signal_values3(q, v, z, qdd, P, out):
     """Every point's position and velocity (6 per point), every translational element's s_rel,
     v_rel, axial force (an inerter's from Eq. 9 or 8 at the accelerations qdd), power and stored energy
@@ -2092,6 +2223,7 @@ def _stop_at_change_point(loop, method, hdr, y, y_prev, f_prev, f, dense, Pm, t,
         if t_stop < 0.0:
             return OK, t, k
     limit = t + 1e-12 * max(1.0, t) if loop == LOOP_REACHED else t_stop      # as _rk_sample_covered
+    sampled = k
     while k < ts.shape[0] and ts[k] <= limit:
         if method == NATIVE_RK4:
             h = hdr[RK_H_LAST]
@@ -2099,6 +2231,7 @@ def _stop_at_change_point(loop, method, hdr, y, y_prev, f_prev, f, dense, Pm, t,
         else:
             _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
         k += 1
+    _record_windings_of(out, sampled, k, ny, ts, t, y, P)
     if k == ts.shape[0]:
         return OK, t, k
     y[:] = stop[0]
@@ -2617,6 +2750,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     steps_before = hdr[RK_STEPS]
     status = OK
     k = _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k0, out)
+    _record_windings_of(out, k0, k, y.shape[0], ts, t, y, P)
     ik = np.searchsorted(kinks, t, side="right")             # the next kink: kinks[ik] > t
     while k < ts.shape[0] and status == OK:
         if keeping and keep[2][KEPT_COUNT] >= keep[1].shape[0]:
@@ -2649,7 +2783,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
             y_prev[i] = y[i]
             y[i] = y_new[i]
             f[i] = f_new[i]
-        _wind_of(y, P)
+        _wind_step_of(y, y_prev, h, P)
         hdr[RK_T_PREV] = t
         hdr[RK_H_LAST] = h
         if keeping:
@@ -2663,7 +2797,9 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
             if status != OK or k == ts.shape[0]:
                 h_abs = abs(h)
                 break
+        sampled = k
         k = _rk_sample_covered(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
+        _record_windings_of(out, sampled, k, y.shape[0], ts, t, y, P)
         if hdr[RK_STEPS] - steps_before > max_steps:
             status = MAX_STEPS
     hdr[RK_T] = t
@@ -2793,10 +2929,11 @@ def _signal_at(t, y, inputs, alpha, need_acc, P, work, raw, index, element, slot
 
 
 @njit(cache=True)
-def signal_column(times, states, inputs, alpha, index, element, slot, need_acc, P, raw, out):
+def signal_column(times, states, windings, inputs, alpha, index, element, slot, need_acc, P, raw, out):
     """out[k] = the signal at `index` of signal_values' layout at each sample of a history (rows
     [q, v, z]) (:func:`_signal_at`: `element` ≥ 0, the signal is that translational element's
-    output `slot`, evaluated alone). `raw`: scratch of the layout's length. Returns (status, the
+    output `slot`, evaluated alone), the 3D rotational elements' angles wound from windings[k]
+    (:func:`_hold_windings_of`). `raw`: scratch of the layout's length. Returns (status, the
     first sample where it could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = states.shape[1]
@@ -2812,6 +2949,7 @@ def signal_column(times, states, inputs, alpha, index, element, slot, need_acc, 
         if point >= 0:
             out[k] = _point_value_of(q, v, point, c, P)
         else:
+            _hold_windings_of(windings, k, P)
             st, out[k] = _signal_at(times[k], y, inputs, alpha, need_acc, P, work, raw, index, element, slot)
             if st != OK:
                 return st, k
@@ -2824,11 +2962,12 @@ DENSE_BLOCK = 256
 
 
 @njit(cache=True)
-def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, index, element, slot, need_acc, P, raw,
-                 out):
+def dense_signal(method, nodes, coeffs, count, times, comps, windings, inputs, alpha, index, element, slot, need_acc,
+                 P, raw, out):
     """out[k] = the signal at `index` of signal_values' layout at times[k], on the state from a kept
     dense output (:func:`_dense_block`, only the components `comps` the signal reads; `element`,
-    `slot`: :func:`_signal_at`). Returns (status, the first time where it could not be evaluated)."""
+    `slot`: :func:`_signal_at`), the 3D rotational elements' angles wound from windings[k]
+    (:func:`_hold_windings_of`). Returns (status, the first time where it could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = coeffs.shape[2]
     nq = P[DIMS][N_COORD]
@@ -2849,6 +2988,7 @@ def dense_signal(method, nodes, coeffs, count, times, comps, inputs, alpha, inde
             if point >= 0:
                 out[k] = _point_value_of(q, v, point, c, P)
             else:
+                _hold_windings_of(windings, k, P)
                 st, out[k] = _signal_at(times[k], y, inputs, alpha, need_acc, P, work, raw, index, element, slot)
                 if st != OK:
                     return st, k
@@ -3067,19 +3207,21 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
             return TERMINALS_MEET, k, steps, evals, t
         if euler_lock_within(y, y_new, P):
             return GIMBAL_LOCK, k, steps, evals, t
+        _wind_step_of(y_new, y, h, P)
         if rarely(P[DIMS][LOOPS] != 0):
             st, t_stop, k = _rk4_loop_watch(t, y, f, t_new, y_new, f_new, grid, k, out, inputs, alpha, P, work,
                                             monitor)
             if st != OK:
                 y[:] = y_new                # the state it stopped at (_stop_at_change_point)
                 return st, k, steps, evals, t_stop
+        sampled = k
         while k < ngrid and grid[k] <= t_new + 1e-12 * max(1.0, t_new):
             _hermite(y, f, y_new, f_new, h, (grid[k] - t) / h, out, k)
             k += 1
+        _record_windings_of(out, sampled, k, ny, grid, t_new, y_new, P)
         for i in range(ny):
             y[i] = y_new[i]
             f[i] = f_new[i]
-        _wind_of(y, P)
         t = t_new
         if steps > max_steps:
             return MAX_STEPS, k, steps, evals, t

@@ -238,7 +238,7 @@ class StepMonitor:
                     f"singularity" + self.mech.diagnose(solver.y), t_old)
         else:
             self.small = 0
-        self.mech.wind(solver.y)
+        self.mech.wind(solver.y, y_old, h)
 
     def _stiffness(self, solver, h):
         K = getattr(solver, "K", None)
@@ -372,6 +372,7 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
     first_step = None
     max_drift = mech.constraint_residual(y[:n])
     monitor = StepMonitor(mech, settings.method, settings.max_steps)
+    record = _WindingRecord(mech, len(grid))
     solver = None
     try:
         while t0 < settings.stop_time:
@@ -402,9 +403,7 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
                 dense = solver.dense_output()
                 ts.append(solver.t)
                 interpolants.append(dense)
-                while k < len(grid) and grid[k] <= solver.t + 1e-12 * max(1.0, solver.t):
-                    out[k] = dense(grid[k])
-                    k += 1
+                k = _step_samples(grid, k, solver, dense, out, record)
             evaluations += solver.nfev
             y = solver.y
             if project:
@@ -432,7 +431,77 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
         from scipy.integrate import OdeSolution
 
         dense = OdeSolution(np.array(ts), interpolants)
-    return Run(grid[:k].copy(), out[:k].copy(), dense, status, message, steps, evaluations, cpu, max_drift)
+    return Run(grid[:k].copy(), out[:k].copy(), dense, status, message, steps, evaluations, cpu, max_drift,
+               record.extra(k))
+
+
+def _step_samples(grid, k, solver, dense, out, record):
+    """out[k:] = the dense output of the step that has just ended (at solver.t), at the times of the
+    grid it covers (within 1e-12·max(1 s, t) of its end), recorded with their 3D rotational
+    elements' angles (:class:`_WindingRecord`); the first k not written."""
+    first, t = k, solver.t
+    while k < len(grid) and grid[k] <= t + 1e-12 * max(1.0, t):
+        out[k] = dense(grid[k])
+        k += 1
+    record.step(grid[first:k], out[first:k], t, solver.y)
+    return k
+
+
+class _WindingRecord:
+    """What :func:`integrate` records of its 3D rotational elements (nothing without them): after
+    each accepted step, the φ_ref the step wound them to (at its end), and their angle at each
+    sample the step covers, on the branch the integration followed (``mech.angles_between``, from
+    the step's end). A sample's outputs are then read wound from its own angle (``Result``), not
+    from the sample before, which may lie any number of turns away."""
+
+    def __init__(self, mech, samples):
+        self.mech = mech
+        count = len(mech.windings) if hasattr(mech, "windings") else 0
+        self.samples = np.zeros((samples, count)) if count else None     # 0 at t = 0
+        self.steps = []
+        self.k = 1
+
+    def step(self, times, states, t, y):
+        """After an accepted step to (t, y) (wound: StepMonitor.after_step) that gave the samples
+        `states` at `times`."""
+        if self.samples is None:
+            return
+        held = np.array(self.mech.windings, dtype=float)
+        self.steps.append(held)
+        if len(times):
+            ends = np.ones(len(times))
+            self.samples[self.k:self.k + len(times)] = self.mech.angles_between(
+                t * ends, np.tile(y, (len(times), 1)), np.tile(held, (len(times), 1)), times, states)
+            self.k += len(times)
+
+    def extra(self, k) -> dict:
+        """``run.extra``'s "windings" (samples × elements) and "step_windings" (steps × elements,
+        in the order of the dense output's segments); {} without such elements."""
+        if self.samples is None:
+            return {}
+        steps = np.array(self.steps, dtype=float).reshape(-1, self.samples.shape[1])
+        return {"windings": self.samples[:k].copy(), "step_windings": steps}
+
+
+def dense_windings(run, times, mech):
+    """(len(times) × elements) the 3D rotational elements' angles at each time of the run's dense
+    output, on the branch its integration followed: a compiled run's dense output knows its own
+    (``windings_at``); scipy's, from the φ_ref recorded at the end of the step (the segment
+    OdeSolution takes) that gives the time (``run.extra["step_windings"]``), by `mech` (the run's:
+    its kernel where it has one, ``angles_between``). None where the run recorded none."""
+    sol = run.dense
+    if hasattr(sol, "windings_at"):
+        return sol.windings_at(times)
+    steps = run.extra.get("step_windings")
+    if sol is None or steps is None or not len(steps):
+        return None
+    kernel = run.extra.get("kernel")
+    between = kernel.windings_between if getattr(kernel, "compiled", False) else mech.angles_between
+    t = np.asarray(times, dtype=float).reshape(-1)
+    i = np.clip(np.searchsorted(sol.ts, t, side="left") - 1, 0, len(steps) - 1)
+    ends = np.asarray(sol.ts, dtype=float)[i + 1]
+    return between(ends, np.asarray(sol(ends)).T.reshape(len(t), -1), steps[i], t,
+                   np.asarray(sol(t)).T.reshape(len(t), -1))
 
 
 #: Methods whose integration a :class:`Stepper` keeps running across communication points (the

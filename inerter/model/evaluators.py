@@ -401,6 +401,10 @@ class SpatialRotationalElement:
         """After an accepted step to q: the next angles are read on the branch of this one."""
         self.reference = self.geometry(q, np.zeros(len(q)))[0]
 
+    def rate(self, q, v):
+        """φ̇ at (q, v) (Mechanism.wind's prediction of the angle at a step's end)."""
+        return self.geometry(q, v)[1]
+
     def geometry(self, q, v):
         """(φ, φ̇, g, A_a, A_b): twist.spatial_twist."""
         Aa, wa = self.fa.evaluate(q, v)

@@ -386,12 +386,31 @@ class Mechanism:
                     + (f" from t = {t_old:.6g} s" if t_old is not None else "") + "), where the angle rates are "
                     "undefined; use orientation = \"quaternion\" (the default)", t)
 
-    def wind(self, y):
-        """After an accepted step to the state y = [q, v, z] (or at each sample of a history, in time
-        order from t = 0): each 3D rotational element's φ_ref moves on to its angle there, so that
-        its angle winds on past half a turn (inerter.elements.winding); nothing in 2D."""
+    def wind(self, y, y_old=None, h=0.0):
+        """After an accepted step of length h from y_old to the state y = [q, v, z] (or at each
+        sample of a history, in time order from t = 0, without y_old): each 3D rotational element's
+        φ_ref moves on to its angle there, so that its angle winds on past half a turn
+        (inerter.elements.winding); nothing in 2D. After a step, the angle is read on the branch
+        nearest φ_ref + h (φ̇(y_old) + φ̇(y))/2, where the rates carry it, so that a step turning it
+        by more than half a turn winds it on too (kernels.wind3_step)."""
+        n, nv = self.nq, self.nq + self.n
         for e in self.winding:
-            e.wind(y[:self.nq])
+            if y_old is not None:
+                e.reference = e.reference + 0.5 * h * (e.rate(y_old[:n], y_old[n:nv]) + e.rate(y[:n], y[n:nv]))
+            e.wind(y[:n])
+
+    def angles_between(self, times0, states0, windings0, times, states) -> np.ndarray:
+        """(rows × elements) each 3D rotational element's angle at each row of `states` (at `times`),
+        on the branch its integration followed, from the row of `states0` (at `times0`: an end of
+        the step that gives the time) where the integrator held φ_ref = `windings0`: the branch
+        the rates at both carry the angle to (:meth:`wind`); φ_ref as it was afterwards."""
+        out = np.empty((len(states), len(self.winding)))
+        with self.wound_from_start():
+            for i in range(len(states)):
+                self.windings = windings0[i]
+                self.wind(states[i], states0[i], times[i] - times0[i])
+                out[i] = self.windings
+        return out
 
     @property
     def windings(self) -> np.ndarray:

@@ -169,6 +169,10 @@ class OracleSpatialRotational(OracleRotational):
         """After an accepted step to q: the next angles are read on the turn of this one."""
         self.reference = self.angle(q, np.zeros(max(f.vi for f in (self.fa, self.fb)) + 6)).v
 
+    def rate(self, q, v):
+        """φ̇ = ∇φ·v at (q, v) (Mechanism.wind's prediction of the angle at a step's end)."""
+        return self.angle(q, v).d1
+
     def potential(self, q):
         if self.kind != "rotational_spring":
             return 0.0

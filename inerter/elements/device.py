@@ -102,9 +102,10 @@ shift of order v_s; tests/test_device_efficiency.py). With v_s = 0 (the default)
 and F and q̈ jump, as at an unregularised Coulomb reversal: the integrator meets the jump by its
 error control alone, which rejects and shrinks the steps that straddle it (to ~1e-11 s at rtol
 1e-10; no event: the state stays continuous, only q̈ jumps). A mount does not go with the
-efficiency (:func:`check_device`: its gyroscopic block spins the flywheel with b, not b_eff); the
-oracle and the linearisation refuse it (no energy or dissipation function gives the mode's
-dependence on sign(L̈)).
+efficiency (:func:`check_device`: its gyroscopic block spins the flywheel with b, not b_eff). The
+linearisation refuses the efficiency (no energy or dissipation function gives the mode's
+dependence on sign(L̈)); the oracle derives it from this definition on its own (every sign
+assignment of the modes tried, inerter/oracle/efficiency.py).
 
 *In series* (with ``device.compliance``, and so with backlash): the screw turns with the inerter's
 own stroke u (u̇ = L̇ − ṡ, a state), driven by the series force F less the drag F_d(u̇) on it. The

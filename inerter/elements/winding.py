@@ -27,3 +27,13 @@ def wound(reference, reading):
     # the reading plus whole turns (not reference + wrapped offset): a reading within half a turn of
     # the reference is returned as it is, bit for bit, so an element that never winds is unchanged
     return reading - turn * math.ceil((reading - reference - math.pi) / turn)
+
+
+@law
+def carried(reference, h, rate_start, rate_end):
+    """Where the rates at the two ends of a step of length h carry an angle that was `reference`
+    at its start: reference + h (φ̇_start + φ̇_end)/2 (the trapezoidal rule). The angle at the
+    step's end is the reading :func:`wound` from this, not from `reference`, so that a step that
+    turns it by more than half a turn (an adaptive method's long step where no force depends on the
+    branch) still winds it on; where the step turns it by less, both branches are the same."""
+    return reference + 0.5 * h * (rate_start + rate_end)

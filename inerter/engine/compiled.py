@@ -327,8 +327,15 @@ def _monitor(method) -> np.ndarray:
     ratio below which the joints' rows count as dependent (``mechanism.DEPENDENT_RATIO``: the
     kernels' change-point watch, kernels.loop_watch), in the slots kernels.MONITOR_*."""
     from inerter.engine import simulation as sim
-    return np.array([sim.STIFFNESS_BOUND.get(method, 0.0), sim.STIFFNESS_EVERY, sim.STIFFNESS_HITS,
-                     sim.COLLAPSE_RELATIVE, sim.COLLAPSE_STEPS, sim.TRIAL_SHRINK, DEPENDENT_RATIO], dtype=float)
+    monitor = np.zeros(_k.MONITOR_SIZE)
+    monitor[_k.MONITOR_STIFF_BOUND] = sim.STIFFNESS_BOUND.get(method, 0.0)
+    monitor[_k.MONITOR_STIFF_EVERY] = sim.STIFFNESS_EVERY
+    monitor[_k.MONITOR_STIFF_HITS] = sim.STIFFNESS_HITS
+    monitor[_k.MONITOR_COLLAPSE_RELATIVE] = sim.COLLAPSE_RELATIVE
+    monitor[_k.MONITOR_COLLAPSE_STEPS] = sim.COLLAPSE_STEPS
+    monitor[_k.MONITOR_TRIAL_SHRINK] = sim.TRIAL_SHRINK
+    monitor[_k.MONITOR_DEPENDENT] = DEPENDENT_RATIO
+    return monitor
 
 
 #: The statuses of an evaluation at a state where the accelerations cannot be evaluated (a singular
@@ -964,10 +971,9 @@ _TABLEAU_A = [name for name, _ in _k.TABLEAU].index("A") if _k is not None else 
 
 
 def _gaps_stale(scratch):
-    """Mark the terminals' gaps of kernels.cosim_scratch (gaps, z, fresh, keep) as not those of the
-    integration's state: the next step computes them at its start (fresh[0] = 0)."""
-    _gaps, _z, fresh, _keep = scratch
-    fresh[0] = 0.0
+    """Mark the terminals' gaps of kernels.cosim_scratch as not those of the integration's state:
+    the next step computes them at its start."""
+    scratch[_k.SCRATCH_FRESH][0] = 0.0
 
 
 def _tables(method):
@@ -1112,11 +1118,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         why = failure_text(kernel, status, settings.method, h if settings.method != "RK4" else settings.step,
                            states[-1] if stopped is None else stopped, grid[k - 1], int(settings.max_steps))
         message = f"at t = {t_reached:.6g} s: the {settings.method} integrator failed: {why}"
-    sol = None
-    nodes, coeffs, kept = keep
-    if kept[_k.KEPT_COUNT] > 0:
-        sol = DenseOutput(_RK_CODE[settings.method], nodes, coeffs, int(kept[_k.KEPT_COUNT]), kernel)
-    elif tables is not None and k > 1:
+    sol = DenseOutput.of_kept(settings.method, keep, kernel)
+    if sol is None and tables is not None and k > 1:
         sol = LocalDense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, tables, windings)
     run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
                       int(evals), cpu, None)
@@ -1167,6 +1170,14 @@ class DenseOutput:
         self.n = coeffs.shape[2]
         self.kernel, self.start = kernel, start
         self._step_windings = None            # each step's φ_ref, once asked for
+
+    @classmethod
+    def of_kept(cls, method, keep, kernel, start=None):
+        """The dense output of the steps kernels.rk_advance kept in `keep` (nodes, coeffs, kept) in a
+        run of `method` on `kernel` (`start`: as the constructor's), or None where it kept none."""
+        nodes, coeffs, kept = keep
+        count = int(kept[_k.KEPT_COUNT])
+        return cls(_RK_CODE[method], nodes, coeffs, count, kernel, start) if count > 0 else None
 
     def windings_at(self, times):
         """(len(times) × elements) each 3D rotational element's angle at each time on the branch the
@@ -1261,8 +1272,7 @@ class LocalDense:
                                           f"({failure_text(kernel, status, s.method, 0.0, y, t0)})", t0)
                 self.evaluations += int(evals)
                 y, t0 = seg_out[-1].copy(), t1
-        nodes, coeffs, kept = keep
-        return DenseOutput(_RK_CODE[s.method], nodes, coeffs, int(kept[_k.KEPT_COUNT]), kernel, self.windings(k))
+        return DenseOutput.of_kept(s.method, keep, kernel, self.windings(k))
 
     def __call__(self, t):
         times = np.asarray(t, dtype=float)

@@ -33,7 +33,7 @@ from inerter.elements.kinematics import (frame_force, gyroscopic, pd_magnitude, 
                                          planar_point_force, spatial_body_energy, spatial_point,
                                          spatial_point_force, spatial_turn_row)
 from inerter.elements.twist import planar_relative, spatial_twist
-from inerter.elements.winding import wound
+from inerter.elements.winding import carried, wound
 from inerter.elements.layout import (AXIS, BODY_A, BODY_B, COINCIDENT, DEVICE, DOT1, DOT1_ROWS, DOT2,
                                      DOT2_ROWS, EFFICIENCY, F_AMPLITUDE, F_FREQUENCY,
                                      F_INITIAL, F_OFFSET, F_PHASE, F_TIME, F_VALUE, FORCE_FUNCTION, FORCE_POINT, INERTIA,
@@ -71,7 +71,14 @@ OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLL
 # bound, how often it is tested, its firings in a row that stop a run; the collapse's relative step
 # and steps in a row; the trial shrink; the smallest/largest singular value ratio of C_v below which
 # the joints' rows count as dependent (Mechanism.DEPENDENT_RATIO, :func:`loop_watch`).
-MONITOR_DEPENDENT = 6
+MONITOR_STIFF_BOUND, MONITOR_STIFF_EVERY, MONITOR_STIFF_HITS, MONITOR_COLLAPSE_RELATIVE, MONITOR_COLLAPSE_STEPS, \
+    MONITOR_TRIAL_SHRINK, MONITOR_DEPENDENT = range(7)
+MONITOR_SIZE = 7
+# The arrays of work_arrays, in the order of WORK (their names): the kernels take them by these slots.
+W_AB, W_RHS, W_GEN, W_ACC, W_K, W_Y_NEW, W_F_NEW, W_YS = range(8)
+# cosim_scratch's arrays, in the order of COSIM: the terminals' gaps, the zero velocities they are
+# evaluated with, fresh[0] (1: the gaps are those at the integration's y), the keep that keeps nothing.
+SCRATCH_GAPS, SCRATCH_Z, SCRATCH_FRESH, SCRATCH_KEEP = range(4)
 
 
 
@@ -1063,14 +1070,22 @@ def _record_windings_by_dimension(out, k0, k, ny, ts, t_end, y_end, P):
     co-simulation step's) record nothing; nothing in 2D."""
     if is_spatial(P):
         def record_spatial(out, k0, k, ny, ts, t_end, y_end, P):
-            nq = P[DIMS][N_COORD]
-            nv = nq + P[DIMS][N_VELOCITY]
-            for j in range(k0, k):
-                for e in range(out.shape[1] - ny):
-                    out[j, ny + e] = _angle_from3(out[j, :nq], out[j, nq:nv], y_end[:nq], y_end[nq:nv],
-                                                  ts[j] - t_end, e, P)
+            if out.shape[1] > ny:
+                record_windings3(out, k0, k, ny, ts, t_end, y_end, P)
         return record_spatial
     return lambda out, k0, k, ny, ts, t_end, y_end, P: None
+
+
+@njit(cache=True)
+def record_windings3(out, k0, k, ny, ts, t_end, y_end, P):
+    """:func:`_record_windings_of` in 3D: a call, not inlined, so that the twist's evaluation
+    (:func:`_angle_from3`) is compiled once rather than into every sampling site of every
+    integration loop."""
+    nq = P[DIMS][N_COORD]
+    nv = nq + P[DIMS][N_VELOCITY]
+    for j in range(k0, k):
+        for e in range(out.shape[1] - ny):
+            out[j, ny + e] = _angle_from3(out[j, :nq], out[j, nq:nv], y_end[:nq], y_end[nq:nv], ts[j] - t_end, e, P)
 
 
 def _hold_windings_of(windings, i, P):
@@ -1079,10 +1094,11 @@ def _hold_windings_of(windings, i, P):
 
 @overload(_hold_windings_of, inline="always")
 def _hold_windings_by_dimension(windings, i, P):
-    """Before the outputs at row i of a history: each 3D rotational element's φ_ref set to
-    windings[i] (the integrator's, recorded with the sample: :func:`_record_windings_of`), from
-    which the reading there is wound; `windings` without rows: φ_ref left as the row before wound
-    it (the rows come in time order, close enough to each other); nothing in 2D."""
+    """Before the outputs at row i of a history: each 3D rotational element's PHI_REF set to
+    windings[i], its angle at that sample on the integration's branch (recorded with the sample,
+    :func:`_record_windings_of`), so that the reading there is wound to that angle itself;
+    `windings` without rows: PHI_REF left as the row before wound it (the rows come in time order,
+    close enough to each other); nothing in 2D."""
     if is_spatial(P):
         def hold_spatial(windings, i, P):
             if windings.shape[0]:
@@ -1888,7 +1904,7 @@ def _angle_from3(q, v, q0, v0, h, e, P):
     rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
     at = _rotational3(q, v, e, rot_int, rot_real)
     rate0 = _rotational3(q0, v0, e, rot_int, rot_real)[5]
-    return wound(rot_real[e, PHI_REF] + 0.5 * h * (rate0 + at[5]), at[4])
+    return wound(carried(rot_real[e, PHI_REF], h, rate0, at[5]), at[4])
 
 
 @njit(cache=True)
@@ -2026,7 +2042,7 @@ def joint_jacobian(t, y, inputs, alpha, P, work, Cv):
     """Cv = C_v (m × n, the joints' rows of Eq. 33's matrix) at the state y, read back out of the
     band storage the assembly fills (:func:`_addK`), so that the joints' rows are written once, in
     the assembly; `work`: :func:`work_arrays` (AB, rhs, gen are overwritten)."""
-    AB, rhs, gen = work[0], work[1], work[2]
+    AB, rhs, gen = work[W_AB], work[W_RHS], work[W_GEN]
     dims, perm = P[DIMS], P[PERM]
     n, nq, off = dims[N_VELOCITY], dims[N_COORD], dims[KL]
     _assemble_of(t, y[:nq], y[nq:nq + n], y[nq + n:], inputs, alpha, P, AB, rhs, gen)
@@ -2473,7 +2489,7 @@ def _rk_shape(method):
 def _rk_start(hdr, y, f, t_bound, order, rtol, atol, inputs, alpha, P, work, before):
     """A fresh integration's derivative at its start and, where RK_H is 0, its first step chosen as
     scipy's select_initial_step does. Returns the right-hand side's status."""
-    AB, rhs, gen, acc = work[0], work[1], work[2], work[3]
+    AB, rhs, gen, acc = work[W_AB], work[W_RHS], work[W_GEN], work[W_ACC]
     t = hdr[RK_T]
     st = _rhs(min(t, before), y, inputs, alpha, P, AB, rhs, gen, acc, f)
     hdr[RK_EVALS] += 1
@@ -2494,7 +2510,7 @@ def _rk_stages(first, last, hdr, t, h, y, inputs, alpha, P, A, C, work, before):
     """Stages K[s] for first ≤ s < last of a step of length h from (t, y): the derivative at
     y + h Σ_j A[s, j] K[j] and t + C[s] h (clipped `before` a discontinuity). Returns the status of
     the first right-hand side that failed (OK: none)."""
-    AB, rhs, gen, acc, K, ys = work[0], work[1], work[2], work[3], work[4], work[7]
+    AB, rhs, gen, acc, K, ys = work[W_AB], work[W_RHS], work[W_GEN], work[W_ACC], work[W_K], work[W_YS]
     for s in range(first, last):
         for i in range(y.shape[0]):
             acc_s = 0.0
@@ -2513,7 +2529,8 @@ def _rk_trial(n_stages, hdr, t, h, y, f, inputs, alpha, P, A, B, C, work, before
     """The stages K[0..n_stages] of one trial step of length h from (t, y) with derivative f, its
     solution y_new and the derivative f_new there (K[n_stages] = f_new). Returns the status of the
     first right-hand side that failed (OK: none)."""
-    AB, rhs, gen, acc, K, y_new, f_new = work[0], work[1], work[2], work[3], work[4], work[5], work[6]
+    AB, rhs, gen, acc, K = work[W_AB], work[W_RHS], work[W_GEN], work[W_ACC], work[W_K]
+    y_new, f_new = work[W_Y_NEW], work[W_F_NEW]
     ny = y.shape[0]
     for i in range(ny):
         K[0, i] = f[i]
@@ -2571,7 +2588,7 @@ def _rk_attempt(method, hdr, t, h_abs, kink, t_bound, y, f, rtol, atol, inputs, 
     """Trial steps from (t, y) until the error control accepts one, as scipy's ``_step_impl``: each
     clipped to `t_bound` and to end on the next `kink`; a trial whose stages cannot be evaluated
     (singular, not finite, terminals that meet: a wild stage of too long a step) is tried again
-    `monitor[5]` times as long, as inerter.engine.simulation does with scipy's integrators. Returns (status, t_new, h,
+    `monitor[MONITOR_TRIAL_SHRINK]` times as long, as inerter.engine.simulation does with scipy's integrators. Returns (status, t_new, h,
     the step size proposed next): STEP_TOO_SMALL (or the failing stage's status) below 10 ulp of t.
     A clipped step accepted at its first trial proposes the size proposed before the clip (see
     :func:`rk_advance`)."""
@@ -2595,12 +2612,12 @@ def _rk_attempt(method, hdr, t, h_abs, kink, t_bound, y, f, rtol, atol, inputs, 
         st = _rk_trial(n_stages, hdr, t, h, y, f, inputs, alpha, P, A, B, C, work, before)
         if st == SINGULAR or st == NOT_FINITE or st == TERMINALS_MEET:
             trial_failure = st
-            h_abs *= monitor[5]
+            h_abs *= monitor[MONITOR_TRIAL_SHRINK]
             rejected = True
             continue
         if st != OK:
             return st, t, h, h_abs
-        err = _rk_error(method, n_stages, h, y, work[5], work[4], E, E3, rtol, atol)
+        err = _rk_error(method, n_stages, h, y, work[W_Y_NEW], work[W_K], E, E3, rtol, atol)
         if err < 1.0:
             factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** err_exp)
             if rejected:
@@ -2616,9 +2633,10 @@ def _rk_attempt(method, hdr, t, h_abs, kink, t_bound, y, f, rtol, atol, inputs, 
 @njit(cache=True)
 def _rk_watch(n_stages, hdr, t_new, h, y, y_new, K, A, monitor):
     """After an accepted step, the watch of :func:`rk_advance`'s docstring: Hairer's stiffness test
-    (STIFF after `monitor[2]` firings in a row) and a step size collapsing (COLLAPSED), with its
+    (STIFF after `monitor[MONITOR_STIFF_HITS]` firings in a row) and a step size collapsing (COLLAPSED), with its
     counters in `hdr` (RK_HITS, RK_CALM, RK_SMALL). Returns OK or the status that stops the run."""
-    if monitor[0] > 0.0 and (hdr[RK_HITS] > 0 or int(hdr[RK_STEPS]) % int(monitor[1]) == 0):
+    if monitor[MONITOR_STIFF_BOUND] > 0.0 and (hdr[RK_HITS] > 0
+                                           or int(hdr[RK_STEPS]) % int(monitor[MONITOR_STIFF_EVERY]) == 0):
         num = 0.0
         den = 0.0
         last = n_stages - 1
@@ -2631,18 +2649,18 @@ def _rk_watch(n_stages, hdr, t_new, h, y, y_new, K, A, monitor):
             den += d * d
             num += e * e
         if den > 0.0:
-            if abs(h) * math.sqrt(num / den) > monitor[0]:
+            if abs(h) * math.sqrt(num / den) > monitor[MONITOR_STIFF_BOUND]:
                 hdr[RK_CALM] = 0.0
                 hdr[RK_HITS] += 1
-                if hdr[RK_HITS] >= monitor[2]:
+                if hdr[RK_HITS] >= monitor[MONITOR_STIFF_HITS]:
                     return STIFF
             else:
                 hdr[RK_CALM] += 1
                 if hdr[RK_CALM] >= 6:
                     hdr[RK_HITS] = 0.0
-    if abs(h) < monitor[3] * max(1.0, abs(t_new)):
+    if abs(h) < monitor[MONITOR_COLLAPSE_RELATIVE] * max(1.0, abs(t_new)):
         hdr[RK_SMALL] += 1
-        if hdr[RK_SMALL] >= monitor[4]:
+        if hdr[RK_SMALL] >= monitor[MONITOR_COLLAPSE_STEPS]:
             return COLLAPSED
     else:
         hdr[RK_SMALL] = 0.0
@@ -2654,7 +2672,7 @@ def _rk_dense(method, hdr, t, h, y, inputs, alpha, P, A, C, Dm, Pm, work, before
     """The dense-output coefficients of the accepted step from (t, y) of length h into `dense`, as
     scipy's ``_dense_output_impl`` (DOP853's three extra stages are evaluated here). Returns the
     status of the right-hand side."""
-    K, y_new, f_new = work[4], work[5], work[6]
+    K, y_new, f_new = work[W_K], work[W_Y_NEW], work[W_F_NEW]
     n_stages, _ = _rk_shape(method)
     ny = y.shape[0]
     if method != 0:
@@ -2736,7 +2754,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     on failure y, f and the last step's data are those of the last good node (`gaps` may be the
     failed step's), except at a change point (CHANGE_POINT), where y is the state it stopped at."""
     work = _unowned(work)
-    K, y_new, f_new = work[4], work[5], work[6]
+    K, y_new, f_new = work[W_K], work[W_Y_NEW], work[W_F_NEW]
     work[CV_KNOWN][0] = 0.0         # C_v at y is not known yet (loop_watch): y may have been set anew
     n_stages, order = _rk_shape(method)
     keeping = keep[2][KEPT_ON] == 1
@@ -3124,7 +3142,7 @@ def _rk_loop_watch(method, hdr, y, y_prev, f, dense, t, ts, k, out, inputs, alph
     status, t_stop, k = _stop_at_change_point(loop, method, hdr, y, y_prev, y_prev, f, dense, Pm, t, ts, k, out,
                                               inputs, alpha, P, work, monitor)
     if status == OK and k == ts.shape[0]:
-        return OK, _step_back(hdr, y, f, y_prev, work[4][0], P, gaps, z), k
+        return OK, _step_back(hdr, y, f, y_prev, work[W_K][0], P, gaps, z), k
     return status, t_stop, k
 
 
@@ -3139,7 +3157,7 @@ def _rk4_loop_watch(t, y, f, t_new, y_new, f_new, grid, k, out, inputs, alpha, P
     hdr = np.zeros(RK_HEADER)
     hdr[RK_T_PREV] = t
     hdr[RK_H_LAST] = t_new - t
-    return _stop_at_change_point(loop, NATIVE_RK4, hdr, y_new, y, f, f_new, work[4], work[4], t_new, grid, k, out,
+    return _stop_at_change_point(loop, NATIVE_RK4, hdr, y_new, y, f, f_new, work[W_K], work[W_K], t_new, grid, k, out,
                                  inputs, alpha, P, work, monitor)
 
 
@@ -3303,9 +3321,11 @@ WORK = (("AB", "f2"), ("rhs", "f1"), ("gen", "f1"), ("acc", "f1"), ("K", "f2"), 
         ("ys", "f1"), ("sig_acc", "f1"), ("cv_start", "f2"), ("cv_end", "f2"), ("cv_work", "f2"), ("cv_gram", "f2"),
         ("cv_known", "f1"))
 assert [name for name, _ in WORK[CV_START:]] == ["cv_start", "cv_end", "cv_work", "cv_gram", "cv_known"]
+assert [name for name, _ in WORK[:W_YS + 1]] == ["AB", "rhs", "gen", "acc", "K", "y_new", "f_new", "ys"]
 #: cosim_scratch (gaps, z, fresh, keep), keep's coefficients (a (0, 1, ny) array) left out: native_step
 #: makes them an empty view of `nodes`.
 COSIM = (("gaps", "f2"), ("z", "f1"), ("fresh", "f1"), ("nodes", "f1"), ("kept", "i1"))
+assert [name for name, _ in COSIM][SCRATCH_FRESH] == "fresh"
 NATIVE_SLOTS = (RK_STATE + (("ts", "f1"), ("out", "f2"), ("inputs", "f1")) + PARAMS + TABLEAU
                 + (("monitor", "f1"),) + WORK
                 + (("raw", "f1"), ("order", "i1"), ("values", "f1"), ("clock", "f1"))
@@ -3527,7 +3547,7 @@ def native_step_on(tab, t, h, P):
                                       tableau, _f1(tab, S_MONITOR), work, tab[TABLE_NEED_ACC] != 0, raw, order,
                                       values, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), scratch)
         if st != OK or sst != OK:
-            scratch[2][0] = 0.0                 # the Python path restores y from the backup
+            scratch[SCRATCH_FRESH][0] = 0.0     # the Python path restores y from the backup
             return 0
     clock[CLOCK_TIME] = t_end
     clock[CLOCK_BOUND] = bound

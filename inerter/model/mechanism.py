@@ -23,6 +23,7 @@ import numpy as np
 from inerter.model import evaluators as el
 from inerter import elements
 from inerter.elements import kinematics, layout
+from inerter.elements import winding
 from inerter.elements.device import MODE_SOLVES
 from inerter.common.errors import SceneError, SimulationError
 from inerter.model.joints import make_joint
@@ -37,6 +38,7 @@ _pd_magnitude = kinematics.pd_magnitude.py_func
 _frame_force = kinematics.frame_force.py_func
 _planar_body_energy = kinematics.planar_body_energy.py_func
 _spatial_body_energy = kinematics.spatial_body_energy.py_func
+_carried = winding.carried.py_func
 
 #: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
 ASSEMBLY_TOLERANCE = 1e-6
@@ -396,7 +398,7 @@ class Mechanism:
         n, nv = self.nq, self.nq + self.n
         for e in self.winding:
             if y_old is not None:
-                e.reference = e.reference + 0.5 * h * (e.rate(y_old[:n], y_old[n:nv]) + e.rate(y[:n], y[n:nv]))
+                e.reference = _carried(e.reference, h, e.rate(y_old[:n], y_old[n:nv]), e.rate(y[:n], y[n:nv]))
             e.wind(y[:n])
 
     def angles_between(self, times0, states0, windings0, times, states) -> np.ndarray:

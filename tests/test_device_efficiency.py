@@ -111,6 +111,22 @@ def _x(r, dim):
 # ------------------------------------------------------------------------------------------------
 # The law and the mode's resolution
 # ------------------------------------------------------------------------------------------------
+def assert_follows_the_exact_switch(r, dim):
+    """A run of `_oscillator` with the exact switch against the closed form (efficiency_closed_form):
+    x(t) to 1e-7 x0; E.mode 1 while |x| falls and 0 while it grows (wherever |ẋ| > 1e-6 m/s); E.p_loss
+    the law's (b_eff − b) ẍ ẋ with ẍ = −k x/(m + b_eff) at the run's own (x, ẋ), to 1e-12 · ½ k x0²
+    (round-off)."""
+    exact, _, _, _ = efficiency_closed_form(r.time, X0, M, B, K, ETA_F, ETA_B)
+    x, v = _x(r, dim), r["spring.v_rel"]
+    assert np.max(np.abs(x - exact)) <= 1e-7 * X0
+    inward, outward = (x * v < 0) & (np.abs(v) > 1e-6), (x * v > 0) & (np.abs(v) > 1e-6)
+    assert inward.sum() > 100 and outward.sum() > 100
+    assert np.all(r["inerter.mode"][inward] == 1.0) and np.all(r["inerter.mode"][outward] == 0.0)
+    beff = np.where(x * v < 0, B / ETA_F, B * ETA_B)
+    p_loss = (beff - B) * (-K * x / (M + beff)) * v
+    assert np.max(np.abs(r["inerter.p_loss"] - p_loss)) <= 1e-12 * 0.5 * K * X0 ** 2
+
+
 def test_the_efficiency_law_and_its_mode():
     """Closed form, the exact switch (v_s = 0): b_eff = b/η_f where L̇·L̈ > 0 and at L̇ = 0, b η_b where
     L̇·L̈ < 0; the stored mode is s = sign(L̈) (+1 at the start, kept at L̈ = 0); the loss
@@ -244,15 +260,7 @@ def test_the_numpy_path_resolves_the_mode_as_the_closed_form(tmp_path):
     model = _oscillator(tmp_path)
     r = model.simulate(stop_time=1.0, path="numpy", metrics=False)
     assert r.status == "ok" and r.run.extra.get("path", "numpy").startswith("numpy"), r.message
-    exact, _, _, _ = efficiency_closed_form(r.time, X0, M, B, K, ETA_F, ETA_B)
-    x, v = _x(r, 2), r["spring.v_rel"]
-    assert np.max(np.abs(x - exact)) <= 1e-7 * X0
-    inward, outward = (x * v < 0) & (np.abs(v) > 1e-6), (x * v > 0) & (np.abs(v) > 1e-6)
-    assert inward.sum() > 100 and outward.sum() > 100
-    assert np.all(r["inerter.mode"][inward] == 1.0) and np.all(r["inerter.mode"][outward] == 0.0)
-    beff = np.where(x * v < 0, B / ETA_F, B * ETA_B)
-    p_loss = (beff - B) * (-K * x / (M + beff)) * v
-    assert np.max(np.abs(r["inerter.p_loss"] - p_loss)) <= 1e-12 * 0.5 * K * X0 ** 2
+    assert_follows_the_exact_switch(r, 2)
 
 
 def test_energy_plus_the_efficiency_loss_is_the_initial_energy(tmp_path):

@@ -19,8 +19,8 @@ from inerter.common.errors import SceneError, SimulationError
 from inerter.oracle import efficiency as oracle_efficiency
 from inerter.oracle.derivation import OracleDevice
 from test_device import _device
-from test_device_efficiency import (B, ETA_B, ETA_F, K, M, PEAK_SPEED, SERIES_VS, V0, X0, _oscillator, _series, _x,
-                                    efficiency_closed_form, series_reference)
+from test_device_efficiency import (B, ETA_B, ETA_F, K, PEAK_SPEED, SERIES_VS, X0, _oscillator, _series, _x,
+                                    assert_follows_the_exact_switch, series_reference)
 
 
 def _oracle_run(model, stop_time):
@@ -41,15 +41,7 @@ def test_the_oracle_follows_the_closed_form_of_the_exact_switch(tmp_path, dim):
     and its E.p_loss is the closed form's (b_eff − b) ẍ ẋ with ẍ = −k x/(m + b_eff) at the run's own
     (x, ẋ), to 1e-12 · ½ k x0² (round-off)."""
     r = _oracle_run(_oscillator(tmp_path, dim), 1.0)
-    exact, _, _, _ = efficiency_closed_form(r.time, X0, M, B, K, ETA_F, ETA_B)
-    x, v = _x(r, dim), r["spring.v_rel"]
-    assert np.max(np.abs(x - exact)) <= 1e-7 * X0
-    inward, outward = (x * v < 0) & (np.abs(v) > 1e-6), (x * v > 0) & (np.abs(v) > 1e-6)
-    assert inward.sum() > 100 and outward.sum() > 100
-    assert np.all(r["inerter.mode"][inward] == 1.0) and np.all(r["inerter.mode"][outward] == 0.0)
-    beff = np.where(x * v < 0, B / ETA_F, B * ETA_B)
-    p_loss = (beff - B) * (-K * x / (M + beff)) * v
-    assert np.max(np.abs(r["inerter.p_loss"] - p_loss)) <= 1e-12 * 0.5 * K * X0 ** 2
+    assert_follows_the_exact_switch(r, dim)
 
 
 @pytest.mark.parametrize("vs", [0.0, 1e-2 * PEAK_SPEED], ids=["switch", "vs"])

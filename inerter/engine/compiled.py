@@ -148,8 +148,10 @@ COMPILE_SECONDS = {2: 150, 3: 180}
 #: Seconds ``inerter compile`` takes on a 2-core machine with an empty cache, by dimension (every kernel:
 #: the three integrator loops, outputs, co-simulation steps and the FMU's native step). Measured
 #: 2026-11-27 with the two dimensions in parallel (api.warm_up): 386 s wall, 703 s of CPU, the 3D
-#: process the longer; the split between them is inferred from those two figures.
-AOT_SECONDS = {2: 315, 3: 385}
+#: process the longer; the split between them is inferred from those two figures. The 3D kernels
+#: then gained the samples' recorded windings (kernels.record_windings3, windings_along,
+#: windings_between): 652 s wall the same day on a quiet machine, the 3D process the longer.
+AOT_SECONDS = {2: 315, 3: 650}
 #: The kernels entered from Python, in the notice's words (others by their own name).
 _WHAT = {"integrate_rk": "the DOP853/RK45 loop", "integrate_rk4": "the RK4 loop",
          "signal_history": "the outputs", "signal_column": "the outputs", "dense_signal": "the outputs",

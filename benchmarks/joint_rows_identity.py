@@ -6,6 +6,10 @@ joint rows on scenes with every joint kind, of two source trees, compared.
     PYTHONPATH=. python benchmarks/joint_rows_identity.py snap /tmp/after.npz
     python benchmarks/joint_rows_identity.py compare /tmp/before.npz /tmp/after.npz
 
+`snap ... --dense` also keeps every output on the dense output between the first samples and,
+for a scene with metrics, the metrics of a whole run (which read the dense output); `compare`
+counts them among the outputs.
+
 `snap` (with the tree under test first on PYTHONPATH) runs every scene of scenarios/,
 scenarios/hard/ and tests/data/ and seven 3D scenes of the joint tests (cylindrical, planar,
 universal, revolute about a tilted axis, prismatic, fixed, a shaken prismatic slider) on the
@@ -68,8 +72,21 @@ def snap(out_path):
                     out[f"{key}|np{i}|{name}"] = x
         r = model.simulate(stop_time=min(model.scene.experiment.stop_time, 1.0), metrics=False)
         out[f"{key}|t"], out[f"{key}|y"], out[f"{key}|states"] = r.time, r._all_values(), r.run.states
+        if "--dense" in sys.argv:
+            _snap_dense(model, r, key, out)
         print(key, r.status, r.run.extra.get("path"), len(r.time), flush=True)
     np.savez(out_path, **out)
+
+
+def _snap_dense(model, r, key, out):
+    """`--dense`: every output on the run's dense output halfway between its first 30 samples
+    (Result.dense), and a run of the whole scene with its metrics (which read the dense output)."""
+    mid = 0.5 * (r.time[:30][1:] + r.time[:30][:-1])
+    out[f"{key}|dense"] = np.array([r.dense(name)(mid) for name in r.names])
+    if model.scene.metrics:
+        full = model.simulate()
+        values = [np.ravel(np.asarray(full.metrics[m], dtype=float)) for m in sorted(full.metrics)]
+        out[f"{key}|metrics"] = np.concatenate(values) if values else np.zeros(0)
 
 
 def compare(path_a, path_b):
@@ -79,13 +96,19 @@ def compare(path_a, path_b):
     for key in keys:
         states = all(np.array_equal(a[f"{key}|{s}"], b[f"{key}|{s}"], equal_nan=True) for s in ("t", "states"))
         outputs = np.array_equal(a[f"{key}|y"], b[f"{key}|y"], equal_nan=True)
-        same += states and outputs
         states_same += states
         rows = [np.max(np.abs(a[k] - b[k])) / max(1.0, np.max(np.abs(a[k]))) for k in a.files
                 if k.startswith(f"{key}|np") and a[k].size]
         numpy = f"{max(rows):.1e}" if rows else "no joints"
-        run = "bit-identical" if states and outputs else "DIFFERS"
-        if states and not outputs and a[f"{key}|y"].shape == b[f"{key}|y"].shape:
+        extras = [extra for extra in ("dense", "metrics")      # snap --dense
+                  if (f"{key}|{extra}" in a.files or f"{key}|{extra}" in b.files)
+                  and not (f"{key}|{extra}" in a.files and f"{key}|{extra}" in b.files
+                           and np.array_equal(a[f"{key}|{extra}"], b[f"{key}|{extra}"], equal_nan=True))]
+        same += states and outputs and not extras
+        run = "bit-identical" if states and outputs and not extras else "DIFFERS"
+        if extras:
+            run = f"{run}: {' and '.join(extras)} differ"
+        if states and not outputs and not extras and a[f"{key}|y"].shape == b[f"{key}|y"].shape:
             # the states the same, some outputs not: the largest difference, relative to
             # max(1, |before|) of its column, and the column (its index in Result.names)
             ya, yb = a[f"{key}|y"], b[f"{key}|y"]

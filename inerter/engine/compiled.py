@@ -154,8 +154,8 @@ COMPILE_SECONDS = {2: 150, 3: 180}
 AOT_SECONDS = {2: 315, 3: 650}
 #: The kernels entered from Python, in the notice's words (others by their own name).
 _WHAT = {"integrate_rk": "the DOP853/RK45 loop", "integrate_rk4": "the RK4 loop",
-         "signal_history": "the outputs", "signal_column": "the outputs", "dense_signal": "the outputs",
-         "dense_states": "the dense output",
+         "signal_history": "the outputs", "signal_column": "the outputs",
+         "dense_rows": "the dense output",
          "signal_values": "the outputs", "max_residual": "the constraint residual",
          "cosim_step": "the co-simulation step", "rk4_cosim_step": "the RK4 co-simulation step",
          "native_step": "the FMU's native step", "native_step3": "the FMU's native step"}
@@ -760,11 +760,13 @@ class Kernel:
 
     def dense_signal(self, sol, index, times, inputs=None, alpha=0.0, windings=None):
         """(values, k): the signal at `index` at `times` (in any order) on a dense output, up to the
-        first time k where it cannot be evaluated: a :class:`DenseOutput` in one compiled call (only
-        the state components the signal reads), another (scipy's OdeSolution) through its states.
-        `windings`: the 3D rotational elements' angles at each time, as signal_history's; a
-        :class:`DenseOutput` or :class:`LocalDense` gives its own where none are given (each time's
-        from the step that covers it: :meth:`DenseOutput.windings_at`)."""
+        first time k where it cannot be evaluated: on a :class:`DenseOutput`, the state components
+        the signal reads (:meth:`DenseOutput.rows`), then the signal as :meth:`signal_column` reads
+        it at samples, in blocks of at most :data:`DENSE_VALUES` state values; another (scipy's
+        OdeSolution) through its states. `windings`: the 3D rotational elements' angles at each
+        time, as signal_history's; a :class:`DenseOutput` or :class:`LocalDense` gives its own
+        where none are given (each time's from the step that covers it:
+        :meth:`DenseOutput.windings_at`)."""
         times = np.ascontiguousarray(times, dtype=float).reshape(-1)
         if isinstance(sol, LocalDense):
             return self._local_dense_signal(sol, index, times, inputs, alpha)
@@ -772,14 +774,18 @@ class Kernel:
             return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha, windings)
         if windings is None:
             windings = sol.windings_at(times)
-        need, comps = self._reads(index)
-        element, slot = self.element_slot(index)
-        out = np.empty(len(times))
-        with self.wound_from_start():
-            st, k = _k.dense_signal(sol.method_code, sol.nodes, sol.coeffs, sol.count, times, comps,
-                                    _windings_arg(windings), self._inputs(inputs), float(alpha), int(index),
-                                    int(element), int(slot), need, self.params, np.empty(len(self._layout)), out)
-        return out[:k], int(k)
+        _, comps = self._reads(index)
+        block = max(1, DENSE_VALUES // self.ny)
+        values = []
+        for start in range(0, len(times), block):
+            part = slice(start, start + block)
+            states = sol.rows(times[part], comps, np.zeros((len(times[part]), self.ny)))
+            piece, k = self.signal_column(index, times[part], states, inputs, alpha,
+                                          None if windings is None else windings[part])
+            values.append(piece)
+            if k < len(times[part]):         # not defined at that time: the values before it
+                return np.concatenate(values), start + k
+        return (np.concatenate(values) if values else np.empty(0)), len(times)
 
     def _local_dense_signal(self, sol, index, times, inputs, alpha):
         """:meth:`dense_signal` on a :class:`LocalDense`, one sample interval after the other (each
@@ -850,6 +856,9 @@ class Kernel:
 
 #: `windings` for the kernels where none are recorded: each row winds on from the row before.
 _NO_WINDINGS = np.zeros((0, 0))
+#: State values a dense-output signal reads in one block (Kernel.dense_signal): 16 MB, whatever
+#: the mechanism's size or the number of times.
+DENSE_VALUES = 1 << 21
 
 
 def _windings_arg(windings) -> np.ndarray:
@@ -1160,7 +1169,7 @@ class DenseOutput:
     polynomial with scipy's formulas, kept by :func:`~inerter.engine.kernels.rk_advance` (steps of
     every segment between jumps, one after the other). ``sol(t)`` gives the states at t
     as scipy's ``OdeSolution`` does: shape (ny,) for a scalar t, (ny, len(t)) for an array,
-    evaluated in compiled code (:func:`~inerter.engine.kernels.dense_states`). ``sol.ts``: the
+    evaluated in compiled code (:func:`~inerter.engine.kernels.dense_rows`). ``sol.ts``: the
     nodes (the steps' ends). `kernel`, `start`: the kernel it was integrated on and its 3D rotational
     elements' φ_ref at the first step's start (None: 0, a whole run's), for :meth:`windings_at`."""
 
@@ -1201,9 +1210,15 @@ class DenseOutput:
         times = np.asarray(t, dtype=float)
         scalar = times.ndim == 0
         times = np.ascontiguousarray(times.reshape(-1))
-        out = np.empty((self.n, len(times)))
-        _k.dense_states(self.method_code, self.nodes, self.coeffs, self.count, times, out)
+        out = np.ascontiguousarray(self.rows(times, np.arange(self.n), np.empty((len(times), self.n))).T)
         return out[:, 0] if scalar else out
+
+    def rows(self, times, comps, out):
+        """out[k, j] = y_j(times[k]) for j in `comps` (out's other columns as they were): the
+        states, a row per time (C-contiguous floats), as the kernels read a history."""
+        _k.dense_rows(self.method_code, self.nodes, self.coeffs, self.count,
+                      np.ascontiguousarray(times, dtype=float), np.asarray(comps, dtype=np.int64), out)
+        return out
 
 
 class LocalDense:

@@ -76,9 +76,9 @@ MONITOR_STIFF_BOUND, MONITOR_STIFF_EVERY, MONITOR_STIFF_HITS, MONITOR_COLLAPSE_R
 MONITOR_SIZE = 7
 # The arrays of work_arrays, in the order of WORK (their names): the kernels take them by these slots.
 W_AB, W_RHS, W_GEN, W_ACC, W_K, W_Y_NEW, W_F_NEW, W_YS = range(8)
-# cosim_scratch's arrays, in the order of COSIM: the terminals' gaps, the zero velocities they are
-# evaluated with, fresh[0] (1: the gaps are those at the integration's y), the keep that keeps nothing.
-SCRATCH_GAPS, SCRATCH_Z, SCRATCH_FRESH, SCRATCH_KEEP = range(4)
+# The slot of cosim_scratch's fresh[0] (1: the gaps are those at the integration's y), in the order of
+# COSIM (gaps, z, fresh, keep: the kernels unpack the others by name).
+SCRATCH_FRESH = 2
 
 
 
@@ -783,7 +783,7 @@ def _element_signals2(q, v, z, qdd, P, e, energy, out, k):
     return meets, energy, k
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def element_signals2(q, v, z, qdd, P, e, out):
     """Translational element e's outputs alone, from out[0] on, as :func:`signal_values2` writes
     them. Returns a status code."""
@@ -1083,9 +1083,10 @@ def record_windings3(out, k0, k, ny, ts, t_end, y_end, P):
     integration loop."""
     nq = P[DIMS][N_COORD]
     nv = nq + P[DIMS][N_VELOCITY]
-    for j in range(k0, k):
-        for e in range(out.shape[1] - ny):
-            out[j, ny + e] = _angle_from3(out[j, :nq], out[j, nq:nv], y_end[:nq], y_end[nq:nv], ts[j] - t_end, e, P)
+    for e in range(out.shape[1] - ny):
+        rate_end = _twist_rate3(y_end[:nq], y_end[nq:nv], e, P)      # the same for every sample of the step
+        for j in range(k0, k):
+            out[j, ny + e] = _angle_from3(out[j, :nq], out[j, nq:nv], rate_end, ts[j] - t_end, e, P)
 
 
 def _hold_windings_of(windings, i, P):
@@ -1141,8 +1142,8 @@ def windings_between(times0, states0, windings0, times, states, P, out):
         for e in range(out.shape[1]):
             rot_real[e, PHI_REF] = windings0[i, e]
         for e in range(out.shape[1]):
-            out[i, e] = _angle_from3(states[i, :nq], states[i, nq:nv], states0[i, :nq], states0[i, nq:nv],
-                                     times[i] - times0[i], e, P)
+            rate0 = _twist_rate3(states0[i, :nq], states0[i, nq:nv], e, P)
+            out[i, e] = _angle_from3(states[i, :nq], states[i, nq:nv], rate0, times[i] - times0[i], e, P)
 
 
 def _settle_of(q, v, qdd, P):
@@ -1876,7 +1877,8 @@ def wind3(q, v, P):
     state (inerter.elements.winding): the next steps read their angles on its branch."""
     rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
     for e in range(rot_int.shape[0]):
-        rot_real[e, PHI_REF] = _rotational3(q, v, e, rot_int, rot_real)[4]
+        _, _, _, _, phi, _, _, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
+        rot_real[e, PHI_REF] = phi
 
 
 @njit(cache=True)
@@ -1891,20 +1893,27 @@ def wind3_step(q, v, q0, v0, h, P):
     for bit (:func:`inerter.elements.winding.wound` returns the reading itself)."""
     rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
     for e in range(rot_int.shape[0]):
-        rot_real[e, PHI_REF] = _angle_from3(q, v, q0, v0, h, e, P)
+        rot_real[e, PHI_REF] = _angle_from3(q, v, _twist_rate3(q0, v0, e, P), h, e, P)
 
 
 @njit(cache=True, inline="always")
-def _angle_from3(q, v, q0, v0, h, e, P):
-    """Element e's angle at (q, v), h after (q0, v0), where it held φ_ref (h < 0: before): the
-    reading there on the branch nearest φ_ref + h (φ̇(q0, v0) + φ̇(q, v))/2, where the rates carry
-    the angle over h (the trapezoidal rule); the reading as :func:`_rotational3` winds it from
-    φ_ref, bit for bit, where both branches are the same (:func:`inerter.elements.winding.wound`
-    returns it as it is)."""
+def _twist_rate3(q, v, e, P):
+    """Element e's rate φ̇ at (q, v), which carries its angle over a step (:func:`_angle_from3`)."""
     rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
-    at = _rotational3(q, v, e, rot_int, rot_real)
-    rate0 = _rotational3(q0, v0, e, rot_int, rot_real)[5]
-    return wound(carried(rot_real[e, PHI_REF], h, rate0, at[5]), at[4])
+    _, _, _, _, _, rate, _, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
+    return rate
+
+
+@njit(cache=True, inline="always")
+def _angle_from3(q, v, rate0, h, e, P):
+    """Element e's angle at (q, v), h after a state where it held φ_ref and turned at rate0
+    (:func:`_twist_rate3`; h < 0: before): the reading there on the branch nearest φ_ref + h (rate0
+    + φ̇(q, v))/2, where the rates carry the angle over h (the trapezoidal rule); the reading as
+    :func:`_rotational3` winds it from φ_ref, bit for bit, where both branches are the same
+    (:func:`inerter.elements.winding.wound` returns it as it is)."""
+    rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
+    _, _, _, _, phi, rate, _, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
+    return wound(carried(rot_real[e, PHI_REF], h, rate0, rate), phi)
 
 
 @njit(cache=True)
@@ -1966,7 +1975,7 @@ def _element_signals3(q, v, z, qdd, P, e, energy, out, k):
     return meets, energy, k
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def element_signals3(q, v, z, qdd, P, e, out):
     """Translational element e's outputs alone, from out[0] on, as :func:`signal_values3` writes
     them: what a column of one of them needs, without every other signal. Returns a status code."""
@@ -2974,60 +2983,12 @@ def signal_column(times, states, windings, inputs, alpha, index, element, slot, 
     return OK, states.shape[0]
 
 
-#: Times a dense-output signal is evaluated at in one block: their states first, then the signal
-#: at each (two loops without a dependence from one time to the next).
-DENSE_BLOCK = 256
-
-
 @njit(cache=True)
-def dense_signal(method, nodes, coeffs, count, times, comps, windings, inputs, alpha, index, element, slot, need_acc,
-                 P, raw, out):
-    """out[k] = the signal at `index` of signal_values' layout at times[k], on the state from a kept
-    dense output (:func:`_dense_block`, only the components `comps` the signal reads; `element`,
-    `slot`: :func:`_signal_at`), the 3D rotational elements' angles wound from windings[k]
-    (:func:`_hold_windings_of`). Returns (status, the first time where it could not be evaluated)."""
-    P = _unowned(P)                 # entered from Python (_unowned)
-    ny = coeffs.shape[2]
-    nq = P[DIMS][N_COORD]
-    block = np.zeros((DENSE_BLOCK, ny))
-    y = np.zeros(ny)
-    q = y[:nq]
-    v = y[nq:nq + P[DIMS][N_VELOCITY]]
-    work = work_arrays(P, ny, 1)
-    point, c = _point_signal(index, P)
-    n = times.shape[0]
-    i = 0
-    for start in range(0, n, DENSE_BLOCK):
-        end = min(n, start + DENSE_BLOCK)
-        i = _dense_block(method, nodes, coeffs, count, times, start, end, comps, block, i)
-        for k in range(start, end):
-            for m in range(comps.shape[0]):
-                y[comps[m]] = block[k - start, comps[m]]
-            if point >= 0:
-                out[k] = _point_value_of(q, v, point, c, P)
-            else:
-                _hold_windings_of(windings, k, P)
-                st, out[k] = _signal_at(times[k], y, inputs, alpha, need_acc, P, work, raw, index, element, slot)
-                if st != OK:
-                    return st, k
-    return OK, n
-
-
-@njit(cache=True)
-def dense_states(method, nodes, coeffs, count, times, out):
-    """out[:, k] = y(times[k]) from a kept dense output (:func:`rk_advance`, `count` steps), as
-    scipy's ``OdeSolution(times)``: one column per time."""
-    ny = coeffs.shape[2]
-    comps = np.arange(ny)
-    block = np.empty((DENSE_BLOCK, ny))
-    n = times.shape[0]
-    i = 0
-    for start in range(0, n, DENSE_BLOCK):
-        end = min(n, start + DENSE_BLOCK)
-        i = _dense_block(method, nodes, coeffs, count, times, start, end, comps, block, i)
-        for k in range(start, end):
-            for j in range(ny):
-                out[j, k] = block[k - start, j]
+def dense_rows(method, nodes, coeffs, count, times, comps, out):
+    """out[k, j] = y_j(times[k]) for j in `comps` (the other columns left as they are) from a kept
+    dense output (:func:`rk_advance`, `count` steps), as scipy's ``OdeSolution(times)`` evaluates it:
+    the states a signal's column reads (:func:`signal_column`), or all of them."""
+    _dense_block(method, nodes, coeffs, count, times, 0, times.shape[0], comps, out, 0)
 
 
 # rk_advance inlined where a co-simulation step enters it (one call per communication step instead of
@@ -3157,8 +3118,10 @@ def _rk4_loop_watch(t, y, f, t_new, y_new, f_new, grid, k, out, inputs, alpha, P
     hdr = np.zeros(RK_HEADER)
     hdr[RK_T_PREV] = t
     hdr[RK_H_LAST] = t_new - t
-    return _stop_at_change_point(loop, NATIVE_RK4, hdr, y_new, y, f, f_new, work[W_K], work[W_K], t_new, grid, k, out,
-                                 inputs, alpha, P, work, monitor)
+    # np.int64: the method as a value, not a literal, so that numba compiles _stop_at_change_point and
+    # locate_crossing once for every method rather than again for RK4's constant
+    return _stop_at_change_point(loop, np.int64(NATIVE_RK4), hdr, y_new, y, f, f_new, work[W_K], work[W_K], t_new,
+                                 grid, k, out, inputs, alpha, P, work, monitor)
 
 
 @njit(cache=True)

@@ -3156,7 +3156,7 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
     st = _rhs(min(t, before), y, inputs, alpha, P, AB, rhs, gen, acc, f)
     if st != OK:
         return st, 1, 0, evals, t
-    k = 1
+    k = np.int64(1)         # a value, not the literal 1: the kernels k is passed to compile once, not again for it
     ngrid = grid.shape[0]
     steps = 0
     gaps, z = terminal_gaps(y, P)

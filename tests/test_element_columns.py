@@ -50,8 +50,8 @@ def test_an_elements_column_alone_is_every_signals_column(scene):
 
 @pytest.mark.parametrize("scene", SCENES[:3], ids=lambda s: Path(s).stem)
 def test_an_elements_dense_output_alone_is_every_signals(scene):
-    """The same between samples: an element's output on the run's dense output (Kernel.dense_signal:
-    kernels.dense_rows, then signal_column; through LocalDense's intervals) against every signal at
+    """The same between samples: an element's output on the run's dense output (kernels.dense_signal,
+    which calls signal_column; through LocalDense's intervals) against every signal at
     the dense output's states."""
     model = inerter.load(ROOT / scene, **{"experiment.stop_time": 0.5})
     result = model.simulate(metrics=False)

@@ -143,18 +143,18 @@ def _write_bytecode(source: Path, fresh: bool):
 # First use: saying so while the kernels compile
 # ------------------------------------------------------------------------------------------------
 #: Seconds a run's first compilation of the kernels takes on a 2-core machine, by dimension (its
-#: integrator loop and outputs, docs/benchmarks/first_use.md), for the notice.
-COMPILE_SECONDS = {2: 150, 3: 180}
+#: integrator loop; then its outputs, about 50 s 2D and 80 s 3D), for the notice: measured
+#: 2026-11-27 (docs/benchmarks/first_use.md), 225 s and 257 s.
+COMPILE_SECONDS = {2: 230, 3: 260}
 #: Seconds ``inerter compile`` takes on a 2-core machine with an empty cache, by dimension (every kernel:
-#: the three integrator loops, outputs, co-simulation steps and the FMU's native step). Measured
-#: 2026-11-27 with the two dimensions in parallel (api.warm_up): 386 s wall, 703 s of CPU, the 3D
-#: process the longer; the split between them is inferred from those two figures. The 3D kernels
-#: then gained the samples' recorded windings (kernels.record_windings3, windings_along,
-#: windings_between): 652 s wall the same day on a quiet machine, the 3D process the longer.
-AOT_SECONDS = {2: 315, 3: 650}
+#: the three integrator loops, outputs, co-simulation steps and the FMU's native step), the two
+#: dimensions in parallel (api.warm_up), for the notice: measured 2026-11-27 as a pair of
+#: processes (benchmarks/compile_profile.py), 432 s (2D) and 590 s (3D) after the outputs' code was
+#: compiled once for samples and dense output (docs/benchmarks/first_use.md).
+AOT_SECONDS = {2: 430, 3: 590}
 #: The kernels entered from Python, in the notice's words (others by their own name).
 _WHAT = {"integrate_rk": "the DOP853/RK45 loop", "integrate_rk4": "the RK4 loop",
-         "signal_history": "the outputs", "signal_column": "the outputs",
+         "signal_history": "the outputs", "signal_column": "the outputs", "dense_signal": "the outputs",
          "dense_rows": "the dense output",
          "signal_values": "the outputs", "max_residual": "the constraint residual",
          "cosim_step": "the co-simulation step", "rk4_cosim_step": "the RK4 co-simulation step",
@@ -760,9 +760,9 @@ class Kernel:
 
     def dense_signal(self, sol, index, times, inputs=None, alpha=0.0, windings=None):
         """(values, k): the signal at `index` at `times` (in any order) on a dense output, up to the
-        first time k where it cannot be evaluated: on a :class:`DenseOutput`, the state components
-        the signal reads (:meth:`DenseOutput.rows`), then the signal as :meth:`signal_column` reads
-        it at samples, in blocks of at most :data:`DENSE_VALUES` state values; another (scipy's
+        first time k where it cannot be evaluated: on a :class:`DenseOutput`, in one compiled call
+        (:func:`~inerter.engine.kernels.dense_signal`: the state components the signal reads, block
+        by block, then the signal as :meth:`signal_column` reads it at samples); another (scipy's
         OdeSolution) through its states. `windings`: the 3D rotational elements' angles at each
         time, as signal_history's; a :class:`DenseOutput` or :class:`LocalDense` gives its own
         where none are given (each time's from the step that covers it:
@@ -774,18 +774,14 @@ class Kernel:
             return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha, windings)
         if windings is None:
             windings = sol.windings_at(times)
-        _, comps = self._reads(index)
-        block = max(1, DENSE_VALUES // self.ny)
-        values = []
-        for start in range(0, len(times), block):
-            part = slice(start, start + block)
-            states = sol.rows(times[part], comps, np.zeros((len(times[part]), self.ny)))
-            piece, k = self.signal_column(index, times[part], states, inputs, alpha,
-                                          None if windings is None else windings[part])
-            values.append(piece)
-            if k < len(times[part]):         # not defined at that time: the values before it
-                return np.concatenate(values), start + k
-        return (np.concatenate(values) if values else np.empty(0)), len(times)
+        need, comps = self._reads(index)
+        element, slot = self.element_slot(index)
+        out = np.empty(len(times))
+        with self.wound_from_start():
+            st, k = _k.dense_signal(sol.method_code, sol.nodes, sol.coeffs, sol.count, times, comps,
+                                    _windings_arg(windings), self._inputs(inputs), float(alpha), int(index),
+                                    int(element), int(slot), need, self.params, np.empty(len(self._layout)), out)
+        return out[:k], int(k)
 
     def _local_dense_signal(self, sol, index, times, inputs, alpha):
         """:meth:`dense_signal` on a :class:`LocalDense`, one sample interval after the other (each
@@ -856,9 +852,6 @@ class Kernel:
 
 #: `windings` for the kernels where none are recorded: each row winds on from the row before.
 _NO_WINDINGS = np.zeros((0, 0))
-#: State values a dense-output signal reads in one block (Kernel.dense_signal): 16 MB, whatever
-#: the mechanism's size or the number of times.
-DENSE_VALUES = 1 << 21
 
 
 def _windings_arg(windings) -> np.ndarray:
@@ -1215,7 +1208,7 @@ class DenseOutput:
 
     def rows(self, times, comps, out):
         """out[k, j] = y_j(times[k]) for j in `comps` (out's other columns as they were): the
-        states, a row per time (C-contiguous floats), as the kernels read a history."""
+        states, a row per time (C-contiguous floats)."""
         _k.dense_rows(self.method_code, self.nodes, self.coeffs, self.count,
                       np.ascontiguousarray(times, dtype=float), np.asarray(comps, dtype=np.int64), out)
         return out

@@ -783,7 +783,7 @@ def _element_signals2(q, v, z, qdd, P, e, energy, out, k):
     return meets, energy, k
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def element_signals2(q, v, z, qdd, P, e, out):
     """Translational element e's outputs alone, from out[0] on, as :func:`signal_values2` writes
     them. Returns a status code."""
@@ -1975,7 +1975,7 @@ def _element_signals3(q, v, z, qdd, P, e, energy, out, k):
     return meets, energy, k
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def element_signals3(q, v, z, qdd, P, e, out):
     """Translational element e's outputs alone, from out[0] on, as :func:`signal_values3` writes
     them: what a column of one of them needs, without every other signal. Returns a status code."""
@@ -2986,9 +2986,44 @@ def signal_column(times, states, windings, inputs, alpha, index, element, slot, 
 @njit(cache=True)
 def dense_rows(method, nodes, coeffs, count, times, comps, out):
     """out[k, j] = y_j(times[k]) for j in `comps` (the other columns left as they are) from a kept
-    dense output (:func:`rk_advance`, `count` steps), as scipy's ``OdeSolution(times)`` evaluates it:
-    the states a signal's column reads (:func:`signal_column`), or all of them."""
+    dense output (:func:`rk_advance`, `count` steps), as scipy's ``OdeSolution(times)`` evaluates it."""
     _dense_block(method, nodes, coeffs, count, times, 0, times.shape[0], comps, out, 0)
+
+
+#: Times a dense-output signal is evaluated at in one block (:func:`dense_signal`).
+DENSE_BLOCK = 256
+
+
+@njit(cache=True)
+def dense_signal(method, nodes, coeffs, count, times, comps, windings, inputs, alpha, index, element, slot, need_acc,
+                 P, raw, out):
+    """out[k] = the signal at `index` of signal_values' layout at times[k] on a kept dense output:
+    block after block of times, the state components `comps` the signal reads (:func:`_dense_block`,
+    the others 0), then :func:`signal_column` on them, called (one compiled copy of the outputs'
+    code for samples and dense output alike), with the 3D rotational elements' angles wound from
+    windings[k]. Returns (status, the first time where it could not be evaluated)."""
+    n = times.shape[0]
+    ny = coeffs.shape[2]
+    states = np.zeros((DENSE_BLOCK, ny))
+    at = np.empty(DENSE_BLOCK)
+    values = np.empty(DENSE_BLOCK)
+    held = np.empty((DENSE_BLOCK if windings.shape[0] else 0, windings.shape[1]))
+    i = 0
+    for start in range(0, n, DENSE_BLOCK):
+        end = min(n, start + DENSE_BLOCK)
+        m = end - start
+        i = _dense_block(method, nodes, coeffs, count, times, start, end, comps, states, i)
+        for k in range(m):
+            at[k] = times[start + k]
+            for e in range(held.shape[1] if held.shape[0] else 0):
+                held[k, e] = windings[start + k, e]
+        st, done = signal_column(at[:m], states[:m], held[:m], inputs, alpha, index, element, slot, need_acc, P, raw,
+                                 values[:m])
+        for k in range(done):
+            out[start + k] = values[k]
+        if done < m:
+            return st, start + done
+    return OK, n
 
 
 # rk_advance inlined where a co-simulation step enters it (one call per communication step instead of

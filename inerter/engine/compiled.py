@@ -1197,20 +1197,21 @@ class DenseOutput:
         times = np.asarray(times, dtype=float).reshape(-1)
         step = np.clip(np.searchsorted(self.ts, times, side="left") - 1, 0, self.count - 1)
         return self.kernel.windings_between(self.nodes[step], self.coeffs[step, 0, :], self._step_windings[step],
-                                            times, self(times).T)
+                                            times, self.rows(times))
 
     def __call__(self, t):
         times = np.asarray(t, dtype=float)
         scalar = times.ndim == 0
         times = np.ascontiguousarray(times.reshape(-1))
-        out = np.ascontiguousarray(self.rows(times, np.arange(self.n), np.empty((len(times), self.n))).T)
+        out = np.ascontiguousarray(self.rows(times).T)
         return out[:, 0] if scalar else out
 
-    def rows(self, times, comps, out):
-        """out[k, j] = y_j(times[k]) for j in `comps` (out's other columns as they were): the
-        states, a row per time (C-contiguous floats)."""
-        _k.dense_rows(self.method_code, self.nodes, self.coeffs, self.count,
-                      np.ascontiguousarray(times, dtype=float), np.asarray(comps, dtype=np.int64), out)
+    def rows(self, times):
+        """The states at `times` (a 1-D array), a row per time (C-contiguous floats), as the kernels
+        read a history."""
+        times = np.ascontiguousarray(times, dtype=float)
+        out = np.empty((len(times), self.n))
+        _k.dense_rows(self.method_code, self.nodes, self.coeffs, self.count, times, np.arange(self.n), out)
         return out
 
 

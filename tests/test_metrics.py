@@ -125,6 +125,39 @@ def test_harmonics_over_given_window(periodic_history):
         harmonics(t, x, (5.0, 11.0), 3)
 
 
+DRIFT = 0.02  # per second: a signal that does not repeat over its window
+
+
+def drifting(t):
+    """0.3 + DRIFT t + 2 cos(w t): over a window [t0, t1] of whole periods its mean is
+    0.3 + DRIFT (t0 + t1)/2 and its fundamental's coefficient (1/W) ∫ x e^(−iw(t − t0)) dt is
+    e^(i w t0) + i DRIFT W/(2π k) (W = t1 − t0 = k periods), both in closed form."""
+    t = np.asarray(t, dtype=float)
+    return 0.3 + DRIFT * t + 2.0 * np.cos(W0 * t)
+
+
+def test_harmonics_of_a_signal_that_does_not_repeat():
+    # The trapezoidal rule over both ends of the window: the mean of the linear drift exactly
+    # (a sum without the window's end point is off by DRIFT h/2, 3e-6 here); the coefficient
+    # to second order in the grid step h = W/2560: |error| <= w DRIFT h^2/12, about 3e-8.
+    t0, periods = 1.0, 5
+    t1 = t0 + periods / F0
+    t = np.arange(0.0, 5.0 + 1e-9, 1e-3)
+    result = harmonics(t, drifting(t), (t0, t1), periods, dense=drifting)
+    assert result["mean"] == pytest.approx(0.3 + DRIFT * (t0 + t1) / 2.0, abs=1e-12)
+    c1 = np.exp(1j * W0 * t0) + 1j * DRIFT * (t1 - t0) / (2.0 * math.pi * periods)
+    h = (t1 - t0) / (periods * 512)
+    assert result["amplitude"] == pytest.approx(2.0 * abs(c1), abs=2.0 * W0 * DRIFT * h ** 2 / 12.0 * 1.5)
+
+
+def test_steady_state_mean_of_a_signal_that_does_not_repeat():
+    # As above: the window's mean by the trapezoidal rule, exact for the drift.
+    t = np.arange(0.0, 5.0 + 1e-9, 1e-3)
+    result = steady_state(t, drifting(t), 1.0 / F0, 5, reference=0.0, dense=drifting)
+    t0, t1 = result["window"]
+    assert result["mean"] == pytest.approx(0.3 + DRIFT * (t0 + t1) / 2.0, abs=1e-12)
+
+
 # ------------------------------------------------------------------ steady_state
 
 F1 = 1.3  # Hz, excitation frequency

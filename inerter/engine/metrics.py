@@ -9,9 +9,11 @@ accurate than linear interpolation between output samples.  Each refinement call
 with every candidate at once (a few calls in all, however many crossings or extrema),
 so that a dense output evaluated in compiled code costs little per call.
 
-Periodic quantities are computed over a whole number of periods on a uniform grid
-that excludes the window's end point: for a periodic signal the resulting
-trapezoid/FFT quadrature of the Fourier coefficients is spectrally accurate.
+Periodic quantities are computed over a whole number of periods on a uniform grid with
+both of the window's ends, by the trapezoidal rule (:func:`_fourier`): for a periodic
+signal it is spectrally accurate (the sum over the grid without its end point, an FFT
+bin), and where the signal does not quite repeat over the window (a transient still
+decaying, a drift), its error falls as the square of the grid step, not as the step.
 """
 from __future__ import annotations
 
@@ -175,12 +177,21 @@ def _roots(dense: Dense, level: float, a: np.ndarray, b: np.ndarray, guess: np.n
 
 
 def _fourier(values: np.ndarray, periods: int) -> tuple[float, float]:
-    """Mean and fundamental amplitude of uniform samples covering `periods` periods."""
-    n = values.size
-    mean = float(np.mean(values))
+    """Mean and fundamental amplitude of n + 1 uniform samples covering `periods` periods, both
+    ends included: the trapezoidal rule for (1/T) ∫ x(t) e^(−2πi k t/T) dt, k = 0 and `periods`,
+    which is the DFT of the first n samples plus (x_n − x_0)/2 (e^(−2πi k) = 1), divided by n
+    (exact as the plain DFT where x_n = x_0, a periodic signal; of second order where not)."""
+    n = values.size - 1
     # The fundamental is the DFT bin `periods`; amplitude A = 2 |c_1|.
-    c1 = np.fft.rfft(values)[periods] / n
-    return mean, float(2.0 * abs(c1))
+    c1 = (np.fft.rfft(values[:n])[periods] + 0.5 * (values[n] - values[0])) / n
+    return _mean(values), float(2.0 * abs(c1))
+
+
+def _mean(values: np.ndarray) -> float:
+    """The mean of n + 1 uniform samples over a window, both ends included, by the trapezoidal rule
+    (:func:`_fourier`'s k = 0)."""
+    n = values.size - 1
+    return float((np.sum(values[:n]) + 0.5 * (values[n] - values[0])) / n)
 
 
 # ------------------------------------------------------------------------ public API
@@ -202,7 +213,7 @@ def harmonics(t, x, window, periods, dense=None, samples_per_period=512) -> dict
 
     The window must hold `periods` whole periods of the signal, i.e. the fundamental
     frequency is ``periods / (t1 - t0)``.  `x` is resampled uniformly with
-    `samples_per_period` points per period (end point excluded).
+    `samples_per_period` points per period (both ends included: :func:`_fourier`).
 
     Returns ``{"mean": a0, "amplitude": A}`` where ``x ~ a0 + A cos(2 pi f t + phi) + ...``.
     """
@@ -219,7 +230,7 @@ def harmonics(t, x, window, periods, dense=None, samples_per_period=512) -> dict
             f"[{t[0]:.9g}, {t[-1]:.9g}] s"
         )
     n = periods * samples_per_period
-    tau = t0 + (t1 - t0) * (np.arange(n) / n)
+    tau = t0 + (t1 - t0) * (np.arange(n + 1) / n)
     mean, amplitude = _fourier(_resample(t, x, tau, dense), periods)
     return {"mean": mean, "amplitude": amplitude}
 
@@ -358,7 +369,7 @@ def steady_state(t, x, period, periods, reference, dense=None, samples_per_perio
     ending at ``t[-1]``.  `x` is resampled uniformly with `samples_per_period` points
     per period; the peak-to-peak is max - min over that grid (plus, without `dense`,
     the samples inside the window; with `dense`, the extrema are refined on the
-    interpolant).  The mean is the uniform-grid average over the whole periods.
+    interpolant).  The mean is the trapezoidal rule over that grid (:func:`_mean`).
 
     Returns ``{"peak_to_peak": ..., "mean_offset": mean - reference, "mean": ...,
     "window": (t0, t1)}``.  Raises ValueError if the history is shorter than the window.
@@ -384,7 +395,7 @@ def steady_state(t, x, period, periods, reference, dense=None, samples_per_perio
     n = periods * samples_per_period
     tau = t0 + (t1 - t0) * (np.arange(n + 1) / n)  # end point included for the extrema
     values = _resample(t, x, tau, dense)
-    mean = float(np.mean(values[:n]))  # end point excluded: periodic trapezoid rule
+    mean = _mean(values)
 
     if dense is None:
         # The linear interpolant attains its extrema at sample times: include the

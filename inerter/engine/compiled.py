@@ -750,10 +750,11 @@ class Kernel:
         values signal_history gives. `windings`: as signal_history's."""
         need, _ = self._reads(index)
         element, slot = self.element_slot(index)
+        states = np.ascontiguousarray(states, dtype=float)
         out = np.empty(len(times))
         with self.wound_from_start():
-            st, k = _k.signal_column(np.ascontiguousarray(times, dtype=float),
-                                     np.ascontiguousarray(states, dtype=float), _windings_arg(windings),
+            st, k = _k.signal_column(np.ascontiguousarray(times, dtype=float), states,
+                                     np.arange(states.shape[1]), _windings_arg(windings),
                                      self._inputs(inputs), float(alpha), int(index), int(element), int(slot), need,
                                      self.params, np.empty(len(self._layout)), out)
         return out[:k], int(k)
@@ -1203,7 +1204,7 @@ class DenseOutput:
         times = np.asarray(t, dtype=float)
         scalar = times.ndim == 0
         times = np.ascontiguousarray(times.reshape(-1))
-        out = np.ascontiguousarray(self.rows(times).T)
+        out = self.rows(times).T               # a view: (ny, len(t)), as OdeSolution's, without a copy
         return out[:, 0] if scalar else out
 
     def rows(self, times):
@@ -1211,7 +1212,7 @@ class DenseOutput:
         read a history."""
         times = np.ascontiguousarray(times, dtype=float)
         out = np.empty((len(times), self.n))
-        _k.dense_rows(self.method_code, self.nodes, self.coeffs, self.count, times, np.arange(self.n), out)
+        _k.dense_rows(self.method_code, self.nodes, self.coeffs, self.count, times, out)
         return out
 
 

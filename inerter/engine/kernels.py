@@ -1465,10 +1465,11 @@ def _element_at(q, v, e, el_int, el_real, pbody, ploc, ga, gb, Aa, Ab):
 
 @njit(cache=True, inline="always")
 def _rotational3(q, v, e, rot_int, rot_real):
-    """A 3D rotational element (``evaluators.SpatialRotationalElement``): its bodies, A_a, A_b, the
-    twist φ about the axis n̄ fixed in body a (wound on from PHI_REF), its rate φ̇, the torque
-    (restoring positive) and the direction g it acts along in the global frame
-    (:func:`inerter.elements.twist.spatial_twist`)."""
+    """A 3D rotational element (``evaluators.SpatialRotationalElement``), as :func:`_rotational2`
+    in 2D: its bodies, A_a, A_b, the twist φ about the axis n̄ fixed in body a (wound on from
+    PHI_REF), its rate φ̇ and the direction g its torque acts along in the global frame
+    (:func:`inerter.elements.twist.spatial_twist`); its kind's torque is the caller's, where it is
+    needed (the winding kernels read the angle and its rate alone)."""
     ia = rot_int[e, BODY_A]
     ib = rot_int[e, BODY_B]
     Aa = _rot(q, v, ia)
@@ -1477,8 +1478,7 @@ def _rotational3(q, v, e, rot_int, rot_real):
     wbx, wby, wbz = _omega(v, ib)
     phi, w, gx, gy, gz = spatial_twist(Aa, Ab, rot_real[e], REL0, rot_real[e, AXIS], rot_real[e, AXIS + 1],
                                        rot_real[e, AXIS + 2], rot_real[e, PHI_REF], wax, way, waz, wbx, wby, wbz)
-    tau = law.torque(rot_int[e, ROT_KIND], rot_real[e], phi, w)
-    return ia, ib, Aa, Ab, phi, w, tau, gx, gy, gz
+    return ia, ib, Aa, Ab, phi, w, gx, gy, gz
 
 
 @njit(cache=True, inline="always")
@@ -1582,7 +1582,8 @@ def _add_rotational3(q, v, P, gen):
     gradient of the angle (:func:`_rotational3`)."""
     rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
     for e in range(rot_int.shape[0]):
-        ia, ib, Aa, Ab, phi, w, tau, gx, gy, gz = _rotational3(q, v, e, rot_int, rot_real)
+        ia, ib, Aa, Ab, phi, w, gx, gy, gz = _rotational3(q, v, e, rot_int, rot_real)
+        tau = law.torque(rot_int[e, ROT_KIND], rot_real[e], phi, w)
         if ib >= 0:
             tx, ty, tz = matrix9_apply_transposed(Ab, gx, gy, gz)
             k = 6 * ib + 3
@@ -1877,7 +1878,7 @@ def wind3(q, v, P):
     state (inerter.elements.winding): the next steps read their angles on its branch."""
     rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
     for e in range(rot_int.shape[0]):
-        _, _, _, _, phi, _, _, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
+        _, _, _, _, phi, _, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
         rot_real[e, PHI_REF] = phi
 
 
@@ -1900,7 +1901,7 @@ def wind3_step(q, v, q0, v0, h, P):
 def _twist_rate3(q, v, e, P):
     """Element e's rate φ̇ at (q, v), which carries its angle over a step (:func:`_angle_from3`)."""
     rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
-    _, _, _, _, _, rate, _, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
+    _, _, _, _, _, rate, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
     return rate
 
 
@@ -1912,7 +1913,7 @@ def _angle_from3(q, v, rate0, h, e, P):
     :func:`_rotational3` winds it from φ_ref, bit for bit, where both branches are the same
     (:func:`inerter.elements.winding.wound` returns it as it is)."""
     rot_int, rot_real = P[ROT_INT], P[ROT_REAL]
-    _, _, _, _, phi, rate, _, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
+    _, _, _, _, phi, rate, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
     return wound(carried(rot_real[e, PHI_REF], h, rate0, rate), phi)
 
 
@@ -1953,7 +1954,8 @@ def signal_values3(q, v, z, qdd, P, out):
         if meets:
             status = TERMINALS_MEET
     for e in range(rot_int.shape[0]):
-        ia, ib, Aa, Ab, phi, w, tau, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
+        _, _, _, _, phi, w, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
+        tau = law.torque(rot_int[e, ROT_KIND], rot_real[e], phi, w)
         k, energy = _rotational_outputs(rot_int[e, ROT_KIND], rot_real[e], phi, w, tau, energy, out, k)
     for b in range(nb):
         k = _body_outputs3(q, v, b, dims, out, k)
@@ -2956,25 +2958,26 @@ def _signal_at(t, y, inputs, alpha, need_acc, P, work, raw, index, element, slot
 
 
 @njit(cache=True)
-def signal_column(times, states, windings, inputs, alpha, index, element, slot, need_acc, P, raw, out):
+def signal_column(times, states, comps, windings, inputs, alpha, index, element, slot, need_acc, P, raw, out):
     """out[k] = the signal at `index` of signal_values' layout at each sample of a history (rows
     [q, v, z]) (:func:`_signal_at`: `element` ≥ 0, the signal is that translational element's
     output `slot`, evaluated alone), the 3D rotational elements' angles wound from windings[k]
-    (:func:`_hold_windings_of`). `raw`: scratch of the layout's length. Returns (status, the
-    first sample where it could not be evaluated)."""
+    (:func:`_hold_windings_of`). `comps`: the state components the signal reads (the others are
+    read as 0). `raw`: scratch of the layout's length. Returns (status, the first sample where it
+    could not be evaluated)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = states.shape[1]
     nq = P[DIMS][N_COORD]
-    y = np.empty(ny)
+    y = np.zeros(ny)
     q = y[:nq]
     v = y[nq:nq + P[DIMS][N_VELOCITY]]
     work = work_arrays(P, ny, 1)
-    point, c = _point_signal(index, P)
+    point, component = _point_signal(index, P)
     for k in range(states.shape[0]):
-        for j in range(ny):
-            y[j] = states[k, j]
+        for i in range(comps.shape[0]):
+            y[comps[i]] = states[k, comps[i]]
         if point >= 0:
-            out[k] = _point_value_of(q, v, point, c, P)
+            out[k] = _point_value_of(q, v, point, component, P)
         else:
             _hold_windings_of(windings, k, P)
             st, out[k] = _signal_at(times[k], y, inputs, alpha, need_acc, P, work, raw, index, element, slot)
@@ -2984,10 +2987,10 @@ def signal_column(times, states, windings, inputs, alpha, index, element, slot, 
 
 
 @njit(cache=True)
-def dense_rows(method, nodes, coeffs, count, times, comps, out):
-    """out[k, j] = y_j(times[k]) for j in `comps` (the other columns left as they are) from a kept
-    dense output (:func:`rk_advance`, `count` steps), as scipy's ``OdeSolution(times)`` evaluates it."""
-    _dense_block(method, nodes, coeffs, count, times, 0, times.shape[0], comps, out, 0)
+def dense_rows(method, nodes, coeffs, count, times, out):
+    """out[k, j] = y_j(times[k]), every component j, from a kept dense output (:func:`rk_advance`,
+    `count` steps), as scipy's ``OdeSolution(times)`` evaluates it."""
+    _dense_block(method, nodes, coeffs, count, times, 0, times.shape[0], np.arange(coeffs.shape[2]), out, 0)
 
 
 #: Times a dense-output signal is evaluated at in one block (:func:`dense_signal`).
@@ -3005,20 +3008,15 @@ def dense_signal(method, nodes, coeffs, count, times, comps, windings, inputs, a
     n = times.shape[0]
     ny = coeffs.shape[2]
     states = np.zeros((DENSE_BLOCK, ny))
-    at = np.empty(DENSE_BLOCK)
     values = np.empty(DENSE_BLOCK)
-    held = np.empty((DENSE_BLOCK if windings.shape[0] else 0, windings.shape[1]))
     i = 0
     for start in range(0, n, DENSE_BLOCK):
         end = min(n, start + DENSE_BLOCK)
         m = end - start
         i = _dense_block(method, nodes, coeffs, count, times, start, end, comps, states, i)
-        for k in range(m):
-            at[k] = times[start + k]
-            for e in range(held.shape[1] if held.shape[0] else 0):
-                held[k, e] = windings[start + k, e]
-        st, done = signal_column(at[:m], states[:m], held[:m], inputs, alpha, index, element, slot, need_acc, P, raw,
-                                 values[:m])
+        # windings without rows (none given): the angles wound from the PHI_REF P holds, as signal_column's
+        st, done = signal_column(times[start:end], states[:m], comps, windings[start:end], inputs, alpha, index,
+                                 element, slot, need_acc, P, raw, values[:m])
         for k in range(done):
             out[start + k] = values[k]
         if done < m:

@@ -432,7 +432,8 @@ class Result:
 
         def compiled_values(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
-            values, k = kernel.dense_signal(sol, index, t, None, alpha, self._dense_windings(t))
+            windings = self._dense_windings(t) if kernel.reads_windings(index) else None
+            values, k = kernel.dense_signal(sol, index, t, None, alpha, windings)
             if k < len(t):            # not defined at t[k]: the numpy path's values, or its message
                 values = np.concatenate((values, numpy_values(t[k:])))
             return values

@@ -351,6 +351,41 @@ def test_the_dense_output_reads_each_time_on_its_branch(path):
     assert np.abs(result.dense("torsion.tau")(t) - k * reference).max() < k * bound
 
 
+@pytest.mark.parametrize("scene", [BAR_3D, DATA.parent.parent / "scenarios" / "two_bar_2d_as_3d.toml"])
+def test_a_signal_that_does_not_read_the_branch_is_read_without_it(scene):
+    """Kernel.reads_windings: a point's coordinate, and a translational element's output evaluated
+    without the accelerations, do not depend on the 3D rotational elements' branch, so the dense
+    output does not work out each time's (DenseOutput.windings_at, most of what a point's coordinate
+    cost in 3D): their values without it equal, bit for bit, those with the windings the steps give,
+    at times in no order over the whole run (the bar: 0.5 s samples, 20 rad apart). Every other
+    signal reads them (those of the rotational elements among them)."""
+    from inerter.engine import compiled
+
+    k, w, interval = COARSE["slow_0.5s"]
+    model = inerter.load(scene, k=k, w=w) if scene == BAR_3D else inerter.load(scene)
+    settings = model.settings(output_interval=interval if scene == BAR_3D else None)
+    run = compiled.integrate_compiled(model.mechanism, settings, dense=True)
+    kernel, sol = run.extra["kernel"], run.dense
+    assert isinstance(sol, compiled.DenseOutput) and len(kernel.windings)
+    t = np.random.default_rng(5).permutation(np.linspace(run.time[0], run.time[-1], 41))
+    windings = sol.windings_at(t)
+    rotational = {name for name, e in model.scene.elements.items() if e.type.startswith("rotational")}
+    skipped = set()
+    for name in model.signals.names:
+        index = kernel.signal_index(name)
+        if index is None or kernel.reads_windings(index):
+            continue
+        assert name.split(".")[0] not in rotational
+        skipped.add(name.split(".")[0] if "." in name else name)
+        alone, n_alone = kernel.dense_signal(sol, index, t)
+        given, n_given = kernel.dense_signal(sol, index, t, windings=windings)
+        assert n_alone == n_given == len(t)
+        np.testing.assert_array_equal(alone, given)
+    translational = set(model.scene.elements) - rotational
+    assert set(model.scene.points) <= skipped                   # every point's coordinates
+    assert translational <= skipped                              # some outputs of each such element
+
+
 def test_a_peak_of_phi_rel_is_refined_on_its_branch(tmp_path):
     """A peak metric of φ_rel (the fast oscillator: amplitude θ̇(0)/ω = 10/3 rad at t = π/6 s),
     samples 0.5 s apart (5 rad), refined on the dense output integrated again between the samples

@@ -731,6 +731,18 @@ class Kernel:
                 need = True             # a rigid screw efficiency's mode and loss: those of the solved L̈
         return need, np.arange(ny, dtype=np.int64)
 
+    def reads_windings(self, index) -> bool:
+        """Whether the signal at `index` depends on the branch of the 3D rotational elements' angles
+        (``windings``, kernels._hold_windings_of): not a point's coordinate, nor a translational
+        element's output evaluated alone without the accelerations (which the elements' torques
+        enter); any other signal where the scene has such elements."""
+        if not len(self.windings):
+            return False
+        need, _ = self._reads(index)
+        element, _ = self.element_slot(index)
+        point = index < 2 * self.flat["dim"] * len(self.flat["point_names"])
+        return not point and (element < 0 or bool(need))
+
     def element_slot(self, index) -> tuple[int, int]:
         """(translational element e, the position of the signal among e's outputs) of the signal at
         `index` of the layout, (-1, 0) for another signal: a column of it evaluates e's outputs alone
@@ -766,14 +778,14 @@ class Kernel:
         by block, then the signal as :meth:`signal_column` reads it at samples); another (scipy's
         OdeSolution) through its states. `windings`: the 3D rotational elements' angles at each
         time, as signal_history's; a :class:`DenseOutput` or :class:`LocalDense` gives its own
-        where none are given (each time's from the step that covers it:
-        :meth:`DenseOutput.windings_at`)."""
+        where none are given and the signal reads them (each time's from the step that covers it:
+        :meth:`DenseOutput.windings_at`; :meth:`reads_windings`)."""
         times = np.ascontiguousarray(times, dtype=float).reshape(-1)
         if isinstance(sol, LocalDense):
             return self._local_dense_signal(sol, index, times, inputs, alpha)
         if not isinstance(sol, DenseOutput):
             return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha, windings)
-        if windings is None:
+        if windings is None and self.reads_windings(index):
             windings = sol.windings_at(times)
         need, comps = self._reads(index)
         element, slot = self.element_slot(index)

@@ -116,6 +116,18 @@ def test_a_sample_without_value_in_both_counts_as_repeated():
             dense._keep(0)
 
 
+def test_a_nan_time_reads_nan_and_the_rest_are_read(fmu_runs):
+    """A NaN among the times gives NaN there, as the solver's dense output does, and the other times
+    their values (the FMU is not asked to step by NaN seconds). Reference: the same dense output at
+    the finite times alone."""
+    fmu = fmu_runs(LUMPED, stop_time=10.0, y0=1.001)
+    f = fmu.dense("P.r[2]")
+    finite = f([0.5, 0.2, 10.0])
+    got = f([0.5, np.nan, 0.2, 10.0])
+    assert np.isnan(got[1]) and np.array_equal(got[[0, 2, 3]], finite)
+    assert np.isnan(f(np.nan)).all()
+
+
 FMPY_AFTER_A_RUN = """
 import sys, fmpy
 from inerter.fmu.run import simulate_fmu

@@ -397,7 +397,12 @@ class Result:
         fixed steps give no polynomial): a cubic spline through the samples. A derived output:
         its expression on the dense values of the outputs it reads. A 3D rotational element's angle
         is read on the branch its integration followed in the step that gives each t, the times in
-        any order (inerter.elements.winding)."""
+        any order (inerter.elements.winding). The times may have any shape (read flattened; none:
+        an empty array); a NaN time reads NaN."""
+        return _at_times(self._dense(name))
+
+    def _dense(self, name):
+        """:meth:`dense`'s callable, for a 1-D array of times, none of them NaN."""
         self._check_name(name)
         signals = self.model.signals
         if signals.is_derived(name):
@@ -568,6 +573,19 @@ def _plain(value):
         return bool(value)
     describe = getattr(value, "describe", None)
     return describe() if callable(describe) else str(value)
+
+
+def _at_times(values):
+    """`values` (a callable on a 1-D array of times, none NaN, of at least one) on times as
+    Result.dense takes them: any shape, flattened; none; NaN where a time is NaN."""
+    def at(t):
+        t = np.asarray(t, dtype=float).reshape(-1)
+        out = np.full(len(t), np.nan)
+        read = ~np.isnan(t)
+        if np.any(read):
+            out[read] = values(t[read])
+        return out
+    return at
 
 
 def sample_spline(time, values):

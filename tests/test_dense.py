@@ -265,3 +265,25 @@ def test_a_dense_output_built_where_it_is_read_integrates_only_those_intervals()
     assert 0 < plain.dense.evaluations < 0.05 * plain.evaluations
     scale = np.max(np.abs(kept.states), axis=0)
     assert np.max(np.abs(a - b).T / np.maximum(scale, 1e-12)) < 1e-9
+
+
+@pytest.mark.parametrize("kw", [dict(path="numpy"), dict(method="Radau"), dict(constraint="projection"),
+                                dict(method="RK4"), dict()])
+def test_dense_takes_times_of_any_shape_none_and_nan(kw):
+    """Result.dense(name)(t) on every kind of run reads the times flattened (a 1-D array of values,
+    also for a scalar), none as an empty array, and NaN at a NaN time: the numpy path and the scipy
+    integrators raised on an empty array (scipy's OdeSolution) or on a 2-D one, a NaN time raised
+    whatever the integrator found there (terminals meeting, an integer conversion), and RK4's spline
+    gave a scalar for a scalar. Reference: the same callable at the finite times as a 1-D array."""
+    result = inerter.load(LUMPED).simulate(stop_time=1.0, metrics=False, **kw)
+    f = result.dense("P.r[2]")
+    t = np.array([[0.7, 0.1], [1.0, 0.0]])
+    flat = f(t.reshape(-1))
+    assert flat.shape == (4,) and np.all(np.isfinite(flat))
+    assert np.array_equal(f(t), flat)
+    assert f(np.array([])).shape == (0,)
+    assert np.array_equal(f(0.7), flat[:1])
+    got = f([0.7, np.nan, 0.1])
+    assert np.isnan(got[1]) and np.array_equal(got[[0, 2]], flat[:2])
+    derived = result.dense("energy")([np.nan, 0.5])
+    assert np.isnan(derived[0]) and np.isfinite(derived[1])

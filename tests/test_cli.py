@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from inerter.cli import main, parse_set
-from conftest import LUMPED, SCENARIOS, TWO_BAR
+from conftest import LUMPED, SCENARIOS, TWO_BAR, one_line_error
 
 
 def test_run_writes_csv_summary_and_plot(tmp_path, capsys):
@@ -215,6 +215,17 @@ def test_build_fmu_writes_into_out(tmp_path, capsys):
     assert main(["build-fmu", str(LUMPED), "--out", str(out)]) == 0
     assert (out / "lumped_mass_2d.fmu").is_file()
     assert f"built: {out / 'lumped_mass_2d.fmu'}" in capsys.readouterr().out
+
+
+def test_build_fmu_refuses_a_bad_scene_in_one_line_as_run_does(tmp_path, capsys):
+    """A scene build-fmu cannot read (missing; a misspelt field) is the one-line error every command
+    gives, ``inerter: error: FILE: FIELD: ...``, with exit status 2 (it began with "error: " only)."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text(LUMPED.read_text().replace("[bodies.mass]\n", "[bodies.mass]\nmas = 1\n", 1))
+    for scene, field in ((tmp_path / "missing.toml", "missing.toml"), (bad, "bodies.mass.mas: unknown field")):
+        assert main(["build-fmu", str(scene), "--out", str(tmp_path / "fmus")]) == 2
+        err = one_line_error(capsys, field)
+        assert err.startswith(f"inerter: error: {scene}"), err
 
 
 def test_metrics_from_too_few_samples_are_left_out_with_the_reason(tmp_path, capsys):

@@ -228,6 +228,19 @@ def test_build_fmu_refuses_a_bad_scene_in_one_line_as_run_does(tmp_path, capsys)
         assert err.startswith(f"inerter: error: {scene}"), err
 
 
+def test_compare_says_why_a_metric_was_not_computed(tmp_path, capsys):
+    """compare prints a metric it could not compute with the reason, as run does (its table was
+    left empty without a word). The lumped mass's free-oscillation metric needs more periods than
+    0.3 s holds (its natural frequency, 1.5 Hz, is computed)."""
+    assert main(["compare", str(LUMPED), "--stop-time", "0.3", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    reasons = summary["runs"]["corrected"]["metric_errors"]
+    assert reasons
+    for key, why in reasons.items():
+        assert f"{key}: not computed (corrected, uncorrected, oracle): {why}" in out, out
+
+
 def test_metrics_from_too_few_samples_are_left_out_with_the_reason(tmp_path, capsys):
     out = tmp_path / "coarse"
     assert main(["run", str(LUMPED), "--set", "experiment.output_interval=10", "--out", str(out)]) == 0

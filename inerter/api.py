@@ -411,7 +411,7 @@ class Result:
             return lambda t: np.array(signals.derive(name, {x: f(t) for x, f in reads.items()}), dtype=float)
         sol = self.run.dense
         if sol is None:
-            return sample_spline(self.time, self[name])
+            return sample_spline(self.time, self[name], name)
         fn = self.model.signals.function(name)
         n = self.model.mechanism.nq
         alpha = self.settings.alpha
@@ -588,11 +588,16 @@ def _at_times(values):
     return at
 
 
-def sample_spline(time, values):
+def sample_spline(time, values, name=None):
     """A cubic spline through samples (error O(h⁴); linear interpolation would flatten peaks by
-    (ωh)²/12): metrics of runs without a dense output (RK4's fixed steps, FMUs)."""
+    (ωh)²/12): metrics of runs without a dense output (RK4's fixed steps, FMUs). A body's Euler
+    angle (`name` ``B.euler[i]``), read in (−π, π], is splined through its samples unwrapped and
+    read in (−π, π] again, so that the spline does not cross the 2π jumps where it wraps."""
     from scipy.interpolate import CubicSpline
-    return CubicSpline(time, values)
+    if name is None or ".euler[" not in name:
+        return CubicSpline(time, values)
+    spline = CubicSpline(time, np.unwrap(values))
+    return lambda t: np.pi - np.mod(np.pi - spline(t), 2 * np.pi)
 
 
 def _key(prefix, name):

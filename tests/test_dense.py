@@ -287,3 +287,21 @@ def test_dense_takes_times_of_any_shape_none_and_nan(kw):
     assert np.isnan(got[1]) and np.array_equal(got[[0, 2]], flat[:2])
     derived = result.dense("energy")([np.nan, 0.5])
     assert np.isnan(derived[0]) and np.isfinite(derived[1])
+
+
+def test_an_euler_angle_splined_through_its_wraps_is_the_steady_spins():
+    """Where a run keeps no dense output (RK4), an Euler angle is splined through its samples
+    unwrapped and read in (−π, π] again: the spline through the wrapped samples crossed each 2π jump
+    (3.7 rad off between the samples). Reference: the closed form of the steady spin about global X
+    (the spinner's major axis), roll = α0 + ω t wrapped into (−π, π], within 1e-9 rad (RK4's steps
+    of a constant rate are exact up to round-off; the spline of a linear function is exact); a
+    time on a wrap is left out (both ends of the interval are its value)."""
+    model = inerter.load(GIMBAL)
+    result = model.simulate(stop_time=3.0, output_interval=0.05, method="RK4", metrics=False)
+    a0, w = (model.scene.parameters[p].value for p in ("alpha0", "omega"))
+    t = np.linspace(0.0, 3.0, 3001)
+    exact = np.pi - np.mod(np.pi - (a0 + w * t), 2 * np.pi)
+    off = np.abs(np.abs(exact) - np.pi) > 1e-6
+    got = result.dense("spinner.euler[3]")(t)
+    assert np.max(np.abs(got - exact)[off]) <= 1e-9
+    assert np.all((got > -np.pi) & (got <= np.pi))

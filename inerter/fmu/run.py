@@ -125,7 +125,7 @@ class FmuResult:
         if self.fmu_dense is not None and name in self.fmu_dense.names():
             self._check(name)
             return lambda t: self.fmu_dense.values(name, t)
-        return sample_spline(self.time, self[name])
+        return sample_spline(self.time, self[name], name)
 
     def _check(self, name):
         if name not in self.names:

@@ -397,7 +397,12 @@ class Result:
         fixed steps give no polynomial): a cubic spline through the samples. A derived output:
         its expression on the dense values of the outputs it reads. A 3D rotational element's angle
         is read on the branch its integration followed in the step that gives each t, the times in
-        any order (inerter.elements.winding)."""
+        any order (inerter.elements.winding). The times may have any shape (read flattened; none:
+        an empty array); a NaN time reads NaN."""
+        return _at_times(self._dense(name))
+
+    def _dense(self, name):
+        """:meth:`dense`'s callable, for a 1-D array of times, none of them NaN."""
         self._check_name(name)
         signals = self.model.signals
         if signals.is_derived(name):
@@ -406,7 +411,7 @@ class Result:
             return lambda t: np.array(signals.derive(name, {x: f(t) for x, f in reads.items()}), dtype=float)
         sol = self.run.dense
         if sol is None:
-            return sample_spline(self.time, self[name])
+            return sample_spline(self.time, self[name], name)
         fn = self.model.signals.function(name)
         n = self.model.mechanism.nq
         alpha = self.settings.alpha
@@ -571,11 +576,29 @@ def _plain(value):
     return describe() if callable(describe) else str(value)
 
 
-def sample_spline(time, values):
+def _at_times(values):
+    """`values` (a callable on a 1-D array of times, none NaN, of at least one) on times as
+    Result.dense takes them: any shape, flattened; none; NaN where a time is NaN."""
+    def at(t):
+        t = np.asarray(t, dtype=float).reshape(-1)
+        out = np.full(len(t), np.nan)
+        read = ~np.isnan(t)
+        if np.any(read):
+            out[read] = values(t[read])
+        return out
+    return at
+
+
+def sample_spline(time, values, name=None):
     """A cubic spline through samples (error O(h⁴); linear interpolation would flatten peaks by
-    (ωh)²/12): metrics of runs without a dense output (RK4's fixed steps, FMUs)."""
+    (ωh)²/12): metrics of runs without a dense output (RK4's fixed steps, FMUs). A body's Euler
+    angle (`name` ``B.euler[i]``), read in (−π, π], is splined through its samples unwrapped and
+    read in (−π, π] again, so that the spline does not cross the 2π jumps where it wraps."""
     from scipy.interpolate import CubicSpline
-    return CubicSpline(time, values)
+    if name is None or ".euler[" not in name:
+        return CubicSpline(time, values)
+    spline = CubicSpline(time, np.unwrap(values))
+    return lambda t: np.pi - np.mod(np.pi - spline(t), 2 * np.pi)
 
 
 def _key(prefix, name):

@@ -235,6 +235,12 @@ def cmd_compare(args):
             continue
         print(f"  {k:32s} {for_reading(units.get(k)):>6s} "
               + " ".join(f"{v:16.6g}" if v is not None else f"{'-':>16s}" for v in vals))
+    errors = {}                                # a metric not computed: why, and in which runs (as run says)
+    for variant in ("corrected", "uncorrected", "oracle"):
+        for k, why in summaries[variant].get("metric_errors", {}).items():
+            errors.setdefault(k, (why, []))[1].append(variant)
+    for k, (why, where) in errors.items():
+        print(f"  {k}: not computed ({', '.join(where)}): {why}")
     print(f"  largest |{args.model} − oracle| over point positions: "
           + (f"{diff:.3g} m" if math.isfinite(diff) else "not computed (the runs' time grids differ)"))
     print(f"wrote {png} and {out / 'summary.json'}")

@@ -117,6 +117,23 @@ def test_each_compiled_loop_stops_at_the_change_point(tmp_path, capsys, settings
     _stops_at_the_change_point(tmp_path, capsys, ["--path", "compiled"] + [a for s in settings for a in ("--set", s)])
 
 
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
+@pytest.mark.parametrize("settings", [
+    ("experiment.method=Radau",), ("experiment.method=BDF",), ("experiment.method=LSODA",),
+    ("experiment.constraint=projection",)])
+def test_scipys_integrators_stop_at_the_change_point(tmp_path, capsys, settings, path):
+    """scipy's integrators (Radau, BDF, LSODA) and the projection treatment, on either path
+    (simulation.StepMonitor): the same stop, samples and line as the compiled loops'. They went on
+    across the change point along one branch or the other and reported the run completed."""
+    _stops_at_the_change_point(tmp_path, capsys, ["--path", path] + [a for s in settings for a in ("--set", s)])
+
+
+@pytest.mark.parametrize("settings", [("experiment.method=Radau",), ("experiment.constraint=projection",)])
+def test_scipys_integrators_stop_at_the_spatial_change_point(tmp_path, capsys, settings):
+    _stops_at_the_change_point(tmp_path, capsys, ["--path", "compiled"] + [a for s in settings for a in ("--set", s)],
+                               "parallelogram_3d", rate=5)
+
+
 @pytest.mark.parametrize("h", [0.0007, 0.003, 0.01, 0.037])
 def test_a_cosim_step_fails_where_it_reaches_the_change_point(h):
     """Co-simulation steps of h on the compiled stepper (its DOP853 integration runs on across

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from inerter.cli import main, parse_set
-from conftest import LUMPED, SCENARIOS, TWO_BAR
+from conftest import LUMPED, SCENARIOS, TWO_BAR, one_line_error
 
 
 def test_run_writes_csv_summary_and_plot(tmp_path, capsys):
@@ -215,6 +215,30 @@ def test_build_fmu_writes_into_out(tmp_path, capsys):
     assert main(["build-fmu", str(LUMPED), "--out", str(out)]) == 0
     assert (out / "lumped_mass_2d.fmu").is_file()
     assert f"built: {out / 'lumped_mass_2d.fmu'}" in capsys.readouterr().out
+
+
+def test_build_fmu_refuses_a_bad_scene_in_one_line_as_run_does(tmp_path, capsys):
+    """A scene build-fmu cannot read (missing; a misspelt field) is the one-line error every command
+    gives, ``inerter: error: FILE: FIELD: ...``, with exit status 2 (it began with "error: " only)."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text(LUMPED.read_text().replace("[bodies.mass]\n", "[bodies.mass]\nmas = 1\n", 1))
+    for scene, field in ((tmp_path / "missing.toml", "missing.toml"), (bad, "bodies.mass.mas: unknown field")):
+        assert main(["build-fmu", str(scene), "--out", str(tmp_path / "fmus")]) == 2
+        err = one_line_error(capsys, field)
+        assert err.startswith(f"inerter: error: {scene}"), err
+
+
+def test_compare_says_why_a_metric_was_not_computed(tmp_path, capsys):
+    """compare prints a metric it could not compute with the reason, as run does (its table was
+    left empty without a word). The lumped mass's free-oscillation metric needs more periods than
+    0.3 s holds (its natural frequency, 1.5 Hz, is computed)."""
+    assert main(["compare", str(LUMPED), "--stop-time", "0.3", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    reasons = summary["runs"]["corrected"]["metric_errors"]
+    assert reasons
+    for key, why in reasons.items():
+        assert f"{key}: not computed (corrected, uncorrected, oracle): {why}" in out, out
 
 
 def test_metrics_from_too_few_samples_are_left_out_with_the_reason(tmp_path, capsys):

@@ -265,3 +265,43 @@ def test_a_dense_output_built_where_it_is_read_integrates_only_those_intervals()
     assert 0 < plain.dense.evaluations < 0.05 * plain.evaluations
     scale = np.max(np.abs(kept.states), axis=0)
     assert np.max(np.abs(a - b).T / np.maximum(scale, 1e-12)) < 1e-9
+
+
+@pytest.mark.parametrize("kw", [dict(path="numpy"), dict(method="Radau"), dict(constraint="projection"),
+                                dict(method="RK4"), dict()])
+def test_dense_takes_times_of_any_shape_none_and_nan(kw):
+    """Result.dense(name)(t) on every kind of run reads the times flattened (a 1-D array of values,
+    also for a scalar), none as an empty array, and NaN at a NaN time: the numpy path and the scipy
+    integrators raised on an empty array (scipy's OdeSolution) or on a 2-D one, a NaN time raised
+    whatever the integrator found there (terminals meeting, an integer conversion), and RK4's spline
+    gave a scalar for a scalar. Reference: the same callable at the finite times as a 1-D array."""
+    result = inerter.load(LUMPED).simulate(stop_time=1.0, metrics=False, **kw)
+    f = result.dense("P.r[2]")
+    t = np.array([[0.7, 0.1], [1.0, 0.0]])
+    flat = f(t.reshape(-1))
+    assert flat.shape == (4,) and np.all(np.isfinite(flat))
+    assert np.array_equal(f(t), flat)
+    assert f(np.array([])).shape == (0,)
+    assert np.array_equal(f(0.7), flat[:1])
+    got = f([0.7, np.nan, 0.1])
+    assert np.isnan(got[1]) and np.array_equal(got[[0, 2]], flat[:2])
+    derived = result.dense("energy")([np.nan, 0.5])
+    assert np.isnan(derived[0]) and np.isfinite(derived[1])
+
+
+def test_an_euler_angle_splined_through_its_wraps_is_the_steady_spins():
+    """Where a run keeps no dense output (RK4), an Euler angle is splined through its samples
+    unwrapped and read in (−π, π] again: the spline through the wrapped samples crossed each 2π jump
+    (3.7 rad off between the samples). Reference: the closed form of the steady spin about global X
+    (the spinner's major axis), roll = α0 + ω t wrapped into (−π, π], within 1e-9 rad (RK4's steps
+    of a constant rate are exact up to round-off; the spline of a linear function is exact); a
+    time on a wrap is left out (both ends of the interval are its value)."""
+    model = inerter.load(GIMBAL)
+    result = model.simulate(stop_time=3.0, output_interval=0.05, method="RK4", metrics=False)
+    a0, w = (model.scene.parameters[p].value for p in ("alpha0", "omega"))
+    t = np.linspace(0.0, 3.0, 3001)
+    exact = np.pi - np.mod(np.pi - (a0 + w * t), 2 * np.pi)
+    off = np.abs(np.abs(exact) - np.pi) > 1e-6
+    got = result.dense("spinner.euler[3]")(t)
+    assert np.max(np.abs(got - exact)[off]) <= 1e-9
+    assert np.all((got > -np.pi) & (got <= np.pi))

@@ -114,3 +114,42 @@ def test_a_sample_without_value_in_both_counts_as_repeated():
         dense._fmu = Instance(values)
         with pytest.raises(SimulationError, match="does not repeat the run"):
             dense._keep(0)
+
+
+def test_a_nan_time_reads_nan_and_the_rest_are_read(fmu_runs):
+    """A NaN among the times gives NaN there, as the solver's dense output does, and the other times
+    their values (the FMU is not asked to step by NaN seconds). Reference: the same dense output at
+    the finite times alone."""
+    fmu = fmu_runs(LUMPED, stop_time=10.0, y0=1.001)
+    f = fmu.dense("P.r[2]")
+    finite = f([0.5, 0.2, 10.0])
+    got = f([0.5, np.nan, 0.2, 10.0])
+    assert np.isnan(got[1]) and np.array_equal(got[[0, 2, 3]], finite)
+    assert np.isnan(f(np.nan)).all()
+
+
+FMPY_AFTER_A_RUN = """
+import sys, fmpy
+from inerter.fmu.run import simulate_fmu
+simulate_fmu(sys.argv[1], {}, stop_time=0.1, metrics=False)   # fmpy.simulate_fmu with a logger of ours
+try:   # a second FMU with fmpy's default callbacks, whose exitInitializationMode logs an error
+    fmpy.simulate_fmu(sys.argv[2], stop_time=0.1, output_interval=0.05, start_values={"y0": float("nan")})
+except Exception as exc:
+    print("refused:", exc)
+"""
+
+
+def test_an_fmu_logging_after_a_run_in_the_same_process_does_not_crash(tmp_path):
+    """fmpy's native logger proxy calls the logger registered last; simulate_fmu's own is freed when
+    its call returns, so an FMU instantiated afterwards with fmpy's default callbacks (the FMU's
+    dense output, an importer's next run) crashed the process (SIGSEGV) the first time it logged.
+    After the run, fmpy's default logger is registered again: the error is printed and raised."""
+    import subprocess
+    import sys
+    from inerter.fmu.build import build
+    fmu = build(LUMPED, tmp_path)
+    proc = subprocess.run([sys.executable, "-c", FMPY_AFTER_A_RUN, str(LUMPED), str(fmu)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, (proc.returncode, proc.stderr[-2000:])
+    assert "refused: fmi2ExitInitializationMode failed" in proc.stdout
+    assert "y0: not finite (got nan" in proc.stdout + proc.stderr

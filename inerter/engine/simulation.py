@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from inerter.common.errors import SimulationError, TerminalsMeet
+from inerter.model.mechanism import DEPENDENT_RATIO
 
 
 def make_solver(*args, **kwargs):
@@ -217,6 +218,8 @@ class StepMonitor:
         self.steps = 0
         self.hits = self.calm = 0
         self.small = 0
+        self.loops = mech.closed_loops() > 0         # only a closed loop can reach a change point
+        self._rows = None                            # (q, C_v(q)) at the last step's end
 
     def after_step(self, solver, y_old):
         self.steps += 1
@@ -227,6 +230,8 @@ class StepMonitor:
                 f"more than max_steps = {self.max_steps} integrator steps (step size {h:.3g} s): the scene may "
                 f"be stiff for {self.method}; try method = \"Radau\" or \"BDF\"", t_old)
         self.mech.check_step(y_old, solver.y, t, t_old)
+        if self.loops:
+            self._watch_loops(solver, y_old)
         if self.bound is not None and (self.hits or self.steps % STIFFNESS_EVERY == 0):
             self._stiffness(solver, h)
         if h < COLLAPSE_RELATIVE * max(1.0, abs(t)):
@@ -239,6 +244,49 @@ class StepMonitor:
         else:
             self.small = 0
         self.mech.wind(solver.y, y_old, h)
+
+    def _rows_at(self, y):
+        """C_v at the state y (the joints' rows; None where they are not finite)."""
+        q = np.asarray(y[:self.mech.nq], dtype=float)
+        if self._rows is not None and np.array_equal(self._rows[0], q):
+            return self._rows[1]
+        rows = self.mech.constraints(q, np.zeros(self.mech.n))[1]
+        return rows if np.all(np.isfinite(rows)) else None
+
+    def _watch_loops(self, solver, y_old):
+        """A change point of a mechanism whose joints close a loop stops the run, as the compiled
+        loops' watch does (kernels.loop_watch, docs/changepoint.md): the step reaches it (the rows
+        at its end within DEPENDENT_RATIO of dependent, Gram-Schmidt's bound there, the SVD's here)
+        or jumps across it (det(C_v(q₁) C_v(q₀)ᵀ) ≤ 0, located by bisection on the step's dense
+        output and confirmed by the ratio there: rows turning by a right angle without a loss of
+        rank are not one). scipy's integrators (Radau, BDF, LSODA) and the projection treatment
+        went on across it along one branch or the other without a word."""
+        rows0, rows1 = self._rows_at(y_old), self._rows_at(solver.y)
+        self._rows = (np.array(solver.y[:self.mech.nq], dtype=float), rows1)
+        if rows0 is None or rows1 is None:
+            return
+        where = solver.t
+        if not _rank_kept(rows1):
+            q = solver.y
+        elif np.linalg.det(rows1 @ rows0.T) <= 0.0:
+            dense = solver.dense_output()
+            a, b = solver.t_old, solver.t
+            for _ in range(60):                      # to adjacent floats within the step
+                mid = 0.5 * (a + b)
+                if not a < mid < b:
+                    break
+                inside = self._rows_at(dense(mid))
+                if inside is not None and np.linalg.det(inside @ rows0.T) > 0.0:
+                    a = mid
+                else:
+                    b = mid
+            q, where = dense(b), b
+            if _rank_kept(self._rows_at(q)):
+                return
+        else:
+            return
+        raise SimulationError("a step reaches a pose where the joints' constraint rows lose rank"
+                              + self.mech.diagnose(q), where)
 
     def _stiffness(self, solver, h):
         K = getattr(solver, "K", None)
@@ -265,6 +313,15 @@ class StepMonitor:
             self.calm += 1
             if self.calm >= 6:
                 self.hits = 0
+
+
+def _rank_kept(rows) -> bool:
+    """The joints' rows of full rank: the smallest singular value above DEPENDENT_RATIO of the
+    largest (Mechanism._dependent_joints's test), or rows that cannot be evaluated."""
+    if rows is None or not rows.size:
+        return True
+    sv = np.linalg.svd(rows, compute_uv=False)
+    return bool(sv[-1] > DEPENDENT_RATIO * sv[0])
 
 
 #: A trial step of an explicit Runge-Kutta method that reaches a state where the accelerations cannot

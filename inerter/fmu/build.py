@@ -670,7 +670,7 @@ def run(args: argparse.Namespace) -> int:
     """Build the FMUs that `args` name; print one line per scene; return the exit status."""
     scenes = [Path(s) for s in args.scenes] or sorted(DEFAULT_SCENES_DIR.glob("*.toml"))
     if not scenes:
-        print(f"error: no scene given and none in {DEFAULT_SCENES_DIR}", file=sys.stderr)
+        print(f"inerter: error: no scene given and none in {DEFAULT_SCENES_DIR}", file=sys.stderr)
         return 2
     status = 0
     made: dict[Path, Path] = {}
@@ -680,7 +680,7 @@ def run(args: argparse.Namespace) -> int:
                 warnings.simplefilter("always", FmuBuildWarning)
                 path, built = _build(scene, Path(args.out_dir), args.force)
         except InerterError as exc:
-            print(f"error: {exc}", file=sys.stderr)
+            print(f"inerter: error: {exc}", file=sys.stderr)
             status = 1
             continue
         finally:
@@ -691,7 +691,7 @@ def run(args: argparse.Namespace) -> int:
                     warnings.showwarning(warning.message, warning.category, warning.filename,
                                          warning.lineno)
         if path in made:
-            print(f"error: {scene}: builds {path}, as {made[path]} does (two scenes with one "
+            print(f"inerter: error: {scene}: builds {path}, as {made[path]} does (two scenes with one "
                   f"name)", file=sys.stderr)
             status = 1
         made[path] = scene

@@ -68,11 +68,12 @@ class FmuDense:
         return self._variables().keys()
 
     def values(self, name: str, times) -> np.ndarray:
-        """The output `name` at `times` (any order, clipped to the run's interval)."""
+        """The output `name` at `times` (any order, clipped to the run's interval; NaN at a NaN time,
+        as the solver's dense output gives, where the FMU is not stepped)."""
         t = np.clip(np.asarray(times, dtype=float).reshape(-1), self._times[0], self._times[-1])
-        out = np.empty(len(t))
+        out = np.full(len(t), np.nan)
         reference = [self._variables()[name]]
-        for i in np.argsort(t, kind="stable"):
+        for i in np.argsort(t, kind="stable")[:np.count_nonzero(~np.isnan(t))]:   # NaNs sort last
             self._go_to(float(t[i]))
             out[i] = self._fmu.getReal(reference)[0]
         return out

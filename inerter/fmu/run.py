@@ -33,6 +33,29 @@ class FmuRunInfo:
     extra: dict = field(default_factory=dict)
 
 
+#: fmpy's default logger, kept for the process (see :func:`_restore_fmpy_logger`).
+_FMPY_DEFAULT_LOGGER = []
+
+
+def _restore_fmpy_logger():
+    """Point fmpy's logger proxy back at its default logger, one kept alive for the process.
+
+    fmpy (0.3) formats an FMU's message in a native proxy that calls the logger registered last: a
+    ``fmpy.simulate_fmu(..., logger=f)`` registers a callback that is freed when the call returns,
+    and an FMU instantiated afterwards with fmpy's default callbacks (FmuDense's second instance,
+    an importer's own FMU2Slave) then calls freed memory the first time it logs (a segmentation
+    fault on an error's message)."""
+    from ctypes import byref
+
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
+    from fmpy.logging import addLoggerProxy
+    if not _FMPY_DEFAULT_LOGGER:
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(printLogMessage)
+        _FMPY_DEFAULT_LOGGER.append(callbacks)
+    addLoggerProxy(byref(_FMPY_DEFAULT_LOGGER[0]))
+
+
 def solver_item(method: str) -> int:
     """The value of the FMU's ``solver`` Enumeration item for an integration method (1, 2, ...)."""
     return list(Model.methods).index(method) + 1
@@ -102,7 +125,7 @@ class FmuResult:
         if self.fmu_dense is not None and name in self.fmu_dense.names():
             self._check(name)
             return lambda t: self.fmu_dense.values(name, t)
-        return sample_spline(self.time, self[name])
+        return sample_spline(self.time, self[name], name)
 
     def _check(self, name):
         if name not in self.names:
@@ -180,9 +203,12 @@ def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None
     outputs = [n for n in model.signals.names]
     starts = start_values(model, overrides)
     t0 = _time.process_time()
-    table = fmpy.simulate_fmu(str(fmu_file), stop_time=settings.stop_time, output_interval=comm,
-                              start_values=starts, output=outputs,
-                              logger=logger, debug_logging=True)   # so the FMU's messages reach `logger`
+    try:
+        table = fmpy.simulate_fmu(str(fmu_file), stop_time=settings.stop_time, output_interval=comm,
+                                  start_values=starts, output=outputs,
+                                  logger=logger, debug_logging=True)   # so the FMU's messages reach `logger`
+    finally:
+        _restore_fmpy_logger()                    # `logger`'s callback is freed with the call
     cpu = _time.process_time() - t0
     t_last = float(table["time"][-1]) if len(table) else 0.0
     ok = abs(t_last - settings.stop_time) <= 1e-9 * max(1.0, settings.stop_time)

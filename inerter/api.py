@@ -581,8 +581,10 @@ def _at_times(values):
     Result.dense takes them: any shape, flattened; none; NaN where a time is NaN."""
     def at(t):
         t = np.asarray(t, dtype=float).reshape(-1)
-        out = np.full(len(t), np.nan)
         read = ~np.isnan(t)
+        if read.all() and len(t):              # the common case, without the copies below
+            return np.asarray(values(t), dtype=float).reshape(-1)
+        out = np.full(len(t), np.nan)
         if np.any(read):
             out[read] = values(t[read])
         return out

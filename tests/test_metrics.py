@@ -140,7 +140,7 @@ def test_harmonics_of_a_signal_that_does_not_repeat():
     # The trapezoidal rule over both ends of the window: the mean of the linear drift exactly
     # (a sum without the window's end point is off by DRIFT h/2, 3e-6 here); the coefficient
     # to second order in the grid step h = W/2560: the leading term of its error is w DRIFT h^2/12
-    # (about 2e-8 on the amplitude 2|c1|), allowed half again for the terms of higher order.
+    # on c1 (5e-8 on the amplitude 2|c1|), allowed half again for the terms of higher order.
     t0, periods = 1.0, 5
     t1 = t0 + periods / F0
     t = np.arange(0.0, 5.0 + 1e-9, 1e-3)

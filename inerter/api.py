@@ -398,8 +398,9 @@ class Result:
         its expression on the dense values of the outputs it reads. A 3D rotational element's angle
         is read on the branch its integration followed in the step that gives each t, the times in
         any order (inerter.elements.winding). The times may have any shape (read flattened; none:
-        an empty array); a NaN time reads NaN."""
-        return _at_times(self._dense(name))
+        an empty array); a NaN time reads NaN; a time outside the run's samples raises a
+        ValueError (:func:`at_times`)."""
+        return at_times(self._dense(name), self.time, f"{self.model.name}: dense({name!r})")
 
     def _dense(self, name):
         """:meth:`dense`'s callable, for a 1-D array of times, none of them NaN."""
@@ -576,12 +577,23 @@ def _plain(value):
     return describe() if callable(describe) else str(value)
 
 
-def _at_times(values):
+def at_times(values, time, what):
     """`values` (a callable on a 1-D array of times, none NaN, of at least one) on times as
-    Result.dense takes them: any shape, flattened; none; NaN where a time is NaN."""
+    Result.dense takes them: any shape, flattened; none; NaN where a time is NaN. A time outside
+    the run's samples `time` (its first to its last, to rounding) raises a ValueError that names
+    `what`, the time and the span: past them a polynomial or a spline would be extrapolated, not
+    the run's result (a failed run's last sample is where it stopped)."""
+    t0, t1 = (float(time[0]), float(time[-1])) if len(time) else (np.inf, -np.inf)
+    slack = 1e-12 * max(1.0, abs(t0), abs(t1)) if len(time) else 0.0
+    span = f"whose samples span [{t0:.9g}, {t1:.9g}] s" if len(time) else "which has no samples"
+
     def at(t):
         t = np.asarray(t, dtype=float).reshape(-1)
         read = ~np.isnan(t)
+        if np.any(read) and (np.min(t[read]) < t0 - slack or np.max(t[read]) > t1 + slack):
+            bad = t[read][(t[read] < t0 - slack) | (t[read] > t1 + slack)][0]
+            raise ValueError(f"{what}: t = {bad:.9g} s is outside the run, {span}; its dense output "
+                             "is read only there")
         if read.all() and len(t):              # the common case, without the copies below
             return np.asarray(values(t), dtype=float).reshape(-1)
         out = np.full(len(t), np.nan)

@@ -305,3 +305,18 @@ def test_an_euler_angle_splined_through_its_wraps_is_the_steady_spins():
     got = result.dense("spinner.euler[3]")(t)
     assert np.max(np.abs(got - exact)[off]) <= 1e-9
     assert np.all((got > -np.pi) & (got <= np.pi))
+
+
+@pytest.mark.parametrize("kw", [dict(), dict(path="numpy"), dict(method="Radau"), dict(method="RK4")])
+def test_dense_refuses_a_time_outside_the_run(kw):
+    """A time before the first sample or after the last raises a ValueError naming the scene, the
+    signal, the time and the run's span: past them the dense output's polynomial (or RK4's spline)
+    was extrapolated and returned as if the run had reached there. The first and last samples
+    themselves are read (to rounding: linspace's ends)."""
+    result = inerter.load(LUMPED).simulate(stop_time=1.0, metrics=False, **kw)
+    f = result.dense("P.r[2]")
+    assert np.all(np.isfinite(f(np.linspace(0.0, 1.0, 7))))
+    for t in (1.0 + 1e-6, -0.01):
+        with pytest.raises(ValueError, match=r"lumped_mass_2d: dense\('P.r\[2\]'\): t = .* s is outside the run, "
+                                             r"whose samples span \[0, 1\] s"):
+            f([0.5, t])

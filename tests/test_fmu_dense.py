@@ -153,3 +153,11 @@ def test_an_fmu_logging_after_a_run_in_the_same_process_does_not_crash(tmp_path)
     assert proc.returncode == 0, (proc.returncode, proc.stderr[-2000:])
     assert "refused: fmi2ExitInitializationMode failed" in proc.stdout
     assert "y0: not finite (got nan" in proc.stdout + proc.stderr
+
+
+def test_a_time_outside_the_fmu_run_is_refused(fmu_runs):
+    """As the solver's dense output (tests/test_dense.py): a time past the run's last sample raises a
+    ValueError naming it; the FMU's dense output clamped it to the last sample without a word."""
+    fmu = fmu_runs(LUMPED, stop_time=10.0, y0=1.001)
+    with pytest.raises(ValueError, match=r"\(FMU\): dense\('P.r\[2\]'\): t = 10.5 s is outside the run"):
+        fmu.dense("P.r[2]")([1.0, 10.5])

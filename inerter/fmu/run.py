@@ -18,7 +18,8 @@ import numpy as np
 from inerter.common.errors import SceneError
 from inerter.engine.simulation import Settings
 from inerter.fmu.dense import FmuDense, reads_the_fmu
-from inerter.api import Model, Result, compute_metrics, csv_header, output_units, sample_spline, to_dataframe
+from inerter.api import (Model, Result, at_times, compute_metrics, csv_header, output_units, sample_spline,
+                         to_dataframe)
 
 
 @dataclass
@@ -121,11 +122,13 @@ class FmuResult:
     def dense(self, name):
         """A callable t ↦ output(t): the FMU's own dense output (a second instance stepped to the
         times asked for, :class:`inerter.fmu.dense.FmuDense`), or, where the FMU restarts its
-        integration at every communication point, a cubic spline through the samples."""
+        integration at every communication point, a cubic spline through the samples. Times as
+        the solver's :meth:`inerter.api.Result.dense` takes them (:func:`inerter.api.at_times`)."""
+        what = f"{self.model.name} (FMU): dense({name!r})"
         if self.fmu_dense is not None and name in self.fmu_dense.names():
             self._check(name)
-            return lambda t: self.fmu_dense.values(name, t)
-        return sample_spline(self.time, self[name], name)
+            return at_times(lambda t: self.fmu_dense.values(name, t), self.time, what)
+        return at_times(sample_spline(self.time, self[name], name), self.time, what)
 
     def _check(self, name):
         if name not in self.names:

@@ -590,11 +590,13 @@ def at_times(values, time, what):
     def at(t):
         t = np.asarray(t, dtype=float).reshape(-1)
         read = ~np.isnan(t)
-        if np.any(read) and (np.min(t[read]) < t0 - slack or np.max(t[read]) > t1 + slack):
-            bad = t[read][(t[read] < t0 - slack) | (t[read] > t1 + slack)][0]
+        every = bool(read.all())
+        given = t if every else t[read]
+        if len(given) and (given.min() < t0 - slack or given.max() > t1 + slack):
+            bad = given[(given < t0 - slack) | (given > t1 + slack)][0]
             raise ValueError(f"{what}: t = {bad:.9g} s is outside the run, {span}; its dense output "
                              "is read only there")
-        if read.all() and len(t):              # the common case, without the copies below
+        if every and len(t):                   # the common case, without the copies below
             return np.asarray(values(t), dtype=float).reshape(-1)
         out = np.full(len(t), np.nan)
         if np.any(read):

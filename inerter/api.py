@@ -408,7 +408,7 @@ class Result:
         signals = self.model.signals
         if signals.is_derived(name):
             # the expression on the dense values of the outputs it reads, not a spline through its samples
-            reads = {x: self.dense(x) for x in signals.derived_reads(name)}
+            reads = {x: self._dense(x) for x in signals.derived_reads(name)}   # times checked by dense()
             return lambda t: np.array(signals.derive(name, {x: f(t) for x, f in reads.items()}), dtype=float)
         sol = self.run.dense
         if sol is None:

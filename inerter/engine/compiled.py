@@ -706,7 +706,7 @@ class Kernel:
         width = 2 * flat["dim"]
         ny = self.ny
         self.signal_index("")
-        if index < width * len(flat["point_names"]):
+        if self._is_point(index):
             b, c, d = int(flat["pbody"][index // width]), index % width, flat["dim"]
             if b < 0:
                 return False, np.zeros(0, dtype=np.int64)
@@ -740,8 +740,12 @@ class Kernel:
             return False
         need, _ = self._reads(index)
         element, _ = self.element_slot(index)
-        point = index < 2 * self.flat["dim"] * len(self.flat["point_names"])
-        return not point and (element < 0 or bool(need))
+        return not self._is_point(index) and (element < 0 or bool(need))
+
+    def _is_point(self, index) -> bool:
+        """Whether the signal at `index` of the layout is a point's coordinate (the layout's first
+        2 × dim signals of each point, kernels._point_signal)."""
+        return index < 2 * self.flat["dim"] * len(self.flat["point_names"])
 
     def element_slot(self, index) -> tuple[int, int]:
         """(translational element e, the position of the signal among e's outputs) of the signal at

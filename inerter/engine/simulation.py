@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from inerter.common.errors import SimulationError, TerminalsMeet
-from inerter.model.mechanism import DEPENDENT_RATIO
+from inerter.model.mechanism import rank_kept
 
 
 def make_solver(*args, **kwargs):
@@ -316,12 +316,9 @@ class StepMonitor:
 
 
 def _rank_kept(rows) -> bool:
-    """The joints' rows of full rank: the smallest singular value above DEPENDENT_RATIO of the
-    largest (Mechanism._dependent_joints's test), or rows that cannot be evaluated."""
-    if rows is None or not rows.size:
-        return True
-    sv = np.linalg.svd(rows, compute_uv=False)
-    return bool(sv[-1] > DEPENDENT_RATIO * sv[0])
+    """The joints' rows of full rank (:func:`inerter.model.mechanism.rank_kept`), or rows that
+    cannot be evaluated."""
+    return rows is None or not rows.size or rank_kept(rows)
 
 
 #: A trial step of an explicit Runge-Kutta method that reaches a state where the accelerations cannot

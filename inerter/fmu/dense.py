@@ -68,12 +68,13 @@ class FmuDense:
         return self._variables().keys()
 
     def values(self, name: str, times) -> np.ndarray:
-        """The output `name` at `times` (any order, clipped to the run's interval; NaN at a NaN time,
-        as the solver's dense output gives, where the FMU is not stepped)."""
+        """The output `name` at `times` (any order, none NaN, clipped to the run's interval: the
+        rounding ``api.at_times`` lets through, which reads a NaN time as NaN and refuses a time
+        outside the run for :meth:`inerter.fmu.run.FmuResult.dense`)."""
         t = np.clip(np.asarray(times, dtype=float).reshape(-1), self._times[0], self._times[-1])
-        out = np.full(len(t), np.nan)
+        out = np.empty(len(t))
         reference = [self._variables()[name]]
-        for i in np.argsort(t, kind="stable")[:np.count_nonzero(~np.isnan(t))]:   # NaNs sort last
+        for i in np.argsort(t, kind="stable"):
             self._go_to(float(t[i]))
             out[i] = self._fmu.getReal(reference)[0]
         return out

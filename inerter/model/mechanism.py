@@ -117,6 +117,14 @@ def wound_from(holder, start=None):
         holder.windings = held
 
 
+def rank_kept(rows) -> bool:
+    """Whether the joints' constraint rows `rows` (C_v) keep full rank: the smallest singular value
+    above DEPENDENT_RATIO of the largest (below it, a change point: :meth:`Mechanism._dependent_joints`
+    names the joints, ``simulation.StepMonitor`` stops a run there)."""
+    sv = np.linalg.svd(rows, compute_uv=False)
+    return bool(sv[-1] > DEPENDENT_RATIO * sv[0])
+
+
 class Mechanism:
     """A scene compiled for simulation. `element_factory`, where given, builds the translational
     elements instead of :mod:`inerter.model.evaluators`: the oracle (:mod:`inerter.oracle`) passes
@@ -556,11 +564,9 @@ class Mechanism:
         if not self.m:
             return ""
         Cq = self.constraints(q, np.zeros(self.n))[1]
-        if not np.all(np.isfinite(Cq)):
+        if not np.all(np.isfinite(Cq)) or rank_kept(Cq):
             return ""
         U, sv, _ = np.linalg.svd(Cq, full_matrices=False)
-        if sv[-1] > DEPENDENT_RATIO * sv[0]:
-            return ""
         share, row = np.abs(U[:, -1]), 0
         names = []
         for j in self.joints:

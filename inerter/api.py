@@ -667,6 +667,21 @@ def compute_metrics(model: Model, result) -> dict:
     return out
 
 
+#: A periodic metric's grid is fine enough when its quadrature moves by less than this share of
+#: the run's relative tolerance (of the signal's spread, :func:`inerter.engine.metrics._window_grid`):
+#: the metric adds a thousandth of the run's own error at most.
+METRIC_GRID_SHARE = 1e-3
+
+
+def metric_grid_rtol(settings) -> float:
+    """The `grid_rtol` of a run's periodic metrics: :data:`METRIC_GRID_SHARE` of its rtol where its
+    integrator keeps a tolerance; the metrics' own default for RK4 (fixed steps) and where the
+    history has no settings."""
+    if settings is None or settings.method == "RK4":
+        return metric_fns.GRID_RTOL
+    return max(metric_fns.GRID_RTOL, METRIC_GRID_SHARE * settings.rtol)
+
+
 def _compute_metric(model, result, m, out, windows):
     """One [[metrics]] entry into `out`."""
     if m.kind == "natural_frequency":
@@ -683,21 +698,23 @@ def _compute_metric(model, result, m, out, windows):
         out[_key(m.prefix, "peak")] = float(metric_fns.peak(t, x, ref, dense=dense))
         return
     reference = m.reference if m.reference is not None else model.static_value(m.signal)
+    grid_rtol = metric_grid_rtol(getattr(result, "settings", None))
     if m.kind == "free_oscillation":
-        r = metric_fns.free_oscillation(t, x, reference, dense=dense)
+        r = metric_fns.free_oscillation(t, x, reference, dense=dense, grid_rtol=grid_rtol)
         windows[m.signal] = (r["window"], r["periods"])
         for key in ("fundamental_frequency", "fundamental_amplitude", "mean_offset"):
             out[_key(m.prefix, key)] = float(r[key])
     elif m.kind == "harmonics":
         if m.period_of not in windows:
-            r0 = metric_fns.free_oscillation(t, result[m.period_of], 0.0, dense=result.dense(m.period_of))
+            r0 = metric_fns.free_oscillation(t, result[m.period_of], 0.0, dense=result.dense(m.period_of),
+                                             grid_rtol=grid_rtol)
             windows[m.period_of] = (r0["window"], r0["periods"])
         window, periods = windows[m.period_of]
-        r = metric_fns.harmonics(t, x, window, periods, dense=dense)
+        r = metric_fns.harmonics(t, x, window, periods, dense=dense, grid_rtol=grid_rtol)
         out[_key(m.prefix, "mean")] = float(r["mean"])
         out[_key(m.prefix, "amplitude")] = float(r["amplitude"])
     elif m.kind == "steady_state":
-        r = metric_fns.steady_state(t, x, m.period, m.periods, reference, dense=dense)
+        r = metric_fns.steady_state(t, x, m.period, m.periods, reference, dense=dense, grid_rtol=grid_rtol)
         out[_key(m.prefix, "peak_to_peak")] = float(r["peak_to_peak"])
         out[_key(m.prefix, "mean_offset")] = float(r["mean_offset"])
 

@@ -135,6 +135,54 @@ def test_compiled_metrics_of_a_3d_scene_equal_the_oracles_of_its_2d_twin(paper):
         1e-9 * reference.metrics["C_y_peak_to_peak"]
 
 
+@pytest.mark.parametrize("rtol, coarser", [(5e-5, True), (1e-7, True), (1e-9, False)])
+def test_a_runs_metrics_sample_only_as_finely_as_its_tolerance_needs(rtol, coarser):
+    """The periodic metrics' grid stops where the trapezoidal rule moves by less than
+    api.METRIC_GRID_SHARE of the run's rtol (of the signal's spread): the two-bar's steady state
+    over 0-20 s at rtol 5e-5 (the cheapest run reaching 1e-6 m), 1e-7 and 1e-9. Reference: the same
+    metric on the same dense output sampled on its finest grid (2048 a period, grid_rtol 1e-12),
+    which the run's must equal within that share (4/3 of it: a second-order rule's error estimated
+    from two grids). The window still holds the start's transient, so its grids' means converge as
+    h² (measured 2.9e-10 of the spread from 64 to 128 a period, 1.2e-12 from 1024 to 2048): at
+    1e-9 the share, 1e-12, is reached on no grid and the run samples the finest one."""
+    from inerter import api
+    from inerter.engine import metrics
+    model = inerter.load(TWO_BAR)
+    result = model.simulate(stop_time=STOP, rtol=rtol, atol=rtol / 100)
+    spec = next(m for m in model.scene.metrics if m.kind == "steady_state")
+    share = api.metric_grid_rtol(result.settings)
+    assert share == api.METRIC_GRID_SHARE * rtol
+    read = {}
+
+    def counted(key, dense):
+        def values(t):
+            read[key] = read.get(key, 0) + np.size(t)
+            return dense(t)
+        return values
+
+    t, x, dense = result.time, result[spec.signal], result.dense(spec.signal)
+    run = metrics.steady_state(t, x, spec.period, spec.periods, 0.0, counted("run", dense), grid_rtol=share)
+    finest = metrics.steady_state(t, x, spec.period, spec.periods, 0.0, counted("finest", dense))
+    spread = finest["peak_to_peak"]
+    assert abs(run["mean"] - finest["mean"]) <= 4.0 / 3.0 * share * spread
+    assert abs(run["peak_to_peak"] - finest["peak_to_peak"]) <= 4.0 / 3.0 * share * spread
+    assert result.metrics[f"{spec.prefix}_mean_offset"] == run["mean_offset"] - model.static_value(spec.signal)
+    if coarser:
+        assert read["run"] < read["finest"] / 4
+    else:
+        assert read["run"] == read["finest"] and run == finest
+
+
+def test_the_metrics_grid_share_of_a_fixed_step_run_is_the_metrics_own():
+    """RK4 keeps no tolerance: its metrics take the metrics' default grid_rtol (1e-12)."""
+    from inerter import api
+    from inerter.engine import metrics
+    model = inerter.load(TWO_BAR)
+    assert api.metric_grid_rtol(model.settings(method="RK4", step=1e-3)) == metrics.GRID_RTOL
+    assert api.metric_grid_rtol(None) == metrics.GRID_RTOL
+    assert api.metric_grid_rtol(model.settings(rtol=1e-6)) == pytest.approx(1e-9, rel=1e-15)
+
+
 def test_metrics_read_only_the_signals_they_need(paper):
     """A compiled run evaluates an output when it is first asked for: after simulate, only the
     metrics' signals have been (the others cost nothing), with the values every output has."""

@@ -209,3 +209,75 @@ def test_steady_state_history_too_short(forced_history):
     t, x = forced_history
     with pytest.raises(ValueError, match="shorter than"):
         steady_state(t, x, 1.0 / F1, 100, reference=0.0)
+
+
+# ------------------------------------------------------------ the grid's refinement
+
+
+class Counted:
+    """A dense interpolant `f` that counts the times it is asked for."""
+
+    def __init__(self, f):
+        self.f, self.times = f, 0
+
+    def __call__(self, t):
+        self.times += np.size(t)
+        return self.f(t)
+
+
+def test_a_smooth_periodic_signal_settles_on_a_coarse_grid(forced_history):
+    # The steady part is a trigonometric polynomial of degree 2, which the trapezoidal rule
+    # integrates exactly on any grid of more than 2 samples a period: the grid of 64 samples a
+    # period and that of 128 agree to rounding, and the metric stops there instead of sampling
+    # 2048 a period (10 241 times over five periods). Closed forms as in test_steady_state_with_dense.
+    t, x = forced_history
+    dense = Counted(forced)
+    result = steady_state(t, x, 1.0 / F1, 5, reference=0.4, dense=dense)
+    assert result["peak_to_peak"] == pytest.approx(PEAK_TO_PEAK, abs=1e-12)
+    assert result["mean"] == pytest.approx(0.5, abs=1e-12)
+    grid = 5 * 128 + 1
+    extremes = 2 * (2 * 5 + 4) * (3 * 3 + 1)      # at most 2 periods + 4 candidates each way, 3 stencils + vertex
+    assert dense.times <= grid + extremes
+
+
+def rectified(t):
+    """|sin(w t)|, kinked at its zeros: its mean over whole periods is 2/π."""
+    return np.abs(np.sin(W1 * np.asarray(t, dtype=float)))
+
+
+def test_a_kinked_signal_is_sampled_on_the_finest_grid():
+    # A kink makes the trapezoidal rule converge as h², so the grids never agree to the run's share
+    # and the metric samples its finest grid (2048 a period), on exactly that grid's times: its
+    # mean is the trapezoidal rule there, written out here, and within the rule's error bound of
+    # 2/π: a kink inside a cell costs at most |jump of x'| h²/8 (halfway through it), the smooth
+    # pieces beside it |Δx'| h²/12 (Euler-Maclaurin), with x' jumping by 2w at each of two kinks a
+    # period: (1/8 + 1/12) 2w h² 2F = (5/6) w h² F on the mean.
+    periods, n = 5, 5 * 2048
+    t = np.arange(0.0, 20.0 + 1e-9, 1e-3)
+    dense = Counted(rectified)
+    result = steady_state(t, rectified(t), 1.0 / F1, periods, reference=0.0, dense=dense, grid_rtol=1e-9)
+    t0, t1 = result["window"]
+    x = rectified(t0 + (t1 - t0) * (np.arange(n + 1) / n))
+    assert result["mean"] == ((np.sum(x[:n]) + 0.5 * (x[n] - x[0])) / n)
+    h = (t1 - t0) / n
+    assert result["mean"] == pytest.approx(2.0 / math.pi, abs=5.0 / 6.0 * W1 * h ** 2 * F1)
+    assert dense.times >= n + 1
+
+
+def test_the_grid_stops_at_the_callers_share():
+    # A drift makes the fundamental's trapezoidal rule converge as h² (test_harmonics_of_a_signal_
+    # that_does_not_repeat; its mean is exact on every grid): at the default grid_rtol, 1e-12 of
+    # the spread, the metric goes on to its finest grid;
+    # at a looser share it stops sooner, and its amplitude stays within that share (times 4/3,
+    # the estimate of a second-order rule's error from two grids) of the finest grid's.
+    t0, periods = 1.0, 5
+    t1 = t0 + periods / F0
+    t = np.arange(0.0, 5.0 + 1e-9, 1e-3)
+    fine, loose = Counted(drifting), Counted(drifting)
+    strict = harmonics(t, drifting(t), (t0, t1), periods, dense=fine)
+    quick = harmonics(t, drifting(t), (t0, t1), periods, dense=loose, grid_rtol=1e-6)
+    assert fine.times == periods * 512 + 1
+    assert loose.times < fine.times / 2
+    spread = np.ptp(drifting(np.linspace(t0, t1, 5001)))
+    assert quick["amplitude"] == pytest.approx(strict["amplitude"], abs=4.0 / 3.0 * 1e-6 * spread)
+    assert quick["mean"] == pytest.approx(strict["mean"], abs=1e-12)

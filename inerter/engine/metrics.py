@@ -14,6 +14,9 @@ both of the window's ends, by the trapezoidal rule (:func:`_fourier`): for a per
 signal it is spectrally accurate (the sum over the grid without its end point, an FFT
 bin), and where the signal does not quite repeat over the window (a transient still
 decaying, a drift), its error falls as the square of the grid step, not as the step.
+The grid is as fine as the signal needs (:func:`_window_grid`): a smooth periodic signal
+settles at 64 or 128 samples a period, and a signal with a kink, a jump or a drift is
+sampled as finely as the metric allows.
 """
 from __future__ import annotations
 
@@ -34,6 +37,11 @@ _ROOT_ITERATIONS = 100
 _EXTREME_STENCILS = (1.0 / 32.0, 1.0 / 1024.0, 1.0 / 32768.0)
 # Relative slack allowed when a window edge falls a rounding error outside the history.
 _EDGE_SLACK = 1e-9
+# A periodic metric's grid starts at this many samples a period and halves its step while the
+# trapezoidal rule's results move by more than `grid_rtol` of the signal's spread (:func:`_window_grid`);
+# GRID_RTOL is its default, the caller's where the history is not a run with a tolerance.
+_COARSEST_GRID = 64
+GRID_RTOL = 1e-12
 
 
 # --------------------------------------------------------------------------- helpers
@@ -187,6 +195,53 @@ def _fourier(values: np.ndarray, periods: int) -> tuple[float, float]:
     return _mean(values), float(2.0 * abs(c1))
 
 
+def _grid_strides(samples_per_period: int) -> list[int]:
+    """The strides of the nested grids, coarsest first, in steps of the finest grid (the one of
+    `samples_per_period` a period): halving from the coarsest with at least :data:`_COARSEST_GRID`
+    samples a period that `samples_per_period` divides into, down to 1."""
+    strides = [1]
+    while samples_per_period % (2 * strides[-1]) == 0 and samples_per_period // (2 * strides[-1]) >= _COARSEST_GRID:
+        strides.append(2 * strides[-1])
+    return strides[::-1]
+
+
+def _window_grid(t, x, window, periods, samples_per_period, dense, rule, grid_rtol):
+    """The uniform grid over ``window = (t0, t1)`` (both ends), x on it and ``rule(values)`` there
+    (a tuple of numbers: the trapezoidal rule's mean, its fundamental), the grid only as fine as
+    the rule needs.
+
+    The grid starts at :data:`_COARSEST_GRID` samples a period and halves its step, the samples
+    already taken kept, until the rule's results move by no more than `grid_rtol` of the
+    signal's spread from one grid to the next (plus the rounding of the sums), or it reaches
+    `samples_per_period`, the finest, whose times every grid shares exactly. A smooth periodic
+    signal stops at 64 or 128 samples a period, as the rule is spectrally accurate there; a signal
+    with a kink or a jump, or one that drifts, converges only as a power of the step and goes on
+    to the finest grid. Returns (times, values, the rule's results)."""
+    t0, t1 = window
+    n = periods * samples_per_period
+    index = np.arange(n + 1)
+    values = np.empty(n + 1)
+    taken = np.zeros(n + 1, dtype=bool)
+    previous = None
+    for stride in _grid_strides(samples_per_period):
+        new = index[::stride][~taken[::stride]]
+        values[new] = _resample(t, x, t0 + (t1 - t0) * (new / n), dense)
+        taken[new] = True
+        grid = values[::stride]
+        result = rule(grid)
+        if previous is not None and _settled(result, previous, grid, grid_rtol):
+            break
+        previous = result
+    return t0 + (t1 - t0) * (index[::stride] / n), grid, result
+
+
+def _settled(result, previous, grid, grid_rtol) -> bool:
+    """Whether the rule's `result` on `grid` is within `grid_rtol` of the signal's spread of its
+    `previous` on the grid of twice the step, beyond the rounding of a sum of the grid's values."""
+    tolerance = grid_rtol * float(np.ptp(grid)) + 16.0 * np.finfo(float).eps * float(np.abs(grid).max())
+    return all(abs(a - b) <= tolerance for a, b in zip(result, previous))
+
+
 def _mean(values: np.ndarray) -> float:
     """The mean of n + 1 uniform samples over a window, both ends included, by the trapezoidal rule
     (:func:`_fourier`'s k = 0)."""
@@ -208,12 +263,14 @@ def crossing_times(t, x, level, direction=+1, dense=None) -> np.ndarray:
     return _crossings(t, x, float(level), direction, dense)[1]
 
 
-def harmonics(t, x, window, periods, dense=None, samples_per_period=512) -> dict:
+def harmonics(t, x, window, periods, dense=None, samples_per_period=512, grid_rtol=GRID_RTOL) -> dict:
     """Mean and fundamental amplitude of `x` over ``window = (t0, t1)``.
 
     The window must hold `periods` whole periods of the signal, i.e. the fundamental
     frequency is ``periods / (t1 - t0)``.  `x` is resampled uniformly with
-    `samples_per_period` points per period (both ends included: :func:`_fourier`).
+    at most `samples_per_period` points per period (both ends included: :func:`_fourier`;
+    as few as the mean and the amplitude need to within `grid_rtol` of the signal's spread,
+    :func:`_window_grid`).
 
     Returns ``{"mean": a0, "amplitude": A}`` where ``x ~ a0 + A cos(2 pi f t + phi) + ...``.
     """
@@ -229,13 +286,12 @@ def harmonics(t, x, window, periods, dense=None, samples_per_period=512) -> dict
             f"the window [{t0:.9g}, {t1:.9g}] s is not inside the history "
             f"[{t[0]:.9g}, {t[-1]:.9g}] s"
         )
-    n = periods * samples_per_period
-    tau = t0 + (t1 - t0) * (np.arange(n + 1) / n)
-    mean, amplitude = _fourier(_resample(t, x, tau, dense), periods)
+    _, _, (mean, amplitude) = _window_grid(t, x, (t0, t1), periods, samples_per_period, dense,
+                                           lambda values: _fourier(values, periods), grid_rtol)
     return {"mean": mean, "amplitude": amplitude}
 
 
-def free_oscillation(t, x, reference, dense=None, samples_per_period=512) -> dict:
+def free_oscillation(t, x, reference, dense=None, samples_per_period=512, grid_rtol=GRID_RTOL) -> dict:
     """Frequency, amplitude and mean of a free (periodic or nearly periodic) oscillation.
 
     The level is the time average of `x`; the analysis window runs from the first to
@@ -263,7 +319,8 @@ def free_oscillation(t, x, reference, dense=None, samples_per_period=512) -> dic
     periods = times.size - 1
     t0, t1 = float(times[0]), float(times[-1])
     period = (t1 - t0) / periods
-    fourier = harmonics(t, x, (t0, t1), periods, dense=dense, samples_per_period=samples_per_period)
+    fourier = harmonics(t, x, (t0, t1), periods, dense=dense, samples_per_period=samples_per_period,
+                        grid_rtol=grid_rtol)
     return {
         "fundamental_frequency": 1.0 / period,
         "fundamental_amplitude": fourier["amplitude"],
@@ -362,14 +419,16 @@ def peak(t, x, reference, dense=None, candidates=8) -> float:
     return max(high - reference, reference - low)
 
 
-def steady_state(t, x, period, periods, reference, dense=None, samples_per_period=2048) -> dict:
+def steady_state(t, x, period, periods, reference, dense=None, samples_per_period=2048,
+                 grid_rtol=GRID_RTOL) -> dict:
     """Peak-to-peak and mean of a forced steady state over its last whole periods.
 
     The window is the last `periods` periods of the excitation (period `period`)
-    ending at ``t[-1]``.  `x` is resampled uniformly with `samples_per_period` points
-    per period; the peak-to-peak is max - min over that grid (plus, without `dense`,
-    the samples inside the window; with `dense`, the extrema are refined on the
-    interpolant).  The mean is the trapezoidal rule over that grid (:func:`_mean`).
+    ending at ``t[-1]``.  `x` is resampled uniformly with at most `samples_per_period`
+    points per period (as few as the mean needs to within `grid_rtol` of the signal's
+    spread, :func:`_window_grid`); the peak-to-peak is max - min over that grid (plus,
+    without `dense`, the samples inside the window; with `dense`, the extrema are refined
+    on the interpolant).  The mean is the trapezoidal rule over that grid (:func:`_mean`).
 
     Returns ``{"peak_to_peak": ..., "mean_offset": mean - reference, "mean": ...,
     "window": (t0, t1)}``.  Raises ValueError if the history is shorter than the window.
@@ -392,10 +451,8 @@ def steady_state(t, x, period, periods, reference, dense=None, samples_per_perio
         )
     t0 = max(t0, float(t[0]))  # absorb a rounding error at the start
 
-    n = periods * samples_per_period
-    tau = t0 + (t1 - t0) * (np.arange(n + 1) / n)  # end point included for the extrema
-    values = _resample(t, x, tau, dense)
-    mean = _mean(values)
+    tau, values, (mean,) = _window_grid(t, x, (t0, t1), periods, samples_per_period, dense,
+                                        lambda values: (_mean(values),), grid_rtol)
 
     if dense is None:
         # The linear interpolant attains its extrema at sample times: include the

@@ -110,6 +110,9 @@ def wound_from(holder, start=None):
     history starts), while a history is evaluated sample after sample from there, each sample
     winding on; as they were afterwards."""
     held = np.array(holder.windings, dtype=float)
+    if not held.size:                  # none (2D, or no 3D rotational element): nothing to wind
+        yield
+        return
     holder.windings = np.zeros(len(held)) if start is None else start
     try:
         yield

@@ -56,6 +56,7 @@ class FmuDense:
         self.path, self.start_values, self.stop_time = str(fmu_path), dict(start_values), float(stop_time)
         self.result = result
         self._given = instance
+        self._checked = None       # (names, their samples: sample × name), what _keep compares, once read
         self._times = np.asarray(result.time, dtype=float).tolist()   # a list: bisect, not np.searchsorted per scalar
         self._fmu = None
         self._saved = {}           # sample index → FMU state
@@ -132,9 +133,9 @@ class FmuDense:
 
     def _keep(self, k: int):
         """Keep the FMU state at sample k, where the instance is, after checking it gives the run's sample."""
-        names = [n for n in self.result.names if n in self._outputs]
+        names, samples = self._samples()
         got = np.array(self._fmu.getReal([self._outputs[n] for n in names]))
-        want = np.array([self.result[n][k] for n in names])
+        want = samples[k]
         scale = 1.0 + np.abs(want)
         off = ~((np.abs(got - want) <= SAMPLE_TOLERANCE * scale) | (np.isnan(got) & np.isnan(want)))
         if np.any(off):             # (a derived output without value there is NaN in both)
@@ -144,6 +145,14 @@ class FmuDense:
                                   f"{want[names.index(worst)]!r}: it does not repeat the run", self._times[k])
         self._saved[k] = self._fmu.getFMUstate()
         bisect.insort(self._kept, k)
+
+    def _samples(self):
+        """The outputs the run and the instance both have, and the run's samples of them (read once:
+        a column of an FMU result is a copy)."""
+        if self._checked is None:
+            names = [n for n in self.result.names if n in self._outputs]
+            self._checked = names, np.column_stack([np.asarray(self.result[n], dtype=float) for n in names])
+        return self._checked
 
     # -- stepping --------------------------------------------------------------------------
     def _go_to(self, t: float):

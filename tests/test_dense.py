@@ -140,7 +140,7 @@ def test_a_runs_metrics_sample_only_as_finely_as_its_tolerance_needs(rtol, coars
     """The periodic metrics' grid stops where the trapezoidal rule moves by less than
     api.METRIC_GRID_SHARE of the run's rtol (of the signal's spread): the two-bar's steady state
     over 0-20 s at rtol 5e-5 (the cheapest run reaching 1e-6 m), 1e-7 and 1e-9. Reference: the same
-    metric on the same dense output sampled on its finest grid (2048 a period, grid_rtol 1e-12),
+    metric on the same dense output sampled on its finest grid (2048 a period, no grid_rtol),
     which the run's must equal within that share (4/3 of it: a second-order rule's error estimated
     from two grids). The window still holds the start's transient, so its grids' means converge as
     h² (measured 2.9e-10 of the spread from 64 to 128 a period, 1.2e-12 from 1024 to 2048): at
@@ -150,7 +150,7 @@ def test_a_runs_metrics_sample_only_as_finely_as_its_tolerance_needs(rtol, coars
     model = inerter.load(TWO_BAR)
     result = model.simulate(stop_time=STOP, rtol=rtol, atol=rtol / 100)
     spec = next(m for m in model.scene.metrics if m.kind == "steady_state")
-    share = api.metric_grid_rtol(result.settings)
+    share = api.metric_grid_rtol(result.settings, "m")
     assert share == api.METRIC_GRID_SHARE * rtol
     read = {}
 
@@ -173,14 +173,19 @@ def test_a_runs_metrics_sample_only_as_finely_as_its_tolerance_needs(rtol, coars
         assert read["run"] == read["finest"] and run == finest
 
 
-def test_the_metrics_grid_share_of_a_fixed_step_run_is_the_metrics_own():
-    """RK4 keeps no tolerance: its metrics take the metrics' default grid_rtol (1e-12)."""
+def test_only_a_kinematic_output_of_a_run_with_a_tolerance_starts_from_a_coarse_grid():
+    """A force, a power or an energy may hold a pulse narrower than a coarse grid's step (an end
+    stop's contact), which two coarse grids would both miss and agree on: their periodic metrics,
+    those of a fixed-step run (RK4 keeps no tolerance) and those of a history without settings read
+    the finest grid (grid_rtol None)."""
     from inerter import api
-    from inerter.engine import metrics
     model = inerter.load(TWO_BAR)
-    assert api.metric_grid_rtol(model.settings(method="RK4", step=1e-3)) == metrics.GRID_RTOL
-    assert api.metric_grid_rtol(None) == metrics.GRID_RTOL
-    assert api.metric_grid_rtol(model.settings(rtol=1e-6)) == pytest.approx(1e-9, rel=1e-15)
+    adaptive, fixed = model.settings(rtol=1e-6), model.settings(method="RK4", step=1e-3)
+    for unit in ("m", "m/s", "rad", "rad/s"):
+        assert api.metric_grid_rtol(adaptive, unit) == pytest.approx(1e-9, rel=1e-15)
+        assert api.metric_grid_rtol(fixed, unit) is None and api.metric_grid_rtol(None, unit) is None
+    for unit in ("N", "N.m", "W", "J", "1"):
+        assert api.metric_grid_rtol(adaptive, unit) is None
 
 
 def test_metrics_read_only_the_signals_they_need(paper):

@@ -227,12 +227,13 @@ class Counted:
 
 def test_a_smooth_periodic_signal_settles_on_a_coarse_grid(forced_history):
     # The steady part is a trigonometric polynomial of degree 2, which the trapezoidal rule
-    # integrates exactly on any grid of more than 2 samples a period: the grid of 64 samples a
-    # period and that of 128 agree to rounding, and the metric stops there instead of sampling
-    # 2048 a period (10 241 times over five periods). Closed forms as in test_steady_state_with_dense.
+    # integrates exactly on any grid of more than 2 samples a period: given a grid_rtol, the grid
+    # of 64 samples a period and that of 128 agree to rounding, and the metric stops there instead
+    # of sampling 2048 a period (10 241 times over five periods, as it does without one).
+    # Closed forms as in test_steady_state_with_dense.
     t, x = forced_history
     dense = Counted(forced)
-    result = steady_state(t, x, 1.0 / F1, 5, reference=0.4, dense=dense)
+    result = steady_state(t, x, 1.0 / F1, 5, reference=0.4, dense=dense, grid_rtol=1e-12)
     assert result["peak_to_peak"] == pytest.approx(PEAK_TO_PEAK, abs=1e-12)
     assert result["mean"] == pytest.approx(0.5, abs=1e-12)
     grid = 5 * 128 + 1
@@ -266,8 +267,8 @@ def test_a_kinked_signal_is_sampled_on_the_finest_grid():
 
 def test_the_grid_stops_at_the_callers_share():
     # A drift makes the fundamental's trapezoidal rule converge as h² (test_harmonics_of_a_signal_
-    # that_does_not_repeat; its mean is exact on every grid): at the default grid_rtol, 1e-12 of
-    # the spread, the metric goes on to its finest grid;
+    # that_does_not_repeat; its mean is exact on every grid): without a grid_rtol the metric
+    # samples its finest grid;
     # at a looser share it stops sooner, and its amplitude stays within that share (times 4/3,
     # the estimate of a second-order rule's error from two grids) of the finest grid's.
     t0, periods = 1.0, 5

@@ -14,9 +14,11 @@ both of the window's ends, by the trapezoidal rule (:func:`_fourier`): for a per
 signal it is spectrally accurate (the sum over the grid without its end point, an FFT
 bin), and where the signal does not quite repeat over the window (a transient still
 decaying, a drift), its error falls as the square of the grid step, not as the step.
-The grid is as fine as the signal needs (:func:`_window_grid`): a smooth periodic signal
-settles at 64 or 128 samples a period, and a signal with a kink, a jump or a drift is
-sampled as finely as the metric allows.
+Given a `grid_rtol`, the grid is only as fine as the signal needs (:func:`_window_grid`): a
+smooth periodic signal settles at 64 or 128 samples a period, and a signal with a kink, a
+jump or a drift is sampled as finely as the metric allows. The caller gives it only for a
+signal that cannot hold a feature narrower than the coarse grids' step (a pulse both miss
+leaves their sums equal): :func:`inerter.api.metric_grid_rtol`.
 """
 from __future__ import annotations
 
@@ -37,11 +39,10 @@ _ROOT_ITERATIONS = 100
 _EXTREME_STENCILS = (1.0 / 32.0, 1.0 / 1024.0, 1.0 / 32768.0)
 # Relative slack allowed when a window edge falls a rounding error outside the history.
 _EDGE_SLACK = 1e-9
-# A periodic metric's grid starts at this many samples a period and halves its step while the
-# trapezoidal rule's results move by more than `grid_rtol` of the signal's spread (:func:`_window_grid`);
-# GRID_RTOL is its default, the caller's where the history is not a run with a tolerance.
+# With a `grid_rtol`, a periodic metric's grid starts at this many samples a period and halves its
+# step while the trapezoidal rule's results move by more than `grid_rtol` of the signal's spread
+# (:func:`_window_grid`); without, it is the finest grid at once.
 _COARSEST_GRID = 64
-GRID_RTOL = 1e-12
 
 
 # --------------------------------------------------------------------------- helpers
@@ -207,8 +208,8 @@ def _grid_strides(samples_per_period: int) -> list[int]:
 
 def _window_grid(t, x, window, periods, samples_per_period, dense, rule, grid_rtol):
     """The uniform grid over ``window = (t0, t1)`` (both ends), x on it and ``rule(values)`` there
-    (a tuple of numbers: the trapezoidal rule's mean, its fundamental), the grid only as fine as
-    the rule needs.
+    (a tuple of numbers: the trapezoidal rule's mean, its fundamental): with `grid_rtol` None, the
+    finest grid, of `samples_per_period` a period; with a number, only as fine as the rule needs.
 
     The grid starts at :data:`_COARSEST_GRID` samples a period and halves its step, the samples
     already taken kept, until the rule's results move by no more than `grid_rtol` of the
@@ -223,7 +224,7 @@ def _window_grid(t, x, window, periods, samples_per_period, dense, rule, grid_rt
     values = np.empty(n + 1)
     taken = np.zeros(n + 1, dtype=bool)
     previous = None
-    for stride in _grid_strides(samples_per_period):
+    for stride in _grid_strides(samples_per_period) if grid_rtol is not None else [1]:
         new = index[::stride][~taken[::stride]]
         values[new] = _resample(t, x, t0 + (t1 - t0) * (new / n), dense)
         taken[new] = True
@@ -263,14 +264,14 @@ def crossing_times(t, x, level, direction=+1, dense=None) -> np.ndarray:
     return _crossings(t, x, float(level), direction, dense)[1]
 
 
-def harmonics(t, x, window, periods, dense=None, samples_per_period=512, grid_rtol=GRID_RTOL) -> dict:
+def harmonics(t, x, window, periods, dense=None, samples_per_period=512, grid_rtol=None) -> dict:
     """Mean and fundamental amplitude of `x` over ``window = (t0, t1)``.
 
     The window must hold `periods` whole periods of the signal, i.e. the fundamental
     frequency is ``periods / (t1 - t0)``.  `x` is resampled uniformly with
-    at most `samples_per_period` points per period (both ends included: :func:`_fourier`;
-    as few as the mean and the amplitude need to within `grid_rtol` of the signal's spread,
-    :func:`_window_grid`).
+    `samples_per_period` points per period (both ends included: :func:`_fourier`), or, given
+    `grid_rtol`, as few as the mean and the amplitude need to within `grid_rtol` of the
+    signal's spread (:func:`_window_grid`).
 
     Returns ``{"mean": a0, "amplitude": A}`` where ``x ~ a0 + A cos(2 pi f t + phi) + ...``.
     """
@@ -291,7 +292,7 @@ def harmonics(t, x, window, periods, dense=None, samples_per_period=512, grid_rt
     return {"mean": mean, "amplitude": amplitude}
 
 
-def free_oscillation(t, x, reference, dense=None, samples_per_period=512, grid_rtol=GRID_RTOL) -> dict:
+def free_oscillation(t, x, reference, dense=None, samples_per_period=512, grid_rtol=None) -> dict:
     """Frequency, amplitude and mean of a free (periodic or nearly periodic) oscillation.
 
     The level is the time average of `x`; the analysis window runs from the first to
@@ -420,13 +421,13 @@ def peak(t, x, reference, dense=None, candidates=8) -> float:
 
 
 def steady_state(t, x, period, periods, reference, dense=None, samples_per_period=2048,
-                 grid_rtol=GRID_RTOL) -> dict:
+                 grid_rtol=None) -> dict:
     """Peak-to-peak and mean of a forced steady state over its last whole periods.
 
     The window is the last `periods` periods of the excitation (period `period`)
-    ending at ``t[-1]``.  `x` is resampled uniformly with at most `samples_per_period`
-    points per period (as few as the mean needs to within `grid_rtol` of the signal's
-    spread, :func:`_window_grid`); the peak-to-peak is max - min over that grid (plus,
+    ending at ``t[-1]``.  `x` is resampled uniformly with `samples_per_period` points
+    per period (given `grid_rtol`, as few as the mean needs to within `grid_rtol` of the
+    signal's spread, :func:`_window_grid`); the peak-to-peak is max - min over that grid (plus,
     without `dense`, the samples inside the window; with `dense`, the extrema are refined
     on the interpolant).  The mean is the trapezoidal rule over that grid (:func:`_mean`).
 

@@ -675,19 +675,17 @@ METRIC_GRID_SHARE = 1e-3
 #: and the dense output's own step-to-step differences leave the grids (lumped_mass_2d at its rtol
 #: 1e-10: 64 → 128 → 256 → 512 a period moved its mean by 0.9, 2.6 and 0.2 e-13 of the spread).
 METRIC_GRID_FLOOR = 1e-12
-#: The units of the outputs whose periodic metrics may start from a coarse grid: coordinates,
-#: distances, angles and their rates, continuous in time. A force, a power or an energy may hold a
-#: pulse (an end stop's contact) narrower than a coarse grid's step, which two coarse grids would
-#: both miss and agree on; their metrics read the finest grid.
-KINEMATIC_UNITS = ("m", "m/s", "rad", "rad/s")
 
 
-def metric_grid_rtol(settings, unit: str) -> float | None:
-    """The `grid_rtol` of a run's periodic metric of an output in `unit`: :data:`METRIC_GRID_SHARE` of
-    the run's rtol (at least :data:`METRIC_GRID_FLOOR`) for a kinematic output (:data:`KINEMATIC_UNITS`)
-    where the integrator keeps a tolerance; None (the finest grid) otherwise, for RK4 (fixed steps)
-    and where the history has no settings."""
-    if settings is None or settings.method == "RK4" or unit not in KINEMATIC_UNITS:
+def metric_grid_rtol(settings, kinematic: bool) -> float | None:
+    """The `grid_rtol` of a run's periodic metric: :data:`METRIC_GRID_SHARE` of the run's rtol (at
+    least :data:`METRIC_GRID_FLOOR`) for an output of the motion (`kinematic`: a point's or a body's,
+    an element's s_rel, v_rel, phi_rel, w_rel: ``Signals.kinematic``) where the integrator keeps a
+    tolerance. None (the finest grid) otherwise: a force, a power, an energy, a device's or a derived
+    output may hold a pulse (an end stop's contact, a series spring's deflection with it) narrower
+    than a coarse grid's step, which two coarse grids would both miss and agree on; and for RK4
+    (fixed steps) and a history without settings."""
+    if settings is None or settings.method == "RK4" or not kinematic:
         return None
     return max(METRIC_GRID_FLOOR, METRIC_GRID_SHARE * settings.rtol)
 
@@ -708,26 +706,26 @@ def _compute_metric(model, result, m, out, windows):
         out[_key(m.prefix, "peak")] = float(metric_fns.peak(t, x, ref, dense=dense))
         return
     reference = m.reference if m.reference is not None else model.static_value(m.signal)
-    settings, unit = getattr(result, "settings", None), dict(zip(model.signals.names, model.signals.units))
+    settings, kinematic = getattr(result, "settings", None), model.signals.kinematic
     if m.kind == "free_oscillation":
         r = metric_fns.free_oscillation(t, x, reference, dense=dense,
-                                        grid_rtol=metric_grid_rtol(settings, unit[m.signal]))
+                                        grid_rtol=metric_grid_rtol(settings, m.signal in kinematic))
         windows[m.signal] = (r["window"], r["periods"])
         for key in ("fundamental_frequency", "fundamental_amplitude", "mean_offset"):
             out[_key(m.prefix, key)] = float(r[key])
     elif m.kind == "harmonics":
         if m.period_of not in windows:
             r0 = metric_fns.free_oscillation(t, result[m.period_of], 0.0, dense=result.dense(m.period_of),
-                                             grid_rtol=metric_grid_rtol(settings, unit[m.period_of]))
+                                             grid_rtol=metric_grid_rtol(settings, m.period_of in kinematic))
             windows[m.period_of] = (r0["window"], r0["periods"])
         window, periods = windows[m.period_of]
         r = metric_fns.harmonics(t, x, window, periods, dense=dense,
-                                 grid_rtol=metric_grid_rtol(settings, unit[m.signal]))
+                                 grid_rtol=metric_grid_rtol(settings, m.signal in kinematic))
         out[_key(m.prefix, "mean")] = float(r["mean"])
         out[_key(m.prefix, "amplitude")] = float(r["amplitude"])
     elif m.kind == "steady_state":
         r = metric_fns.steady_state(t, x, m.period, m.periods, reference, dense=dense,
-                                    grid_rtol=metric_grid_rtol(settings, unit[m.signal]))
+                                    grid_rtol=metric_grid_rtol(settings, m.signal in kinematic))
         out[_key(m.prefix, "peak_to_peak")] = float(r["peak_to_peak"])
         out[_key(m.prefix, "mean_offset")] = float(r["mean_offset"])
 

@@ -150,7 +150,8 @@ def test_a_runs_metrics_sample_only_as_finely_as_its_tolerance_needs(rtol, coars
     model = inerter.load(TWO_BAR)
     result = model.simulate(stop_time=STOP, rtol=rtol, atol=rtol / 100)
     spec = next(m for m in model.scene.metrics if m.kind == "steady_state")
-    share = api.metric_grid_rtol(result.settings, "m")
+    assert spec.signal in model.signals.kinematic
+    share = api.metric_grid_rtol(result.settings, True)
     assert share == api.METRIC_GRID_SHARE * rtol
     read = {}
 
@@ -173,19 +174,27 @@ def test_a_runs_metrics_sample_only_as_finely_as_its_tolerance_needs(rtol, coars
         assert read["run"] == read["finest"] and run == finest
 
 
-def test_only_a_kinematic_output_of_a_run_with_a_tolerance_starts_from_a_coarse_grid():
-    """A force, a power or an energy may hold a pulse narrower than a coarse grid's step (an end
-    stop's contact), which two coarse grids would both miss and agree on: their periodic metrics,
-    those of a fixed-step run (RK4 keeps no tolerance) and those of a history without settings read
-    the finest grid (grid_rtol None)."""
+def test_only_an_output_of_the_motion_of_a_run_with_a_tolerance_starts_from_a_coarse_grid():
+    """A force, a power, an energy, a device's or a derived output may hold a pulse narrower than a
+    coarse grid's step (an end stop's contact), which two coarse grids would both miss and agree on:
+    their periodic metrics read the finest grid (grid_rtol None), as do those of a fixed-step run
+    (RK4 keeps no tolerance) and of a history without settings. The outputs of the motion are the
+    points' and bodies' and an element's s_rel, v_rel, phi_rel, w_rel (listed by hand here)."""
     from inerter import api
     model = inerter.load(TWO_BAR)
     adaptive, fixed = model.settings(rtol=1e-6), model.settings(method="RK4", step=1e-3)
-    for unit in ("m", "m/s", "rad", "rad/s"):
-        assert api.metric_grid_rtol(adaptive, unit) == pytest.approx(1e-9, rel=1e-15)
-        assert api.metric_grid_rtol(fixed, unit) is None and api.metric_grid_rtol(None, unit) is None
-    for unit in ("N", "N.m", "W", "J", "1"):
-        assert api.metric_grid_rtol(adaptive, unit) is None
+    assert api.metric_grid_rtol(adaptive, True) == pytest.approx(1e-9, rel=1e-15)
+    assert api.metric_grid_rtol(model.settings(rtol=1e-11), True) == api.METRIC_GRID_FLOOR
+    assert api.metric_grid_rtol(adaptive, False) is None
+    assert api.metric_grid_rtol(fixed, True) is None and api.metric_grid_rtol(None, True) is None
+    motion = {n for n in model.signals.names if n.split(".")[-1].split("[")[0] in ("r", "v", "s_rel", "v_rel", "phi_rel", "w_rel")}
+    assert motion and model.signals.kinematic == motion
+    device = inerter.load(SCENARIOS / "two_bar_2d_device.toml").signals
+    extras = [n for n in device.names if n.endswith((".s_series", ".w_flywheel", ".f_stop", ".f", ".energy"))]
+    assert extras and not device.kinematic & set(extras)
+    spatial = inerter.load(SCENARIOS / "two_bar_2d_as_3d.toml").signals
+    assert {n for n in spatial.names if ".q[" in n or ".w[" in n or ".euler[" in n} <= spatial.kinematic
+
 
 
 def test_metrics_read_only_the_signals_they_need(paper):

@@ -22,6 +22,10 @@ from inerter import elements
 from inerter.common.rotations import EULER_SEQUENCES, euler_angles9, quat_from_matrix
 
 
+#: The units of an element family's outputs that are coordinates or rates (s_rel, v_rel, phi_rel, w_rel).
+MOTION_UNITS = ("m", "m/s", "rad", "rad/s")
+
+
 class Signals:
     def __init__(self, mech):
         self.mech = mech
@@ -32,6 +36,10 @@ class Signals:
         self._groups = []
         self._where = {}      # name -> (group, position in it)
         self._reads = {}      # name -> whether that signal itself reads q̈
+        #: the coordinates and rates of the motion: points' and bodies' outputs, an element's s_rel,
+        #: v_rel, phi_rel, w_rel (functions of q and v alone, continuous in time; not a force, power,
+        #: energy or device output, which may pulse: inerter.api.metric_grid_rtol)
+        self.kinematic: set[str] = set()
         for pname in mech.point_names:
             point = mech.points[pname]
             d = mech.dim
@@ -39,7 +47,7 @@ class Signals:
                          for i in range(d)]
                         + [(f"{pname}.v[{i + 1}]", "m/s", f"velocity of point {pname}, global axis {i + 1}")
                            for i in range(d)],
-                        False, lambda t, q, v, a, z, p=point: np.concatenate(p.evaluate(q, v)[:2]))
+                        False, lambda t, q, v, a, z, p=point: np.concatenate(p.evaluate(q, v)[:2]), kinematic=True)
         for e in mech.elements:
             spec = elements.outputs(mech.scene.elements[e.name])
             family = len(elements.KINDS[e.kind].outputs)
@@ -53,7 +61,8 @@ class Signals:
                         needs_a, lambda t, q, v, a, z, e=e, k=len(spec): (
                             e.outputs(q, v, a, z) if getattr(e, "n_states", 0) else e.outputs(q, v, a))[:k],
                         reads=tuple(needs_a and suffix in elements.FORCE_OUTPUTS for suffix, _, _ in spec[:family])
-                        + tuple(efficient and suffix in ("p_loss", "mode") for suffix, _, _ in spec[family:]))
+                        + tuple(efficient and suffix in ("p_loss", "mode") for suffix, _, _ in spec[family:]),
+                        kinematic=tuple(k < family and unit in MOTION_UNITS for k, (_, unit, _) in enumerate(spec)))
         if mech.dim == 3:
             for bname in mech.body_names:
                 self._body(mech, bname)
@@ -95,12 +104,14 @@ class Signals:
                     + [(f"{bname}.euler[{i + 1}]", "rad", f"body {bname}: Euler angle {i + 1} of the {sequence} "
                                                          "sequence (intrinsic)") for i in range(3)]
                     + [(f"{bname}.w[{i + 1}]", "rad/s", f"body {bname}: angular velocity, global axis {i + 1}")
-                       for i in range(3)], False, values)
+                       for i in range(3)], False, values, kinematic=True)
 
-    def _group(self, signals, needs_a, fn, reads=None):
+    def _group(self, signals, needs_a, fn, reads=None, kinematic=False):
         for k, (name, unit, description) in enumerate(signals):
             self._where[name] = (len(self._groups), k)
             self._reads[name] = needs_a if reads is None else reads[k]
+            if kinematic is True or (kinematic and kinematic[k]):
+                self.kinematic.add(name)
             self.names.append(name)
             self.units.append(unit)
             self.descriptions.append(description)

@@ -93,12 +93,13 @@ def _newton(residual, x0, tol, iterations=30, h=1e-7):
 
 
 def _tangent_chart(mech, q_star):
-    """Functions z ↦ q(z) and z ↦ T(z) parametrising the constraint manifold near q*."""
+    """Functions z ↦ q(z) and q ↦ T = ∂q/∂z there (q on the manifold) parametrising the constraint
+    manifold near q*, and the number of independent coordinates z."""
     n, m = mech.n, mech.m
     zero = np.zeros(n)
     if not m:
         eye = np.eye(n)
-        return (lambda z: q_star + z), (lambda z: eye), n
+        return (lambda z: q_star + z), (lambda q: eye), n
     _, Cq, _ = mech.constraints(q_star, zero)
     N, Y = _null_and_range(Cq)
 
@@ -112,11 +113,11 @@ def _tangent_chart(mech, q_star):
             w -= np.linalg.solve(Cq_ @ Y, C)
         return q
 
-    def T_of(zv):
-        _, Cq_, _ = mech.constraints(q_of(zv), zero)
+    def T_at(q):
+        _, Cq_, _ = mech.constraints(q, zero)
         return N - Y @ np.linalg.solve(Cq_ @ Y, Cq_ @ N)
 
-    return q_of, T_of, N.shape[1]
+    return q_of, T_at, N.shape[1]
 
 
 def _null_and_range(Cq):
@@ -130,6 +131,22 @@ def _null_and_range(Cq):
 
 def linearize(mech, q_star=None, h=1e-6):
     """Reduced (M_r, D_r, K_r) about the static equilibrium, in independent coordinates z."""
+    q_star = static_equilibrium(mech) if q_star is None else q_star
+    M, K, T0 = _mass_and_stiffness(mech, q_star, h)
+    D = np.zeros_like(K)
+    still = static_forces(mech, q_star)
+    for j in range(K.shape[0]):
+        dv = T0[:, j] * h
+        Qp = mech.generalized_forces(0.0, q_star, dv) - still
+        Qm = mech.generalized_forces(0.0, q_star, -dv) - still
+        # time-dependent loads cancel in the difference; only velocity-dependent forces remain
+        D[:, j] = -(T0.T @ (Qp - Qm)) / (2 * h)
+    return M, D, K, q_star
+
+
+def _mass_and_stiffness(mech, q_star, h):
+    """(M_r, K_r, T) about the equilibrium q*: the reduced mass Tᵀ(M + M_I)T and stiffness
+    −∂(TᵀQ)/∂z by central differences of step h (symmetrised), and T = ∂q/∂z at q*."""
     if len(getattr(mech, "z0", ())):
         raise SimulationError("the linearisation is of (q, v) only, and this scene's inerter devices have "
                               "internal states (series compliance, backlash): its frequencies would miss their "
@@ -138,31 +155,24 @@ def linearize(mech, q_star=None, h=1e-6):
         raise SimulationError("the linearisation needs a smooth mass matrix, and this scene's screw efficiency "
                               "(device.efficiency) makes b depend on the direction of the power flow: give metrics of "
                               "such a scene an explicit reference")
-    q_star = static_equilibrium(mech) if q_star is None else q_star
-    q_of, T_of, k = _tangent_chart(mech, q_star)
-    zero = np.zeros(mech.n)
-    T0 = T_of(np.zeros(k))
-    M = T0.T @ mech.mass_matrix(q_star, zero) @ T0
+    q_of, T_at, k = _tangent_chart(mech, q_star)
+    T0 = T_at(q_of(np.zeros(k)))
+    M = T0.T @ mech.mass_matrix(q_star, np.zeros(mech.n)) @ T0
     K = np.zeros((k, k))
     for j in range(k):
         dz = np.zeros(k)
         dz[j] = h
-        fp = T_of(dz).T @ static_forces(mech, q_of(dz))
-        fm = T_of(-dz).T @ static_forces(mech, q_of(-dz))
+        qp, qm = q_of(dz), q_of(-dz)
+        fp = T_at(qp).T @ static_forces(mech, qp)
+        fm = T_at(qm).T @ static_forces(mech, qm)
         K[:, j] = -(fp - fm) / (2 * h)
-    D = np.zeros((k, k))
-    for j in range(k):
-        dv = T0[:, j] * h
-        Qp = mech.generalized_forces(0.0, q_star, dv) - static_forces(mech, q_star)
-        Qm = mech.generalized_forces(0.0, q_star, -dv) - static_forces(mech, q_star)
-        # time-dependent loads cancel in the difference; only velocity-dependent forces remain
-        D[:, j] = -(T0.T @ (Qp - Qm)) / (2 * h)
-    return M, D, 0.5 * (K + K.T), q_star
+    return M, 0.5 * (K + K.T), T0
 
 
 def natural_frequencies(mech, q_star=None):
-    """Undamped natural frequencies (Hz) of the linearisation, ascending."""
-    M, _, K, _ = linearize(mech, q_star)
+    """Undamped natural frequencies (Hz) of the linearisation, ascending (its mass and stiffness:
+    the damping is not worked out)."""
+    M, K, _ = _mass_and_stiffness(mech, static_equilibrium(mech) if q_star is None else q_star, 1e-6)
     if M.size == 0:
         return np.zeros(0)
     # K v = ω² M v with M = LLᵀ is the symmetric problem (L⁻¹ K L⁻ᵀ) u = ω² u (as LAPACK's sygv)

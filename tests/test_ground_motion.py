@@ -229,3 +229,18 @@ def test_a_malformed_record_is_one_error_naming_the_file_and_its_line(tmp_path, 
     message = str(err.value)
     assert ": effects.ground_acceleration.file: " in message and "\n" not in message
     assert problem in message and str(tmp_path / "rec.csv") in message, message
+
+
+def test_a_record_value_above_the_magnitude_limit_in_si_is_refused(tmp_path):
+    """The limit of every scene value, 1e15 in SI units, holds for a record's accelerations after
+    their conversion from g (a CSV with unit = "g", a PEER .AT2): 2e14 g is 2.0e15 m/s², refused
+    naming the value; 1e14 g (9.8e14 m/s²) is read."""
+    (tmp_path / "big.AT2").write_text("PEER\nx\nACCELERATION IN G\nNPTS=  3, DT= .01 SEC\n0.1 2e14 0.0\n")
+    (tmp_path / "big.csv").write_text("0,0\n0.01,2e14\n0.02,0\n")
+    (tmp_path / "fine.csv").write_text("0,0\n0.01,1e14\n0.02,0\n")
+    for motion, problem in (('{ file = "big.AT2", axis = 1 }', "wrong value (value 2 of NPTS: 200000000000000.0 g)"),
+                            ('{ file = "big.csv", axis = 1, unit = "g" }', "wrong value (line 2, column 2: 200000000000000.0)")):
+        with pytest.raises(SceneError) as err:
+            _model(tmp_path, "big", motion)
+        assert ": effects.ground_acceleration.file: " in str(err.value) and problem in str(err.value), str(err.value)
+    _model(tmp_path, "fine", '{ file = "fine.csv", axis = 1, unit = "g" }')

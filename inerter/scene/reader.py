@@ -594,6 +594,11 @@ def _read_record(r: _Reader, spec, fld, dimension, folder, single_axis=False):
         except (OSError, ValueError) as exc:
             raise r.error(f"{fld}.file", str(path), "a PEER NGA record (.AT2: 4 header lines, NPTS and DT "
                           "in the fourth, then NPTS values in g)", f"unreadable ({exc})")
+        from inerter.scene.expressions import MAX_MAGNITUDE
+        big = np.flatnonzero(np.abs(values) * STANDARD_GRAVITY > MAX_MAGNITUDE)
+        if len(big):
+            raise r.error(f"{fld}.file", str(path), f"values in g of magnitude at most {MAX_MAGNITUDE:g} m/s²",
+                          f"wrong value (value {big[0] + 1} of NPTS: {float(values[big[0]])!r} g)")
         values = values[None, :]
     else:
         table = _read_csv_record(r, fld, path, 1 if axis is not None else dimension, unit)
@@ -641,6 +646,7 @@ def _read_csv_record(r: _Reader, fld, path, columns: int, unit: str):
     import io
     import warnings
     from inerter.scene.expressions import MAX_MAGNITUDE
+    from inerter.scene.ground_motion import STANDARD_GRAVITY
     data = read_capped(path, MAX_RECORD_BYTES, r.source, f"{fld}.file", "CSV record (time, a_1 ... a_dim)")
     try:
         text = data.decode("utf-8-sig")
@@ -667,10 +673,11 @@ def _read_csv_record(r: _Reader, fld, path, columns: int, unit: str):
         got = f"{table.shape[0]} row{'s' if table.shape[0] != 1 else ''} of {table.shape[1]} column" \
               f"{'s' if table.shape[1] != 1 else ''}" if table.size else "no rows"
         raise r.error(f"{fld}.file", str(path), expected, f"wrong shape ({got})")
-    bad = ~np.isfinite(table) | (np.abs(table) > MAX_MAGNITUDE)
+    si = np.abs(table) * np.r_[1.0, np.full(columns, STANDARD_GRAVITY if unit == "g" else 1.0)]
+    bad = ~np.isfinite(table) | (si > MAX_MAGNITUDE)
     if bad.any():
         row, col = np.argwhere(bad)[0]
-        raise r.error(f"{fld}.file", str(path), expected + f", of magnitude at most {MAX_MAGNITUDE:g}",
+        raise r.error(f"{fld}.file", str(path), expected + f", of magnitude at most {MAX_MAGNITUDE:g} (SI)",
                       f"wrong value ({line(row)}, column {col + 1}: {float(table[row, col])!r})")
     back = np.flatnonzero(np.diff(table[:, 0]) <= 0)
     if len(back):

@@ -778,9 +778,23 @@ class InerterSlave(Fmi2Slave):
             notice.stream, notice.eager = previous
             self._call_thread = None
 
+    def log(self, msg: str, status: Fmi2Status = Fmi2Status.ok, category=None, debug=None):
+        """pythonfmu's log, with the files of resources/ named as the user knows them (below)."""
+        super().log(self._named_files(msg), status, category, debug)
+
+    def _named_files(self, message: str) -> str:
+        """`message` with the FMU's resources/ folder left out of the file names it holds: the
+        scene file and its ground records are named as in the scene (``two_bar_2d.toml``,
+        ``records/x.csv``), not by the importer's temporary folder it unzipped the FMU into."""
+        folder = Path(self.resources or ".")
+        for prefix in {str(folder) + os.sep, str(folder.resolve()) + os.sep}:
+            message = message.replace(prefix, "")
+        return message
+
     def _log_now(self, message: str, status: Fmi2Status = Fmi2Status.ok):
         """Log `message` to the importer at once where the status shim gives its logger (on the
         thread of the call in progress), else through pythonfmu's queue."""
+        message = self._named_files(message)
         category = f"logStatus{status.name.capitalize()}"
         if category not in self.log_categories:
             category = "logAll"

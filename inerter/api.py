@@ -5,6 +5,7 @@ the same scene compiled with ``oracle=True`` and solved at tight tolerance.
 """
 from __future__ import annotations
 
+import re
 import subprocess as _subprocess
 import sys as _sys
 import time as _time
@@ -412,7 +413,7 @@ class Result:
             return lambda t: np.array(signals.derive(name, {x: f(t) for x, f in reads.items()}), dtype=float)
         sol = self.run.dense
         if sol is None:
-            return sample_spline(self.time, self[name], name)
+            return sample_spline(self.time, self[name], name, self.__getitem__)
         fn = self.model.signals.function(name)
         n = self.model.mechanism.nq
         alpha = self.settings.alpha
@@ -605,16 +606,43 @@ def at_times(values, time, what):
     return at
 
 
-def sample_spline(time, values, name=None):
+def sample_spline(time, values, name=None, column=None):
     """A cubic spline through samples (error O(h⁴); linear interpolation would flatten peaks by
     (ωh)²/12): metrics of runs without a dense output (RK4's fixed steps, FMUs). A body's Euler
     angle (`name` ``B.euler[i]``), read in (−π, π], is splined through its samples unwrapped and
-    read in (−π, π] again, so that the spline does not cross the 2π jumps where it wraps."""
+    read in (−π, π] again, so that the spline does not cross the 2π jumps where it wraps. A
+    body's quaternion component (``B.q[i]``; `column(name)` gives the other components' samples)
+    is splined through samples made continuous first, where they flip sign: see
+    :func:`_quaternion_spline`."""
     from scipy.interpolate import CubicSpline
+    if name is not None and column is not None and _QUATERNION.fullmatch(name):
+        return _quaternion_spline(time, name, column)
     if name is None or ".euler[" not in name:
         return CubicSpline(time, values)
     spline = CubicSpline(time, np.unwrap(values))
     return lambda t: np.pi - np.mod(np.pi - spline(t), 2 * np.pi)
+
+
+_QUATERNION = re.compile(r"(.+)\.q\[([1-4])\]")
+
+
+def _quaternion_spline(time, name, column):
+    """The spline of quaternion component `name`. With Euler angles a body's quaternion output
+    is the one with w ≥ 0 of its rotation matrix, so it flips to −q where w crosses 0 (q and −q
+    are the same rotation): a spline through those samples crosses each jump. The samples are
+    made continuous first (each sample's sign the one nearest the previous sample: q_k·q_(k−1)
+    ≥ 0), splined, and read back with w ≥ 0 (the sign of the splined w). Samples without such
+    flips (a quaternion state, continuous) are splined as they are."""
+    from scipy.interpolate import CubicSpline
+    body, index = _QUATERNION.fullmatch(name).groups()
+    q = np.column_stack([np.asarray(column(f"{body}.q[{i}]"), dtype=float) for i in range(1, 5)])
+    turn = np.sign(np.einsum("ij,ij->i", q[1:], q[:-1]))
+    signs = np.cumprod(np.concatenate([[1.0], np.where(turn < 0, -1.0, 1.0)]))
+    if np.all(signs > 0) or np.any(q[:, 0] < 0):      # no flip, or not the w >= 0 convention
+        return CubicSpline(time, q[:, int(index) - 1])
+    component = CubicSpline(time, signs * q[:, int(index) - 1])
+    w = CubicSpline(time, signs * q[:, 0])
+    return lambda t: component(t) * np.where(w(t) < 0, -1.0, 1.0)
 
 
 def _key(prefix, name):

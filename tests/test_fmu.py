@@ -829,6 +829,21 @@ def test_with_logging_off_an_error_is_still_logged(input_fmu, instance, needs_sh
     assert inst.errors() and "not finite" in inst.errors()[0] and all(s == FMI_ERROR for s, _ in inst.messages)
 
 
+def test_an_error_names_the_scene_file_not_the_importers_unzip_folder(input_fmu, instance, unzipped,
+                                                                       needs_shim):
+    """The scene file is named as the user knows it (its name in the FMU's resources/, as in the
+    scene's folder), never by the temporary folder the importer unzipped the FMU into."""
+    scene, fmu = input_fmu
+    inst = instance(fmu)
+    raises_status(FMI_ERROR, inst.initialise, {"b": -1.0})
+    inst.messages.clear()
+    raises_status(FMI_DISCARD, inst.fmu.doStep, 0.0, 0.01)     # the failure, repeated by the step
+    folder = str(Path(unzipped(fmu)).resolve())
+    for message in inst.errors() + [m for s, m in inst.messages if s == FMI_DISCARD]:
+        assert f"FMU parameter b = -1.0: {scene.name}: elements." in message, message
+        assert folder not in message and "resources" not in message, message
+
+
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
 def test_a_start_time_other_than_zero_is_refused(fmus, scene, instance, needs_shim):
     inst = instance(fmus[scene])

@@ -9,6 +9,7 @@ oscillator written in the test (the term's value is one function, scene.ground_m
 compiled and uncompiled, so the two paths are no check of each other).
 """
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -203,3 +204,43 @@ def test_bad_ground_motion_is_one_error_naming_the_field(tmp_path, motion, field
     with pytest.raises(SceneError) as err:
         _model(tmp_path, "bad", motion)
     assert f": {field}:" in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("text, problem", [
+    ("# t, a\n0,0\n\n# pause\n0.1,abc\n", "(line 5, column 2: 'abc' is not a number)"),
+    ("0,0\n0.1,1\n\n0.2\n", "(line 4: 1 columns, the first row has 2)"),
+    ("# t, a\n0,0\n0.2,1\n# back\n0.1,1\n", "time not increasing (line 5: t = 0.1 s after 0.2 s)"),
+    ("0,0\n0.1,1\n0.1,2\n", "time not increasing (line 3: t = 0.1 s after 0.1 s)"),
+    ("0,0\n# x\n0.1,nan\n0.2,0\n", "wrong value (line 3, column 2: nan)"),
+    ("0,0\n0.1,1e300\n0.2,0\n", "wrong value (line 2, column 2: 1e+300)"),
+    ("# nothing\n", "wrong shape (no rows)"),
+    ("0,0\n", "wrong shape (1 row of 2 columns)"),
+])
+def test_a_malformed_record_is_one_error_naming_the_file_and_its_line(tmp_path, text, problem):
+    """A CSV record's error names the scene's field, the record file and the line of the file that
+    is wrong (numpy's own message counted data rows, and several problems named no row); a value
+    above the magnitude limit of every scene value (1e15, SI) is refused there, not left to stop
+    the integrator at t = 0; an empty file is that error alone (numpy's warning is not printed)."""
+    (tmp_path / "rec.csv").write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(SceneError) as err:
+            _model(tmp_path, "bad", '{ file = "rec.csv", axis = 1 }')
+    message = str(err.value)
+    assert ": effects.ground_acceleration.file: " in message and "\n" not in message
+    assert problem in message and str(tmp_path / "rec.csv") in message, message
+
+
+def test_a_record_value_above_the_magnitude_limit_in_si_is_refused(tmp_path):
+    """The limit of every scene value, 1e15 in SI units, holds for a record's accelerations after
+    their conversion from g (a CSV with unit = "g", a PEER .AT2): 2e14 g is 2.0e15 m/s², refused
+    naming the value; 1e14 g (9.8e14 m/s²) is read."""
+    (tmp_path / "big.AT2").write_text("PEER\nx\nACCELERATION IN G\nNPTS=  3, DT= .01 SEC\n0.1 2e14 0.0\n")
+    (tmp_path / "big.csv").write_text("0,0\n0.01,2e14\n0.02,0\n")
+    (tmp_path / "fine.csv").write_text("0,0\n0.01,1e14\n0.02,0\n")
+    for motion, problem in (('{ file = "big.AT2", axis = 1 }', "wrong value (value 2 of NPTS: 200000000000000.0 g)"),
+                            ('{ file = "big.csv", axis = 1, unit = "g" }', "wrong value (line 2, column 2: 200000000000000.0)")):
+        with pytest.raises(SceneError) as err:
+            _model(tmp_path, "big", motion)
+        assert ": effects.ground_acceleration.file: " in str(err.value) and problem in str(err.value), str(err.value)
+    _model(tmp_path, "fine", '{ file = "fine.csv", axis = 1, unit = "g" }')

@@ -121,6 +121,21 @@ def test_a_value_the_scene_refuses_stops_the_sweep_before_any_worker(tmp_path, m
     assert f": {field}:" in err and not out.exists()
 
 
+@pytest.mark.parametrize("args, option", [(["--vary", "experiment.max_steps=5,100000"], "--vary"),
+                                          (["--vary", "b=1,2", "--set", "experiment.baumgarte=5"], "--set")])
+def test_a_name_the_fmu_cannot_take_stops_an_fmu_sweep_before_any_run(tmp_path, monkeypatch, capsys, args,
+                                                                      option):
+    """With --model fmu, a --vary or --set name that is no FMU parameter nor a run setting (an
+    experiment field the FMU fixes) failed every run alike, each recorded as failed (exit 3): it is
+    one error of the whole sweep, exit 2, before any worker starts and the folder is made."""
+    monkeypatch.setattr(sw, "run_sweep", lambda *a, **k: pytest.fail("the sweep started"))
+    out = tmp_path / "never"
+    assert main_sweep([str(LUMPED), "--model", "fmu", *args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"inerter: error: {option} experiment.") and err.count("\n") == 1, err
+    assert "with --model fmu" in err and "not settable on the FMU" in err and not out.exists()
+
+
 def _refused(name, value) -> bool:
     try:
         inerter.load(LUMPED.resolve(), **{name: value})

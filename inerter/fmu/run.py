@@ -128,7 +128,7 @@ class FmuResult:
         if self.fmu_dense is not None and name in self.fmu_dense.names():
             self._check(name)
             return at_times(lambda t: self.fmu_dense.values(name, t), self.time, what)
-        return at_times(sample_spline(self.time, self[name], name), self.time, what)
+        return at_times(sample_spline(self.time, self[name], name, self.__getitem__), self.time, what)
 
     def _check(self, name):
         if name not in self.names:

@@ -594,27 +594,14 @@ def _read_record(r: _Reader, spec, fld, dimension, folder, single_axis=False):
         except (OSError, ValueError) as exc:
             raise r.error(f"{fld}.file", str(path), "a PEER NGA record (.AT2: 4 header lines, NPTS and DT "
                           "in the fourth, then NPTS values in g)", f"unreadable ({exc})")
+        from inerter.scene.expressions import MAX_MAGNITUDE
+        big = np.flatnonzero(np.abs(values) * STANDARD_GRAVITY > MAX_MAGNITUDE)
+        if len(big):
+            raise r.error(f"{fld}.file", str(path), f"values in g of magnitude at most {MAX_MAGNITUDE:g} m/s²",
+                          f"wrong value (value {big[0] + 1} of NPTS: {float(values[big[0]])!r} g)")
         values = values[None, :]
     else:
-        columns = 1 if axis is not None else dimension
-        import io
-        data = read_capped(path, MAX_RECORD_BYTES, r.source, f"{fld}.file", "CSV record (time, a_1 ... a_dim)")
-        try:
-            table = np.loadtxt(io.StringIO(data.decode("utf-8-sig")), delimiter=",", comments="#", ndmin=2)
-        except UnicodeDecodeError:
-            raise r.error(f"{fld}.file", str(path), "a CSV text (time, a_1 ... a_dim)", "not UTF-8 text") from None
-        except ValueError as exc:
-            brief = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
-            raise r.error(f"{fld}.file", str(path), "numeric CSV columns: time, a_1 ... a_dim",
-                          f"unreadable ({brief})") from None
-        if table.shape[0] > MAX_RECORD_SAMPLES:
-            raise r.error(f"{fld}.file", str(path), f"at most {MAX_RECORD_SAMPLES:,} samples (every sample ends an "
-                          "integrator step; resample the record)", f"too many samples ({table.shape[0]:,})")
-        if table.shape[1] != columns + 1 or table.shape[0] < 2 or not np.all(np.isfinite(table)) \
-                or np.any(np.diff(table[:, 0]) <= 0):
-            raise r.error(f"{fld}.file", str(path), f"≥ 2 rows of {columns + 1} finite columns (time increasing, "
-                          f"then {columns} acceleration{'s' if columns > 1 else ''} in {unit})",
-                          "wrong shape or values")
+        table = _read_csv_record(r, fld, path, 1 if axis is not None else dimension, unit)
         times, values = table[:, 0], table[:, 1:].T.copy()
     values = values * to_si
     if single_axis:
@@ -624,6 +611,80 @@ def _read_record(r: _Reader, spec, fld, dimension, folder, single_axis=False):
         full[axis] = values[0]
         values = full
     return times, values
+
+
+def _data_lines(text: str) -> list[int]:
+    """The 1-based line numbers of a CSV text's data rows (numpy.loadtxt's rows: the lines with
+    anything left before a ``#`` comment)."""
+    return [i for i, line in enumerate(text.splitlines(), start=1) if line.split("#", 1)[0].strip()]
+
+
+def _unreadable_row(text: str) -> str | None:
+    """Where numpy.loadtxt could not read a CSV text: the first data line whose count of cells
+    differs from the first's, or with a cell that is not a number (None if none is found)."""
+    count = None
+    for number, line in enumerate(text.splitlines(), start=1):
+        data = line.split("#", 1)[0]
+        if not data.strip():
+            continue
+        cells = data.split(",")
+        count = len(cells) if count is None else count
+        if len(cells) != count:
+            return f"line {number}: {len(cells)} columns, the first row has {count}"
+        for column, cell in enumerate(cells, start=1):
+            try:
+                float(cell.strip().replace("_", "?"))     # numpy reads no "1_0"
+            except ValueError:
+                return f"line {number}, column {column}: {cell.strip()!r} is not a number"
+    return None
+
+
+def _read_csv_record(r: _Reader, fld, path, columns: int, unit: str):
+    """A CSV record's table (time, then `columns` accelerations in `unit`), its errors naming the
+    file's line where a row is wrong (a cell that is not a number, a count of columns, a value
+    that is not finite or of magnitude above MAX_MAGNITUDE, a time not after the one before)."""
+    import io
+    import warnings
+    from inerter.scene.expressions import MAX_MAGNITUDE
+    from inerter.scene.ground_motion import STANDARD_GRAVITY
+    data = read_capped(path, MAX_RECORD_BYTES, r.source, f"{fld}.file", "CSV record (time, a_1 ... a_dim)")
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise r.error(f"{fld}.file", str(path), "a CSV text (time, a_1 ... a_dim)", "not UTF-8 text") from None
+    lines = _data_lines(text)
+    expected = (f"≥ 2 rows of {columns + 1} finite columns (time increasing, then {columns} "
+                f"acceleration{'s' if columns > 1 else ''} in {unit})")
+
+    def line(row: int) -> str:
+        return f"line {lines[row]}" if 0 <= row < len(lines) else f"row {row + 1}"
+    try:
+        with warnings.catch_warnings():            # an empty file: the error below says so
+            warnings.simplefilter("ignore", UserWarning)
+            table = np.loadtxt(io.StringIO(text), delimiter=",", comments="#", ndmin=2)
+    except ValueError as exc:
+        brief = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
+        raise r.error(f"{fld}.file", str(path), "numeric CSV columns: time, a_1 ... a_dim",
+                      f"unreadable ({_unreadable_row(text) or brief})") from None
+    if table.shape[0] > MAX_RECORD_SAMPLES:
+        raise r.error(f"{fld}.file", str(path), f"at most {MAX_RECORD_SAMPLES:,} samples (every sample ends an "
+                      "integrator step; resample the record)", f"too many samples ({table.shape[0]:,})")
+    if table.shape[0] < 2 or table.shape[1] != columns + 1:
+        got = f"{table.shape[0]} row{'s' if table.shape[0] != 1 else ''} of {table.shape[1]} column" \
+              f"{'s' if table.shape[1] != 1 else ''}" if table.size else "no rows"
+        raise r.error(f"{fld}.file", str(path), expected, f"wrong shape ({got})")
+    si = np.abs(table) * np.r_[1.0, np.full(columns, STANDARD_GRAVITY if unit == "g" else 1.0)]
+    bad = ~np.isfinite(table) | (si > MAX_MAGNITUDE)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise r.error(f"{fld}.file", str(path), expected + f", of magnitude at most {MAX_MAGNITUDE:g} (SI)",
+                      f"wrong value ({line(row)}, column {col + 1}: {float(table[row, col])!r})")
+    back = np.flatnonzero(np.diff(table[:, 0]) <= 0)
+    if len(back):
+        row = back[0] + 1
+        raise r.error(f"{fld}.file", str(path), expected,
+                      f"time not increasing ({line(row)}: t = {float(table[row, 0])!r} s after {float(table[row - 1, 0])!r} s)")
+    return table
 
 
 def _read_terms(r: _Reader, raw, fld, dimension):

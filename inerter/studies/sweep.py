@@ -198,6 +198,14 @@ class Sweep:
                 raise SceneError("--vary", name, name, "a parameter of " + str(self.scene) + ": "
                                  + ", ".join(params) + ", or effects.NAME, or experiment.NAME", "unknown name")
         self._check_values()
+        if self.model == "fmu":         # a name the FMU cannot take fails every run alike: say so now
+            from inerter.fmu.run import start_values
+            for name, values in [*self.fixed.items(), *((n, v[0]) for n, v in self.axes)]:
+                option = "--set" if name in self.fixed else "--vary"
+                try:
+                    start_values(base, {name: values})
+                except SceneError as exc:
+                    raise SweepError(f"{option} {name} with --model fmu: {exc}") from None
         self.metric_columns = []
         for m in base.scene.metrics:
             for k in METRIC_KEYS.get(m.kind, ()):

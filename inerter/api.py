@@ -452,9 +452,15 @@ class Result:
         (:func:`inerter.engine.events.device_events`); [] for a scene without any."""
         if not declares_events(self.model.scene) or len(self.time) < 2:
             return []
-        nodes = getattr(getattr(self.run, "dense", None), "ts", np.zeros(0))
+        nodes = self._event_nodes()
         nodes = nodes[(nodes >= self.time[0]) & (nodes <= self.time[-1])]
         return device_events(self.model.scene, np.concatenate((self.time, nodes)), self.dense)
+
+    def _event_nodes(self) -> np.ndarray:
+        """The integrator's step ends, where :meth:`events` brackets crossings beside the samples (a
+        contact shorter than an output interval shortens the steps through it); none where the run
+        keeps no dense output."""
+        return np.asarray(getattr(getattr(self.run, "dense", None), "ts", np.zeros(0)), dtype=float)
 
     def summary(self) -> dict:
         """What a run was and how it went, as plain JSON values (``json.dumps`` needs no default):

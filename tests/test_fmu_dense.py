@@ -161,3 +161,24 @@ def test_a_time_outside_the_fmu_run_is_refused(fmu_runs):
     fmu = fmu_runs(LUMPED, stop_time=10.0, y0=1.001)
     with pytest.raises(ValueError, match=r"\(FMU\): dense\('P.r\[2\]'\): t = 10.5 s is outside the run"):
         fmu.dense("P.r[2]")([1.0, 10.5])
+
+
+def test_a_contact_between_two_communication_points_is_found_as_the_solver_finds_it(fmu_runs):
+    """tests/data/short_contact_2d.toml: an end-stop contact from t = 0.437 s (closed form: the mass
+    coasts at 0.1 m/s to the stop 0.0437 m away) to its release 14 ms later, inside the FMU's
+    communication interval [0.4, 0.5] s. The FMU's events are bracketed on its integrator's steps, as
+    the solver's are (the solver's run at the same settings takes the same steps) and refined on the
+    FMU's own dense output: the same two events as the solver's run at the same output interval, to
+    1e-12 s (the same polynomials), the contact at the closed form's time to 1e-9 s. On its samples
+    alone both events were missed."""
+    import inerter
+
+    scene = SCENARIOS.parent / "tests" / "data" / "short_contact_2d.toml"
+    fmu = fmu_runs(scene, step=0.1, metrics=False)
+    solver = inerter.load(scene).simulate(output_interval=0.1)
+    assert fmu.status == "ok" and fmu.fmu_dense is not None
+    found, expected = fmu.events(), solver.events()
+    assert [(e["event"], e["where"]) for e in found] == [("contact", "upper stop"), ("release", "upper stop")]
+    assert [(e["event"], e["where"]) for e in expected] == [(e["event"], e["where"]) for e in found]
+    assert np.allclose([e["time"] for e in found], [e["time"] for e in expected], rtol=0.0, atol=1e-12)
+    assert found[0]["time"] == pytest.approx(0.437, abs=1e-9) and 0.44 < found[1]["time"] < 0.5

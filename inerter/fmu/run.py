@@ -141,6 +141,21 @@ class FmuResult:
         finally:
             self.close()
 
+    def _event_nodes(self) -> np.ndarray:
+        """The FMU's integrator's step ends, where :meth:`events` brackets crossings beside the
+        communication points: an FMU that reads its own dense output keeps one integration across
+        its communication points, clipped only at the stop time, on the solver's compiled loop, so
+        the solver's run with the same settings and start values takes the same steps (their
+        outputs agree bit for bit, tests/test_fmu_dense.py). The values bracketed and refined there
+        are the FMU's own (:meth:`dense`). Elsewhere (the FMU restarting at each communication
+        point) none: its samples only."""
+        if self.fmu_dense is None:
+            return np.zeros(0)
+        s = self.settings
+        run = self.model.simulate(stop_time=s.stop_time, output_interval=s.output_interval, method=s.method,
+                                  rtol=s.rtol, atol=s.atol, constraint=s.constraint, metrics=False)
+        return run._event_nodes()
+
     def read_the_fmu(self, fmu_path, start_values, instance=None):
         """Let :meth:`dense` read the FMU itself (:class:`inerter.fmu.dense.FmuDense`: the run's FMU,
         start values and stop time; `instance`, one to reset and step again) where its integration

@@ -251,6 +251,11 @@ class Model:
 class Result:
     """A time history: ``result.time``, ``result["C.r[2]"]``, ``result.metrics``.
 
+    Also ``status`` ("ok" or "failed") and ``message`` ("completed", or where and why a failed run
+    stopped: it holds the samples up to there), ``metric_errors`` (why a metric was left out), ``warnings``,
+    ``events()``, ``dense(name)`` (an output between the samples), ``units()``, ``summary()``
+    (what summary.json holds), ``write_csv(path)`` and ``to_dataframe()``.
+
     The outputs are evaluated when first asked for: on a compiled run each signal on its own in
     the kernels (a point's coordinate from that point alone, accelerations only for a force that
     needs them), on the numpy path all of them at once. An output that cannot be evaluated at a

@@ -42,6 +42,15 @@ def load(path, **overrides) -> "Model":
 
 
 class Model:
+    """A scene read, validated and compiled (:func:`load` makes one).
+
+    Description: ``name``, ``source``, ``experiment`` (the scene's settings), ``terms()`` (what
+    was compiled), ``parameter_info()``, ``effect_info()``, ``input_info()``, ``output_info()``
+    (what ``inerter describe`` prints), ``tunable_parameters()``. Analysis:
+    ``static_equilibrium()``, ``natural_frequencies()`` (Hz), ``static_value(signal)``. Runs:
+    ``simulate(...)`` (a :class:`Result`), ``stepper(...)`` (co-simulation steps, as an FMU
+    takes them), ``oracle()`` (the same scene with the oracle's forces),
+    ``with_overrides(**more)``."""
     methods = METHODS
 
     def __init__(self, path, overrides: dict[str, Any] | None = None, oracle: bool = False,
@@ -78,6 +87,8 @@ class Model:
                     communication_step=x.communication_step, step=x.step)
 
     def terms(self) -> list[str]:
+        """What the scene compiled, one line each (dimension and coordinates, joints, elements,
+        forces, gravity): the "compiled terms" of ``inerter describe``."""
         return self.mechanism.terms()
 
     def parameter_info(self):
@@ -119,6 +130,8 @@ class Model:
         return out
 
     def input_info(self):
+        """The FMU inputs the scene declares (``C.f[2]`` of an input force, ``ground.a[1]`` of an
+        input ground motion): name, SI unit and description each."""
         info = []
         for n in self.mechanism.input_names:
             axis = n[n.index("[") + 1]
@@ -131,6 +144,9 @@ class Model:
         return info
 
     def output_info(self):
+        """Every output (docs/scene_format.md, Outputs; derived outputs included), in the CSV's
+        column order: name, SI unit, description and ``reads_accelerations`` each (an output read
+        from the accelerations, as an inerter's force, which an FMU declares dependent on its inputs)."""
         return self.signals.info()
 
     def with_overrides(self, **more) -> "Model":
@@ -235,6 +251,11 @@ class Model:
 
 class Result:
     """A time history: ``result.time``, ``result["C.r[2]"]``, ``result.metrics``.
+
+    Also ``status`` ("ok" or "failed") and ``message`` ("completed", or where and why a failed run
+    stopped: it holds the samples up to there), ``metric_errors`` (why a metric was left out), ``warnings``,
+    ``events()``, ``dense(name)`` (an output between the samples), ``units()``, ``summary()``
+    (what summary.json holds), ``write_csv(path)`` and ``to_dataframe()``.
 
     The outputs are evaluated when first asked for: on a compiled run each signal on its own in
     the kernels (a point's coordinate from that point alone, accelerations only for a force that

@@ -131,3 +131,13 @@ def test_a_bad_simulate_argument_names_itself(kwargs, field):
         model.simulate(**kwargs)
     assert info.value.field == f"experiment.{field}"
     assert str(info.value).startswith(f"{LUMPED}: simulate(): experiment.{field}: ")
+
+
+def test_a_harmonics_metric_takes_no_reference(tmp_path):
+    """`harmonics` gives the mean and amplitude of its signal over `period_of`'s periods, with no
+    reference (docs/scene_format.md, [[metrics]]): a `reference` there would be silently unused, so
+    it is an unknown field, as any field a table does not take."""
+    text = LUMPED.read_text().replace('period_of = "P.r[2]"', 'period_of = "P.r[2]"\nreference = 0', 1)
+    assert text != LUMPED.read_text()
+    msg = expect_error(write(tmp_path, text), "metrics[3].reference", "0", "one of: kind, period_of, prefix, signal")
+    assert "unknown field" in msg

@@ -199,6 +199,15 @@ class FmuResult:
 
 
 def simulate_fmu(scene, overrides=None, stop_time=None, step=None, fmu_path=None, metrics=True):
+    """Run the scene `scene` through its FMU with fmpy (``inerter run SCENE --model fmu``) and
+    return an :class:`FmuResult`: time, ``result[name]``, metrics, ``summary()``, ``write_csv``,
+    ``to_dataframe``, as the solver's :class:`~inerter.api.Result`.
+
+    `overrides` as :func:`inerter.load` takes them, set as the FMU's start values; `stop_time`
+    and `step` (the communication step, which is also the output interval) override the scene's
+    ``[experiment]`` and are checked as its fields are. `fmu_path`: an FMU to run; by default the
+    scene's, built into ``build/fmu`` first where it is stale. With `metrics`, the scene's metrics
+    and events read the FMU's own dense output (:mod:`inerter.fmu.dense`)."""
     import fmpy
 
     from inerter.fmu.build import build

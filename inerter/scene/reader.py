@@ -1221,7 +1221,7 @@ def _read_metrics(r: _Reader, raw, signals):
         kind = r.string(spec, "kind", fld, METRIC_KINDS)
         allowed = {"kind": True, "prefix": False}
         if kind != "natural_frequency":
-            allowed.update({"signal": True, "reference": False})
+            allowed.update({"signal": True} if kind == "harmonics" else {"signal": True, "reference": False})
         if kind == "steady_state":
             allowed.update({"period": True, "periods": False})
         if kind == "harmonics":

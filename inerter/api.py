@@ -760,8 +760,9 @@ def _compute_metric(model, result, m, out, windows):
         ref = m.reference if m.reference is not None else float(x[0])
         out[_key(m.prefix, "peak")] = float(metric_fns.peak(t, x, ref, dense=dense))
         return
-    reference = m.reference if m.reference is not None else model.static_value(m.signal)
     settings, kinematic = getattr(result, "settings", None), model.signals.kinematic
+    if m.kind in ("free_oscillation", "steady_state"):     # (harmonics has no reference: none worked out)
+        reference = m.reference if m.reference is not None else model.static_value(m.signal)
     if m.kind == "free_oscillation":
         r = metric_fns.free_oscillation(t, x, reference, dense=dense,
                                         grid_rtol=metric_grid_rtol(settings, m.signal in kinematic))

@@ -39,6 +39,13 @@ def overrides_of(args) -> dict:
     return overrides
 
 
+def _step_with_fmu(args):
+    """--step is the FMU's communication step: without --model fmu it would be taken and do nothing."""
+    if getattr(args, "step", None) is not None and args.model != "fmu":
+        raise OptionError("--step", args.step, "--model fmu beside it; the solver's samples are set by --set "
+                          "experiment.output_interval=SECONDS", f"the FMU's communication step, without --model fmu")
+
+
 def origins_of(args) -> dict:
     """Where each override of :func:`overrides_of` came from, as an error names it: ``--set
     lead=0`` as typed, ``--stop-time`` for ``experiment.stop_time`` (its value is the field's)."""
@@ -130,6 +137,7 @@ def _report_stop(result, scene, out, label: str = "") -> int:
 
 def cmd_run(args):
     _animation(args)                                  # its options checked before the run
+    _step_with_fmu(args)
     overrides = overrides_of(args)
     model = _load(args, overrides)                   # every value checked before --out is made
     out = _out_dir(args.out)
@@ -204,6 +212,7 @@ def _with_unit(value, unit) -> str:
 
 def cmd_compare(args):
     """With and without the centripetal correction (and the oracle, and the FMU with --model fmu)."""
+    _step_with_fmu(args)
     overrides = overrides_of(args)
     _load(args, overrides)                           # every value checked before --out is made
     out = _out_dir(args.out)

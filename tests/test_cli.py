@@ -110,9 +110,11 @@ def test_a_ground_motion_scene_writes_plain_json(tmp_path, capsys):
     ("--step", "0", "experiment.communication_step", "a number > 0"),
 ])
 def test_a_bad_option_is_a_one_line_error_before_anything_runs(tmp_path, capsys, option, value, field, expected):
-    """The option names the experiment field it overrides; the scene reader checks it."""
+    """The option names the experiment field it overrides; the scene reader checks it (--step, the
+    FMU's communication step, with --model fmu: without, it is refused as such, test_cli_polish.py)."""
     out = tmp_path / "out"
-    assert main(["run", str(TWO_BAR), option, value, "--out", str(out)]) == 2
+    fmu = ["--model", "fmu"] if option == "--step" else []
+    assert main(["run", str(TWO_BAR), option, value, "--out", str(out)] + fmu) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and err.startswith(f"inerter: error: {option}: {TWO_BAR}: {field}: "), err
     assert value in err and expected in err, err

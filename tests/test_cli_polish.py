@@ -294,3 +294,14 @@ def test_a_collapse_the_step_monitor_finds_says_what_may_have_stalled_it_once(mo
     result = model.simulate(stop_time=1.0, path="numpy", metrics=False)
     assert result.status == "failed" and "step size collapsed" in result.message, result.message
     assert result.message.count("; MARK: what may have stalled it") == 1, result.message
+
+
+@pytest.mark.parametrize("command", ["run", "compare"])
+@pytest.mark.parametrize("model", ["solver", "oracle"])
+def test_a_communication_step_without_the_fmu_is_refused(tmp_path, capsys, command, model):
+    """--step is the FMU's communication step: without --model fmu it was taken and did nothing
+    (the solver's samples are its output interval). Refused before anything is run or written."""
+    assert main([command, str(LUMPED), "--model", model, "--step", "0.1", "--out", str(tmp_path / "o")]) == 2
+    one_line_error(capsys, "inerter: error: --step: the FMU's communication step, without --model fmu (got '0.1'",
+                   "experiment.output_interval")
+    assert not (tmp_path / "o").exists()

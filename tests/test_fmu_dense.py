@@ -182,3 +182,17 @@ def test_a_contact_between_two_communication_points_is_found_as_the_solver_finds
     assert [(e["event"], e["where"]) for e in expected] == [(e["event"], e["where"]) for e in found]
     assert np.allclose([e["time"] for e in found], [e["time"] for e in expected], rtol=0.0, atol=1e-12)
     assert found[0]["time"] == pytest.approx(0.437, abs=1e-9) and 0.44 < found[1]["time"] < 0.5
+
+
+def test_the_states_kept_are_as_dense_as_stepping_them_costs_a_restore():
+    """The second instance keeps a state every SAVE_EVERY samples where a sample's steps cost a tenth
+    of a restore or less (an explicit method: 0.04 against 0.45 ms, two_bar_2d), and at every sample
+    where they cost a restore or more (an implicit method through a stiff contact), in between as
+    many samples as cost one restore."""
+    from inerter.fmu.dense import SAVE_EVERY
+
+    dense = FmuDense.__new__(FmuDense)
+    dense._restore_seconds = 4.5e-4
+    for per_sample, stride in ((4e-5, SAVE_EVERY), (1e-4, 4), (4.5e-4, 1), (3e-3, 1), (0.0, SAVE_EVERY)):
+        dense._adapt(per_sample)
+        assert dense._stride == stride, per_sample

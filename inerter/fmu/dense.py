@@ -14,8 +14,10 @@ communication point, so a point placed between two would change the trajectory: 
 dense output stays a cubic spline through the samples, as the solver's RK4 runs have.
 
 Stepping is forward only, so the times asked for are taken in increasing order. The instance
-keeps an FMU state (``fmi2GetFMUstate``) every :data:`SAVE_EVERY` samples as it passes them, and
-goes back to the latest one before a time behind it (or far ahead of it) with ``fmi2SetFMUstate``;
+keeps an FMU state (``fmi2GetFMUstate``) at samples as it passes them, every :data:`SAVE_EVERY`
+samples or fewer, as many as stepping them costs what going back to a state does (an implicit
+method's steps through a stiff contact cost far more than an explicit one's), and goes back to the
+latest one before a time behind it (or far ahead of it) with ``fmi2SetFMUstate``;
 the FMU's state holds its running integration, so a step repeated from it gives the same values
 bit for bit.
 """
@@ -23,14 +25,18 @@ from __future__ import annotations
 
 import bisect
 import shutil
+import time
 
 import numpy as np
 
 from inerter.engine.simulation import RUNS_ON, SimulationError
 
-#: Samples between the FMU states kept: a restore costs about as much as stepping this many
-#: communication intervals (0.45 ms against 0.04 ms each, two_bar_2d through fmpy).
+#: Samples between the FMU states kept, at most: a restore costs about as much as stepping this many
+#: communication intervals (0.45 ms against 0.04 ms each, two_bar_2d through fmpy). Where stepping
+#: costs more, fewer (:meth:`FmuDense._adapt`).
 SAVE_EVERY = 10
+#: What a restore is taken to cost (s) until one is measured (two_bar_2d through fmpy).
+RESTORE_SECONDS = 4.5e-4
 #: The relative difference allowed between the run's samples and the same samples stepped again
 #: (the same integration, so in practice 0; a difference means the instance is not the run's).
 SAMPLE_TOLERANCE = 1e-12
@@ -64,6 +70,8 @@ class FmuDense:
         self._time = 0.0           # where the instance is
         #: doStep calls and FMU-state restores made, for the benchmarks' accounts.
         self.steps = self.restores = 0
+        self._stride = SAVE_EVERY          # samples between the states kept from here on
+        self._restore_seconds = RESTORE_SECONDS
 
     def names(self):
         return self._variables().keys()
@@ -157,20 +165,41 @@ class FmuDense:
     # -- stepping --------------------------------------------------------------------------
     def _go_to(self, t: float):
         """Bring the instance to time t: back to a kept state where t is behind it (or a kept
-        state lies well ahead of it), then forward, keeping states at the samples it passes."""
+        state lies well ahead of it), then forward, keeping states at samples every stride on the
+        way (none where one is kept within the stride already)."""
         here = bisect.bisect_right(self._times, self._time) - 1
         target = bisect.bisect_right(self._times, t) - 1
         kept = self._kept[bisect.bisect_right(self._kept, target) - 1]     # the latest kept at or before target
-        if t < self._time or kept >= here + 2 * SAVE_EVERY:
-            self._fmu.setFMUstate(self._saved[kept])
-            self._time = self._times[kept]
-            self.restores += 1
-        first = (bisect.bisect_right(self._times, self._time) + SAVE_EVERY - 1) // SAVE_EVERY
-        for k in range(first * SAVE_EVERY, target + 1, SAVE_EVERY):
-            if k not in self._saved:
-                self._step(self._times[k])
-                self._keep(k)
+        if t < self._time or kept >= here + 2 * self._stride:
+            self._restore(kept)
+            here = kept
+        last = self._kept[bisect.bisect_right(self._kept, here) - 1]      # the latest kept at or before here
+        while True:
+            ahead = bisect.bisect_right(self._kept, last)
+            k = max(last + self._stride, here + 1)
+            if ahead < len(self._kept) and self._kept[ahead] <= min(k, target):
+                last = self._kept[ahead]                                   # one kept within the stride already
+                continue
+            if k > target:
+                break
+            started, samples = time.perf_counter(), k - here
+            self._step(self._times[k])
+            self._adapt((time.perf_counter() - started) / samples)
+            self._keep(k)
+            last = here = k
         self._step(t)
+
+    def _restore(self, k: int):
+        started = time.perf_counter()
+        self._fmu.setFMUstate(self._saved[k])
+        self._restore_seconds = time.perf_counter() - started
+        self._time = self._times[k]
+        self.restores += 1
+
+    def _adapt(self, per_sample: float):
+        """The stride for a stepping cost of `per_sample` seconds a sample: as many samples as cost
+        what the last restore did, between 1 and :data:`SAVE_EVERY`."""
+        self._stride = int(min(SAVE_EVERY, max(1.0, self._restore_seconds / max(per_sample, 1e-9))))
 
     def _step(self, t: float):
         if t <= self._time:

@@ -305,3 +305,18 @@ def test_a_communication_step_without_the_fmu_is_refused(tmp_path, capsys, comma
     one_line_error(capsys, "inerter: error: --step: the FMU's communication step, without --model fmu (got '0.1'",
                    "experiment.output_interval")
     assert not (tmp_path / "o").exists()
+
+
+def test_compare_on_the_oracle_runs_it_once_per_variant(tmp_path, capsys):
+    """`compare --model oracle`: the corrected run is the oracle's, so it is not run a third time
+    nor compared with itself (it printed "largest |oracle − oracle| ... 0 m")."""
+    import json
+
+    out = tmp_path / "cmp"
+    assert main(["compare", str(LUMPED), "--model", "oracle", "--stop-time", "2", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "largest |" not in printed
+    assert not (out / "lumped_mass_2d_oracle.csv").exists()
+    runs = json.loads((out / "summary.json").read_text())["runs"]
+    assert runs["oracle"] == runs["corrected"] and runs["max_difference_to_oracle_m"] is None
+    assert runs["corrected"]["metrics"] != runs["uncorrected"]["metrics"]

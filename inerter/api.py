@@ -22,6 +22,7 @@ from inerter.elements.device import MODE_SOLVES
 from inerter.oracle import OracleMechanism, require_definitions
 from inerter.engine.outputs import Signals
 from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
+from inerter.scene.units import for_reading
 from inerter.common.errors import InerterError, SceneError, SimulationError
 from inerter.engine.simulation import Settings, Stepper, dense_windings, integrate
 
@@ -46,7 +47,7 @@ class Model:
 
     Description: ``name``, ``source``, ``experiment`` (the scene's settings), ``terms()`` (what
     was compiled), ``parameter_info()``, ``effect_info()``, ``input_info()``, ``output_info()``
-    (what ``inerter describe`` prints), ``tunable_parameters()``. Analysis:
+    (what ``inerter describe`` prints, ``describe()`` as its text), ``tunable_parameters()``. Analysis:
     ``static_equilibrium()``, ``natural_frequencies()`` (Hz), ``static_value(signal)``. Runs:
     ``simulate(...)`` (a :class:`Result`), ``stepper(...)`` (co-simulation steps, as an FMU
     takes them), ``oracle()`` (the same scene with the oracle's forces),
@@ -148,6 +149,20 @@ class Model:
         column order: name, SI unit, description and ``reads_accelerations`` each (an output read
         from the accelerations, as an inerter's force, which an FMU declares dependent on its inputs)."""
         return self.signals.info()
+
+    def describe(self) -> str:
+        """What ``inerter describe`` prints: the name and description, the compiled terms, the
+        parameters (SI, with the value as written where its unit is not SI), inputs and outputs."""
+        lines = [f"{self.name}: {self.scene.description}", "compiled terms:"]
+        lines += ["  " + line for line in self.terms()]
+        lines.append("parameters:")
+        for p in self.parameter_info():
+            given = f" (given as {p['given']})" if p.get("given") else ""
+            unit = for_reading(p["unit"])
+            lines.append(f"  {p['name']} = {p['value']:g}{' ' + unit if unit else ''}{given}  {p['description']}")
+        lines.append("inputs: " + (", ".join(i["name"] for i in self.input_info()) or "none"))
+        lines.append("outputs: " + ", ".join(o["name"] for o in self.output_info()))
+        return "\n".join(lines)
 
     def with_overrides(self, **more) -> "Model":
         merged = dict(self.overrides)

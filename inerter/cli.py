@@ -276,18 +276,7 @@ def max_difference(a, b) -> float:
 
 
 def cmd_describe(args):
-    model = _load(args, parse_set(args.set))
-    print(f"{model.name}: {model.scene.description}")
-    print("compiled terms:")
-    for line in model.terms():
-        print("  " + line)
-    print("parameters:")
-    for p in model.parameter_info():
-        given = f" (given as {p['given']})" if p.get("given") else ""
-        unit = for_reading(p["unit"])
-        print(f"  {p['name']} = {p['value']:g}{' ' + unit if unit else ''}{given}  {p['description']}")
-    print("inputs: " + (", ".join(i["name"] for i in model.input_info()) or "none"))
-    print("outputs: " + ", ".join(o["name"] for o in model.output_info()))
+    print(_load(args, parse_set(args.set)).describe())
     return 0
 
 

@@ -81,6 +81,17 @@ def test_describe_lists_compiled_terms(capsys):
     assert "without centripetal term (Eq. 8)" in capsys.readouterr().out
 
 
+def test_model_describe_is_what_the_command_prints(capsys):
+    """`model.describe()` (the Python API) returns the text `inerter describe` prints, overrides
+    included; it did not exist (AttributeError). Reference: the command's own output."""
+    import inerter
+    model = inerter.load(LUMPED, y0={"value": 1200, "unit": "mm"})
+    text = model.describe()
+    assert main(["describe", str(LUMPED), "--set", 'y0={value = 1200, unit = "mm"}']) == 0
+    assert capsys.readouterr().out == text + "\n"
+    assert "y0 = 1.2 m (given as 1200 mm)" in text and "inerter.f" in text.splitlines()[-1]
+
+
 def test_unknown_override_is_a_clear_error(tmp_path, capsys):
     assert main(["run", str(TWO_BAR), "--set", "bb=3", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err

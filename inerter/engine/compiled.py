@@ -1067,8 +1067,9 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     the same the samples are taken from), as ``Run.dense``, a :class:`DenseOutput`. Without it,
     ``Run.dense`` is a :class:`LocalDense`, which integrates again the sample intervals it is read
     in: what reads a few of them (a peak's refinement) does not make the whole run pay for a dense
-    output at every step. With RK4 (fixed step: metrics use a cubic spline through the samples),
-    ``Run.dense`` is None. The samples are the same either way."""
+    output at every step. With RK4 (fixed step), ``Run.dense`` is an :class:`RK4Dense`, which
+    integrates again the sample intervals it is read in, as LocalDense does (None with 3D
+    rotational elements: a cubic spline through the samples). The samples are the same either way."""
     from inerter.engine.simulation import integrate
 
     why = unsupported(mech)
@@ -1142,6 +1143,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     sol = DenseOutput.of_kept(settings.method, keep, kernel)
     if sol is None and tables is not None and k > 1:
         sol = LocalDense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, tables, windings)
+    elif tables is None and k > 1 and not windings.shape[1]:
+        sol = RK4Dense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks)
     run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
                       int(evals), cpu, None)
     if windings.shape[1]:
@@ -1309,6 +1312,60 @@ class LocalDense:
         for _, where, sol in self.pieces(flat):
             out[:, where] = sol(flat[where])
         return out[:, 0] if times.ndim == 0 else out
+
+
+class RK4Dense:
+    """The dense output of a compiled RK4 run: each sample interval a time falls in is integrated
+    again from the run's state at the sample before it with the run's fixed step (the last step
+    shortened to land on the next sample; the same kinks and jumps), and the times are read on
+    its steps' cubic Hermite polynomials, as the numpy path's RK4 gives its dense output
+    (:class:`inerter.engine.integrators.RK4`). Where the output interval is a multiple of the
+    step the steps are the run's own; else they agree with them to the method's order. Not built
+    for a run with 3D rotational elements (their angles' branches are not followed here): those
+    read a cubic spline through the samples. ``sol(t)``: the states (n × len(t)); ``sol.ts``: the
+    samples."""
+
+    def __init__(self, kernel, settings, inputs, grid, states, switches, kinks):
+        self.kernel, self.settings, self.inputs = kernel, settings, inputs
+        self.grid, self.states, self.switches, self.kinks = grid, states, switches, kinks
+        self.ts = grid
+        self.n = states.shape[1]
+
+    def __call__(self, t):
+        times = np.asarray(t, dtype=float)
+        flat = times.reshape(-1)
+        out = np.empty((self.n, len(flat)))
+        ks = np.clip(np.searchsorted(self.grid, flat, side="right") - 1, 0, len(self.grid) - 2)
+        for k in np.unique(ks):
+            where = np.flatnonzero(ks == k)
+            out[:, where] = self._interval(int(k), flat[where])
+        return out[:, 0] if times.ndim == 0 else out
+
+    def _interval(self, k, times):
+        """The states at `times` (within sample interval k) from the RK4 steps from sample k."""
+        s, kernel = self.settings, self.kernel
+        t0, t_end = float(self.grid[k]), float(self.grid[k + 1])
+        want, back = np.unique(times, return_inverse=True)
+        got = np.empty((self.n, len(want)))
+        y = self.states[k].copy()
+        got[:, want <= t0] = y[:, None]
+        for t1 in sorted(d for d in self.switches if t0 < d < t_end) + [t_end]:
+            inside = (want > t0) & (want <= t1)
+            seg = np.concatenate(([t0], want[inside]))
+            if seg[-1] != t1:
+                seg = np.append(seg, t1)
+            seg_out = np.empty((len(seg), self.n))
+            seg_out[0] = y
+            status, done, _, _, t_reached, _ = _k.integrate_rk4(
+                y, t0, t1, seg, seg_out, float(s.step), int(s.max_steps), self.inputs, float(s.alpha),
+                kernel.params, t1 if t1 in self.switches else 0.0, self.kinks, _monitor("RK4"))
+            if status != 0:
+                raise SimulationError(f"the dense output between t = {t0:.6g} s and {t_end:.6g} s: the RK4 "
+                                      f"integrator failed on integrating that interval again "
+                                      f"({failure_text(kernel, status, 'RK4', s.step, y, t_reached)})", t0)
+            got[:, inside] = seg_out[1:1 + int(inside.sum())].T
+            y, t0 = seg_out[len(seg) - 1].copy(), t1
+        return got[:, back]
 
 
 class CompiledStepper(Stepper):

@@ -430,8 +430,10 @@ class Result:
         integrator's dense output: on a compiled run, the states from the kept steps' polynomials
         (or, where the run kept none, from the sample intervals read, integrated again:
         ``engine.compiled.LocalDense``) and the signal from the kernels, in one compiled call; on the
-        numpy path, scipy's dense output and the numpy signals. Where there is none (RK4, whose
-        fixed steps give no polynomial): a cubic spline through the samples. A derived output:
+        numpy path, scipy's dense output and the numpy signals; a compiled RK4 run's sample
+        intervals read integrated again on its fixed steps (``engine.compiled.RK4Dense``). Where
+        there is none (a compiled RK4 run with 3D rotational elements): a cubic spline through the
+        samples. A derived output:
         its expression on the dense values of the outputs it reads. A 3D rotational element's angle
         is read on the branch its integration followed in the step that gives each t, the times in
         any order (inerter.elements.winding). The times may have any shape (read flattened; none:
@@ -650,7 +652,8 @@ def at_times(values, time, what):
 
 def sample_spline(time, values, name=None, column=None):
     """A cubic spline through samples (error O(h⁴); linear interpolation would flatten peaks by
-    (ωh)²/12): metrics of runs without a dense output (RK4's fixed steps, FMUs). A body's Euler
+    (ωh)²/12): metrics of runs without a dense output (an FMU restarting at each communication
+    point, a compiled RK4 run with 3D rotational elements). A body's Euler
     angle (`name` ``B.euler[i]``), read in (−π, π], is splined through its samples unwrapped and
     read in (−π, π] again, so that the spline does not cross the 2π jumps where it wraps. A
     body's quaternion component (``B.q[i]``; `column(name)` gives the other components' samples)

@@ -360,7 +360,7 @@ class Result:
         """The scene's warnings, one where screw efficiencies' modes did not settle at some
         evaluations (the run's count), and one for each derived output that has no value (NaN) at some
         samples: its expression is undefined there (a square root of a negative number, 0/0)."""
-        notes = list(self.model.scene.warnings)
+        notes = [n for n in self.model.scene.warnings if n not in self._unreached_record_warnings()]
         unsettled = self.run.extra.get("unsettled", 0)
         if unsettled:
             notes.append(f"{self.model.source}: device.efficiency: {unsettled} evaluations of the equations of "
@@ -378,6 +378,15 @@ class Result:
                              f"(written as NaN): the expression is undefined there")
         notes += long_step_windings(self)
         return notes
+
+    def _unreached_record_warnings(self) -> list[str]:
+        """The ground record's warnings (its last value is not zero, so the acceleration steps to zero
+        there) where the run ends before the record does: that step is never reached."""
+        g = self.model.scene.effects.get("ground_acceleration")
+        record = getattr(g, "record", None)
+        if record is None or not len(self.time) or record[0][-1] < self.time[-1]:
+            return []
+        return list(g.warnings)
 
     def _derived_column(self, name) -> np.ndarray:
         """A derived output at every sample, from the columns of the outputs it reads (the values the
@@ -772,6 +781,10 @@ def _compute_metric(model, result, m, out, windows):
         return
     x = result[m.signal]            # first: a sample where it is undefined ends the result before it
     t = result.time
+    missing = ~np.isfinite(x)
+    if missing.any():                # a derived output without value at some samples (NaN)
+        raise ValueError(f"{m.signal} has no value at {int(missing.sum())} of {len(x)} samples, the first at "
+                         f"t = {t[missing.argmax()]:.6g} s: the metric needs it at every sample")
     dense = result.dense(m.signal)
     if m.kind == "peak":
         # largest excursion from the reference (default: the signal's initial value), between samples too

@@ -308,3 +308,19 @@ def test_the_fmu_logs_a_derived_output_without_value_once(tmp_path):
     assert not np.isfinite(result["lift"][1])
     notes = [m for m in said if "outputs.derived.lift: no value" in m]
     assert len(notes) == 1, said
+
+
+def test_a_metric_of_a_derived_output_without_value_at_some_samples_says_where(tmp_path):
+    """A peak of sqrt(P.r[2]/h - 0.2), undefined at the first samples (above): the metric is left out
+    with a reason naming the output, how many samples have no value and the first one's time (it
+    read "t and x must be finite (the history contains nan or inf)")."""
+    path = tmp_path / "derived_demo.toml"
+    path.write_text(SCENE.replace('power = "inerter.f * inerter.v_rel"',
+                                  'power = "inerter.f * inerter.v_rel"\nlift = "sqrt(P.r[2] / h - 0.2)"')
+                    + '\n[[metrics]]\nkind = "peak"\nsignal = "lift"\nreference = 0\n')
+    result = inerter.load(path).simulate(stop_time=0.5)
+    missing = ~np.isfinite(result["lift"])
+    assert missing.any() and "peak" not in result.metrics
+    [(label, why)] = [(k, v) for k, v in result.metric_errors.items() if "lift" in k]
+    assert why == (f"lift has no value at {int(missing.sum())} of {len(missing)} samples, the first at t = 0 s: "
+                   "the metric needs it at every sample")

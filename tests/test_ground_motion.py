@@ -190,6 +190,19 @@ def test_a_record_that_does_not_end_at_rest_is_warned_about(tmp_path):
     assert quiet.scene.warnings == []
 
 
+def test_a_record_that_does_not_end_at_rest_is_not_warned_about_by_a_run_ending_before_it(tmp_path):
+    """The step to zero at the record's end (1 s) is never reached by a run that stops at 0.8 s or
+    at 1 s itself: its result does not warn of it (summary.json and `inerter run` print
+    Result.warnings); one running on past it does (the test above)."""
+    t = np.arange(0, 101) * 0.01
+    np.savetxt(tmp_path / "open.csv", np.column_stack((t, np.full_like(t, 0.2), 0 * t)), delimiter=",")
+    model = _model(tmp_path, "open", '{ file = "open.csv" }')
+    for stop in (0.8, 1.0):
+        r = model.simulate(stop_time=stop, metrics=False)
+        assert r.status == "ok" and r.warnings == [] and r.summary()["warnings"] == []
+    assert model.simulate(stop_time=1.2, metrics=False).warnings == model.scene.warnings
+
+
 @pytest.mark.parametrize("motion, field", [
     ('{ file = "bad.AT2" }', "effects.ground_acceleration.file"),
     ('{ terms = [{ axis = 3, amplitude = 1.0, frequency = 1.0 }] }', "effects.ground_acceleration.terms[0].axis"),

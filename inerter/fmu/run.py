@@ -118,6 +118,7 @@ class FmuResult:
 
     #: The scene's warnings and the derived outputs without value at some samples, as the solver's.
     warnings = Result.warnings
+    _unreached_record_warnings = Result._unreached_record_warnings
 
     def dense(self, name):
         """A callable t ↦ output(t): the FMU's own dense output (a second instance stepped to the

@@ -371,10 +371,9 @@ class Result:
                 column = self[d.name]
             except KeyError:                      # an FMU run that did not record it
                 continue
-            missing = ~np.isfinite(column)
-            if missing.any():
-                notes.append(f"{self.model.source}: outputs.derived.{d.name}: no value at {int(missing.sum())} "
-                             f"of {len(column)} samples, the first at t = {self.time[missing.argmax()]:.6g} s "
+            missing = missing_values(self.time, column)
+            if missing:
+                notes.append(f"{self.model.source}: outputs.derived.{d.name}: {missing} "
                              f"(written as NaN): the expression is undefined there")
         notes += long_step_windings(self)
         return notes
@@ -725,6 +724,16 @@ def metric_units(model: Model) -> dict[str, str]:
 MIN_METRIC_SAMPLES = 5
 
 
+def missing_values(time, column) -> str:
+    """"no value at N of M samples, the first at t = T s" where `column` has no value (NaN, inf) at
+    some samples, else ""."""
+    missing = ~np.isfinite(column)
+    if not missing.any():
+        return ""
+    return (f"no value at {int(missing.sum())} of {len(column)} samples, the first at "
+            f"t = {time[missing.argmax()]:.6g} s")
+
+
 def compute_metrics(model: Model, result) -> dict:
     """The scene's [[metrics]] from a time history (module `metrics`). A metric that cannot be
     computed from this history (too short, too few samples, no oscillation, ...) is left out and
@@ -781,10 +790,9 @@ def _compute_metric(model, result, m, out, windows):
         return
     x = result[m.signal]            # first: a sample where it is undefined ends the result before it
     t = result.time
-    missing = ~np.isfinite(x)
-    if missing.any():                # a derived output without value at some samples (NaN)
-        raise ValueError(f"{m.signal} has no value at {int(missing.sum())} of {len(x)} samples, the first at "
-                         f"t = {t[missing.argmax()]:.6g} s: the metric needs it at every sample")
+    missing = missing_values(t, x)
+    if missing:                      # a derived output without value at some samples (NaN)
+        raise ValueError(f"{m.signal} has {missing}: the metric needs it at every sample")
     dense = result.dense(m.signal)
     if m.kind == "peak":
         # largest excursion from the reference (default: the signal's initial value), between samples too

@@ -1235,6 +1235,15 @@ class DenseOutput:
         return out
 
 
+def _by_interval(grid, times) -> list[tuple[int, np.ndarray]]:
+    """[(sample index k, the indices of `times` in the sample interval [grid[k], grid[k + 1]])], for
+    each interval holding one (a time before the first sample in the first, after the last in the
+    last): where a dense output built interval by interval reads them."""
+    t = np.asarray(times, dtype=float).reshape(-1)
+    ks = np.clip(np.searchsorted(grid, t, side="right") - 1, 0, len(grid) - 2)
+    return [(int(k), np.flatnonzero(ks == k)) for k in np.unique(ks)]
+
+
 class LocalDense:
     """The dense output of a compiled DOP853 or RK45 run that kept none, built where it is read:
     each sample interval a time falls in is integrated again from the run's state at the sample
@@ -1259,14 +1268,11 @@ class LocalDense:
     def pieces(self, times):
         """[(sample index k, the indices of `times` in k's interval, its DenseOutput)], integrating
         the intervals not integrated yet."""
-        t = np.asarray(times, dtype=float).reshape(-1)
-        ks = np.clip(np.searchsorted(self.grid, t, side="right") - 1, 0, len(self.grid) - 2)
         out = []
-        for k in np.unique(ks):
-            k = int(k)
+        for k, where in _by_interval(self.grid, times):
             if k not in self.intervals:
                 self.intervals[k] = self._integrate(k)
-            out.append((k, np.flatnonzero(ks == k), self.intervals[k]))
+            out.append((k, where, self.intervals[k]))
         return out
 
     def windings(self, k):
@@ -1335,10 +1341,8 @@ class RK4Dense:
         times = np.asarray(t, dtype=float)
         flat = times.reshape(-1)
         out = np.empty((self.n, len(flat)))
-        ks = np.clip(np.searchsorted(self.grid, flat, side="right") - 1, 0, len(self.grid) - 2)
-        for k in np.unique(ks):
-            where = np.flatnonzero(ks == k)
-            out[:, where] = self._interval(int(k), flat[where])
+        for k, where in _by_interval(self.grid, flat):
+            out[:, where] = self._interval(k, flat[where])
         return out[:, 0] if times.ndim == 0 else out
 
     def _interval(self, k, times):

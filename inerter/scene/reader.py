@@ -623,11 +623,9 @@ def _unreadable_row(text: str) -> str | None:
     """Where numpy.loadtxt could not read a CSV text: the first data line whose count of cells
     differs from the first's, or with a cell that is not a number (None if none is found)."""
     count = None
-    for number, line in enumerate(text.splitlines(), start=1):
-        data = line.split("#", 1)[0]
-        if not data.strip():
-            continue
-        cells = data.split(",")
+    lines = text.splitlines()
+    for number in _data_lines(text):
+        cells = lines[number - 1].split("#", 1)[0].split(",")
         count = len(cells) if count is None else count
         if len(cells) != count:
             return f"line {number}: {len(cells)} columns, the first row has {count}"

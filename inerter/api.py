@@ -768,15 +768,16 @@ METRIC_GRID_SHARE = 1e-3
 METRIC_GRID_FLOOR = 1e-12
 
 
-def metric_grid_rtol(settings, kinematic: bool) -> float | None:
+def metric_grid_rtol(settings, pulse_free: bool) -> float | None:
     """The `grid_rtol` of a run's periodic metric: :data:`METRIC_GRID_SHARE` of the run's rtol (at
-    least :data:`METRIC_GRID_FLOOR`) for an output of the motion (`kinematic`: a point's or a body's,
-    an element's s_rel, v_rel, phi_rel, w_rel: ``Signals.kinematic``) where the integrator keeps a
-    tolerance. None (the finest grid) otherwise: a force, a power, an energy, a device's or a derived
-    output may hold a pulse (an end stop's contact, a series spring's deflection with it) narrower
+    least :data:`METRIC_GRID_FLOOR`) for an output that holds no pulse the integrator's steps do not
+    resolve (`pulse_free`, ``Signals.pulse_free``: the motion's outputs, and every element's and the
+    energy in a scene without an inerter device) where the integrator keeps a tolerance. None (the
+    finest grid) otherwise: a device's end stop or backlash pulses (its contact, a series spring's
+    deflection with it, every force that reads q̈ with them), and so may a derived output, narrower
     than a coarse grid's step, which two coarse grids would both miss and agree on; and for RK4
     (fixed steps) and a history without settings."""
-    if settings is None or settings.method == "RK4" or not kinematic:
+    if settings is None or settings.method == "RK4" or not pulse_free:
         return None
     return max(METRIC_GRID_FLOOR, METRIC_GRID_SHARE * settings.rtol)
 
@@ -799,28 +800,28 @@ def _compute_metric(model, result, m, out, windows):
         ref = m.reference if m.reference is not None else float(x[0])
         out[_key(m.prefix, "peak")] = float(metric_fns.peak(t, x, ref, dense=dense))
         return
-    settings, kinematic = getattr(result, "settings", None), model.signals.kinematic
+    settings, pulse_free = getattr(result, "settings", None), model.signals.pulse_free
     if m.kind in ("free_oscillation", "steady_state"):     # (harmonics has no reference: none worked out)
         reference = m.reference if m.reference is not None else model.static_value(m.signal)
     if m.kind == "free_oscillation":
         r = metric_fns.free_oscillation(t, x, reference, dense=dense,
-                                        grid_rtol=metric_grid_rtol(settings, m.signal in kinematic))
+                                        grid_rtol=metric_grid_rtol(settings, m.signal in pulse_free))
         windows[m.signal] = (r["window"], r["periods"])
         for key in ("fundamental_frequency", "fundamental_amplitude", "mean_offset"):
             out[_key(m.prefix, key)] = float(r[key])
     elif m.kind == "harmonics":
         if m.period_of not in windows:
             r0 = metric_fns.free_oscillation(t, result[m.period_of], 0.0, dense=result.dense(m.period_of),
-                                             grid_rtol=metric_grid_rtol(settings, m.period_of in kinematic))
+                                             grid_rtol=metric_grid_rtol(settings, m.period_of in pulse_free))
             windows[m.period_of] = (r0["window"], r0["periods"])
         window, periods = windows[m.period_of]
         r = metric_fns.harmonics(t, x, window, periods, dense=dense,
-                                 grid_rtol=metric_grid_rtol(settings, m.signal in kinematic))
+                                 grid_rtol=metric_grid_rtol(settings, m.signal in pulse_free))
         out[_key(m.prefix, "mean")] = float(r["mean"])
         out[_key(m.prefix, "amplitude")] = float(r["amplitude"])
     elif m.kind == "steady_state":
         r = metric_fns.steady_state(t, x, m.period, m.periods, reference, dense=dense,
-                                    grid_rtol=metric_grid_rtol(settings, m.signal in kinematic))
+                                    grid_rtol=metric_grid_rtol(settings, m.signal in pulse_free))
         out[_key(m.prefix, "peak_to_peak")] = float(r["peak_to_peak"])
         out[_key(m.prefix, "mean_offset")] = float(r["mean_offset"])
 

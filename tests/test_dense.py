@@ -175,12 +175,14 @@ def test_a_runs_metrics_sample_only_as_finely_as_its_tolerance_needs(rtol, coars
         assert read["run"] == read["finest"] and run == finest
 
 
-def test_only_an_output_of_the_motion_of_a_run_with_a_tolerance_starts_from_a_coarse_grid():
-    """A force, a power, an energy, a device's or a derived output may hold a pulse narrower than a
-    coarse grid's step (an end stop's contact), which two coarse grids would both miss and agree on:
-    their periodic metrics read the finest grid (grid_rtol None), as do those of a fixed-step run
-    (RK4 keeps no tolerance) and of a history without settings. The outputs of the motion are the
-    points' and bodies' and an element's s_rel, v_rel, phi_rel, w_rel (listed by hand here)."""
+def test_only_an_output_without_pulses_of_a_run_with_a_tolerance_starts_from_a_coarse_grid(tmp_path):
+    """A device's end stop or backlash pulses (its contact), and every force that reads q̈ with it,
+    narrower than a coarse grid's step, which two coarse grids would both miss and agree on; a
+    derived output may pulse in any scene (an expression such as max(0, x − 0.99)). Their periodic
+    metrics read the finest grid (grid_rtol None), as do those of a fixed-step run (RK4 keeps no
+    tolerance) and of a history without settings. The outputs of the motion (the points' and
+    bodies', an element's s_rel, v_rel, phi_rel, w_rel: listed by hand here) never pulse; in a scene
+    without a device, neither does an element's force, power or energy, nor the energy."""
     from inerter import api
     model = inerter.load(TWO_BAR)
     adaptive, fixed = model.settings(rtol=1e-6), model.settings(method="RK4", step=1e-3)
@@ -190,11 +192,60 @@ def test_only_an_output_of_the_motion_of_a_run_with_a_tolerance_starts_from_a_co
     assert api.metric_grid_rtol(fixed, True) is None and api.metric_grid_rtol(None, True) is None
     motion = {n for n in model.signals.names if n.split(".")[-1].split("[")[0] in ("r", "v", "s_rel", "v_rel", "phi_rel", "w_rel")}
     assert motion and model.signals.kinematic == motion
+    element_names = {name for name in model.scene.elements}
+    forces = {n for n in model.signals.names if n.split(".")[0] in element_names} - motion
+    assert forces and model.signals.pulse_free == motion | forces | {"energy"}
     device = inerter.load(SCENARIOS / "two_bar_2d_device.toml").signals
     extras = [n for n in device.names if n.endswith((".s_series", ".w_flywheel", ".f_stop", ".f", ".energy"))]
-    assert extras and not device.kinematic & set(extras)
+    assert extras and not device.pulse_free & set(extras) and device.pulse_free == device.kinematic
+    scene = tmp_path / "lumped_derived.toml"
+    scene.write_text(LUMPED.read_text() + '\n[outputs.derived]\nlift = { expression = "P.r[2] / Lb", unit = "1" }\n')
+    derived = inerter.load(scene).signals
+    assert "lift" in derived.names and "lift" not in derived.pulse_free and "inerter.f" in derived.pulse_free
     spatial = inerter.load(SCENARIOS / "two_bar_2d_as_3d.toml").signals
     assert {n for n in spatial.names if ".q[" in n or ".w[" in n or ".euler[" in n} <= spatial.kinematic
+
+
+@pytest.mark.parametrize("rtol, coarser", [(5e-5, 4), (1e-7, 2)])
+def test_a_force_of_a_scene_without_a_device_is_sampled_only_as_finely_as_its_tolerance_needs(rtol, coarser):
+    """lumped_mass_2d's `harmonics` metric of its inerter's force (a force that reads q̈, in a scene
+    without a device) starts from a coarse grid. Reference: the same metric on the same dense output
+    sampled on its finest grid (512 a period, no grid_rtol), which the run's must equal within
+    api.METRIC_GRID_SHARE of the run's rtol of the force's spread (4/3 of it: a second-order rule's
+    error estimated from two grids), while reading the dense output at fewer times (measured: 128 a
+    period at rtol 5e-5, 256 at 1e-7)."""
+    from inerter import api
+    from inerter.engine import metrics
+    model = inerter.load(LUMPED)
+    result = model.simulate(stop_time=STOP, rtol=rtol, atol=rtol / 100)
+    spec = next(m for m in model.scene.metrics if m.kind == "harmonics")
+    assert spec.signal in model.signals.pulse_free and spec.signal not in model.signals.kinematic
+    share = api.metric_grid_rtol(result.settings, True)
+    t, x = result.time, result[spec.signal]
+    reads = {}
+
+    def counted(key):
+        dense = result.dense(spec.signal)
+
+        def values(times):
+            reads[key] = reads.get(key, 0) + np.size(times)
+            return dense(times)
+        return values
+
+    # the window: whole periods of `period_of`, as the scene's free_oscillation metric of it finds them
+    motion = next(m for m in model.scene.metrics if m.kind == "free_oscillation" and m.signal == spec.period_of)
+    oscillation = metrics.free_oscillation(t, result[spec.period_of], motion.reference, result.dense(spec.period_of),
+                                           grid_rtol=share)
+    window, periods = oscillation["window"], oscillation["periods"]
+    run = metrics.harmonics(t, x, window, periods, counted("run"), grid_rtol=share)
+    finest = metrics.harmonics(t, x, window, periods, counted("finest"))
+    spread = float(np.ptp(x))
+    assert abs(run["mean"] - finest["mean"]) <= 4.0 / 3.0 * share * spread
+    assert abs(run["amplitude"] - finest["amplitude"]) <= 4.0 / 3.0 * share * spread
+    assert reads["run"] - 1 <= (reads["finest"] - 1) / coarser     # n + 1 times a grid of n steps
+    # the run's own metric is the one on the coarse grid
+    assert (result.metrics[f"{spec.prefix}_mean"], result.metrics[f"{spec.prefix}_amplitude"]) == (
+        run["mean"], run["amplitude"])
 
 
 

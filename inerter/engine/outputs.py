@@ -40,6 +40,7 @@ class Signals:
         #: v_rel, phi_rel, w_rel (functions of q and v alone, continuous in time; not a force, power,
         #: energy or device output, which may pulse: inerter.api.metric_grid_rtol)
         self.kinematic: set[str] = set()
+        element_outputs = []
         for pname in mech.point_names:
             point = mech.points[pname]
             d = mech.dim
@@ -57,6 +58,7 @@ class Signals:
             # the stored energy do not); a screw efficiency's mode and loss are those of the solved L̈
             # (inerter.elements.device)
             efficient = e in mech.efficient
+            element_outputs += [f"{e.name}.{suffix}" for suffix, _, _ in spec]
             self._group([(f"{e.name}.{suffix}", unit, f"{e.kind} {e.name}: {text}") for suffix, unit, text in spec],
                         needs_a, lambda t, q, v, a, z, e=e, k=len(spec): (
                             e.outputs(q, v, a, z) if getattr(e, "n_states", 0) else e.outputs(q, v, a))[:k],
@@ -72,6 +74,15 @@ class Signals:
         self._group([("constraint_residual", "m", "largest |C_i(q)| of the joint constraints (m or rad)")], False,
                     lambda t, q, v, a, z: (mech.constraint_residual(q),))
         self.needs_accelerations = any(needs_a for needs_a, _ in self._groups)
+        #: the outputs that hold no pulse narrower than the integrator's steps resolve, which a periodic
+        #: metric may sample only as finely as its rule needs (inerter.api.metric_grid_rtol): the motion's
+        #: and, in a scene without an inerter device (whose end stops and backlash pulse, and carry the
+        #: pulse through q̈ into every force that reads it), every element's outputs and the energy,
+        #: functions of the state and of forcing that is smooth between the kinks and jumps a grid's
+        #: refinement sees. Not a derived output (an expression may pulse: max(0, x − 0.99)), nor the
+        #: constraint residual.
+        devices = any(getattr(mech.scene.elements[e.name], "device", None) is not None for e in mech.elements)
+        self.pulse_free: set[str] = set(self.kinematic) if devices else self.kinematic | set(element_outputs) | {"energy"}
         #: the signals before the derived outputs: those the groups (and the kernels) evaluate
         self.base_count = len(self.names)
         self.derived = tuple(mech.scene.derived)

@@ -153,13 +153,14 @@ class Model:
     def describe(self) -> str:
         """What ``inerter describe`` prints: the name and description, the compiled terms, the
         parameters (SI, with the value as written where its unit is not SI), inputs and outputs."""
-        lines = [f"{self.name}: {self.scene.description}", "compiled terms:"]
+        lines = [f"{self.name}: {self.scene.description}" if self.scene.description else self.name, "compiled terms:"]
         lines += ["  " + line for line in self.terms()]
         lines.append("parameters:")
         for p in self.parameter_info():
             given = f" (given as {p['given']})" if p.get("given") else ""
             unit = for_reading(p["unit"])
-            lines.append(f"  {p['name']} = {p['value']:g}{' ' + unit if unit else ''}{given}  {p['description']}")
+            text = f"  {p['name']} = {p['value']:g}{' ' + unit if unit else ''}{given}"
+            lines.append(f"{text}  {p['description']}" if p["description"] else text)
         lines.append("inputs: " + (", ".join(i["name"] for i in self.input_info()) or "none"))
         lines.append("outputs: " + ", ".join(o["name"] for o in self.output_info()))
         return "\n".join(lines)

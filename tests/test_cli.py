@@ -92,6 +92,19 @@ def test_model_describe_is_what_the_command_prints(capsys):
     assert "y0 = 1.2 m (given as 1200 mm)" in text and "inerter.f" in text.splitlines()[-1]
 
 
+def test_describe_of_a_scene_without_descriptions_has_no_trailing_separators(tmp_path):
+    """A scene without a description and a parameter without one: `describe` printed "bare: " and
+    "k = 400  " (the separators of the missing texts). Reference: the lines as written by hand."""
+    import inerter
+    scene = tmp_path / "bare.toml"
+    scene.write_text('[scene]\nname = "bare"\n[parameters]\nk = 400\n[ground.points]\nO = [0, 0]\n'
+                     '[bodies.mass]\nmass = 1\ninertia = 0.1\nposition = [1, 0]\npoints = { P = [0, 0] }\n'
+                     '[elements.spring]\ntype = "spring"\nbetween = ["O", "P"]\nk = "k"\nlength = 0.5\n')
+    lines = inerter.load(scene).describe().splitlines()
+    assert lines[0] == "bare" and "  k = 400" in lines
+    assert all(line == line.rstrip() for line in lines)
+
+
 def test_unknown_override_is_a_clear_error(tmp_path, capsys):
     assert main(["run", str(TWO_BAR), "--set", "bb=3", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err

@@ -342,6 +342,7 @@ class InerterSlave(Fmi2Slave):
         self._call_thread = None                  # the thread inside an FMI call that may compile
 
         self._register(model)
+        self._status_vr = next(vr for vr, var in self.vars.items() if var.name == STATUS_VARIABLE)
         # The native doStep (inerter/fmu/native.py): the FMU's binary steps in compiled code
         # whenever this slave arms it. The derived outputs are not in its values (the kernels do not
         # evaluate them): a getter that asks for one comes here, after the slave took the steps over.
@@ -575,7 +576,16 @@ class InerterSlave(Fmi2Slave):
             except Exception as exc:
                 self._reject(f"set{cls.__name__}: {exc}")
 
+    def _early(self, call: str, vrs):
+        """Log an error for a getter called before initialization mode (FMI 2.0 allows none in
+        the instantiated state): the status shim returns fmi2Error; the values are given anyway."""
+        self.log(f"{call}: called before fmi2EnterInitializationMode (value references "
+                 f"{list(vrs)}; expected fmi2EnterInitializationMode first: FMI 2.0 allows no getter "
+                 f"in the instantiated state)", Fmi2Status.error)
+
     def get_real(self, vrs):
+        if self._phase == INSTANTIATED:
+            self._early("fmi2GetReal", vrs)
         if self._stale:
             self._refresh_outputs()
         return self._get(vrs, Real, float, math.nan)
@@ -583,12 +593,18 @@ class InerterSlave(Fmi2Slave):
     def get_integer(self, vrs):
         if len(vrs) == 2 and vrs[0] == fmu_native.LINK_VR and vrs[1] == fmu_native.LINK_VR + 1:
             return self._native.address_words()
+        if self._phase == INSTANTIATED and list(vrs) != [self._status_vr]:   # the shim reads that
+            self._early("fmi2GetInteger", vrs)
         return self._get(vrs, Integer, int, 0)
 
     def get_boolean(self, vrs):
+        if self._phase == INSTANTIATED:
+            self._early("fmi2GetBoolean", vrs)
         return self._get(vrs, Boolean, bool, False)
 
     def get_string(self, vrs):
+        if self._phase == INSTANTIATED:
+            self._early("fmi2GetString", vrs)
         return self._get(vrs, String, str, "")
 
     def set_real(self, vrs, values):
@@ -779,8 +795,13 @@ class InerterSlave(Fmi2Slave):
             self._call_thread = None
 
     def log(self, msg: str, status: Fmi2Status = Fmi2Status.ok, category=None, debug=None):
-        """pythonfmu's log, with the files of resources/ named as the user knows them (below)."""
-        super().log(self._named_files(msg), status, category, debug)
+        """pythonfmu's log, with the files of resources/ named as the user knows them (below); a
+        message of a status the importer must act on names the scene file where it does not."""
+        msg = self._named_files(msg)
+        if status in (Fmi2Status.discard, Fmi2Status.error, Fmi2Status.fatal) and self.scene_file \
+                and self.scene_file not in msg:
+            msg = f"{self.scene_file}: {msg}"
+        super().log(msg, status, category, debug)
 
     def _named_files(self, message: str) -> str:
         """`message` with the FMU's resources/ folder left out of the file names it holds: the
@@ -826,8 +847,12 @@ class InerterSlave(Fmi2Slave):
             return False
 
     def _refuse(self, message: str, status: Fmi2Status = Fmi2Status.error) -> bool:
-        """doStep returns fmi2Discard (False) and logs why."""
-        self._status = DISCARD
+        """doStep returns False and logs why: fmi2Error for a step refused (a call FMI 2.0 does
+        not allow: no running integration, a step size not > 0, a step not starting at the
+        current communication point or ending past stopTime), fmi2Discard for a step the solver
+        could not complete (`status` discard). pythonfmu's binary returns fmi2Discard for both;
+        the status shim returns fmi_status."""
+        self._status = DISCARD if status == Fmi2Status.discard else ERROR
         self.log(message, status)
         return False
 
@@ -866,6 +891,11 @@ class InerterSlave(Fmi2Slave):
         if abs(t - now) > TIME_TOLERANCE * max(1.0, abs(t), abs(now)):
             return (f": the FMU is at t = {now!r} s; a step must start where the last one ended "
                     f"(or roll back with fmi2SetFMUstate)")
+        stop = self._stop_time
+        if stop is not None and t + h > stop + TIME_TOLERANCE * max(1.0, abs(stop)):
+            return (f": it would end at t = {t + h!r} s, past stopTime = {stop!r} s of "
+                    f"fmi2SetupExperiment (expected an end ≤ stopTime: FMI 2.0 makes a step past it "
+                    f"an error); the state is unchanged")
         return None
 
     def _advance(self, stepper, t: float, h: float) -> bool:
@@ -915,6 +945,11 @@ class InerterSlave(Fmi2Slave):
 
     def terminate(self):
         self._native.disarm()
+        if self._phase not in (STEPPING, FAILED):
+            self.log(f"fmi2Terminate: refused in the {self._phase} state (expected it after "
+                     f"fmi2ExitInitializationMode, before a reset: FMI 2.0 allows it only there); "
+                     f"nothing changes", Fmi2Status.error)
+            return
         self._phase = TERMINATED
         total = self._slave_steps + self._native_steps
         self.log(f"terminated: {total} communication steps, {self._native_steps} of them taken in "

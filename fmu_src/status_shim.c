@@ -258,6 +258,9 @@ struct instance {
     fmi2ComponentEnvironment environment;
     char *name;                           /* the instance name, copied */
     int logging_on;                       /* as the importer last set it */
+    unsigned long errors;                 /* messages of status fmi2Error or worse the slave logged */
+    int stop_defined;                     /* fmi2SetupExperiment's stopTimeDefined and stopTime */
+    double stop_time;
     fmi2CallbackFunctions functions;      /* the original's: the importer's, logger filtered_log */
 };
 
@@ -273,9 +276,13 @@ static int passes(const struct instance *w, int status)
 static void filtered_log(fmi2ComponentEnvironment environment, fmi2String instanceName,
                          fmi2Status status, fmi2String category, fmi2String message, ...)
 {
-    const struct instance *w = (const struct instance *)environment;
+    struct instance *w = (struct instance *)environment;
 
-    if (w == NULL || w->logger == NULL || !passes(w, (int)status))
+    if (w == NULL)
+        return;
+    if (status >= fmi2Error)
+        w->errors++;
+    if (w->logger == NULL || !passes(w, (int)status))
         return;
     w->logger(w->environment, instanceName, status, category, message);
 }
@@ -427,6 +434,32 @@ static fmi2Status checked(fmi2Component c, fmi2Status status)
     return value >= fmi2Error ? fmi2Error : (fmi2Status)value;
 }
 
+/* The status of a call the slave does not report in fmi_status (a getter, setupExperiment,
+ * terminate, ...) that the original returned as `status`: fmi2Error where the slave logged an error
+ * during it (`before`: the instance's error count when the call began). pythonfmu's binary returns
+ * fmi2OK from such a call whatever the slave said: an unknown value reference, a call FMI 2.0 does
+ * not allow in the instance's state. */
+static fmi2Status logged(const struct instance *w, unsigned long before, fmi2Status status)
+{
+    return status <= fmi2Warning && w->errors != before ? fmi2Error : status;
+}
+
+/* Whether a step (t, t + h] ends past fmi2SetupExperiment's stopTime (1e-9 relative to
+ * max(1 s, stopTime), the slave's TIME_TOLERANCE): such a step is the slave's to refuse. */
+static int past_stop(const struct instance *w, double t, double h)
+{
+    double scale = w->stop_time < 0 ? -w->stop_time : w->stop_time;
+    return w->stop_defined && t + h > w->stop_time + 1e-9 * (scale > 1.0 ? scale : 1.0);
+}
+
+/* A call that enters Python and reports the slave's errors by what it logged (see logged). */
+#define FORWARD_LOGGED(call)                                                                     \
+    {                                                                                            \
+        struct instance *w_ = c;                                                                 \
+        unsigned long before_ = w_->errors;                                                      \
+        return logged(w_, before_, call);                                                        \
+    }
+
 /* ---------------------------------------------------------------------------------------------
  * Common functions
  * ------------------------------------------------------------------------------------------- */
@@ -525,22 +558,24 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
     ((struct instance *)c)->logging_on = loggingOn == fmi2True;
     /* the original keeps logging every category; filtered_log does what the importer asked */
     if (loggingOn == fmi2True)
-        return original.SetDebugLogging(INNER(c), fmi2True, nCategories, categories);
-    return original.SetDebugLogging(INNER(c), fmi2True, 0, NULL);
+        FORWARD_LOGGED(original.SetDebugLogging(INNER(c), fmi2True, nCategories, categories))
+    FORWARD_LOGGED(original.SetDebugLogging(INNER(c), fmi2True, 0, NULL))
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
     ENTER
-    return original.SetupExperiment(INNER(c), toleranceDefined, tolerance, startTime,
-                                    stopTimeDefined, stopTime);
+    ((struct instance *)c)->stop_defined = stopTimeDefined == fmi2True;
+    ((struct instance *)c)->stop_time = stopTime;
+    FORWARD_LOGGED(original.SetupExperiment(INNER(c), toleranceDefined, tolerance, startTime,
+                                            stopTimeDefined, stopTime))
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
     ENTER
-    return original.EnterInitializationMode(INNER(c));
+    FORWARD_LOGGED(original.EnterInitializationMode(INNER(c)))
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
@@ -558,7 +593,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 fmi2Status fmi2Terminate(fmi2Component c)
 {
     ENTER
-    return original.Terminate(INNER(c));
+    FORWARD_LOGGED(original.Terminate(INNER(c)))
 }
 
 fmi2Status fmi2Reset(fmi2Component c)
@@ -568,6 +603,7 @@ fmi2Status fmi2Reset(fmi2Component c)
 
     ENTER
     w->ctx = NULL; /* the slave object and its context are replaced */
+    w->stop_defined = 0;
     status = original.Reset(w->inner);
     link_context(w);
     return status;
@@ -584,7 +620,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
                                     : CONTEXT_ARRAY(w, double, CTX_REALS)[INDEX(where[i])])
     if (sync(w) != fmi2OK)
         return fmi2Error;
-    return original.GetReal(w->inner, vr, nvr, value);
+    FORWARD_LOGGED(original.GetReal(w->inner, vr, nvr, value))
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -596,7 +632,7 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
           value[i] = (fmi2Integer)CONTEXT_ARRAY(w, int64_t, CTX_INTEGERS)[INDEX(where[i])])
     if (sync(w) != fmi2OK)
         return fmi2Error;
-    return original.GetInteger(w->inner, vr, nvr, value);
+    FORWARD_LOGGED(original.GetInteger(w->inner, vr, nvr, value))
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -608,7 +644,7 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
           value[i] = CONTEXT_ARRAY(w, int64_t, CTX_BOOLEANS)[INDEX(where[i])] ? fmi2True : fmi2False)
     if (sync(w) != fmi2OK)
         return fmi2Error;
-    return original.GetBoolean(w->inner, vr, nvr, value);
+    FORWARD_LOGGED(original.GetBoolean(w->inner, vr, nvr, value))
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -620,7 +656,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
                                                                        CTX_STRINGS)[INDEX(where[i])])
     if (sync(w) != fmi2OK)
         return fmi2Error;
-    return original.GetString(w->inner, vr, nvr, value);
+    FORWARD_LOGGED(original.GetString(w->inner, vr, nvr, value))
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -654,7 +690,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     READ
-    return original.GetFMUstate(INNER(c), FMUstate);
+    FORWARD_LOGGED(original.GetFMUstate(INNER(c), FMUstate))
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
@@ -666,27 +702,27 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     READ
-    return original.FreeFMUstate(INNER(c), FMUstate);
+    FORWARD_LOGGED(original.FreeFMUstate(INNER(c), FMUstate))
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
     READ
-    return original.SerializedFMUstateSize(INNER(c), FMUstate, size);
+    FORWARD_LOGGED(original.SerializedFMUstateSize(INNER(c), FMUstate, size))
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
                                  fmi2Byte serializedState[], size_t size)
 {
     READ
-    return original.SerializeFMUstate(INNER(c), FMUstate, serializedState, size);
+    FORWARD_LOGGED(original.SerializeFMUstate(INNER(c), FMUstate, serializedState, size))
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[],
                                    size_t size, fmi2FMUstate *FMUstate)
 {
     READ
-    return original.DeSerializeFMUstate(INNER(c), serializedState, size, FMUstate);
+    FORWARD_LOGGED(original.DeSerializeFMUstate(INNER(c), serializedState, size, FMUstate))
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
@@ -725,7 +761,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     fmi2Status status;
 
     GUARD
-    if (w->armed && w->ctx[CTX_ARMED]) {
+    if (w->armed && w->ctx[CTX_ARMED] && !past_stop(w, currentCommunicationPoint, communicationStepSize)) {
         native_step_fn *step = (native_step_fn *)(uintptr_t)w->ctx[CTX_FUNCTION];
         const int32_t took = step((const int64_t *)(uintptr_t)w->ctx[CTX_TABLE],
                                   currentCommunicationPoint, communicationStepSize);

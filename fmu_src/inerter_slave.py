@@ -30,13 +30,20 @@ of those calls and returns it when it is worse than fmi2OK. So
 
 - an invalid parameter, effect or solver setting: exitInitializationMode logs the solver's
   message (file, field, value, expected; the settings changed) and returns fmi2Error; the
-  outputs read NaN and every doStep returns fmi2Discard with the same message until the
+  outputs read NaN and every doStep returns fmi2Error with the same message until the
   importer resets the FMU (FMI 2.0 allows nothing but reset or free after that error);
 - a non-finite input, a fixed parameter set after initialisation, an output or an unknown value
   reference set: the value is ignored (the state stays as it was), the attempt is logged and the
   setXxx returns fmi2Error. The importer may go on from there;
 - a step the solver cannot complete: doStep returns fmi2Discard with the solver's message and
-  the FMU stays at the last good communication point, so the importer can retry or roll back.
+  the FMU stays at the last good communication point, so the importer can retry or roll back;
+- a call FMI 2.0 does not allow in the instance's state or with its arguments (a doStep before
+  initialisation, after terminate, not at the current point, of a size not > 0, or ending past
+  fmi2SetupExperiment's stopTime; a getter before initialization mode or of an unknown value
+  reference; terminate outside a run): an error is logged and the call changes nothing; the shim
+  returns fmi2Error (for a getter, terminate and the like: because the slave logged an error).
+
+Every message of status discard or error names the scene file.
 
 Without the shim (the win64 binary, or a build on a machine without a C compiler) those calls
 return fmi2OK. A rejected value is then reported by the next doStep instead, which returns
@@ -584,11 +591,17 @@ class InerterSlave(Fmi2Slave):
                  f"in the instantiated state)", Fmi2Status.error)
 
     def get_real(self, vrs):
+        if len(vrs) == 1 and vrs[0] == fmu_native.TIME_VR:
+            return [self._time()]
         if self._phase == INSTANTIATED:
             self._early("fmi2GetReal", vrs)
         if self._stale:
             self._refresh_outputs()
         return self._get(vrs, Real, float, math.nan)
+
+    def _time(self) -> float:
+        """The end of the last step completed: the stepper's time, else the start time."""
+        return float(self._stepper.time) if self._stepper is not None else self._start_time
 
     def get_integer(self, vrs):
         if len(vrs) == 2 and vrs[0] == fmu_native.LINK_VR and vrs[1] == fmu_native.LINK_VR + 1:
@@ -830,7 +843,7 @@ class InerterSlave(Fmi2Slave):
         self._failure = message
         self._stepper = None
         self._outputs = [math.nan] * len(self._output_names)
-        self.log(f"{message}; the FMU cannot step: every doStep returns fmi2Discard until it "
+        self.log(f"{message}; the FMU cannot step: every doStep is refused until it "
                  f"is reset", Fmi2Status.error)
 
     # ------------------------------------------------------------------------------------------

@@ -10,6 +10,12 @@
  * fmi2GetInteger and returns that status when it is worse than fmi2OK; after fmi2DoStep, when the
  * original returned fmi2Discard, it returns fmi2Error where the slave says so.
  *
+ * A call the slave does not report in fmi_status (a getter, setupExperiment, enterInitializationMode,
+ * terminate, the FMU-state calls) returns fmi2Error when the slave logged a message of status
+ * fmi2Error or worse during it (filtered_log counts them): an unknown value reference read, a getter
+ * before initialization mode, terminate outside a run. fmi2GetRealStatus(fmi2LastSuccessfulTime)
+ * is the slave's time, read through a private Real value reference.
+ *
  * The component the importer holds is this library's (struct instance), wrapping the original's:
  * every call is forwarded with the original's component, and the slave's messages reach the
  * importer through the original's logger calls as before.
@@ -796,9 +802,16 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
     return original.GetStatus(INNER(c), s, value);
 }
 
+/* fmi2LastSuccessfulTime is the slave's time, read through the private Real NATIVE_SYNC_VR + 1:
+ * pythonfmu's binary answers the end of the last doStep it was called for (NaN before the first,
+ * the end of a refused step, not the native steps', not a rollback's). */
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
 {
     READ
+    if (s == fmi2LastSuccessfulTime && value != NULL) {
+        const fmi2ValueReference vr = NATIVE_SYNC_VR + 1u;
+        return original.GetReal(INNER(c), &vr, 1, value);
+    }
     return original.GetRealStatus(INNER(c), s, value);
 }
 

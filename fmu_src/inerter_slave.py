@@ -643,13 +643,24 @@ class InerterSlave(Fmi2Slave):
     # Initialisation
     # ------------------------------------------------------------------------------------------
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        if self._phase != INSTANTIATED:
+            self._out_of_order("fmi2SetupExperiment", "before fmi2EnterInitializationMode")
+            return
         self._start_time = float(start_time)
         self._stop_time = None if stop_time is None else float(stop_time)
         self._tolerance = None if tolerance is None else float(tolerance)
 
     def enter_initialization_mode(self):
-        if self._phase == INSTANTIATED:
-            self._phase = INITIALIZATION
+        if self._phase != INSTANTIATED:
+            self._out_of_order("fmi2EnterInitializationMode", "once, after fmi2Instantiate or fmi2Reset")
+            return
+        self._phase = INITIALIZATION
+
+    def _out_of_order(self, call: str, expected: str):
+        """Log an error for a call FMI 2.0 does not allow in the instance's state: the status shim
+        returns fmi2Error; the call changes nothing."""
+        self.log(f"{call}: refused in the {self._phase} state (expected it {expected}); nothing "
+                 f"changes", Fmi2Status.error)
 
     def exit_initialization_mode(self):
         self._begin_call()
@@ -707,10 +718,9 @@ class InerterSlave(Fmi2Slave):
                              stop_time=self._stop_time)
 
     def _initialise(self):
-        if self._phase not in (INSTANTIATED, INITIALIZATION):
+        if self._phase != INITIALIZATION:
             self._status = ERROR
-            self.log(f"exitInitializationMode called in phase '{self._phase}': ignored",
-                     Fmi2Status.error)
+            self._out_of_order("fmi2ExitInitializationMode", "after fmi2EnterInitializationMode")
             return
         if self._start_time != 0.0:
             self._fail(f"exitInitializationMode: the scene starts at t = 0 s (got startTime = "
@@ -959,9 +969,7 @@ class InerterSlave(Fmi2Slave):
     def terminate(self):
         self._native.disarm()
         if self._phase not in (STEPPING, FAILED):
-            self.log(f"fmi2Terminate: refused in the {self._phase} state (expected it after "
-                     f"fmi2ExitInitializationMode, before a reset: FMI 2.0 allows it only there); "
-                     f"nothing changes", Fmi2Status.error)
+            self._out_of_order("fmi2Terminate", "after fmi2ExitInitializationMode, once")
             return
         self._phase = TERMINATED
         total = self._slave_steps + self._native_steps

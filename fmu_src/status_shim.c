@@ -264,17 +264,45 @@ struct instance {
     fmi2ComponentEnvironment environment;
     char *name;                           /* the instance name, copied */
     int logging_on;                       /* as the importer last set it */
+    unsigned categories;                  /* the LOG_CATEGORIES it selected (bits), 0: all */
     unsigned long errors;                 /* messages of status fmi2Error or worse the slave logged */
     int stop_defined;                     /* fmi2SetupExperiment's stopTimeDefined and stopTime */
     double stop_time;
     fmi2CallbackFunctions functions;      /* the original's: the importer's, logger filtered_log */
 };
 
-/* Whether a message of `status` reaches the importer (see the top): all of them with logging on,
- * those of a status the importer must act on always. */
-static int passes(const struct instance *w, int status)
+/* The FMU's log categories, as pythonfmu 0.7.0 writes them into modelDescription.xml's
+ * <LogCategories> (tests/test_fmu_call_sequences.py checks that they are the same): the slave's
+ * messages of status fmi2OK have the category logAll. */
+static const char *const LOG_CATEGORIES[] = {"logStatusWarning", "logStatusDiscard",
+                                             "logStatusError", "logStatusFatal", "logAll"};
+#define N_LOG_CATEGORIES (sizeof LOG_CATEGORIES / sizeof LOG_CATEGORIES[0])
+#define LOG_ALL_BIT (1u << (N_LOG_CATEGORIES - 1))
+
+/* The index of `name` in LOG_CATEGORIES, or -1. */
+static int category_index(const char *name)
 {
-    return w->logging_on || status >= (int)fmi2Discard;
+    size_t i;
+    for (i = 0; name != NULL && i < N_LOG_CATEGORIES; i++)
+        if (strcmp(name, LOG_CATEGORIES[i]) == 0)
+            return (int)i;
+    return -1;
+}
+
+/* Whether a message of `status` and `category` reaches the importer (see the top): with logging
+ * on, those of the categories it selected with fmi2SetDebugLogging (all when it named none, or
+ * logAll); those of a status the importer must act on always, whatever it selected. */
+static int passes(const struct instance *w, int status, const char *category)
+{
+    int k;
+    if (status >= (int)fmi2Discard)
+        return 1;
+    if (!w->logging_on)
+        return 0;
+    if (w->categories == 0 || (w->categories & LOG_ALL_BIT))
+        return 1;
+    k = category_index(category);
+    return k >= 0 && ((w->categories >> k) & 1u);
 }
 
 /* The original's logger: the message passed on to the importer's where `passes` lets it. The
@@ -288,7 +316,7 @@ static void filtered_log(fmi2ComponentEnvironment environment, fmi2String instan
         return;
     if (status >= fmi2Error)
         w->errors++;
-    if (w->logger == NULL || !passes(w, (int)status))
+    if (w->logger == NULL || !passes(w, (int)status, category))
         return;
     w->logger(w->environment, instanceName, status, category, message);
 }
@@ -302,7 +330,7 @@ static void live_log(int64_t target, int32_t status, const char *category, const
     const char *from;
     char *text, *to;
 
-    if (w == NULL || w->logger == NULL || !passes(w, (int)status) || message == NULL)
+    if (w == NULL || w->logger == NULL || !passes(w, (int)status, category) || message == NULL)
         return;
     for (from = message; *from != '\0'; from++)
         n += *from == '%' ? 2 : 1;
@@ -560,22 +588,47 @@ void fmi2FreeInstance(fmi2Component c)
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[])
 {
+    struct instance *w = c;
+    unsigned selected = 0;
+    size_t i;
+
     ENTER
-    ((struct instance *)c)->logging_on = loggingOn == fmi2True;
+    for (i = 0; loggingOn == fmi2True && i < nCategories; i++) {
+        const char *name = categories != NULL ? categories[i] : NULL;
+        const int k = category_index(name);
+        if (k < 0) {
+            char message[512];
+            snprintf(message, sizeof message, "%s: fmi2SetDebugLogging: unknown log category "
+                     "'%.200s' (expected one of the LogCategories of modelDescription.xml: "
+                     "logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll); "
+                     "logging unchanged", ORIGINAL_LIBRARY, name != NULL ? name : "(null)");
+            live_log((int64_t)(uintptr_t)w, (int32_t)fmi2Error, "logStatusError", message);
+            return fmi2Error;
+        }
+        selected |= 1u << k;
+    }
+    w->logging_on = loggingOn == fmi2True;
+    w->categories = selected;
     /* the original keeps logging every category; filtered_log does what the importer asked */
-    if (loggingOn == fmi2True)
-        FORWARD_LOGGED(original.SetDebugLogging(INNER(c), fmi2True, nCategories, categories))
     FORWARD_LOGGED(original.SetDebugLogging(INNER(c), fmi2True, 0, NULL))
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
+    struct instance *w = c;
+    unsigned long before;
+    fmi2Status status;
+
     ENTER
-    ((struct instance *)c)->stop_defined = stopTimeDefined == fmi2True;
-    ((struct instance *)c)->stop_time = stopTime;
-    FORWARD_LOGGED(original.SetupExperiment(INNER(c), toleranceDefined, tolerance, startTime,
-                                            stopTimeDefined, stopTime))
+    before = w->errors;
+    status = logged(w, before, original.SetupExperiment(w->inner, toleranceDefined, tolerance,
+                                                        startTime, stopTimeDefined, stopTime));
+    if (status <= fmi2Warning) { /* the slave took it: native steps stop there too */
+        w->stop_defined = stopTimeDefined == fmi2True;
+        w->stop_time = stopTime;
+    }
+    return status;
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)

@@ -170,3 +170,55 @@ def test_last_successful_time_is_the_fmus_time(input_fmu, instance, steps):
     inst.fmu.setFMUstate(state)                                # rolled back
     assert inst.fmu.getRealStatus(last) == pytest.approx(2 * H, abs=1e-15)
     inst.fmu.freeFMUstate(state)
+
+
+@pytest.mark.parametrize("call", ["setupExperiment", "enterInitializationMode", "exitInitializationMode"])
+def test_an_initialisation_call_out_of_order_is_fmi2error_and_changes_nothing(input_fmu, instance, steps, call):
+    """fmi2SetupExperiment only before initialization mode, fmi2EnterInitializationMode once,
+    fmi2ExitInitializationMode only in it (each was fmi2OK; an exit without enter initialised)."""
+    scene, fmu = input_fmu
+    inst = instance(fmu, logging=False)
+    if call == "exitInitializationMode":       # without enterInitializationMode
+        raises_status(FMI_ERROR, inst.fmu.exitInitializationMode)
+        inst.fmu.setupExperiment(startTime=0.0, stopTime=2 * H)
+    else:
+        inst.fmu.setupExperiment(startTime=0.0, stopTime=2 * H)
+        inst.fmu.enterInitializationMode()
+        if call == "setupExperiment":          # in initialization mode: its stop time is not taken
+            raises_status(FMI_ERROR, inst.fmu.setupExperiment, None, 0.0, 1.0)
+        else:
+            raises_status(FMI_ERROR, inst.fmu.enterInitializationMode)
+    [message] = inst.errors()
+    assert message.startswith(f"{scene.name}: fmi2{call[0].upper()}{call[1:]}: refused in the "), message
+    if call == "exitInitializationMode":
+        inst.fmu.enterInitializationMode()
+    inst.fmu.exitInitializationMode()
+    inst.fmu.doStep(0.0, 2 * H)
+    raises_status(FMI_ERROR, inst.fmu.doStep, 2 * H, H)      # the stop time set first holds
+
+
+def test_log_categories_select_messages_but_never_silence_an_error(input_fmu, instance, steps):
+    """fmi2SetDebugLogging with categories: those of modelDescription.xml are taken (the shim knows
+    them: LOG_CATEGORIES), another is fmi2Error; a selection lets through the fmi2OK messages of
+    the categories named (logAll for the slave's), and every error whatever it names (a category
+    the importer named was passed on to pythonfmu's binary, which then dropped every message of the
+    others, errors included)."""
+    scene, fmu = input_fmu
+    inst = instance(fmu, logging=True)
+    for category in inst.md.logCategories:
+        inst.fmu.setDebugLogging(True, [category.name])
+    inst.messages.clear()
+    raises_status(FMI_ERROR, inst.fmu.setDebugLogging, True, ["bogus"])
+    [message] = inst.errors()
+    assert "fmi2SetDebugLogging: unknown log category 'bogus'" in message and "two_bar_2d" in message
+    inst.fmu.setDebugLogging(True, ["logStatusWarning"])
+    inst.messages.clear()
+    inst.initialise()                                          # its fmi2OK message: not selected
+    assert inst.messages == []
+    raises_status(FMI_ERROR, inst.fmu.setReal, [inst.vr[INPUT]], [math.nan])
+    assert len(inst.errors()) == 1 and f"{INPUT}: input not finite" in inst.errors()[0]
+    inst.fmu.setDebugLogging(True, ["logAll"])
+    inst.messages.clear()
+    inst.fmu.doStep(0.0, H)
+    inst.fmu.terminate()                                       # its fmi2OK message: logAll
+    assert [m for _, m in inst.messages if m.startswith("terminated:")]

@@ -25,7 +25,8 @@
  * off (fmpy's default) an fmi2Error said nothing of its cause. The shim keeps the original's
  * logging always on, with every category, through its own logger (filtered_log, with the instance
  * as the original's component environment), and passes on a message when the importer has logging
- * on, or when its status is fmi2Discard, fmi2Error or fmi2Fatal: the reason for a status the
+ * on and selected its category (fmi2SetDebugLogging's categories, all when it named none; an unknown
+ * one is fmi2Error), or when its status is fmi2Discard, fmi2Error or fmi2Fatal: the reason for a status the
  * importer must act on is always logged, as FMI's reference implementations log errors.
  *
  * The native doStep (inerter/fmu/native.py says the protocol). After fmi2Instantiate and after

@@ -481,7 +481,11 @@ class InerterSlave(Fmi2Slave):
     def _input_setter(self, name):
         def setter(value):
             value = float(value)
-            if math.isfinite(value):
+            if self._phase in (TERMINATED, FAILED):
+                self._reject(f"{name}: an input cannot be set in the {self._phase} state (got "
+                             f"{value!r}; expected a reset first: FMI 2.0 allows no setter there); "
+                             f"it stays {self._inputs[name]!r}")
+            elif math.isfinite(value):
                 if value != self._inputs[name]:
                     self._stale = True            # the outputs that read q̈ follow at once
                 self._inputs[name] = value
@@ -1058,6 +1062,8 @@ class InerterSlave(Fmi2Slave):
 
     @staticmethod
     def _fmu_state_from_bytes(data: bytes):
+        # pythonfmu calls it on the class: bytes that are no state give a state that
+        # setFMUstate refuses with fmi2Error and the reason
         try:
             state = json.loads(bytes(data).decode("utf-8"))
             if state.get("stepper") is not None:

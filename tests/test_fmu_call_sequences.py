@@ -222,3 +222,19 @@ def test_log_categories_select_messages_but_never_silence_an_error(input_fmu, in
     inst.fmu.doStep(0.0, H)
     inst.fmu.terminate()                                       # its fmi2OK message: logAll
     assert [m for _, m in inst.messages if m.startswith("terminated:")]
+
+
+def test_an_input_set_after_terminate_is_fmi2error(input_fmu, instance, steps):
+    """FMI 2.0 allows no setter in the terminated state: an input was taken silently (fmi2OK)."""
+    scene, fmu = input_fmu
+    inst = instance(fmu, logging=False)
+    inst.initialise()
+    inst.set(INPUT, 2.0)
+    inst.fmu.doStep(0.0, H)
+    inst.fmu.terminate()
+    raises_status(FMI_ERROR, inst.set, INPUT, 3.0)
+    [message] = inst.errors()
+    assert message.startswith(f"{scene.name}: {INPUT}: an input cannot be set in the terminated state "
+                              f"(got 3.0;") and "it stays 2.0" in message, message
+    assert inst.get([INPUT]) == [2.0]
+

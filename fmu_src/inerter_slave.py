@@ -30,13 +30,20 @@ of those calls and returns it when it is worse than fmi2OK. So
 
 - an invalid parameter, effect or solver setting: exitInitializationMode logs the solver's
   message (file, field, value, expected; the settings changed) and returns fmi2Error; the
-  outputs read NaN and every doStep returns fmi2Discard with the same message until the
+  outputs read NaN and every doStep returns fmi2Error with the same message until the
   importer resets the FMU (FMI 2.0 allows nothing but reset or free after that error);
 - a non-finite input, a fixed parameter set after initialisation, an output or an unknown value
   reference set: the value is ignored (the state stays as it was), the attempt is logged and the
   setXxx returns fmi2Error. The importer may go on from there;
 - a step the solver cannot complete: doStep returns fmi2Discard with the solver's message and
-  the FMU stays at the last good communication point, so the importer can retry or roll back.
+  the FMU stays at the last good communication point, so the importer can retry or roll back;
+- a call FMI 2.0 does not allow in the instance's state or with its arguments (a doStep before
+  initialisation, after terminate, not at the current point, of a size not > 0, or ending past
+  fmi2SetupExperiment's stopTime; a getter before initialization mode or of an unknown value
+  reference; terminate outside a run): an error is logged and the call changes nothing; the shim
+  returns fmi2Error (for a getter, terminate and the like: because the slave logged an error).
+
+Every message of status discard or error names the scene file.
 
 Without the shim (the win64 binary, or a build on a machine without a C compiler) those calls
 return fmi2OK. A rejected value is then reported by the next doStep instead, which returns
@@ -342,6 +349,7 @@ class InerterSlave(Fmi2Slave):
         self._call_thread = None                  # the thread inside an FMI call that may compile
 
         self._register(model)
+        self._status_vr = next(vr for vr, var in self.vars.items() if var.name == STATUS_VARIABLE)
         # The native doStep (inerter/fmu/native.py): the FMU's binary steps in compiled code
         # whenever this slave arms it. The derived outputs are not in its values (the kernels do not
         # evaluate them): a getter that asks for one comes here, after the slave took the steps over.
@@ -473,7 +481,11 @@ class InerterSlave(Fmi2Slave):
     def _input_setter(self, name):
         def setter(value):
             value = float(value)
-            if math.isfinite(value):
+            if self._phase in (TERMINATED, FAILED):
+                self._reject(f"{name}: an input cannot be set in the {self._phase} state (got "
+                             f"{value!r}; expected a reset first: FMI 2.0 allows no setter there); "
+                             f"it stays {self._inputs[name]!r}")
+            elif math.isfinite(value):
                 if value != self._inputs[name]:
                     self._stale = True            # the outputs that read q̈ follow at once
                 self._inputs[name] = value
@@ -575,20 +587,41 @@ class InerterSlave(Fmi2Slave):
             except Exception as exc:
                 self._reject(f"set{cls.__name__}: {exc}")
 
+    def _early(self, call: str, vrs):
+        """Log an error for a getter called before initialization mode (FMI 2.0 allows none in
+        the instantiated state): the status shim returns fmi2Error; the values are given anyway."""
+        self.log(f"{call}: called before fmi2EnterInitializationMode (value references "
+                 f"{list(vrs)}; expected fmi2EnterInitializationMode first: FMI 2.0 allows no getter "
+                 f"in the instantiated state)", Fmi2Status.error)
+
     def get_real(self, vrs):
+        if len(vrs) == 1 and vrs[0] == fmu_native.TIME_VR:
+            return [self._time()]
+        if self._phase == INSTANTIATED:
+            self._early("fmi2GetReal", vrs)
         if self._stale:
             self._refresh_outputs()
         return self._get(vrs, Real, float, math.nan)
 
+    def _time(self) -> float:
+        """The end of the last step completed: the stepper's time, else the start time."""
+        return float(self._stepper.time) if self._stepper is not None else self._start_time
+
     def get_integer(self, vrs):
         if len(vrs) == 2 and vrs[0] == fmu_native.LINK_VR and vrs[1] == fmu_native.LINK_VR + 1:
             return self._native.address_words()
+        if self._phase == INSTANTIATED and list(vrs) != [self._status_vr]:   # the shim reads that
+            self._early("fmi2GetInteger", vrs)
         return self._get(vrs, Integer, int, 0)
 
     def get_boolean(self, vrs):
+        if self._phase == INSTANTIATED:
+            self._early("fmi2GetBoolean", vrs)
         return self._get(vrs, Boolean, bool, False)
 
     def get_string(self, vrs):
+        if self._phase == INSTANTIATED:
+            self._early("fmi2GetString", vrs)
         return self._get(vrs, String, str, "")
 
     def set_real(self, vrs, values):
@@ -614,13 +647,24 @@ class InerterSlave(Fmi2Slave):
     # Initialisation
     # ------------------------------------------------------------------------------------------
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        if self._phase != INSTANTIATED:
+            self._out_of_order("fmi2SetupExperiment", "before fmi2EnterInitializationMode")
+            return
         self._start_time = float(start_time)
         self._stop_time = None if stop_time is None else float(stop_time)
         self._tolerance = None if tolerance is None else float(tolerance)
 
     def enter_initialization_mode(self):
-        if self._phase == INSTANTIATED:
-            self._phase = INITIALIZATION
+        if self._phase != INSTANTIATED:
+            self._out_of_order("fmi2EnterInitializationMode", "once, after fmi2Instantiate or fmi2Reset")
+            return
+        self._phase = INITIALIZATION
+
+    def _out_of_order(self, call: str, expected: str):
+        """Log an error for a call FMI 2.0 does not allow in the instance's state: the status shim
+        returns fmi2Error; the call changes nothing."""
+        self.log(f"{call}: refused in the {self._phase} state (expected it {expected}); nothing "
+                 f"changes", Fmi2Status.error)
 
     def exit_initialization_mode(self):
         self._begin_call()
@@ -678,10 +722,9 @@ class InerterSlave(Fmi2Slave):
                              stop_time=self._stop_time)
 
     def _initialise(self):
-        if self._phase not in (INSTANTIATED, INITIALIZATION):
+        if self._phase != INITIALIZATION:
             self._status = ERROR
-            self.log(f"exitInitializationMode called in phase '{self._phase}': ignored",
-                     Fmi2Status.error)
+            self._out_of_order("fmi2ExitInitializationMode", "after fmi2EnterInitializationMode")
             return
         if self._start_time != 0.0:
             self._fail(f"exitInitializationMode: the scene starts at t = 0 s (got startTime = "
@@ -779,8 +822,13 @@ class InerterSlave(Fmi2Slave):
             self._call_thread = None
 
     def log(self, msg: str, status: Fmi2Status = Fmi2Status.ok, category=None, debug=None):
-        """pythonfmu's log, with the files of resources/ named as the user knows them (below)."""
-        super().log(self._named_files(msg), status, category, debug)
+        """pythonfmu's log, with the files of resources/ named as the user knows them (below); a
+        message of a status the importer must act on names the scene file where it does not."""
+        msg = self._named_files(msg)
+        if status in (Fmi2Status.discard, Fmi2Status.error, Fmi2Status.fatal) and self.scene_file \
+                and self.scene_file not in msg:
+            msg = f"{self.scene_file}: {msg}"
+        super().log(msg, status, category, debug)
 
     def _named_files(self, message: str) -> str:
         """`message` with the FMU's resources/ folder left out of the file names it holds: the
@@ -809,7 +857,7 @@ class InerterSlave(Fmi2Slave):
         self._failure = message
         self._stepper = None
         self._outputs = [math.nan] * len(self._output_names)
-        self.log(f"{message}; the FMU cannot step: every doStep returns fmi2Discard until it "
+        self.log(f"{message}; the FMU cannot step: every doStep is refused until it "
                  f"is reset", Fmi2Status.error)
 
     # ------------------------------------------------------------------------------------------
@@ -826,8 +874,12 @@ class InerterSlave(Fmi2Slave):
             return False
 
     def _refuse(self, message: str, status: Fmi2Status = Fmi2Status.error) -> bool:
-        """doStep returns fmi2Discard (False) and logs why."""
-        self._status = DISCARD
+        """doStep returns False and logs why: fmi2Error for a step refused (a call FMI 2.0 does
+        not allow: no running integration, a step size not > 0, a step not starting at the
+        current communication point or ending past stopTime), fmi2Discard for a step the solver
+        could not complete (`status` discard). pythonfmu's binary returns fmi2Discard for both;
+        the status shim returns fmi_status."""
+        self._status = DISCARD if status == Fmi2Status.discard else ERROR
         self.log(message, status)
         return False
 
@@ -866,6 +918,11 @@ class InerterSlave(Fmi2Slave):
         if abs(t - now) > TIME_TOLERANCE * max(1.0, abs(t), abs(now)):
             return (f": the FMU is at t = {now!r} s; a step must start where the last one ended "
                     f"(or roll back with fmi2SetFMUstate)")
+        stop = self._stop_time
+        if stop is not None and t + h > stop + TIME_TOLERANCE * max(1.0, abs(stop)):
+            return (f": it would end at t = {t + h!r} s, past stopTime = {stop!r} s of "
+                    f"fmi2SetupExperiment (expected an end ≤ stopTime: FMI 2.0 makes a step past it "
+                    f"an error); the state is unchanged")
         return None
 
     def _advance(self, stepper, t: float, h: float) -> bool:
@@ -915,6 +972,9 @@ class InerterSlave(Fmi2Slave):
 
     def terminate(self):
         self._native.disarm()
+        if self._phase not in (STEPPING, FAILED):
+            self._out_of_order("fmi2Terminate", "after fmi2ExitInitializationMode, once")
+            return
         self._phase = TERMINATED
         total = self._slave_steps + self._native_steps
         self.log(f"terminated: {total} communication steps, {self._native_steps} of them taken in "
@@ -1002,6 +1062,8 @@ class InerterSlave(Fmi2Slave):
 
     @staticmethod
     def _fmu_state_from_bytes(data: bytes):
+        # pythonfmu calls it on the class: bytes that are no state give a state that
+        # setFMUstate refuses with fmi2Error and the reason
         try:
             state = json.loads(bytes(data).decode("utf-8"))
             if state.get("stepper") is not None:

@@ -10,6 +10,12 @@
  * fmi2GetInteger and returns that status when it is worse than fmi2OK; after fmi2DoStep, when the
  * original returned fmi2Discard, it returns fmi2Error where the slave says so.
  *
+ * A call the slave does not report in fmi_status (a getter, setupExperiment, enterInitializationMode,
+ * terminate, the FMU-state calls) returns fmi2Error when the slave logged a message of status
+ * fmi2Error or worse during it (filtered_log counts them): an unknown value reference read, a getter
+ * before initialization mode, terminate outside a run. fmi2GetRealStatus(fmi2LastSuccessfulTime)
+ * is the slave's time, read through a private Real value reference.
+ *
  * The component the importer holds is this library's (struct instance), wrapping the original's:
  * every call is forwarded with the original's component, and the slave's messages reach the
  * importer through the original's logger calls as before.
@@ -19,7 +25,8 @@
  * off (fmpy's default) an fmi2Error said nothing of its cause. The shim keeps the original's
  * logging always on, with every category, through its own logger (filtered_log, with the instance
  * as the original's component environment), and passes on a message when the importer has logging
- * on, or when its status is fmi2Discard, fmi2Error or fmi2Fatal: the reason for a status the
+ * on and selected its category (fmi2SetDebugLogging's categories, all when it named none; an unknown
+ * one is fmi2Error), or when its status is fmi2Discard, fmi2Error or fmi2Fatal: the reason for a status the
  * importer must act on is always logged, as FMI's reference implementations log errors.
  *
  * The native doStep (inerter/fmu/native.py says the protocol). After fmi2Instantiate and after
@@ -258,14 +265,45 @@ struct instance {
     fmi2ComponentEnvironment environment;
     char *name;                           /* the instance name, copied */
     int logging_on;                       /* as the importer last set it */
+    unsigned categories;                  /* the LOG_CATEGORIES it selected (bits), 0: all */
+    unsigned long errors;                 /* messages of status fmi2Error or worse the slave logged */
+    int stop_defined;                     /* fmi2SetupExperiment's stopTimeDefined and stopTime */
+    double stop_time;
     fmi2CallbackFunctions functions;      /* the original's: the importer's, logger filtered_log */
 };
 
-/* Whether a message of `status` reaches the importer (see the top): all of them with logging on,
- * those of a status the importer must act on always. */
-static int passes(const struct instance *w, int status)
+/* The FMU's log categories, as pythonfmu 0.7.0 writes them into modelDescription.xml's
+ * <LogCategories> (tests/test_fmu_call_sequences.py checks that they are the same): the slave's
+ * messages of status fmi2OK have the category logAll. */
+static const char *const LOG_CATEGORIES[] = {"logStatusWarning", "logStatusDiscard",
+                                             "logStatusError", "logStatusFatal", "logAll"};
+#define N_LOG_CATEGORIES (sizeof LOG_CATEGORIES / sizeof LOG_CATEGORIES[0])
+#define LOG_ALL_BIT (1u << (N_LOG_CATEGORIES - 1))
+
+/* The index of `name` in LOG_CATEGORIES, or -1. */
+static int category_index(const char *name)
 {
-    return w->logging_on || status >= (int)fmi2Discard;
+    size_t i;
+    for (i = 0; name != NULL && i < N_LOG_CATEGORIES; i++)
+        if (strcmp(name, LOG_CATEGORIES[i]) == 0)
+            return (int)i;
+    return -1;
+}
+
+/* Whether a message of `status` and `category` reaches the importer (see the top): with logging
+ * on, those of the categories it selected with fmi2SetDebugLogging (all when it named none, or
+ * logAll); those of a status the importer must act on always, whatever it selected. */
+static int passes(const struct instance *w, int status, const char *category)
+{
+    int k;
+    if (status >= (int)fmi2Discard)
+        return 1;
+    if (!w->logging_on)
+        return 0;
+    if (w->categories == 0 || (w->categories & LOG_ALL_BIT))
+        return 1;
+    k = category_index(category);
+    return k >= 0 && ((w->categories >> k) & 1u);
 }
 
 /* The original's logger: the message passed on to the importer's where `passes` lets it. The
@@ -273,9 +311,13 @@ static int passes(const struct instance *w, int status)
 static void filtered_log(fmi2ComponentEnvironment environment, fmi2String instanceName,
                          fmi2Status status, fmi2String category, fmi2String message, ...)
 {
-    const struct instance *w = (const struct instance *)environment;
+    struct instance *w = (struct instance *)environment;
 
-    if (w == NULL || w->logger == NULL || !passes(w, (int)status))
+    if (w == NULL)
+        return;
+    if (status >= fmi2Error)
+        w->errors++;
+    if (w->logger == NULL || !passes(w, (int)status, category))
         return;
     w->logger(w->environment, instanceName, status, category, message);
 }
@@ -289,7 +331,7 @@ static void live_log(int64_t target, int32_t status, const char *category, const
     const char *from;
     char *text, *to;
 
-    if (w == NULL || w->logger == NULL || !passes(w, (int)status) || message == NULL)
+    if (w == NULL || w->logger == NULL || !passes(w, (int)status, category) || message == NULL)
         return;
     for (from = message; *from != '\0'; from++)
         n += *from == '%' ? 2 : 1;
@@ -427,6 +469,32 @@ static fmi2Status checked(fmi2Component c, fmi2Status status)
     return value >= fmi2Error ? fmi2Error : (fmi2Status)value;
 }
 
+/* The status of a call the slave does not report in fmi_status (a getter, setupExperiment,
+ * terminate, ...) that the original returned as `status`: fmi2Error where the slave logged an error
+ * during it (`before`: the instance's error count when the call began). pythonfmu's binary returns
+ * fmi2OK from such a call whatever the slave said: an unknown value reference, a call FMI 2.0 does
+ * not allow in the instance's state. */
+static fmi2Status logged(const struct instance *w, unsigned long before, fmi2Status status)
+{
+    return status <= fmi2Warning && w->errors != before ? fmi2Error : status;
+}
+
+/* Whether a step (t, t + h] ends past fmi2SetupExperiment's stopTime (1e-9 relative to
+ * max(1 s, stopTime), the slave's TIME_TOLERANCE): such a step is the slave's to refuse. */
+static int past_stop(const struct instance *w, double t, double h)
+{
+    double scale = w->stop_time < 0 ? -w->stop_time : w->stop_time;
+    return w->stop_defined && t + h > w->stop_time + 1e-9 * (scale > 1.0 ? scale : 1.0);
+}
+
+/* A call that enters Python and reports the slave's errors by what it logged (see logged). */
+#define FORWARD_LOGGED(call)                                                                     \
+    {                                                                                            \
+        struct instance *w_ = c;                                                                 \
+        unsigned long before_ = w_->errors;                                                      \
+        return logged(w_, before_, call);                                                        \
+    }
+
 /* ---------------------------------------------------------------------------------------------
  * Common functions
  * ------------------------------------------------------------------------------------------- */
@@ -521,26 +589,53 @@ void fmi2FreeInstance(fmi2Component c)
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[])
 {
+    struct instance *w = c;
+    unsigned selected = 0;
+    size_t i;
+
     ENTER
-    ((struct instance *)c)->logging_on = loggingOn == fmi2True;
+    for (i = 0; loggingOn == fmi2True && i < nCategories; i++) {
+        const char *name = categories != NULL ? categories[i] : NULL;
+        const int k = category_index(name);
+        if (k < 0) {
+            char message[512];
+            snprintf(message, sizeof message, "%s: fmi2SetDebugLogging: unknown log category "
+                     "'%.200s' (expected one of the LogCategories of modelDescription.xml: "
+                     "logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll); "
+                     "logging unchanged", ORIGINAL_LIBRARY, name != NULL ? name : "(null)");
+            live_log((int64_t)(uintptr_t)w, (int32_t)fmi2Error, "logStatusError", message);
+            return fmi2Error;
+        }
+        selected |= 1u << k;
+    }
+    w->logging_on = loggingOn == fmi2True;
+    w->categories = selected;
     /* the original keeps logging every category; filtered_log does what the importer asked */
-    if (loggingOn == fmi2True)
-        return original.SetDebugLogging(INNER(c), fmi2True, nCategories, categories);
-    return original.SetDebugLogging(INNER(c), fmi2True, 0, NULL);
+    FORWARD_LOGGED(original.SetDebugLogging(INNER(c), fmi2True, 0, NULL))
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
+    struct instance *w = c;
+    unsigned long before;
+    fmi2Status status;
+
     ENTER
-    return original.SetupExperiment(INNER(c), toleranceDefined, tolerance, startTime,
-                                    stopTimeDefined, stopTime);
+    before = w->errors;
+    status = logged(w, before, original.SetupExperiment(w->inner, toleranceDefined, tolerance,
+                                                        startTime, stopTimeDefined, stopTime));
+    if (status <= fmi2Warning) { /* the slave took it: native steps stop there too */
+        w->stop_defined = stopTimeDefined == fmi2True;
+        w->stop_time = stopTime;
+    }
+    return status;
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
     ENTER
-    return original.EnterInitializationMode(INNER(c));
+    FORWARD_LOGGED(original.EnterInitializationMode(INNER(c)))
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
@@ -558,7 +653,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 fmi2Status fmi2Terminate(fmi2Component c)
 {
     ENTER
-    return original.Terminate(INNER(c));
+    FORWARD_LOGGED(original.Terminate(INNER(c)))
 }
 
 fmi2Status fmi2Reset(fmi2Component c)
@@ -568,6 +663,7 @@ fmi2Status fmi2Reset(fmi2Component c)
 
     ENTER
     w->ctx = NULL; /* the slave object and its context are replaced */
+    w->stop_defined = 0;
     status = original.Reset(w->inner);
     link_context(w);
     return status;
@@ -584,7 +680,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
                                     : CONTEXT_ARRAY(w, double, CTX_REALS)[INDEX(where[i])])
     if (sync(w) != fmi2OK)
         return fmi2Error;
-    return original.GetReal(w->inner, vr, nvr, value);
+    FORWARD_LOGGED(original.GetReal(w->inner, vr, nvr, value))
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -596,7 +692,7 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
           value[i] = (fmi2Integer)CONTEXT_ARRAY(w, int64_t, CTX_INTEGERS)[INDEX(where[i])])
     if (sync(w) != fmi2OK)
         return fmi2Error;
-    return original.GetInteger(w->inner, vr, nvr, value);
+    FORWARD_LOGGED(original.GetInteger(w->inner, vr, nvr, value))
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -608,7 +704,7 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
           value[i] = CONTEXT_ARRAY(w, int64_t, CTX_BOOLEANS)[INDEX(where[i])] ? fmi2True : fmi2False)
     if (sync(w) != fmi2OK)
         return fmi2Error;
-    return original.GetBoolean(w->inner, vr, nvr, value);
+    FORWARD_LOGGED(original.GetBoolean(w->inner, vr, nvr, value))
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -620,7 +716,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
                                                                        CTX_STRINGS)[INDEX(where[i])])
     if (sync(w) != fmi2OK)
         return fmi2Error;
-    return original.GetString(w->inner, vr, nvr, value);
+    FORWARD_LOGGED(original.GetString(w->inner, vr, nvr, value))
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -654,7 +750,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     READ
-    return original.GetFMUstate(INNER(c), FMUstate);
+    FORWARD_LOGGED(original.GetFMUstate(INNER(c), FMUstate))
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
@@ -666,27 +762,27 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     READ
-    return original.FreeFMUstate(INNER(c), FMUstate);
+    FORWARD_LOGGED(original.FreeFMUstate(INNER(c), FMUstate))
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
     READ
-    return original.SerializedFMUstateSize(INNER(c), FMUstate, size);
+    FORWARD_LOGGED(original.SerializedFMUstateSize(INNER(c), FMUstate, size))
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
                                  fmi2Byte serializedState[], size_t size)
 {
     READ
-    return original.SerializeFMUstate(INNER(c), FMUstate, serializedState, size);
+    FORWARD_LOGGED(original.SerializeFMUstate(INNER(c), FMUstate, serializedState, size))
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[],
                                    size_t size, fmi2FMUstate *FMUstate)
 {
     READ
-    return original.DeSerializeFMUstate(INNER(c), serializedState, size, FMUstate);
+    FORWARD_LOGGED(original.DeSerializeFMUstate(INNER(c), serializedState, size, FMUstate))
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
@@ -725,7 +821,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     fmi2Status status;
 
     GUARD
-    if (w->armed && w->ctx[CTX_ARMED]) {
+    if (w->armed && w->ctx[CTX_ARMED] && !past_stop(w, currentCommunicationPoint, communicationStepSize)) {
         native_step_fn *step = (native_step_fn *)(uintptr_t)w->ctx[CTX_FUNCTION];
         const int32_t took = step((const int64_t *)(uintptr_t)w->ctx[CTX_TABLE],
                                   currentCommunicationPoint, communicationStepSize);
@@ -760,9 +856,16 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
     return original.GetStatus(INNER(c), s, value);
 }
 
+/* fmi2LastSuccessfulTime is the slave's time, read through the private Real NATIVE_SYNC_VR + 1:
+ * pythonfmu's binary answers the end of the last doStep it was called for (NaN before the first,
+ * the end of a refused step, not the native steps', not a rollback's). */
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
 {
     READ
+    if (s == fmi2LastSuccessfulTime && value != NULL) {
+        const fmi2ValueReference vr = NATIVE_SYNC_VR + 1u;
+        return original.GetReal(INNER(c), &vr, 1, value);
+    }
     return original.GetRealStatus(INNER(c), s, value);
 }
 

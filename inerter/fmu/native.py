@@ -68,6 +68,8 @@ MAGIC = 0x696E65727465
 #: makes the slave take over the native steps.
 LINK_VR = 0x7FFFFF00
 SYNC_VR = 0x7FFFFF02
+#: Private Real value reference: the slave's time (the shim answers fmi2LastSuccessfulTime with it).
+TIME_VR = SYNC_VR + 1
 #: The environment variable that turns the link off ("0").
 SWITCH = "INERTER_FMU_NATIVE"
 

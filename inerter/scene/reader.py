@@ -983,10 +983,8 @@ def _read_parameter(r: _Reader, spec, fld, p: "elements.Parameter"):
         return p.default
     if p.size > 1:
         return tuple(float(x) for x in r.vector(spec, p.key, fld, p.size, unit_length=True))
-    minimum = p.minimum if p.minimum != -math.inf else None
-    value = r.number(spec, p.key, fld, minimum=minimum, exclusive=p.strict, required=p.required,
-                     unit=_fixed_unit(p.unit))
-    if value > p.maximum:
+    value = r.number(spec, p.key, fld, required=p.required, unit=_fixed_unit(p.unit))
+    if not p.admits(value):
         raise r.error(f"{fld}.{p.key}", value, p.expected(), "out of range")
     return value
 

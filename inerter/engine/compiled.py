@@ -1068,8 +1068,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     ``Run.dense`` is a :class:`LocalDense`, which integrates again the sample intervals it is read
     in: what reads a few of them (a peak's refinement) does not make the whole run pay for a dense
     output at every step. With RK4 (fixed step), ``Run.dense`` is an :class:`RK4Dense`, which
-    integrates again the sample intervals it is read in, as LocalDense does (None with 3D
-    rotational elements: a cubic spline through the samples). The samples are the same either way."""
+    integrates again the sample intervals it is read in, as LocalDense does. The samples are the
+    same either way."""
     from inerter.engine.simulation import integrate
 
     why = unsupported(mech)
@@ -1143,8 +1143,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     sol = DenseOutput.of_kept(settings.method, keep, kernel)
     if sol is None and tables is not None and k > 1:
         sol = LocalDense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, tables, windings)
-    elif tables is None and k > 1 and not windings.shape[1]:
-        sol = RK4Dense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks)
+    elif tables is None and k > 1:
+        sol = RK4Dense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, windings)
     run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
                       int(evals), cpu, None)
     if windings.shape[1]:
@@ -1335,16 +1335,19 @@ class RK4Dense:
 
     An interval is integrated once: its steps are kept (:class:`_RK4Steps`, each step's cubic by
     its values at four points) and read again for any time in it, up to :data:`RK4_DENSE_KEPT`
-    numbers in all. Not built for a run with 3D rotational elements (their angles' branches are not
-    followed here): those read a cubic spline through the samples. ``sol(t)``: the states
-    (n × len(t)); ``sol.ts``: the samples."""
+    numbers in all. A run with 3D rotational elements (`windings`: the angles the run recorded at
+    its samples, ``run.extra["windings"]``) integrates an interval wound from the angles recorded
+    at its first sample, as :class:`LocalDense` does, and reads each time's angles on the branch
+    its step followed (:meth:`windings_at`). ``sol(t)``: the states (n × len(t)); ``sol.ts``: the
+    samples."""
 
-    def __init__(self, kernel, settings, inputs, grid, states, switches, kinks):
+    def __init__(self, kernel, settings, inputs, grid, states, switches, kinks, windings=None):
         from collections import OrderedDict
         self.kernel, self.settings, self.inputs = kernel, settings, inputs
         self.grid, self.states, self.switches, self.kinks = grid, states, switches, kinks
         self.ts = grid
         self.n = states.shape[1]
+        self.recorded = windings if windings is not None and np.size(windings) else None
         self.intervals = OrderedDict()       # sample index k → [_RK4Steps of each segment], last read last
         self.kept = 0                        # the numbers they hold
         #: How many sample intervals were integrated again, and the right-hand side's evaluations spent.
@@ -1376,28 +1379,46 @@ class RK4Dense:
                 out[:, where[inside]] = steps.states(flat[where][inside]).T
         return out[:, 0] if times.ndim == 0 else out
 
+    def windings_at(self, times):
+        """(len(times) × elements) each 3D rotational element's angle at each time on the branch the
+        step that gives it followed (Kernel.windings_between from the step's start); None without
+        such elements."""
+        if self.recorded is None:
+            return None
+        times = np.asarray(times, dtype=float).reshape(-1)
+        out = np.empty((len(times), self.recorded.shape[1]))
+        for _, where, segments in self.pieces(times):
+            for steps, inside in _RK4Steps.split(segments, times[where]):
+                out[where[inside]] = steps.windings(self.kernel, times[where][inside])
+        return out
+
     def _integrate(self, k):
         """[_RK4Steps of each segment between jumps] from sample k to sample k + 1."""
         s, kernel = self.settings, self.kernel
         t0, t_end = float(self.grid[k]), float(self.grid[k + 1])
         y = self.states[k].copy()
+        angles = None if self.recorded is None else self.recorded[k]
         segments = []
         self.integrations += 1
-        for t1 in sorted(d for d in self.switches if t0 < d < t_end) + [t_end]:
-            nodes = _rk4_nodes(t0, t1, float(s.step), self.kinks)
-            seg, rows = _RK4Steps.grid(nodes)
-            seg_out = np.empty((len(seg), self.n))
-            seg_out[0] = y
-            status, done, _, evals, t_reached, _ = _k.integrate_rk4(
-                y, t0, t1, seg, seg_out, float(s.step), int(s.max_steps), self.inputs, float(s.alpha),
-                kernel.params, t1 if t1 in self.switches else 0.0, self.kinks, _monitor("RK4"))
-            self.evaluations += int(evals)
-            if status != 0 or done != len(seg):
-                raise SimulationError(f"the dense output between t = {t0:.6g} s and {t_end:.6g} s: the RK4 "
-                                      f"integrator failed on integrating that interval again "
-                                      f"({failure_text(kernel, status, 'RK4', s.step, y, t_reached)})", t0)
-            segments.append(_RK4Steps(nodes, seg, rows, seg_out, self.n))
-            y, t0 = seg_out[-1].copy(), t1
+        with kernel.wound_from_start(angles):
+            for t1 in sorted(d for d in self.switches if t0 < d < t_end) + [t_end]:
+                nodes = _rk4_nodes(t0, t1, float(s.step), self.kinks)
+                seg, rows = _RK4Steps.grid(nodes)
+                seg_out = np.empty((len(seg), self.n + (0 if angles is None else len(angles))))
+                seg_out[0, :self.n] = y
+                if angles is not None:
+                    seg_out[0, self.n:] = angles
+                status, done, _, evals, t_reached, _ = _k.integrate_rk4(
+                    y, t0, t1, seg, seg_out, float(s.step), int(s.max_steps), self.inputs, float(s.alpha),
+                    kernel.params, t1 if t1 in self.switches else 0.0, self.kinks, _monitor("RK4"))
+                self.evaluations += int(evals)
+                if status != 0 or done != len(seg):
+                    raise SimulationError(f"the dense output between t = {t0:.6g} s and {t_end:.6g} s: the RK4 "
+                                          f"integrator failed on integrating that interval again "
+                                          f"({failure_text(kernel, status, 'RK4', s.step, y, t_reached)})", t0)
+                segments.append(_RK4Steps(nodes, seg, rows, seg_out, self.n))
+                y, t0 = seg_out[-1, :self.n].copy(), t1
+                angles = None if angles is None else seg_out[-1, self.n:].copy()
         return segments
 
 
@@ -1419,7 +1440,7 @@ def _rk4_nodes(t0, t_end, step, kinks) -> np.ndarray:
 class _RK4Steps:
     """The RK4 steps of one segment of a sample interval: each step's cubic Hermite polynomial kept
     by its values at four points (its ends and two inner points, near a third and two thirds, as
-    integrate_rk4 read them)."""
+    integrate_rk4 read them), and with 3D rotational elements the angles it recorded at its start."""
 
     def __init__(self, nodes, times, rows, values, ny):
         self.nodes = nodes
@@ -1474,6 +1495,14 @@ class _RK4Steps:
                                    s * (s - a) * (s - 1.0) / (b * (b - a) * (b - 1.0)),
                                    s * (s - a) * (s - b) / ((1.0 - a) * (1.0 - b))))
         return np.einsum("ij,ijk->ik", weights, self.values[i, :, :self.ny])
+
+    def windings(self, kernel, times):
+        """(len(times) × elements) the angles at `times` on the branch of the step that gives each,
+        wound from the angles recorded at its start (Kernel.windings_between)."""
+        i, _ = self._step(times)
+        start = self.values[i, 0]
+        return kernel.windings_between(self.nodes[i], start[:, :self.ny], start[:, self.ny:], times,
+                                       self.states(times))
 
 
 class CompiledStepper(Stepper):

@@ -441,8 +441,7 @@ class Result:
         ``engine.compiled.LocalDense``) and the signal from the kernels, in one compiled call; on the
         numpy path, scipy's dense output and the numpy signals; a compiled RK4 run's sample
         intervals read integrated again on its fixed steps (``engine.compiled.RK4Dense``). Where
-        there is none (a compiled RK4 run with 3D rotational elements): a cubic spline through the
-        samples. A derived output:
+        there is none: a cubic spline through the samples. A derived output:
         its expression on the dense values of the outputs it reads. A 3D rotational element's angle
         is read on the branch its integration followed in the step that gives each t, the times in
         any order (inerter.elements.winding). The times may have any shape (read flattened; none:

@@ -408,6 +408,50 @@ def test_rk4_dense_output_is_its_steps_not_a_spline_through_the_samples():
         assert np.max(np.abs(got - reference.dense(name)(t))) <= 1e-6 * scale, name
 
 
+def test_rk4_dense_output_integrates_each_interval_once(monkeypatch):
+    """A compiled RK4 run's dense output keeps the steps of the sample intervals it integrated
+    again: reading the same interval again, at the same or other times, integrates nothing (it
+    integrated it at every read: 4 integrations of integrate_rk4 for the reads below, now 2), and
+    gives the same values. Reference: the numpy path's RK4 (the same fixed steps: the 0.1 s output
+    interval is a multiple of the 1e-3 s step), whose dense output is its steps' cubic Hermite
+    polynomials, within 1e-10 of the motion's scale (the cubic read through four of its values)."""
+    model = inerter.load(TWO_BAR)
+    kw = dict(stop_time=1.0, output_interval=0.1, method="RK4", step=1e-3, metrics=False)
+    fast, explicit = model.simulate(**kw), model.simulate(path="numpy", **kw)
+    sol = fast.run.dense
+    assert isinstance(sol, compiled.RK4Dense)
+    calls = []
+    integrate = compiled._k.integrate_rk4
+    monkeypatch.setattr(compiled._k, "integrate_rk4", lambda *a: calls.append(a[1]) or integrate(*a))
+    t, other = np.array([0.1234, 0.1271, 0.5005]), np.array([0.15, 0.52, 0.1])
+    first = sol(t)
+    assert len(calls) == 2
+    assert np.array_equal(sol(t), first) and sol(other).shape == (sol.n, 3)
+    assert len(calls) == 2 and sorted(sol.intervals) == [1, 5]
+    scale = np.maximum(np.max(np.abs(explicit.run.states), axis=0), 1e-12)
+    for times, got in ((t, first), (other, sol(other))):
+        assert np.max(np.abs(got - explicit.run.dense(times)).T / scale) < 1e-10
+    for name in ("C.r[2]", "inerter.f"):           # a signal read through the kept steps
+        want = explicit.dense(name)(t)
+        assert np.max(np.abs(fast.dense(name)(t) - want)) <= 1e-10 * max(1.0, float(np.max(np.abs(want)))), name
+    assert len(calls) == 2
+
+
+def test_rk4_dense_output_keeps_a_bounded_number_of_values(monkeypatch):
+    """Past RK4_DENSE_KEPT numbers, the intervals read longest ago are dropped (and integrated
+    again if read again): memory stays bounded however many intervals are read."""
+    result = inerter.load(TWO_BAR).simulate(stop_time=1.0, output_interval=0.1, method="RK4", step=1e-3,
+                                            metrics=False)
+    sol = result.run.dense
+    sol(np.array([0.05]))
+    one = sol.kept
+    monkeypatch.setattr(compiled, "RK4_DENSE_KEPT", int(2.5 * one))      # room for two intervals
+    sol(np.array([0.15, 0.25, 0.35]))
+    assert list(sol.intervals) == [2, 3] and sol.kept <= 2.5 * one and sol.integrations == 4
+    sol(np.array([0.25]))
+    assert sol.integrations == 4 and list(sol.intervals) == [3, 2]
+
+
 def test_a_dense_output_built_where_it_is_read_integrates_only_those_intervals():
     """A run that kept no dense output (no metric reads whole windows) gives one where it is read:
     each 10 ms sample interval asked for is integrated again from the sample before it. Two times

@@ -206,6 +206,21 @@ def test_device_errors_name_the_field_value_and_expectation(tmp_path, device, fi
     assert str(tmp_path / "scene.toml") in str(err.value)
 
 
+@pytest.mark.parametrize("exponent", ["4.0", "0.5"])
+def test_a_stop_exponent_out_of_range_reads_as_other_field_errors(tmp_path, exponent):
+    """The exponent's range [1, 3] (inerter.elements.device.END_STOPS) reads as the reader writes a
+    field's: "a number ≥ 1 and ≤ 3", the dimensionless unit "1" not written (it read
+    "a number ≥ 1 and ≤ 3 (1)" above the range and "a number ≥ 1" below it)."""
+    text = _with_device(TWO_BAR.read_text(encoding="utf-8"),
+                        f"[DEVICE.end_stops]\nmax = 0.8\nstiffness = 1e4\nexponent = {exponent}\n")
+    with pytest.raises(SceneError) as err:
+        _load(tmp_path, text)
+    assert err.value.field == "elements.inerter.device.end_stops.exponent"
+    assert f"elements.inerter.device.end_stops.exponent: out of range (got {exponent}; expected a number ≥ 1 " \
+           "and ≤ 3)" in str(err.value), str(err.value)
+    assert str(err.value).startswith(str(tmp_path / "scene.toml"))
+
+
 def test_inertance_given_twice_is_an_error(tmp_path):
     """A flywheel gives b: the element's own b as well is an error naming both."""
     text = _with_device(TWO_BAR.read_text(encoding="utf-8"), "[DEVICE.flywheel]\ninertia = 1e-4\nlead = 0.01\n")

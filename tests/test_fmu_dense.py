@@ -196,3 +196,31 @@ def test_the_states_kept_are_as_dense_as_stepping_them_costs_a_restore():
     for per_sample, stride in ((4e-5, SAVE_EVERY), (1e-4, 4), (4.5e-4, 1), (3e-3, 1), (0.0, SAVE_EVERY)):
         dense._adapt(per_sample)
         assert dense._stride == stride, per_sample
+
+
+def test_the_event_nodes_are_found_by_one_solver_run_per_result(monkeypatch):
+    """FmuResult._event_nodes runs the solver at the FMU's settings for its integrator's step ends
+    (where events() brackets crossings): once per result, however often events() asks (it ran at
+    each call). Reference: the nodes of the solver's run at the same settings; none (and no run)
+    where the FMU restarts at every communication point (no fmu_dense)."""
+    from types import SimpleNamespace
+
+    import inerter
+    from inerter.fmu.run import FmuResult
+
+    model = inerter.load(SCENARIOS.parent / "tests" / "data" / "short_contact_2d.toml")
+    settings = model.settings(output_interval=0.1)
+    simulate, runs = model.simulate, []
+
+    def counted(**kw):
+        runs.append(kw)
+        return simulate(**kw)
+    monkeypatch.setattr(model, "simulate", counted)
+    fmu = FmuResult(model, np.zeros(2, dtype=[("time", float)]), settings, SimpleNamespace(status="ok", message=""),
+                    0.1)
+    assert len(fmu._event_nodes()) == 0 and runs == []
+    fmu.fmu_dense = SimpleNamespace(close=lambda: None)      # an FMU that reads its own dense output
+    first = fmu._event_nodes()
+    assert fmu._event_nodes() is first and fmu._event_nodes() is first and len(runs) == 1
+    reference = simulate(stop_time=settings.stop_time, output_interval=0.1, metrics=False)._event_nodes()
+    assert len(first) > len(fmu.time) and np.array_equal(first, reference)

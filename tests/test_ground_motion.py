@@ -244,6 +244,35 @@ def test_a_malformed_record_is_one_error_naming_the_file_and_its_line(tmp_path, 
     assert problem in message and str(tmp_path / "rec.csv") in message, message
 
 
+AT2_HEADER = "PEER NGA STRONG MOTION DATABASE RECORD\nsynthetic\nACCELERATION TIME SERIES IN UNITS OF G\n"
+
+
+@pytest.mark.parametrize("body, problem", [
+    ("NPTS=  7, DT= .01 SEC\n0.1 0.2 0.3\n0.4 abc 0.6\n0.7\n",
+     "unreadable (line 6: 'abc' (value 5 of NPTS) is not a number)"),
+    ("NPTS=  7, DT= .01 SEC\n0.1 0.2 0.3\n\n0.4 0.5\n", "unreadable (line 7: the file ends after 5 values, "
+                                                         "expected NPTS = 7 (line 4))"),
+    ("NPTS=  4, DT= .01 SEC\n0.1 0.2 0.3\n0.4 0.5\n", "unreadable (line 6: '0.5' is value 5, expected NPTS = 4 "
+                                                      "values (line 4))"),
+    ("NPTS=  4, DT= .01 SEC\n0.1 0.2\n\n0.3 nan\n", "wrong value (line 7, value 4 of NPTS: nan g)"),
+    ("NPTS=  4, DT= .01 SEC\n0.1 inf 0 0\n", "wrong value (line 5, value 2 of NPTS: inf g)"),
+    ("NPTS=  4, DT= .0.1 SEC\n0.1 0.2 0.3 0.4\n", "unreadable (line 4: DT = '.0.1' is not a number)"),
+    ("NPTS=  4 DT .01\n0.1 0.2 0.3 0.4\n", "unreadable (line 4: 'NPTS=  4 DT .01', expected the fourth header"),
+    ("NPTS=  1, DT= .01 SEC\n0.1\n", "unreadable (line 4: NPTS = 1 and DT = 0.01, expected at least 2 points"),
+])
+def test_a_malformed_at2_record_is_one_error_naming_the_file_and_its_line(tmp_path, body, problem):
+    """A PEER .AT2 record's error names the scene's field, the record file and the line of the file
+    that is wrong, as a CSV record's does (the reference: the line counted by hand in each text,
+    the header's four lines first); it named no line before (numpy's 'could not convert string to
+    float', 'the header gives NPTS = 7 but the file holds 5 values', 'a value is not finite')."""
+    (tmp_path / "rec.AT2").write_text(AT2_HEADER + body)
+    with pytest.raises(SceneError) as err:
+        _model(tmp_path, "bad", '{ file = "rec.AT2", axis = 1 }')
+    message = str(err.value)
+    assert ": effects.ground_acceleration.file: " in message and "\n" not in message
+    assert problem in message and str(tmp_path / "rec.AT2") in message, message
+
+
 def test_a_record_value_above_the_magnitude_limit_in_si_is_refused(tmp_path):
     """The limit of every scene value, 1e15 in SI units, holds for a record's accelerations after
     their conversion from g (a CSV with unit = "g", a PEER .AT2): 2e14 g is 2.0e15 m/s², refused
@@ -251,7 +280,7 @@ def test_a_record_value_above_the_magnitude_limit_in_si_is_refused(tmp_path):
     (tmp_path / "big.AT2").write_text("PEER\nx\nACCELERATION IN G\nNPTS=  3, DT= .01 SEC\n0.1 2e14 0.0\n")
     (tmp_path / "big.csv").write_text("0,0\n0.01,2e14\n0.02,0\n")
     (tmp_path / "fine.csv").write_text("0,0\n0.01,1e14\n0.02,0\n")
-    for motion, problem in (('{ file = "big.AT2", axis = 1 }', "wrong value (value 2 of NPTS: 200000000000000.0 g)"),
+    for motion, problem in (('{ file = "big.AT2", axis = 1 }', "wrong value (line 5, value 2 of NPTS: 200000000000000.0 g)"),
                             ('{ file = "big.csv", axis = 1, unit = "g" }', "wrong value (line 2, column 2: 200000000000000.0)")):
         with pytest.raises(SceneError) as err:
             _model(tmp_path, "big", motion)

@@ -323,13 +323,16 @@ def test_a_projected_run_reads_its_samples_on_their_branch():
     assert_closed_form(r, k, w, 1e-6, 1e-8)
 
 
-@pytest.mark.parametrize("path", ["numpy", "compiled", "compiled-kept", "Radau"])
+@pytest.mark.parametrize("path", ["numpy", "compiled", "compiled-kept", "Radau", "RK4"])
 def test_the_dense_output_reads_each_time_on_its_branch(path):
     """The dense output of φ_rel and τ at times in no order, spread over the run (0.5 s samples,
     20 rad apart), each read from the step that gives it (run.dense.windings_at, or from the φ_ref
     at the end of scipy's step, run.extra["step_windings"]): the closed form within 1e-6 rad (Radau at
-    rtol 1e-8: 2e-5 rad). Kept by the compiled loop (DenseOutput), integrated again interval by
-    interval from each sample's recorded φ_ref (LocalDense), or scipy's."""
+    rtol 1e-8: 2e-5 rad; RK4 at its 1e-3 s step: 2e-5 rad, as its samples in
+    test_each_method_records_its_windings_at_coarse_samples). Kept by the compiled loop
+    (DenseOutput), integrated again interval by interval from each sample's recorded φ_ref
+    (LocalDense; RK4Dense, measured 1.0e-5 rad: a compiled RK4 run read a cubic spline through
+    the samples instead, 1.6e-4 rad off), or scipy's."""
     from inerter.api import Result
     from inerter.engine import compiled
 
@@ -341,12 +344,15 @@ def test_the_dense_output_reads_each_time_on_its_branch(path):
         assert isinstance(result.run.dense, compiled.DenseOutput)
     elif path == "Radau":
         result = model.simulate(output_interval=interval, method="Radau", rtol=1e-8, atol=1e-10, metrics=False)
+    elif path == "RK4":
+        result = model.simulate(output_interval=interval, method="RK4", metrics=False)
+        assert isinstance(result.run.dense, compiled.RK4Dense)
     else:
         result = model.simulate(output_interval=interval, metrics=False, path=path)
     assert path != "compiled" or isinstance(result.run.dense, compiled.LocalDense)
     t = np.random.default_rng(3).permutation(np.linspace(0.03, 2.97, 37))
     reference = oscillator(k, w, t)
-    bound = 2e-5 if path == "Radau" else 1e-6
+    bound = 2e-5 if path in ("Radau", "RK4") else 1e-6
     assert np.abs(result.dense("torsion.phi_rel")(t) - reference).max() < bound
     assert np.abs(result.dense("torsion.tau")(t) - k * reference).max() < k * bound
 

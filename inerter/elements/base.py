@@ -71,15 +71,22 @@ class Parameter:
     size: int = 1
 
     def expected(self) -> str:
-        """The range in words, for an error message: "a number ≥ 0 (N/m)"."""
+        """The range in words, for an error message, as the scene reader writes a field's: "a
+        number ≥ 0 N/m", "a number ≥ 1 and ≤ 3" (a dimensionless one's unit "1" not written)."""
+        unit = f" {self.unit}" if self.unit != "1" else ""
         if self.size > 1:
-            return f"a vector of {self.size} numbers, not all zero ({self.unit})"
+            return f"a vector of {self.size} numbers, not all zero" + (f" ({self.unit})" if unit else "")
         parts = []
         if self.minimum != -math.inf:
             parts.append(f"{'>' if self.strict else '≥'} {self.minimum:g}")
         if self.maximum != math.inf:
             parts.append(f"≤ {self.maximum:g}")
-        return "a number" + (" " + " and ".join(parts) if parts else "") + f" ({self.unit})"
+        return "a number" + (" " + " and ".join(parts) if parts else "") + unit
+
+    def admits(self, value: float) -> bool:
+        """Whether `value` is within the parameter's range."""
+        above = value > self.minimum if self.strict else value >= self.minimum
+        return above and value <= self.maximum
 
 
 @dataclass(frozen=True)

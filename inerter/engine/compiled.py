@@ -1068,8 +1068,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     ``Run.dense`` is a :class:`LocalDense`, which integrates again the sample intervals it is read
     in: what reads a few of them (a peak's refinement) does not make the whole run pay for a dense
     output at every step. With RK4 (fixed step), ``Run.dense`` is an :class:`RK4Dense`, which
-    integrates again the sample intervals it is read in, as LocalDense does (None with 3D
-    rotational elements: a cubic spline through the samples). The samples are the same either way."""
+    integrates again the sample intervals it is read in, as LocalDense does. The samples are the
+    same either way."""
     from inerter.engine.simulation import integrate
 
     why = unsupported(mech)
@@ -1143,8 +1143,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     sol = DenseOutput.of_kept(settings.method, keep, kernel)
     if sol is None and tables is not None and k > 1:
         sol = LocalDense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, tables, windings)
-    elif tables is None and k > 1 and not windings.shape[1]:
-        sol = RK4Dense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks)
+    elif tables is None and k > 1:
+        sol = RK4Dense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, windings)
     run = CompiledRun(grid[:k].copy(), states, sol, "ok" if status == 0 else "failed", message, int(steps),
                       int(evals), cpu, None)
     if windings.shape[1]:
@@ -1320,56 +1320,189 @@ class LocalDense:
         return out[:, 0] if times.ndim == 0 else out
 
 
+#: The most numbers an :class:`RK4Dense` keeps of the sample intervals it integrated again (its
+#: steps' states); past it the intervals read longest ago are dropped (integrated again if read).
+RK4_DENSE_KEPT = 4_000_000
+
+
 class RK4Dense:
     """The dense output of a compiled RK4 run: each sample interval a time falls in is integrated
     again from the run's state at the sample before it with the run's fixed step (the last step
     shortened to land on the next sample; the same kinks and jumps), and the times are read on
     its steps' cubic Hermite polynomials, as the numpy path's RK4 gives its dense output
     (:class:`inerter.engine.integrators.RK4`). Where the output interval is a multiple of the
-    step the steps are the run's own; else they agree with them to the method's order. Not built
-    for a run with 3D rotational elements (their angles' branches are not followed here): those
-    read a cubic spline through the samples. ``sol(t)``: the states (n × len(t)); ``sol.ts``: the
+    step the steps are the run's own; else they agree with them to the method's order.
+
+    An interval is integrated once: its steps are kept (:class:`_RK4Steps`, each step's cubic by
+    its values at four points) and read again for any time in it, up to :data:`RK4_DENSE_KEPT`
+    numbers in all. A run with 3D rotational elements (`windings`: the angles the run recorded at
+    its samples, ``run.extra["windings"]``) integrates an interval wound from the angles recorded
+    at its first sample, as :class:`LocalDense` does, and reads each time's angles on the branch
+    its step followed (:meth:`windings_at`). ``sol(t)``: the states (n × len(t)); ``sol.ts``: the
     samples."""
 
-    def __init__(self, kernel, settings, inputs, grid, states, switches, kinks):
+    def __init__(self, kernel, settings, inputs, grid, states, switches, kinks, windings=None):
+        from collections import OrderedDict
         self.kernel, self.settings, self.inputs = kernel, settings, inputs
         self.grid, self.states, self.switches, self.kinks = grid, states, switches, kinks
         self.ts = grid
         self.n = states.shape[1]
+        self.recorded = windings if windings is not None and np.size(windings) else None
+        self.intervals = OrderedDict()       # sample index k → [_RK4Steps of each segment], last read last
+        self.kept = 0                        # the numbers they hold
+        #: How many sample intervals were integrated again, and the right-hand side's evaluations spent.
+        self.integrations = 0
+        self.evaluations = 0
+
+    def pieces(self, times):
+        """[(sample index k, the indices of `times` in k's interval, its segments' steps)],
+        integrating the intervals not kept."""
+        out = []
+        for k, where in _by_interval(self.grid, times):
+            if k in self.intervals:
+                self.intervals.move_to_end(k)
+            else:
+                self.intervals[k] = self._integrate(k)
+                self.kept += sum(steps.size for steps in self.intervals[k])
+                while self.kept > RK4_DENSE_KEPT and len(self.intervals) > 1:
+                    _, dropped = self.intervals.popitem(last=False)
+                    self.kept -= sum(steps.size for steps in dropped)
+            out.append((k, where, self.intervals[k]))
+        return out
 
     def __call__(self, t):
         times = np.asarray(t, dtype=float)
         flat = times.reshape(-1)
         out = np.empty((self.n, len(flat)))
-        for k, where in _by_interval(self.grid, flat):
-            out[:, where] = self._interval(k, flat[where])
+        for _, where, segments in self.pieces(flat):
+            for steps, inside in _RK4Steps.split(segments, flat[where]):
+                out[:, where[inside]] = steps.states(flat[where][inside]).T
         return out[:, 0] if times.ndim == 0 else out
 
-    def _interval(self, k, times):
-        """The states at `times` (within sample interval k) from the RK4 steps from sample k."""
+    def windings_at(self, times):
+        """(len(times) × elements) each 3D rotational element's angle at each time on the branch the
+        step that gives it followed (Kernel.windings_between from the step's start); None without
+        such elements."""
+        if self.recorded is None:
+            return None
+        times = np.asarray(times, dtype=float).reshape(-1)
+        out = np.empty((len(times), self.recorded.shape[1]))
+        for _, where, segments in self.pieces(times):
+            for steps, inside in _RK4Steps.split(segments, times[where]):
+                out[where[inside]] = steps.windings(self.kernel, times[where][inside])
+        return out
+
+    def _integrate(self, k):
+        """[_RK4Steps of each segment between jumps] from sample k to sample k + 1."""
         s, kernel = self.settings, self.kernel
         t0, t_end = float(self.grid[k]), float(self.grid[k + 1])
-        want, back = np.unique(times, return_inverse=True)
-        got = np.empty((self.n, len(want)))
         y = self.states[k].copy()
-        got[:, want <= t0] = y[:, None]
-        for t1 in sorted(d for d in self.switches if t0 < d < t_end) + [t_end]:
-            inside = (want > t0) & (want <= t1)
-            seg = np.concatenate(([t0], want[inside]))
-            if seg[-1] != t1:
-                seg = np.append(seg, t1)
-            seg_out = np.empty((len(seg), self.n))
-            seg_out[0] = y
-            status, done, _, _, t_reached, _ = _k.integrate_rk4(
-                y, t0, t1, seg, seg_out, float(s.step), int(s.max_steps), self.inputs, float(s.alpha),
-                kernel.params, t1 if t1 in self.switches else 0.0, self.kinks, _monitor("RK4"))
-            if status != 0:
-                raise SimulationError(f"the dense output between t = {t0:.6g} s and {t_end:.6g} s: the RK4 "
-                                      f"integrator failed on integrating that interval again "
-                                      f"({failure_text(kernel, status, 'RK4', s.step, y, t_reached)})", t0)
-            got[:, inside] = seg_out[1:1 + int(inside.sum())].T
-            y, t0 = seg_out[len(seg) - 1].copy(), t1
-        return got[:, back]
+        angles = None if self.recorded is None else self.recorded[k]
+        segments = []
+        self.integrations += 1
+        with kernel.wound_from_start(angles):
+            for t1 in sorted(d for d in self.switches if t0 < d < t_end) + [t_end]:
+                nodes = _rk4_nodes(t0, t1, float(s.step), self.kinks)
+                seg, rows = _RK4Steps.grid(nodes)
+                seg_out = np.empty((len(seg), self.n + (0 if angles is None else len(angles))))
+                seg_out[0, :self.n] = y
+                if angles is not None:
+                    seg_out[0, self.n:] = angles
+                status, done, _, evals, t_reached, _ = _k.integrate_rk4(
+                    y, t0, t1, seg, seg_out, float(s.step), int(s.max_steps), self.inputs, float(s.alpha),
+                    kernel.params, t1 if t1 in self.switches else 0.0, self.kinks, _monitor("RK4"))
+                self.evaluations += int(evals)
+                if status != 0 or done != len(seg):
+                    raise SimulationError(f"the dense output between t = {t0:.6g} s and {t_end:.6g} s: the RK4 "
+                                          f"integrator failed on integrating that interval again "
+                                          f"({failure_text(kernel, status, 'RK4', s.step, y, t_reached)})", t0)
+                segments.append(_RK4Steps(nodes, seg, rows, seg_out, self.n))
+                y, t0 = seg_out[-1, :self.n].copy(), t1
+                angles = None if angles is None else seg_out[-1, self.n:].copy()
+        return segments
+
+
+def _rk4_nodes(t0, t_end, step, kinks) -> np.ndarray:
+    """The ends of the steps kernels.integrate_rk4 takes from t0 to t_end (t0 first): the fixed
+    step, the step before each kink and before t_end shortened to end there, the same floating-
+    point operations as its loop's, so the same times."""
+    nodes, t = [t0], t0
+    ik = int(np.searchsorted(kinks, t, side="right"))
+    while t < t_end:
+        while ik < len(kinks) and kinks[ik] <= t:
+            ik += 1
+        end = float(kinks[ik]) if ik < len(kinks) and kinks[ik] < t_end else t_end
+        t = t + min(step, abs(end - t))
+        nodes.append(t)
+    return np.array(nodes)
+
+
+class _RK4Steps:
+    """The RK4 steps of one segment of a sample interval: each step's cubic Hermite polynomial kept
+    by its values at four points (its ends and two inner points, near a third and two thirds, as
+    integrate_rk4 read them), and with 3D rotational elements the angles it recorded at its start."""
+
+    def __init__(self, nodes, times, rows, values, ny):
+        self.nodes = nodes
+        self.h = np.diff(nodes)
+        first = rows[:-1]                                  # the row of each step's start
+        short = rows[1:] - first == 1                      # a step without inner points: linear
+        self.s = np.empty((len(self.h), 2))
+        start, end = values[first], values[rows[1:]]
+        self.values = np.empty((len(self.h), 4, values.shape[1]))
+        self.values[:, 0], self.values[:, 3] = start, end
+        for j in (1, 2):
+            row = np.minimum(first + j, len(times) - 1)
+            self.s[:, j - 1] = np.where(short, j / 3.0, (times[row] - nodes[:-1]) / np.where(self.h > 0, self.h, 1.0))
+            self.values[:, j] = np.where(short[:, None], start + j / 3.0 * (end - start), values[row])
+        self.ny = ny
+        self.size = self.values.size
+
+    @staticmethod
+    def grid(nodes):
+        """(the times integrate_rk4 is to write, the index of each node among them): every node, and
+        inside each step two points near a third and two thirds of it, where they lie clear of its
+        ends by more than the kernel's tolerance (1e-12·max(1, |t|)); none in a shorter step."""
+        times, rows = [nodes[0]], [0]
+        for a, b in zip(nodes[:-1], nodes[1:]):
+            h = b - a
+            if h > 12e-12 * max(1.0, abs(b)):
+                times += [a + h / 3.0, a + 2.0 * h / 3.0]
+            times.append(b)
+            rows.append(len(times) - 1)
+        return np.array(times), np.array(rows)
+
+    @staticmethod
+    def split(segments, times):
+        """[(segment, a boolean mask of `times` in it)]: a time in (start, end] of a segment, the
+        first's start too (a time at a jump is read at the end of the segment before it)."""
+        ends = np.array([steps.nodes[-1] for steps in segments[:-1]])
+        which = np.searchsorted(ends, times, side="left")
+        return [(steps, which == j) for j, steps in enumerate(segments) if np.any(which == j)]
+
+    def _step(self, times):
+        i = np.clip(np.searchsorted(self.nodes, times, side="right") - 1, 0, len(self.h) - 1)
+        s = np.clip((times - self.nodes[i]) / np.where(self.h[i] > 0, self.h[i], 1.0), 0.0, 1.0)
+        return i, s
+
+    def states(self, times):
+        """(len(times) × ny) the states at `times`, on their steps' cubics (Lagrange's form through
+        the four values kept, the cubic integrate_rk4 reads, to rounding)."""
+        i, s = self._step(times)
+        a, b = self.s[i, 0], self.s[i, 1]
+        weights = np.column_stack((-(s - a) * (s - b) * (s - 1.0) / (a * b),
+                                   s * (s - b) * (s - 1.0) / (a * (a - b) * (a - 1.0)),
+                                   s * (s - a) * (s - 1.0) / (b * (b - a) * (b - 1.0)),
+                                   s * (s - a) * (s - b) / ((1.0 - a) * (1.0 - b))))
+        return np.einsum("ij,ijk->ik", weights, self.values[i, :, :self.ny])
+
+    def windings(self, kernel, times):
+        """(len(times) × elements) the angles at `times` on the branch of the step that gives each,
+        wound from the angles recorded at its start (Kernel.windings_between)."""
+        i, _ = self._step(times)
+        start = self.values[i, 0]
+        return kernel.windings_between(self.nodes[i], start[:, :self.ny], start[:, self.ny:], times,
+                                       self.states(times))
 
 
 class CompiledStepper(Stepper):

@@ -111,6 +111,7 @@ class FmuResult:
         #: The FMU stepped again where a metric reads it (:class:`inerter.fmu.dense.FmuDense`), or
         #: None: a spline through the samples.
         self.fmu_dense = None
+        self._nodes = None                  # _event_nodes', once computed
 
     def __getitem__(self, name):
         self._check(name)
@@ -149,13 +150,15 @@ class FmuResult:
         the solver's run with the same settings and start values takes the same steps (their
         outputs agree bit for bit, tests/test_fmu_dense.py). The values bracketed and refined there
         are the FMU's own (:meth:`dense`). Elsewhere (the FMU restarting at each communication
-        point) none: its samples only."""
+        point) none: its samples only. The solver runs once per result; later calls take its nodes."""
         if self.fmu_dense is None:
             return np.zeros(0)
-        s = self.settings
-        run = self.model.simulate(stop_time=s.stop_time, output_interval=s.output_interval, method=s.method,
-                                  rtol=s.rtol, atol=s.atol, constraint=s.constraint, metrics=False)
-        return run._event_nodes()
+        if self._nodes is None:
+            s = self.settings
+            run = self.model.simulate(stop_time=s.stop_time, output_interval=s.output_interval, method=s.method,
+                                      rtol=s.rtol, atol=s.atol, constraint=s.constraint, metrics=False)
+            self._nodes = run._event_nodes()
+        return self._nodes
 
     def read_the_fmu(self, fmu_path, start_values, instance=None):
         """Let :meth:`dense` read the FMU itself (:class:`inerter.fmu.dense.FmuDense`: the run's FMU,

@@ -46,6 +46,12 @@ ASSEMBLY_TOLERANCE = 1e-6
 #: The augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]] counts as singular at t = 0 when its smallest
 #: singular value is below this fraction of its largest.
 SINGULAR_RATIO = 1e-14
+#: A body's principal moment of inertia at or below this fraction of its largest counts as zero
+#: (:meth:`Mechanism.check_free_spins`).
+FREE_SPIN_RATIO = 1e-12
+#: A body's spin counts as held by its joints where it moves their constraint rows C_v by more
+#: than this fraction of ‖C_v‖ (a joint's point off the spin axis by more than that, relative).
+HELD_RATIO = 1e-9
 #: A run that stops where the joints' C_v has a smallest singular value below this fraction of its largest
 #: names them as nearly dependent (:meth:`Mechanism.diagnose`).
 DEPENDENT_RATIO = 1e-4
@@ -192,6 +198,7 @@ class Mechanism:
                              "derives", "internal states not derived")
         self._meet_limits(groups)
         self.check_mounts(self.q0)
+        self.check_free_spins(self.q0)
         self.check_mass_matrix(self.q0, self.v0)
 
     def _bodies(self, scene):
@@ -579,6 +586,56 @@ class Mechanism:
         return (f"; the joints' constraints are nearly dependent there (joints {', '.join(names)}: smallest/largest "
                 f"singular value {sv[-1] / sv[0]:.2g}): a change point, where the mechanism may move on in more "
                 f"than one way and its accelerations are not determined")
+
+    def check_free_spins(self, q):
+        """At t = 0: a body with mass (not ``massless = true``) has a moment of inertia > 0 about
+        every axis its joints leave it free to turn about, its centre of mass at rest. Such a spin
+        has no mass; an inerter that carries it at one pose (a terminal off the axis) does not at
+        others, where the run stops with the step size collapsing. A point mass whose rotation a
+        joint holds (a prismatic joint, a revolute one about another axis) is fine."""
+        spins = []                                   # (body, unit axis in the body frame, moment, Δv)
+        size = 1 if self.dim == 2 else 3
+        for i, name in enumerate(self.body_names):
+            if self.scene.bodies[name].massless:
+                continue
+            k = self.v_index[i] + self.dim
+            moments, axes = np.linalg.eigh(self.M0[k:k + size, k:k + size])
+            for moment, axis in zip(moments, axes.T):
+                if moment <= FREE_SPIN_RATIO * max(moments[-1], 0.0):
+                    column = np.zeros(self.n)
+                    column[k:k + size] = axis
+                    spins.append((name, axis, float(moment), column))
+        if not spins:
+            return
+        Z = np.column_stack([spin[3] for spin in spins])
+        null = np.zeros(len(spins))
+        null[0] = 1.0
+        if self.m:
+            Cq = self.constraints(q, np.zeros(self.n))[1]
+            _, sv, Vt = np.linalg.svd(Cq @ Z)
+            rank = int(np.sum(sv > HELD_RATIO * max(1.0, np.linalg.norm(Cq, 2))))
+            if rank == len(spins):
+                return
+            null = Vt[-1]
+        name, axis, moment, _ = spins[int(np.argmax(np.abs(null)))]
+        raise self._free_spin_error(name, axis, moment)
+
+    def _free_spin_error(self, name, axis, moment):
+        """The error of :meth:`check_free_spins` for body `name`'s spin about `axis` (body frame)."""
+        spec = self.scene.bodies[name]
+        J = np.asarray(spec.inertia, dtype=float)
+        value = float(J) if J.ndim == 0 else ([float(x) for x in np.diag(J)]
+                                              if np.count_nonzero(J - np.diag(np.diag(J))) == 0
+                                              else [[float(x) for x in row] for row in J])
+        joints = [f"{j.name}: {j.type}" for j in self.scene.joints.values()
+                  if name in (self.scene.points[j.point_a].body, self.scene.points[j.point_b].body)]
+        held = f"which its joints ({', '.join(joints)}) leave free" if joints else "and no joint holds it"
+        about = "" if self.dim == 2 else \
+            f" about its axis [{', '.join(f'{x + 0.0:.6g}' for x in axis * np.sign(axis[np.argmax(np.abs(axis))]))}]"
+        return SceneError(self.scene.source, f"bodies.{name}.inertia", value,
+                          "a moment of inertia > 0 about every axis its joints leave free (a point mass where a "
+                          "joint holds its rotation), or massless = true where inerters carry that rotation",
+                          f"body '{name}' turns freely with no inertia: moment {moment:.3g} kg.m2{about}, {held}")
 
     def check_mass_matrix(self, q, v):
         """At t = 0: the augmented matrix [[M + M_I, C_vᵀ], [C_v, 0]] must be non-singular, or some

@@ -108,22 +108,66 @@ class GroundMotion:
         return f"acceleration: {' + '.join(parts)}, scale {self.scale:g}"
 
 
-def read_at2(path, max_points=10_000_000):
+class RecordValueError(ValueError):
+    """A record's value that is read but not allowed (not finite, or above the magnitude limit)."""
+
+
+#: The line of an .AT2 file its values begin on (after the four header lines).
+AT2_FIRST_VALUE_LINE = 5
+
+
+def read_at2(path, max_points=10_000_000, max_magnitude=math.inf):
     """(times, accelerations in g) of a PEER NGA record (.AT2): four header lines, the fourth
     giving NPTS and DT (``NPTS=  5590, DT= .0050 SEC``), then NPTS values in g, several per line.
-    Raises ValueError naming what is wrong."""
+    Raises ValueError naming the line of the file that is wrong, what it holds and what was
+    expected; :class:`RecordValueError` for a value that is not finite or of magnitude above
+    `max_magnitude` (g)."""
     path = Path(path)
     with path.open("r", encoding="utf-8", errors="replace") as f:
         header = [f.readline() for _ in range(4)]
         npts, dt = _at2_size(header[3])
         if npts > max_points:
-            raise ValueError(f"NPTS = {npts} is more than the {max_points} points a record may have")
-        values = np.array(f.read(32 * (npts + 1)).split()[:npts + 1], dtype=float)
-    if len(values) != npts:
-        raise ValueError(f"the header gives NPTS = {npts} but the file holds {len(values)} values")
-    if not np.all(np.isfinite(values)):
-        raise ValueError("a value is not finite")
+            raise ValueError(f"line 4: NPTS = {npts}, more than the {max_points} points a record may have")
+        text = f.read(32 * (npts + 1))
+    tokens = text.split()[:npts + 1]
+    try:
+        values = np.array(tokens, dtype=float)
+    except ValueError:
+        index = next((i for i, token in enumerate(tokens) if not _is_number(token)), None)
+        if index is None:
+            raise
+        raise ValueError(f"line {_at2_line(text, index)}: {tokens[index]!r} (value {index + 1} of NPTS) "
+                         f"is not a number") from None
+    if len(values) < npts:
+        raise ValueError(f"line {_at2_line(text, len(values) - 1) if len(values) else AT2_FIRST_VALUE_LINE - 1}: "
+                         f"the file ends after {len(values)} values, expected NPTS = {npts} (line 4)")
+    if len(values) > npts:
+        raise ValueError(f"line {_at2_line(text, npts)}: {tokens[npts]!r} is value {npts + 1}, expected "
+                         f"NPTS = {npts} values (line 4)")
+    bad = np.flatnonzero(~np.isfinite(values) | (np.abs(values) > max_magnitude))
+    if len(bad):
+        index = int(bad[0])
+        raise RecordValueError(f"line {_at2_line(text, index)}, value {index + 1} of NPTS: {float(values[index])!r} g")
     return np.arange(npts) * dt, values
+
+
+def _is_number(token: str) -> bool:
+    try:
+        np.array([token], dtype=float)
+    except ValueError:
+        return False
+    return True
+
+
+def _at2_line(text: str, index: int) -> int:
+    """The line of the file holding value `index` (0-based) of an .AT2 file's values, `text`
+    (the file after its header)."""
+    count = 0
+    for number, line in enumerate(text.split("\n"), start=AT2_FIRST_VALUE_LINE):
+        count += len(line.split())
+        if count > index:
+            return number
+    return AT2_FIRST_VALUE_LINE + text.count("\n")
 
 
 def _at2_size(line):
@@ -132,11 +176,15 @@ def _at2_size(line):
     npts = re.search(r"NPTS\s*=\s*(\d+)", line, re.IGNORECASE)
     dt = re.search(r"DT\s*=\s*([0-9.eE+-]+)", line, re.IGNORECASE)
     if not npts or not dt:
-        raise ValueError(f"the fourth header line should give NPTS and DT, e.g. 'NPTS=  5590, DT= .0050 SEC'; "
-                         f"it reads {line.strip()[:80]!r}")
-    n, step = int(npts.group(1)), float(dt.group(1))
+        raise ValueError(f"line 4: {line.strip()[:80]!r}, expected the fourth header line to give NPTS and DT, "
+                         f"e.g. 'NPTS=  5590, DT= .0050 SEC'")
+    n = int(npts.group(1))
+    try:
+        step = float(dt.group(1))
+    except ValueError:
+        raise ValueError(f"line 4: DT = {dt.group(1)!r} is not a number") from None
     if n < 2 or not step > 0:
-        raise ValueError(f"NPTS = {n} and DT = {step}: expected at least 2 points and DT > 0")
+        raise ValueError(f"line 4: NPTS = {n} and DT = {step:g}, expected at least 2 points and DT > 0")
     return n, step
 
 

@@ -566,7 +566,7 @@ def _read_record(r: _Reader, spec, fld, dimension, folder, single_axis=False):
     """A record: (times, values[dim, n]) in m/s², or with `single_axis` (axis index, (times,
     values[1, n])). A CSV file has time and one column per axis (an `axis` only with one column);
     a .AT2 file (PEER NGA) one axis in g."""
-    from inerter.scene.ground_motion import STANDARD_GRAVITY, read_at2
+    from inerter.scene.ground_motion import STANDARD_GRAVITY
     if single_axis:
         r.table(spec, fld, {"file": True, "axis": False, "unit": False})
     name = spec["file"]
@@ -587,18 +587,7 @@ def _read_record(r: _Reader, spec, fld, dimension, folder, single_axis=False):
         if axis >= dimension or axis + 1 != value:
             raise r.error(f"{fld}.axis", value, f"an axis 1..{dimension}", "out of range")
     if at2:
-        try:
-            times, values = read_at2(path, MAX_RECORD_SAMPLES)
-        except FileNotFoundError:
-            raise r.error(f"{fld}.file", str(path), "an existing PEER NGA record (.AT2)", "file not found")
-        except (OSError, ValueError) as exc:
-            raise r.error(f"{fld}.file", str(path), "a PEER NGA record (.AT2: 4 header lines, NPTS and DT "
-                          "in the fourth, then NPTS values in g)", f"unreadable ({exc})")
-        from inerter.scene.expressions import MAX_MAGNITUDE
-        big = np.flatnonzero(np.abs(values) * STANDARD_GRAVITY > MAX_MAGNITUDE)
-        if len(big):
-            raise r.error(f"{fld}.file", str(path), f"values in g of magnitude at most {MAX_MAGNITUDE:g} m/s²",
-                          f"wrong value (value {big[0] + 1} of NPTS: {float(values[big[0]])!r} g)")
+        times, values = _read_at2_record(r, fld, path)
         values = values[None, :]
     else:
         table = _read_csv_record(r, fld, path, 1 if axis is not None else dimension, unit)
@@ -611,6 +600,22 @@ def _read_record(r: _Reader, spec, fld, dimension, folder, single_axis=False):
         full[axis] = values[0]
         values = full
     return times, values
+
+
+def _read_at2_record(r: _Reader, fld, path):
+    """A PEER NGA record's (times, values in g), its errors naming the file's line that is wrong."""
+    from inerter.scene.expressions import MAX_MAGNITUDE
+    from inerter.scene.ground_motion import STANDARD_GRAVITY, RecordValueError, read_at2
+    try:
+        return read_at2(path, MAX_RECORD_SAMPLES, MAX_MAGNITUDE / STANDARD_GRAVITY)
+    except FileNotFoundError:
+        raise r.error(f"{fld}.file", str(path), "an existing PEER NGA record (.AT2)", "file not found") from None
+    except RecordValueError as exc:
+        raise r.error(f"{fld}.file", str(path), f"finite values in g of magnitude at most {MAX_MAGNITUDE:g} m/s²",
+                      f"wrong value ({exc})") from None
+    except (OSError, ValueError) as exc:
+        raise r.error(f"{fld}.file", str(path), "a PEER NGA record (.AT2: 4 header lines, NPTS and DT "
+                      "in the fourth, then NPTS values in g)", f"unreadable ({exc})") from None
 
 
 def _data_lines(text: str) -> list[int]:
@@ -978,10 +983,8 @@ def _read_parameter(r: _Reader, spec, fld, p: "elements.Parameter"):
         return p.default
     if p.size > 1:
         return tuple(float(x) for x in r.vector(spec, p.key, fld, p.size, unit_length=True))
-    minimum = p.minimum if p.minimum != -math.inf else None
-    value = r.number(spec, p.key, fld, minimum=minimum, exclusive=p.strict, required=p.required,
-                     unit=_fixed_unit(p.unit))
-    if value > p.maximum:
+    value = r.number(spec, p.key, fld, required=p.required, unit=_fixed_unit(p.unit))
+    if not p.admits(value):
         raise r.error(f"{fld}.{p.key}", value, p.expected(), "out of range")
     return value
 

@@ -59,7 +59,7 @@ import numpy as np
 
 from inerter.common.atomic import replace_file
 from inerter.common.errors import InerterError, SceneError
-from inerter.common.options import output_path
+from inerter.common.options import count, output_folder
 
 try:  # POSIX: one sweep at a time writes a results file
     import fcntl
@@ -119,6 +119,9 @@ def parse_vary(text: str) -> tuple[str, list]:
                              "number NUM ≥ 1 (e.g. 1.05:1.8:16)", "not a range") from None
         if num < 1 or not (math.isfinite(start) and math.isfinite(stop)):
             raise SceneError("--vary", name, spec, "finite START and STOP and NUM ≥ 1", "out of range")
+        if num > 1 and start == stop:            # NUM copies of one value: one run, not the NUM asked for
+            raise SceneError("--vary", name, spec, f"START ≠ STOP for NUM = {num} values (one value: {name}="
+                             f"{parts[0]})", "empty range")
         # 12 significant digits: 1.15, not 1.1500000000000001, in the CSV and in the run keys.
         values = [float(f"{v:.12g}") for v in np.linspace(start, stop, num)]
     else:
@@ -198,6 +201,7 @@ class Sweep:
                 raise SceneError("--vary", name, name, "a parameter of " + str(self.scene) + ": "
                                  + ", ".join(params) + ", or effects.NAME, or experiment.NAME", "unknown name")
         self._check_values()
+        self._check_settings(base)
         if self.model == "fmu":         # a name the FMU cannot take fails every run alike: say so now
             from inerter.fmu.run import start_values
             for name, values in [*self.fixed.items(), *((n, v[0]) for n, v in self.axes)]:
@@ -237,6 +241,22 @@ class Sweep:
                 except SceneError as exc:           # named by its option, by the scene reader or here
                     text = str(exc)
                     raise SweepError(text if text.startswith(origin + ":") else f"{origin}: {text}") from None
+
+    def _check_settings(self, base):
+        """--stop-time and --step read as the runs read them (the experiment's own checks), before any
+        worker starts: a value every run would refuse is an error of the sweep, not a failed row each."""
+        if self.step is not None and self.model != "fmu":
+            raise SweepError(f"--step {self.step}: the FMU's communication step, without --model fmu (expected "
+                             "--model fmu beside it; the solver's samples are set by --set "
+                             "experiment.output_interval=SECONDS)")
+        given = {k: v for k, v in (("stop_time", self.stop_time), ("communication_step", self.step),
+                                   ("output_interval", self.step)) if v is not None}
+        if given:
+            option = " and ".join(o for o, v in (("--stop-time", self.stop_time), ("--step", self.step)) if v is not None)
+            try:
+                base.scene.experiment_with(given, f"{option}: {self.scene}")
+            except SceneError as exc:
+                raise SweepError(str(exc)) from None
 
     @property
     def settings(self) -> dict:
@@ -925,11 +945,22 @@ def add_run_arguments(p: argparse.ArgumentParser):
                         "port) and print its link; with --scheduler, print that scheduler's link")
 
 
+def check_run_arguments(args):
+    """The options of ``sweep`` and ``study`` that no scene is needed to check, before anything runs."""
+    output_folder(args.out)
+    count(args.workers, "--workers")
+    count(args.max_runs, "--max-runs", least=0)
+
+
 def _guarded(fn, argv):
     try:
         return fn(argv)
     except InerterError as exc:
         print(f"inerter: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:            # an output file that cannot be written (as inerter run says it)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"inerter: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("inerter: interrupted; the runs that finished are in results.csv: run the same command again "
@@ -973,7 +1004,7 @@ def sweep_parser() -> argparse.ArgumentParser:
 def _sweep(argv) -> int:
     from inerter.scene.overrides import parse_set, set_origins
     args = sweep_parser().parse_args(argv)
-    output_path(args.out)
+    check_run_arguments(args)
     sweep = Sweep(args.scene, [parse_vary(v) for v in args.vary], parse_set(args.set), args.model,
                   args.stop_time, args.step, args.path, origins=set_origins(args.set))
     report = run_sweep(sweep, args.out, workers=args.workers, scheduler=args.scheduler,
@@ -1000,7 +1031,7 @@ def sweep_plot_parser() -> argparse.ArgumentParser:
 def _sweep_plot(argv) -> int:
     args = sweep_plot_parser().parse_args(argv)
     if args.out is not None:
-        output_path(args.out, expected="a PNG file path, such as out/sweep/plot.png")
+        output_folder(args.out, file=True)
     out = args.out or Path(args.results).parent / f"{_file_part(args.y)}_vs_{_file_part(args.x)}.png"
     out = plot_results(args.results, args.x, args.y, out, hue=args.hue, title=args.title)
     print(f"wrote {out}")

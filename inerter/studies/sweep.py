@@ -71,6 +71,10 @@ SWEEP_FILE = "sweep.json"
 MODELS = ("solver", "fmu")
 PATHS = ("numpy", "compiled")
 
+#: The units of the experiment settings that have one (the others are dimensionless or names).
+EXPERIMENT_UNITS = {"stop_time": "s", "output_interval": "s", "communication_step": "s", "step": "s",
+                    "baumgarte": "1/s"}
+
 #: Columns before the parameters, between the parameters and the metrics, and after the metrics.
 HEAD_COLUMNS = ("key", "scene", "model")
 STATUS_COLUMNS = ("status", "error")
@@ -217,6 +221,7 @@ class Sweep:
                 if key not in self.metric_columns:
                     self.metric_columns.append(key)
         self.parameter_columns = list(self.fixed) + names
+        self.units = self._units(base)
         clash = set(self.parameter_columns) & (set(META_COLUMNS) | set(self.metric_columns))
         if clash:
             raise SweepError(f"{', '.join(sorted(clash))}: a name of both a parameter and a column of "
@@ -241,6 +246,18 @@ class Sweep:
                 except SceneError as exc:           # named by its option, by the scene reader or here
                     text = str(exc)
                     raise SweepError(text if text.startswith(origin + ":") else f"{origin}: {text}") from None
+
+    def _units(self, base) -> dict:
+        """The unit of each column of results.csv that has one (sweep.json's ``units``): a parameter's
+        SI unit (the values in the file are SI, as ``--set`` takes them), an experiment setting's, a
+        metric's (Hz for frequencies, its signal's unit otherwise) and the run time's."""
+        from inerter.api import metric_units
+        known = {p["name"]: p["unit"] for p in base.parameter_info()}
+        known.update({f"experiment.{k}": u for k, u in EXPERIMENT_UNITS.items()})
+        units = {name: known[name] for name in self.parameter_columns if known.get(name)}
+        units.update(metric_units(base))
+        units["run_time_s"] = "s"
+        return units
 
     def _check_settings(self, base):
         """--stop-time and --step read as the runs read them (the experiment's own checks), before any
@@ -284,7 +301,8 @@ class Sweep:
     def describe(self) -> dict:
         return {"scene": str(self.scene), "scene_sha256": self.digest, "name": self.name,
                 "model": self.model, "stop_time": self.stop_time, "step": self.step, "path": self.path,
-                "set": self.fixed, "vary": {n: v for n, v in self.axes}, "runs": len(self.runs())}
+                "set": self.fixed, "vary": {n: v for n, v in self.axes}, "runs": len(self.runs()),
+                "units": self.units}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -862,6 +880,22 @@ def read_results(path) -> tuple[list[str], list[str], list[dict]]:
     return params, metrics, rows
 
 
+def column_units(results) -> dict:
+    """The units of a results file's columns, from the sweep.json beside it (``{}`` without one)."""
+    try:
+        units = json.loads((Path(results).parent / SWEEP_FILE).read_text(encoding="utf-8")).get("units")
+    except (OSError, ValueError, AttributeError):
+        return {}
+    return units if isinstance(units, dict) else {}
+
+
+def _label(name: str, units: dict) -> str:
+    """An axis label: the column and its unit (none for a dimensionless one or a switch)."""
+    from inerter.scene.units import for_reading
+    unit = for_reading(units.get(name))
+    return f"{name} ({unit})" if unit else name
+
+
 def _number(text):
     if text in ("true", "false"):
         return float(text == "true")
@@ -904,8 +938,9 @@ def plot_results(path, x: str, y: str, out, hue: str | None = None, title: str |
         if hue and label and label[0] == "false":
             style["ls"] = "--"
         ax.plot(xs, ys, label=text, **style)
-    ax.set_xlabel(x)
-    ax.set_ylabel(y)
+    units = column_units(path)
+    ax.set_xlabel(_label(x, units))
+    ax.set_ylabel(_label(y, units))
     ax.grid(alpha=0.3)
     if any(label for label in series):
         ax.legend(fontsize=8)

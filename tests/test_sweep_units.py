@@ -1,0 +1,51 @@
+"""The units of a sweep's columns: sweep.json beside results.csv states them, and sweep-plot labels
+its axes with them. Reference: the scene file's own units (lumped_mass_2d: k in N/m, y0 in m, read
+in SI as --set takes them), docs/usage.md's rule for metrics (frequencies in Hz, every other metric
+in its signal's unit: P.r[2] in m, inerter.f in N) and the experiment fields' units (stop_time in s).
+Before, neither results.csv nor sweep.json held a unit and the plot's axes were the bare names."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from conftest import LUMPED
+from inerter.studies import sweep as sw
+
+matplotlib = pytest.importorskip("matplotlib")
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def sweep():
+    """Nothing is run: the units come from the scene, as the columns do."""
+    return sw.Sweep(LUMPED, [("y0", [1.1, 1.2]), ("effects.centripetal", [True, False]),
+                             ("experiment.stop_time", [2.0, 3.0])], {"k": 2e4})
+
+
+def test_sweep_json_states_the_unit_of_each_column(sweep, tmp_path):
+    units = sweep.describe()["units"]
+    assert {k: units[k] for k in ("k", "y0", "experiment.stop_time", "run_time_s")} == {
+        "k": "N/m", "y0": "m", "experiment.stop_time": "s", "run_time_s": "s"}
+    assert {k: units[k] for k in sweep.metric_columns} == {
+        "natural_frequency": "Hz", "fundamental_frequency": "Hz", "fundamental_amplitude": "m",
+        "mean_offset": "m", "inerter_force_mean": "N", "inerter_force_amplitude": "N"}
+    assert "effects.centripetal" not in units                  # a switch has no unit
+    for column in units:                                        # every unit names a column of results.csv
+        assert column in sweep.parameter_columns + sweep.metric_columns + ["run_time_s", "natural_frequencies"]
+
+
+def test_sweep_plot_labels_its_axes_with_the_units(sweep, tmp_path):
+    (tmp_path / "sweep.json").write_text(json.dumps(sweep.describe()))
+    rows = ["key,scene,model,y0,effects.centripetal,status,error,fundamental_frequency,run_time_s",
+            "a,lumped_mass_2d,solver,1.1,true,ok,,1.51,0.1", "b,lumped_mass_2d,solver,1.2,true,ok,,1.50,0.1"]
+    (tmp_path / "results.csv").write_text("\n".join(rows) + "\n")
+    fig, ax = plt.subplots()
+    sw.plot_results(tmp_path / "results.csv", "y0", "fundamental_frequency", None, ax=ax)
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("y0 (m)", "fundamental_frequency (Hz)")
+    (tmp_path / "sweep.json").unlink()                         # a results file alone: the bare names
+    fig, ax = plt.subplots()
+    sw.plot_results(tmp_path / "results.csv", "y0", "fundamental_frequency", None, ax=ax)
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("y0", "fundamental_frequency")
+    plt.close("all")

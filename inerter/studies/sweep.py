@@ -740,8 +740,10 @@ class DaskClient:
                 # any free port rather than on the dashboard's 8787.
                 http = {"dashboard": True, "dashboard_address": self.dashboard} if self.dashboard else \
                     {"dashboard": False, "dashboard_address": "127.0.0.1:0"}
+                # CRITICAL: a run's failure is its row; what dask logs as it shuts down, stopped part-way (a
+                # worker's heartbeat to the closed scheduler, a cancelled result), is a traceback on stderr.
                 self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                            scheduler_kwargs=http, silence_logs=logging.ERROR)
+                                            scheduler_kwargs=http, silence_logs=logging.CRITICAL)
             self.client = Client(self.cluster)
         if self.dashboard is not None:
             where = f" (the dashboard of the scheduler at {self.scheduler}, if it serves one)" if self.scheduler else ""
@@ -987,7 +989,18 @@ def check_run_arguments(args):
     count(args.max_runs, "--max-runs", least=0)
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill PID``), stopping a sweep as Ctrl-C does: the cluster closed, the rows kept."""
+
+
+def _terminate(signum, frame):
+    raise Terminated()
+
+
 def _guarded(fn, argv):
+    import signal
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
     try:
         return fn(argv)
     except InerterError as exc:
@@ -997,10 +1010,13 @@ def _guarded(fn, argv):
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"inerter: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("inerter: interrupted; the runs that finished are in results.csv: run the same command again "
-              "to go on", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        print(f"inerter: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}; the runs that finished "
+              "are in results.csv: run the same command again to go on", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
 
 
 def print_report(report: SweepReport, sweep: Sweep):

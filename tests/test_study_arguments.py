@@ -51,3 +51,22 @@ def test_a_bad_argument_is_one_line_and_exit_2_before_anything_runs(folder, caps
     assert main(argv) == 2
     one_line_error(capsys, *fragments)
     assert sorted(os.listdir(folder)) == ["afile"]          # no folder made, no run written
+
+
+@pytest.mark.parametrize("text, values", [
+    ("effects.gravity=[0, -9.81],[0,0]", [[0, -9.81], [0, 0]]),
+    ('y0={value = 1100, unit = "mm"},1.2', [{"value": 1100, "unit": "mm"}, 1.2]),
+    ("b=max(1, m),2*m", ["max(1, m)", "2*m"]),
+    ("experiment.method=RK4,DOP853", ["RK4", "DOP853"]),
+])
+def test_vary_splits_its_values_at_the_commas_between_them(text, values):
+    """Each value is read as --set reads it (a vector, a table with a unit, an expression): the
+    commas inside one are not separators. Before, `[0, -9.81],[0,0]` was split into '[0', ' -9.81]',
+    ... and refused ('wrong shape (got '[0'...)')."""
+    from inerter.scene.overrides import parse_set
+    from inerter.studies.sweep import parse_vary
+    name, got = parse_vary(text)
+    assert got == values
+    assert got == [parse_set([f"{name}={v}"])[name] for v in
+                   ({"y0": ['{value = 1100, unit = "mm"}', "1.2"], "b": ["max(1, m)", "2*m"],
+                     "effects.gravity": ["[0, -9.81]", "[0,0]"], "experiment.method": ["RK4", "DOP853"]}[name])]

@@ -129,11 +129,31 @@ def parse_vary(text: str) -> tuple[str, list]:
         # 12 significant digits: 1.15, not 1.1500000000000001, in the CSV and in the run keys.
         values = [float(f"{v:.12g}") for v in np.linspace(start, stop, num)]
     else:
-        items = [s.strip() for s in spec.split(",")]
+        items = [s.strip() for s in _split_values(spec)]
         if any(not s for s in items):
             raise SceneError("--vary", name, spec, "values separated by commas", "empty value")
         values = [_value(name, s) for s in items]
     return name, values
+
+
+def _split_values(spec: str) -> list[str]:
+    """``V1,V2,...`` split at the commas between values, not at those inside a vector or a table
+    (``[0, -9.81],[0, 0]``, ``{value = 1100, unit = "mm"},...``), nor inside quotes or an
+    expression's call (``max(1, b),2``)."""
+    items, depth, quote, start = [], 0, None, 0
+    for i, c in enumerate(spec):
+        if quote:
+            quote = None if c == quote else quote
+        elif c in "\"'":
+            quote = c
+        elif c in "[{(":
+            depth += 1
+        elif c in "]})":
+            depth -= 1
+        elif c == "," and depth == 0:
+            items.append(spec[start:i])
+            start = i + 1
+    return items + [spec[start:]]
 
 
 def _canonical(value):

@@ -288,6 +288,13 @@ class Sweep:
                              "experiment.output_interval=SECONDS)")
         given = {k: v for k, v in (("stop_time", self.stop_time), ("communication_step", self.step),
                                    ("output_interval", self.step)) if v is not None}
+        varied = [n for n, _ in self.axes]
+        for key in given:                  # the option is the runs' setting: a value beside it would go unused
+            name = f"experiment.{key}"
+            if name in varied or name in self.fixed:
+                option = "--stop-time" if key == "stop_time" else "--step"
+                raise SweepError(f"{option}: {name} is also given with {'--vary' if name in varied else '--set'}, "
+                                 f"and {option} would set every run's {key}: give one of them")
         if given:
             option = " and ".join(o for o, v in (("--stop-time", self.stop_time), ("--step", self.step)) if v is not None)
             try:

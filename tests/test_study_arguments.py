@@ -4,7 +4,7 @@ Before these checks an --out inside a file ended in a traceback (FileExistsError
 --max-runs ran nothing and exited 0, a --stop-time every run refuses failed each run (exit 3), a
 --step without --model fmu was taken and did nothing, --stop-time beside a varied
 experiment.stop_time ran every run to --stop-time under the varied value's label, START:STOP:NUM with START = STOP ran one run
-for NUM, and bench read a bad --signal only after its oracle reference, with a traceback."""
+for NUM, a --scheduler that is no address was a ValueError traceback, and bench read a bad --signal only after its oracle reference, with a traceback."""
 from __future__ import annotations
 
 import os
@@ -34,6 +34,8 @@ SWEEP = ["sweep", str(LUMPED), "--vary", "y0=1.1,1.2", "--no-progress"]
     (SWEEP + ["--out", "s", "--stop-time", "-1"], ["--stop-time: ", "experiment.stop_time: out of range (got -1.0"]),
     (SWEEP + ["--out", "s", "--stop-time", "nan"], ["--stop-time: ", "experiment.stop_time: is not finite"]),
     (SWEEP + ["--out", "s", "--step", "0.01"], ["--step 0.01: ", "without --model fmu"]),
+    (SWEEP + ["--out", "s", "--scheduler", "nonsense"],
+     ["--scheduler: not an address: missing port number in address 'nonsense' (got 'nonsense'"]),
     (["sweep", str(LUMPED), "--vary", "experiment.stop_time=2,6", "--stop-time", "4", "--out", "s"],
      ["--stop-time: experiment.stop_time is also given with --vary"]),
     (SWEEP + ["--out", "s", "--model", "fmu", "--step", "0.02", "--set", "experiment.output_interval=0.01"],

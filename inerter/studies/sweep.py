@@ -59,7 +59,7 @@ import numpy as np
 
 from inerter.common.atomic import replace_file
 from inerter.common.errors import InerterError, SceneError
-from inerter.common.options import count, output_folder
+from inerter.common.options import OptionError, count, output_folder
 
 try:  # POSIX: one sweep at a time writes a results file
     import fcntl
@@ -752,6 +752,8 @@ class DaskClient:
                     break
                 except (OSError, TimeoutError) as exc:
                     raise SweepError(f"--scheduler {self.scheduler}: cannot connect ({exc})") from None
+                except ValueError as exc:           # not an address (check_address said it, for the command)
+                    raise SweepError(f"--scheduler {self.scheduler}: {exc}") from None
                 except AssertionError:
                     # distributed's Client asserts that the scheduler's first reply is one message; on a
                     # scheduler busy with other clients it can come batched with another: connect anew.
@@ -1014,6 +1016,18 @@ def check_run_arguments(args):
     output_folder(args.out)
     count(args.workers, "--workers")
     count(args.max_runs, "--max-runs", least=0)
+    if args.scheduler:
+        check_address(args.scheduler)
+
+
+def check_address(address: str):
+    """--scheduler's value read as distributed reads it (scheme, host and port; no connection)."""
+    from distributed.comm.addressing import get_address_host_port
+    try:
+        get_address_host_port(address)
+    except ValueError as exc:               # distributed's own words say why
+        raise OptionError("--scheduler", address, "a scheduler's address, such as tcp://HOST:8786",
+                          f"not an address: {exc}") from None
 
 
 class Terminated(KeyboardInterrupt):

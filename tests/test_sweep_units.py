@@ -49,3 +49,13 @@ def test_sweep_plot_labels_its_axes_with_the_units(sweep, tmp_path):
     sw.plot_results(tmp_path / "results.csv", "y0", "fundamental_frequency", None, ax=ax)
     assert (ax.get_xlabel(), ax.get_ylabel()) == ("y0", "fundamental_frequency")
     plt.close("all")
+
+
+def test_a_second_sweep_into_the_folder_keeps_the_units_of_the_first(sweep, tmp_path):
+    """results.csv keeps the rows of both sweeps (resuming is by run key); sweep.json describes the
+    last, and keeps the units of the columns only the first had (b of two_bar_2d, in kg)."""
+    (tmp_path / "sweep.json").write_text(json.dumps({"units": {"b": "kg", "C_y_peak_to_peak": "m"}}))
+    sw.write_description(sweep, tmp_path)
+    units = json.loads((tmp_path / "sweep.json").read_text())["units"]
+    assert units["b"] == "kg" and units["C_y_peak_to_peak"] == "m" and units["y0"] == "m"
+    assert json.loads((tmp_path / "sweep.json").read_text())["vary"]["y0"] == [1.1, 1.2]

@@ -812,7 +812,7 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
         report.failed_before = sum(1 for r in results.rows if r.get("key") in keys and r.get("status") == "failed")
         if max_runs is not None:
             todo = todo[:max(0, max_runs)]
-        (out / SWEEP_FILE).write_text(json.dumps(sweep.describe(), indent=2, default=str))
+        write_description(sweep, out)
         if todo:
             fmu_path = None
             if sweep.model == "fmu":
@@ -839,6 +839,14 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
     report.pending = report.total - report.skipped - report.ok - report.failed
     report.wall_time = time.perf_counter() - t_start
     return report
+
+
+def write_description(sweep: Sweep, out: Path):
+    """``out/sweep.json``: this sweep, and the units of every column of results.csv, those of an
+    earlier sweep into the same folder (another scene, other parameters) kept beside this one's."""
+    description = sweep.describe()
+    description["units"] = {**column_units(out / RESULTS_FILE), **description["units"]}
+    (out / SWEEP_FILE).write_text(json.dumps(description, indent=2, default=str))
 
 
 #: A sweep with runs left and no worker for this long stops with an error (its rows are kept).

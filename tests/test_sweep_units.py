@@ -59,3 +59,26 @@ def test_a_second_sweep_into_the_folder_keeps_the_units_of_the_first(sweep, tmp_
     units = json.loads((tmp_path / "sweep.json").read_text())["units"]
     assert units["b"] == "kg" and units["C_y_peak_to_peak"] == "m" and units["y0"] == "m"
     assert json.loads((tmp_path / "sweep.json").read_text())["vary"]["y0"] == [1.1, 1.2]
+
+
+def test_the_natural_frequency_of_a_sweep_follows_its_closed_form(tmp_path):
+    """Each grid point's row (run_one, as a worker runs it) against the linearisation of
+    lumped_mass_2d (the paper's Eq. A.6, docs/results.md): about y = Lb the spring and the inerter
+    act along the mass's line with cos²θ = Lb²/(La² + Lb²) = 1/2, so f = sqrt(k/2 / (m + b/2)) / 2π;
+    and each row's metrics equal inerter.load(scene, **point).simulate(stop_time=...).metrics."""
+    import math
+
+    import inerter
+    from inerter import __version__
+    grid = sw.Sweep(LUMPED, [("k", [5e3, 2e4]), ("b", [0.0, 100.0]), ("m", [1.0, 5.0])], {"experiment.rtol": 1e-8},
+                    stop_time=1.0)
+    for run in grid.runs():
+        task = dict(key=run.key, name=grid.name, model="solver", overrides=run.overrides, version=__version__,
+                    stop_time=1.0, step=None, fmu_path=None, path="compiled", scene_path=str(grid.scene),
+                    scene_digest=grid.digest, scene_content=grid.content)
+        row = sw.run_one(task)
+        k, b, m = (run.overrides[n] for n in ("k", "b", "m"))
+        closed = math.sqrt(k / 2 / (m + b / 2)) / (2 * math.pi)
+        assert row["status"] == "ok" and row["natural_frequency"] == pytest.approx(closed, rel=1e-8), (run, row)
+        alone = inerter.load(LUMPED, **run.overrides).simulate(stop_time=1.0).metrics
+        assert {c: row.get(c) for c in grid.metric_columns} == {c: alone.get(c) for c in grid.metric_columns}

@@ -22,9 +22,10 @@ Resuming. Each run is keyed by a hash of the scene file's content, the run's ove
 ``--set`` values and its varied values) and the run settings (model, stop time, FMU step). A
 sweep started again with the same arguments skips every key already in ``results.csv``: nothing
 finished is computed twice, and a sweep stopped part-way (Ctrl-C, a killed process, ``--max-runs``)
-is finished by running the same command again. A run that fails (an invalid value for that
-combination, such as a negative inertance, or a simulation that stops part-way) is recorded with
-its message and never stops the sweep; ``--retry-failed`` runs the failed keys again.
+is finished by running the same command again. A value the scene refuses (a negative inertance)
+is an error of the whole sweep, before any run; a run that fails (a mechanism singular for that
+combination, a simulation that stops part-way) is recorded with its message and never stops the
+sweep; ``--retry-failed`` runs the failed keys again.
 
 With ``--model fmu`` each worker extracts and instantiates the scene's FMU once, and resets it
 between runs (:class:`FmuSlot`).

@@ -1839,8 +1839,8 @@ def _status_text(kernel, status, method, h, y_last, t_last, max_steps):
     from inerter.engine import simulation as sim
     text = _STATUS_TEXT[status]
     if status == 1 and max_steps is not None:
-        return (f"more than max_steps = {max_steps} integrator steps (step size {h:.3g} s): the scene may be "
-                f"stiff for {method}; try method = \"Radau\" or \"BDF\"")
+        return (f"more than max_steps = {max_steps} integrator steps (step size {h:.3g} s): "
+                + sim.max_steps_advice(method))
     if status == 6:
         return text.format(method=method, h=h, hits=sim.STIFFNESS_HITS)
     if status == 7:

@@ -227,8 +227,8 @@ class StepMonitor:
         h = t - t_old
         if self.steps > self.max_steps:
             raise SimulationError(
-                f"more than max_steps = {self.max_steps} integrator steps (step size {h:.3g} s): the scene may "
-                f"be stiff for {self.method}; try method = \"Radau\" or \"BDF\"", t_old)
+                f"more than max_steps = {self.max_steps} integrator steps (step size {h:.3g} s): "
+                + max_steps_advice(self.method), t_old)
         self.mech.check_step(y_old, solver.y, t, t_old)
         if self.loops:
             self._watch_loops(solver, y_old)
@@ -562,6 +562,16 @@ def dense_windings(run, times, mech):
 #: others restart at every point: RK4, whose last step lands on it, and LSODA, whose state is
 #: Fortran's).
 RUNS_ON = ("DOP853", "RK45", "Radau", "BDF")
+
+
+def max_steps_advice(method: str) -> str:
+    """What to do when a run takes more than max_steps steps: an explicit method's small steps are
+    likely stiffness (an implicit method takes long steps there); an implicit one's, or RK4's fixed
+    ones, are not helped by switching to Radau or BDF."""
+    if method in ("DOP853", "RK45"):
+        return f"the scene may be stiff for {method}; try method = \"Radau\" or \"BDF\""
+    return "raise experiment.max_steps, or " + ("lengthen experiment.step" if method == "RK4" else
+                                                 "loosen experiment.rtol")
 
 
 class Stepper:

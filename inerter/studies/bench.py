@@ -28,7 +28,7 @@ from typing import Callable
 
 import numpy as np
 
-from inerter.common.options import output_path
+from inerter.common.options import OptionError, output_folder
 
 TARGETS = (1e-3, 1e-6, 1e-9)
 
@@ -92,7 +92,7 @@ def signal_columns(mech, signal: str | None) -> list[tuple[str, int]]:
         axis = rest[:-1] if rest.endswith("]") else ""
         if name not in names or axis not in [str(i) for i in range(1, d + 1)]:
             axes = " or ".join(f"P.r[{i}]" for i in range(1, d + 1))
-            raise ValueError(f"--signal {signal!r}: expected {axes} with P one of {', '.join(names)}")
+            raise OptionError("--signal", signal, f"{axes} with P one of {', '.join(names)}", "unknown signal")
         return [(name, int(axis) - 1)]
     return [(name, a) for name in names if mech.points[name].body >= 0 for a in range(d)]
 
@@ -336,10 +336,10 @@ def run_study(scene, stop_time=None, signal=None, paths=("numpy", "compiled"), m
     model = Model(scene, overrides, origins=origins)
     stop = float(stop_time if stop_time is not None else model.scene.experiment.stop_time)
     interval = model.scene.experiment.output_interval
+    extract = signal_extractor(model.mechanism, signal)          # a bad --signal before the reference
     t0 = time.perf_counter()
     reference = reference_states(scene, overrides, stop, interval, origins)
     log(f"{model.name}: oracle reference over 0-{stop:g} s in {time.perf_counter() - t0:.1f} s")
-    extract = signal_extractor(model.mechanism, signal)
     study = Study(model.name, stop, signal or "every point's position")
     solver_paths = [p for p in paths if p != "fmu"]
     sweep(study, model, reference, extract, solver_paths, list(methods), sweeps or SWEEPS, budget, log)
@@ -433,7 +433,9 @@ def main_bench(argv=None) -> int:
 
 def _bench(a, paths, methods, overrides, origins=None) -> int:
     if a.out is not None:
-        output_path(a.out)                     # before the runs
+        output_folder(a.out)                   # before the runs
+    if not a.budget > 0:
+        raise OptionError("--budget", a.budget, "a positive number of CPU seconds")
     study, model, _, _ = run_study(a.scene, a.stop_time, a.signal, paths, methods, QUICK if a.quick else SWEEPS,
                                    a.budget, overrides, origins=origins)
     out = Path(a.out) if a.out is not None else Path("out") / "bench" / model.name

@@ -19,14 +19,15 @@ parameter of a paper scene, with and without the centripetal correction, followe
 from __future__ import annotations
 
 import argparse
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from inerter.studies.sweep import (SweepError, Sweep, _number, add_run_arguments, parse_vary, print_report, read_results,
-                    run_sweep, status_code)
+from inerter.studies.sweep import (SweepError, Sweep, _number, add_run_arguments, check_run_arguments, parse_vary,
+                                   print_report, read_results, run_sweep, status_code)
 
 from inerter.common.locations import scenarios as _shipped_scenarios
-from inerter.common.options import output_path
+from inerter.common.options import OptionError
 
 #: The shipped scenes: the repository's scenarios/, or their copy in an installed package.
 REPO_SCENARIOS = _shipped_scenarios()
@@ -188,10 +189,16 @@ def main(argv=None) -> int:
             a, b = (float(v) for v in args.range.split(":"))
         except ValueError:
             raise SweepError(f"--range {args.range}: expected START:STOP, e.g. 1.05:1.8") from None
+        if not (math.isfinite(a) and math.isfinite(b)) or a == b:
+            raise OptionError("--range", args.range, "finite START ≠ STOP, e.g. 1.05:1.8",
+                              "empty range" if a == b else "out of range")
         span = (a, b)
     if args.points is not None and args.points < 2:
         raise SweepError(f"--points {args.points}: expected at least 2")
-    out = output_path(args.out) if args.out is not None else Path("out") / "study" / study.name
+    if args.out is None:
+        args.out = str(Path("out") / "study" / study.name)
+    check_run_arguments(args)
+    out = Path(args.out)
     sweep = make_sweep(study, args.scenarios, args.points, span, parse_set(args.set), args.model,
                        args.stop_time, args.step, args.path, origins=set_origins(args.set))
     report = run_sweep(sweep, out, workers=args.workers, scheduler=args.scheduler,

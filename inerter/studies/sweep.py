@@ -22,9 +22,10 @@ Resuming. Each run is keyed by a hash of the scene file's content, the run's ove
 ``--set`` values and its varied values) and the run settings (model, stop time, FMU step). A
 sweep started again with the same arguments skips every key already in ``results.csv``: nothing
 finished is computed twice, and a sweep stopped part-way (Ctrl-C, a killed process, ``--max-runs``)
-is finished by running the same command again. A run that fails (an invalid value for that
-combination, such as a negative inertance, or a simulation that stops part-way) is recorded with
-its message and never stops the sweep; ``--retry-failed`` runs the failed keys again.
+is finished by running the same command again. A value the scene refuses (a negative inertance)
+is an error of the whole sweep, before any run; a run that fails (a mechanism singular for that
+combination, a simulation that stops part-way) is recorded with its message and never stops the
+sweep; ``--retry-failed`` runs the failed keys again.
 
 With ``--model fmu`` each worker extracts and instantiates the scene's FMU once, and resets it
 between runs (:class:`FmuSlot`).
@@ -59,7 +60,7 @@ import numpy as np
 
 from inerter.common.atomic import replace_file
 from inerter.common.errors import InerterError, SceneError
-from inerter.common.options import output_path
+from inerter.common.options import OptionError, count, output_folder
 
 try:  # POSIX: one sweep at a time writes a results file
     import fcntl
@@ -70,6 +71,10 @@ RESULTS_FILE = "results.csv"
 SWEEP_FILE = "sweep.json"
 MODELS = ("solver", "fmu")
 PATHS = ("numpy", "compiled")
+
+#: The units of the experiment settings that have one (the others are dimensionless or names).
+EXPERIMENT_UNITS = {"stop_time": "s", "output_interval": "s", "communication_step": "s", "step": "s",
+                    "baumgarte": "1/s"}
 
 #: Columns before the parameters, between the parameters and the metrics, and after the metrics.
 HEAD_COLUMNS = ("key", "scene", "model")
@@ -119,14 +124,37 @@ def parse_vary(text: str) -> tuple[str, list]:
                              "number NUM ≥ 1 (e.g. 1.05:1.8:16)", "not a range") from None
         if num < 1 or not (math.isfinite(start) and math.isfinite(stop)):
             raise SceneError("--vary", name, spec, "finite START and STOP and NUM ≥ 1", "out of range")
+        if num > 1 and start == stop:            # NUM copies of one value: one run, not the NUM asked for
+            raise SceneError("--vary", name, spec, f"START ≠ STOP for NUM = {num} values (one value: {name}="
+                             f"{parts[0]})", "empty range")
         # 12 significant digits: 1.15, not 1.1500000000000001, in the CSV and in the run keys.
         values = [float(f"{v:.12g}") for v in np.linspace(start, stop, num)]
     else:
-        items = [s.strip() for s in spec.split(",")]
+        items = [s.strip() for s in _split_values(spec)]
         if any(not s for s in items):
             raise SceneError("--vary", name, spec, "values separated by commas", "empty value")
         values = [_value(name, s) for s in items]
     return name, values
+
+
+def _split_values(spec: str) -> list[str]:
+    """``V1,V2,...`` split at the commas between values, not at those inside a vector or a table
+    (``[0, -9.81],[0, 0]``, ``{value = 1100, unit = "mm"},...``), nor inside quotes or an
+    expression's call (``max(1, b),2``)."""
+    items, depth, quote, start = [], 0, None, 0
+    for i, c in enumerate(spec):
+        if quote:
+            quote = None if c == quote else quote
+        elif c in "\"'":
+            quote = c
+        elif c in "[{(":
+            depth += 1
+        elif c in "]})":
+            depth -= 1
+        elif c == "," and depth == 0:
+            items.append(spec[start:i])
+            start = i + 1
+    return items + [spec[start:]]
 
 
 def _canonical(value):
@@ -198,6 +226,7 @@ class Sweep:
                 raise SceneError("--vary", name, name, "a parameter of " + str(self.scene) + ": "
                                  + ", ".join(params) + ", or effects.NAME, or experiment.NAME", "unknown name")
         self._check_values()
+        self._check_settings(base)
         if self.model == "fmu":         # a name the FMU cannot take fails every run alike: say so now
             from inerter.fmu.run import start_values
             for name, values in [*self.fixed.items(), *((n, v[0]) for n, v in self.axes)]:
@@ -213,6 +242,7 @@ class Sweep:
                 if key not in self.metric_columns:
                     self.metric_columns.append(key)
         self.parameter_columns = list(self.fixed) + names
+        self.units = self._units(base)
         clash = set(self.parameter_columns) & (set(META_COLUMNS) | set(self.metric_columns))
         if clash:
             raise SweepError(f"{', '.join(sorted(clash))}: a name of both a parameter and a column of "
@@ -237,6 +267,41 @@ class Sweep:
                 except SceneError as exc:           # named by its option, by the scene reader or here
                     text = str(exc)
                     raise SweepError(text if text.startswith(origin + ":") else f"{origin}: {text}") from None
+
+    def _units(self, base) -> dict:
+        """The unit of each column of results.csv that has one (sweep.json's ``units``): a parameter's
+        SI unit (the values in the file are SI, as ``--set`` takes them), an experiment setting's, a
+        metric's (Hz for frequencies, its signal's unit otherwise) and the run time's."""
+        from inerter.api import metric_units
+        known = {p["name"]: p["unit"] for p in base.parameter_info()}
+        known.update({f"experiment.{k}": u for k, u in EXPERIMENT_UNITS.items()})
+        units = {name: known[name] for name in self.parameter_columns if known.get(name)}
+        units.update(metric_units(base))
+        units["run_time_s"] = "s"
+        return units
+
+    def _check_settings(self, base):
+        """--stop-time and --step read as the runs read them (the experiment's own checks), before any
+        worker starts: a value every run would refuse is an error of the sweep, not a failed row each."""
+        if self.step is not None and self.model != "fmu":
+            raise SweepError(f"--step {self.step}: the FMU's communication step, without --model fmu (expected "
+                             "--model fmu beside it; the solver's samples are set by --set "
+                             "experiment.output_interval=SECONDS)")
+        given = {k: v for k, v in (("stop_time", self.stop_time), ("communication_step", self.step),
+                                   ("output_interval", self.step)) if v is not None}
+        varied = [n for n, _ in self.axes]
+        for key in given:                  # the option is the runs' setting: a value beside it would go unused
+            name = f"experiment.{key}"
+            if name in varied or name in self.fixed:
+                option = "--stop-time" if key == "stop_time" else "--step"
+                raise SweepError(f"{option}: {name} is also given with {'--vary' if name in varied else '--set'}, "
+                                 f"and {option} would set every run's {key}: give one of them")
+        if given:
+            option = " and ".join(o for o, v in (("--stop-time", self.stop_time), ("--step", self.step)) if v is not None)
+            try:
+                base.scene.experiment_with(given, f"{option}: {self.scene}")
+            except SceneError as exc:
+                raise SweepError(str(exc)) from None
 
     @property
     def settings(self) -> dict:
@@ -264,7 +329,8 @@ class Sweep:
     def describe(self) -> dict:
         return {"scene": str(self.scene), "scene_sha256": self.digest, "name": self.name,
                 "model": self.model, "stop_time": self.stop_time, "step": self.step, "path": self.path,
-                "set": self.fixed, "vary": {n: v for n, v in self.axes}, "runs": len(self.runs())}
+                "set": self.fixed, "vary": {n: v for n, v in self.axes}, "runs": len(self.runs()),
+                "units": self.units}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -687,6 +753,8 @@ class DaskClient:
                     break
                 except (OSError, TimeoutError) as exc:
                     raise SweepError(f"--scheduler {self.scheduler}: cannot connect ({exc})") from None
+                except ValueError as exc:           # not an address (check_address said it, for the command)
+                    raise SweepError(f"--scheduler {self.scheduler}: {exc}") from None
                 except AssertionError:
                     # distributed's Client asserts that the scheduler's first reply is one message; on a
                     # scheduler busy with other clients it can come batched with another: connect anew.
@@ -702,8 +770,10 @@ class DaskClient:
                 # any free port rather than on the dashboard's 8787.
                 http = {"dashboard": True, "dashboard_address": self.dashboard} if self.dashboard else \
                     {"dashboard": False, "dashboard_address": "127.0.0.1:0"}
+                # CRITICAL: a run's failure is its row; what dask logs as it shuts down, stopped part-way (a
+                # worker's heartbeat to the closed scheduler, a cancelled result), is a traceback on stderr.
                 self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                            scheduler_kwargs=http, silence_logs=logging.ERROR)
+                                            scheduler_kwargs=http, silence_logs=logging.CRITICAL)
             self.client = Client(self.cluster)
         if self.dashboard is not None:
             where = f" (the dashboard of the scheduler at {self.scheduler}, if it serves one)" if self.scheduler else ""
@@ -743,7 +813,7 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
         report.failed_before = sum(1 for r in results.rows if r.get("key") in keys and r.get("status") == "failed")
         if max_runs is not None:
             todo = todo[:max(0, max_runs)]
-        (out / SWEEP_FILE).write_text(json.dumps(sweep.describe(), indent=2, default=str))
+        write_description(sweep, out)
         if todo:
             fmu_path = None
             if sweep.model == "fmu":
@@ -770,6 +840,14 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
     report.pending = report.total - report.skipped - report.ok - report.failed
     report.wall_time = time.perf_counter() - t_start
     return report
+
+
+def write_description(sweep: Sweep, out: Path):
+    """``out/sweep.json``: this sweep, and the units of every column of results.csv, those of an
+    earlier sweep into the same folder (another scene, other parameters) kept beside this one's."""
+    description = sweep.describe()
+    description["units"] = {**column_units(out / RESULTS_FILE), **description["units"]}
+    (out / SWEEP_FILE).write_text(json.dumps(description, indent=2, default=str))
 
 
 #: A sweep with runs left and no worker for this long stops with an error (its rows are kept).
@@ -842,6 +920,22 @@ def read_results(path) -> tuple[list[str], list[str], list[dict]]:
     return params, metrics, rows
 
 
+def column_units(results) -> dict:
+    """The units of a results file's columns, from the sweep.json beside it (``{}`` without one)."""
+    try:
+        units = json.loads((Path(results).parent / SWEEP_FILE).read_text(encoding="utf-8")).get("units")
+    except (OSError, ValueError, AttributeError):
+        return {}
+    return units if isinstance(units, dict) else {}
+
+
+def _label(name: str, units: dict) -> str:
+    """An axis label: the column and its unit (none for a dimensionless one or a switch)."""
+    from inerter.scene.units import for_reading
+    unit = for_reading(units.get(name))
+    return f"{name} ({unit})" if unit else name
+
+
 def _number(text):
     if text in ("true", "false"):
         return float(text == "true")
@@ -884,8 +978,9 @@ def plot_results(path, x: str, y: str, out, hue: str | None = None, title: str |
         if hue and label and label[0] == "false":
             style["ls"] = "--"
         ax.plot(xs, ys, label=text, **style)
-    ax.set_xlabel(x)
-    ax.set_ylabel(y)
+    units = column_units(path)
+    ax.set_xlabel(_label(x, units))
+    ax.set_ylabel(_label(y, units))
     ax.grid(alpha=0.3)
     if any(label for label in series):
         ax.legend(fontsize=8)
@@ -925,16 +1020,53 @@ def add_run_arguments(p: argparse.ArgumentParser):
                         "port) and print its link; with --scheduler, print that scheduler's link")
 
 
+def check_run_arguments(args):
+    """The options of ``sweep`` and ``study`` that no scene is needed to check, before anything runs."""
+    output_folder(args.out)
+    count(args.workers, "--workers")
+    count(args.max_runs, "--max-runs", least=0)
+    if args.scheduler:
+        check_address(args.scheduler)
+
+
+def check_address(address: str):
+    """--scheduler's value read as distributed reads it (scheme, host and port; no connection)."""
+    from distributed.comm.addressing import get_address_host_port
+    try:
+        get_address_host_port(address)
+    except ValueError as exc:               # distributed's own words say why
+        raise OptionError("--scheduler", address, "a scheduler's address, such as tcp://HOST:8786",
+                          f"not an address: {exc}") from None
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill PID``), stopping a sweep as Ctrl-C does: the cluster closed, the rows kept."""
+
+
+def _terminate(signum, frame):
+    raise Terminated()
+
+
 def _guarded(fn, argv):
+    import signal
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
     try:
         return fn(argv)
     except InerterError as exc:
         print(f"inerter: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("inerter: interrupted; the runs that finished are in results.csv: run the same command again "
-              "to go on", file=sys.stderr)
-        return 130
+    except OSError as exc:            # an output file that cannot be written (as inerter run says it)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"inerter: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:
+        print(f"inerter: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}; the runs that finished "
+              "are in results.csv: run the same command again to go on", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
 
 
 def print_report(report: SweepReport, sweep: Sweep):
@@ -973,7 +1105,7 @@ def sweep_parser() -> argparse.ArgumentParser:
 def _sweep(argv) -> int:
     from inerter.scene.overrides import parse_set, set_origins
     args = sweep_parser().parse_args(argv)
-    output_path(args.out)
+    check_run_arguments(args)
     sweep = Sweep(args.scene, [parse_vary(v) for v in args.vary], parse_set(args.set), args.model,
                   args.stop_time, args.step, args.path, origins=set_origins(args.set))
     report = run_sweep(sweep, args.out, workers=args.workers, scheduler=args.scheduler,
@@ -1000,7 +1132,7 @@ def sweep_plot_parser() -> argparse.ArgumentParser:
 def _sweep_plot(argv) -> int:
     args = sweep_plot_parser().parse_args(argv)
     if args.out is not None:
-        output_path(args.out, expected="a PNG file path, such as out/sweep/plot.png")
+        output_folder(args.out, file=True)
     out = args.out or Path(args.results).parent / f"{_file_part(args.y)}_vs_{_file_part(args.x)}.png"
     out = plot_results(args.results, args.x, args.y, out, hue=args.hue, title=args.title)
     print(f"wrote {out}")

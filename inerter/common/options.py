@@ -38,6 +38,7 @@ def output_folder(text, option: str = "--out", file: bool = False) -> Path:
             break
     return path
 
+
 def count(value, option: str, least: int = 1):
     """A whole-number option (``--max-runs``, ``--workers``) of at least `least`."""
     if value is not None and value < least:

@@ -1058,6 +1058,20 @@ def _rk_segment(kernel, settings, tables, y, t0, t1, seg, seg_out, max_steps, in
                            A, B, C, E, E3, D, Pm, _monitor(settings.method), t1 if t1 in switches else 0.0, kinks, keep)
 
 
+def _run_failure(kernel, settings, status, h, y_last, t_reached, t_sample) -> str:
+    """The message of a whole run's compiled loop that stopped with `status` at `t_reached` (the last
+    sample at `t_sample`; `h` its last step). Terminals meeting: the loop stopped at the start of the
+    step that crosses the meeting (`y_last` the state there), which the message bounds."""
+    h = h if settings.method != "RK4" else settings.step
+    meet = status == _k.TERMINALS_MEET
+    why = failure_text(kernel, status, settings.method, h, y_last, t_reached if meet else t_sample,
+                       int(settings.max_steps))
+    message = f"at t = {t_reached:.6g} s: the {settings.method} integrator failed: {why}"
+    if meet:
+        message += f" (the step to t = {t_reached + h:.6g} s crosses the meeting; the run ends at its start)"
+    return message
+
+
 def integrate_compiled(mech, settings, inputs=None, dense=False):
     """Integrate like :func:`inerter.engine.simulation.integrate`, in one compiled loop for DOP853, RK45
     and RK4 with Baumgarte stabilisation; other methods and ``projection`` use scipy's integrators
@@ -1129,7 +1143,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         out[k:k + written] = seg_out[1:1 + written]
         k += written
         if status != 0:
-            stopped = y_reached if status == _k.CHANGE_POINT else None      # the state it stopped at there
+            stopped = y_reached if status in (_k.CHANGE_POINT, _k.TERMINALS_MEET) else None    # its state there
             break
         y, t0 = seg_out[-1, :ny].copy(), t1
     cpu = _time.process_time() - start
@@ -1137,9 +1151,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     if status == 0:
         message = "completed"
     else:
-        why = failure_text(kernel, status, settings.method, h if settings.method != "RK4" else settings.step,
-                           states[-1] if stopped is None else stopped, grid[k - 1], int(settings.max_steps))
-        message = f"at t = {t_reached:.6g} s: the {settings.method} integrator failed: {why}"
+        message = _run_failure(kernel, settings, status, h, states[-1] if stopped is None else stopped,
+                               t_reached, grid[k - 1])
     sol = DenseOutput.of_kept(settings.method, keep, kernel)
     if sol is None and tables is not None and k > 1:
         sol = LocalDense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, tables, windings)

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from inerter.common.errors import InerterError, SceneError
-from inerter.common.options import OptionError, output_path
+from inerter.common.options import OptionError, output_path, unwritable
 from inerter.scene.overrides import parse_set, read_value, set_origins
 from inerter.scene.reader import METHODS
 from inerter.scene.units import for_reading
@@ -466,8 +466,7 @@ def main(argv=None):
         print(f"inerter: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:            # an output file that cannot be written
-        where = f"{exc.filename}: " if exc.filename else ""
-        print(f"inerter: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        print(f"inerter: error: {unwritable(exc)}", file=sys.stderr)
         return 2
 
 

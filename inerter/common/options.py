@@ -44,3 +44,9 @@ def count(value, option: str, least: int = 1):
     if value is not None and value < least:
         raise OptionError(option, value, f"a whole number ≥ {least}")
     return value
+
+
+def unwritable(exc: OSError) -> str:
+    """The one-line error of an output file that cannot be written: its path and the system's reason."""
+    where = f"{exc.filename}: " if exc.filename else ""
+    return f"{where}{exc.strerror or exc}"

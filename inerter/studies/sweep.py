@@ -60,7 +60,7 @@ import numpy as np
 
 from inerter.common.atomic import replace_file
 from inerter.common.errors import InerterError, SceneError
-from inerter.common.options import OptionError, count, output_folder
+from inerter.common.options import OptionError, count, output_folder, unwritable
 
 try:  # POSIX: one sweep at a time writes a results file
     import fcntl
@@ -1057,8 +1057,7 @@ def _guarded(fn, argv):
         print(f"inerter: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:            # an output file that cannot be written (as inerter run says it)
-        where = f"{exc.filename}: " if exc.filename else ""
-        print(f"inerter: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        print(f"inerter: error: {unwritable(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
         print(f"inerter: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}; the runs that finished "

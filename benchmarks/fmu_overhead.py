@@ -321,7 +321,10 @@ def main(argv=None):
     print(head + body)
     (ROOT / "docs").mkdir(exist_ok=True)
     (ROOT / "docs" / "fmu_overhead.md").write_text(
-        "# FMU overhead\n\nMeasured by `python benchmarks/fmu_overhead.py` on a 2-core machine.\n\n" + head + body
+        "# FMU overhead\n\n"
+        f"- **Date:** {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, on a 2-core machine.\n"
+        f"- **Command:** `python benchmarks/fmu_overhead.py {' '.join(argv if argv is not None else sys.argv[1:])}`"
+        "\n\n" + head + body
         + "\nEach row produces the same outputs at the same communication points. The whole run integrates once "
           "and samples its dense output. On the compiled path the stepper and the FMU keep one integration "
           "running across the communication points (it restarts only where an input changes), so they take "

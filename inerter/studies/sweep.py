@@ -283,10 +283,7 @@ class Sweep:
     def _check_settings(self, base):
         """--stop-time and --step read as the runs read them (the experiment's own checks), before any
         worker starts: a value every run would refuse is an error of the sweep, not a failed row each."""
-        if self.step is not None and self.model != "fmu":
-            raise SweepError(f"--step {self.step}: the FMU's communication step, without --model fmu (expected "
-                             "--model fmu beside it; the solver's samples are set by --set "
-                             "experiment.output_interval=SECONDS)")
+        check_fmu_step(self.step, self.model)
         given = {k: v for k, v in (("stop_time", self.stop_time), ("communication_step", self.step),
                                    ("output_interval", self.step)) if v is not None}
         varied = [n for n, _ in self.axes]
@@ -1018,6 +1015,15 @@ def add_run_arguments(p: argparse.ArgumentParser):
     p.add_argument("--dashboard", nargs="?", const=":8787", default=None, metavar="ADDRESS",
                    help="serve dask's dashboard (needs bokeh) at ADDRESS (default :8787; 127.0.0.1:0: any free "
                         "port) and print its link; with --scheduler, print that scheduler's link")
+
+
+def check_fmu_step(step, model: str):
+    """``--step`` is the FMU's communication step: without ``--model fmu`` it would be taken and do
+    nothing (the solver's samples are its output interval). The one check of run, compare, sweep and
+    study; `step`: as given (the typed text or a number), None when not given."""
+    if step is not None and model != "fmu":
+        raise OptionError("--step", step, "--model fmu beside it; the solver's samples are set by --set "
+                          "experiment.output_interval=SECONDS", "the FMU's communication step, without --model fmu")
 
 
 def check_run_arguments(args):

@@ -578,13 +578,18 @@ class FmuSlot:
 class ResultsFile:
     """``results.csv``: rows appended and flushed one by one, read back to resume.
 
-    Held under an exclusive lock while a sweep writes it. A row cut short by a killed process
-    (no final newline) is dropped when the file is opened again. A row with a parameter or metric
-    the header lacks rewrites the file with the column added in its place.
+    Held under an exclusive lock while a sweep writes it (``results.csv.lock`` beside it, removed
+    when the file is closed). A row cut short by a killed process (no final newline) is dropped
+    when the file is opened again. A row with a parameter or metric the header lacks rewrites the
+    file with the column added in its place.
     """
+
+    #: Attempts at taking the lock while other sweeps remove their lock files (see _take_lock).
+    LOCK_ATTEMPTS = 10
 
     def __init__(self, path):
         self.path = Path(path)
+        self.lock_path = self.path.with_name(self.path.name + ".lock")
         self.columns: list[str] = []
         self.rows: list[dict] = []
         self._fh = None
@@ -604,23 +609,52 @@ class ResultsFile:
         return list(reader.fieldnames or []), rows
 
     # -- writing ------------------------------------------------------------------------------
-    def open(self, parameters=(), metrics=()) -> "ResultsFile":
+    def open(self, parameters=(), metrics=(), check=None) -> "ResultsFile":
+        """Lock the file, read its rows and add the columns it lacks. `check(rows)`: called on the
+        rows before anything is written (it raises to refuse the file). Whatever fails, the lock is
+        released and its file removed."""
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        if fcntl is not None:
-            self._lock = open(self.path.with_name(self.path.name + ".lock"), "w")
+        self._take_lock()
+        try:
+            return self._load(parameters, metrics, check)
+        except BaseException:
+            self.close()
+            raise
+
+    def _take_lock(self):
+        """The exclusive lock on ``results.csv.lock``. The file a sweep locked may be removed by it
+        as it ends (close) between this sweep's opening it and locking it: then this sweep holds
+        the lock of a file no longer there, and locks the one now at that path instead."""
+        if fcntl is None:
+            return
+        for _ in range(self.LOCK_ATTEMPTS):
+            fh = open(self.lock_path, "a")
             try:
-                fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError:
-                self._lock.close()
-                self._lock = None
-                raise SweepError(f"{self.path}: another sweep is writing this file; wait for it to finish "
-                                 "or use another --out") from None
+                fh.close()
+                break
+            try:
+                here = os.stat(self.lock_path)
+                mine = os.fstat(fh.fileno())
+                if (here.st_dev, here.st_ino) == (mine.st_dev, mine.st_ino):
+                    self._lock = fh
+                    return
+            except FileNotFoundError:
+                pass
+            fh.close()
+        raise SweepError(f"{self.path}: another sweep is writing this file; wait for it to finish "
+                         "or use another --out")
+
+    def _load(self, parameters, metrics, check) -> "ResultsFile":
         if self.path.is_file() and self.path.stat().st_size:
             data = self.path.read_bytes()
             if not data.endswith(b"\n"):                        # a row cut short by a kill
                 with open(self.path, "r+b") as fh:
                     fh.truncate(data.rfind(b"\n") + 1)
             self.columns, self.rows = self.read(self.path)
+        if check is not None:
+            check(self.rows)
         if not self.columns or "key" not in self.columns or "status" not in self.columns:
             if self.rows:
                 raise SweepError(f"{self.path}: not a results file of inerter sweep (no key/status columns)")
@@ -680,7 +714,11 @@ class ResultsFile:
         if self._fh is not None:
             self._fh.close()
             self._fh = None
-        if self._lock is not None:
+        if self._lock is not None:          # removed while held: no other sweep holds it meanwhile
+            try:
+                os.unlink(self.lock_path)
+            except OSError:
+                pass
             self._lock.close()
             self._lock = None
 
@@ -799,8 +837,9 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
     t_start = time.perf_counter()
     out = Path(out)
     runs = sweep.runs()
-    results = ResultsFile(out / RESULTS_FILE).open(sweep.parameter_columns, sweep.metric_columns)
+    results = ResultsFile(out / RESULTS_FILE)
     try:
+        results.open(sweep.parameter_columns, sweep.metric_columns, check=lambda rows: check_scene(sweep, out, rows))
         if retry_failed:
             results.drop({r["key"] for r in results.rows if r.get("status") != "ok"})
         finished = {r["key"] for r in results.rows if r.get("status") in ("ok", "failed")}
@@ -839,9 +878,33 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
     return report
 
 
+def check_scene(sweep: Sweep, out: Path, rows: list[dict]):
+    """A folder holds the sweeps of one scene: rows in its results.csv of another scene are refused
+    before any run (its rows would be mixed with this sweep's, its parameters' columns beside these).
+    The scene a folder holds is the one its sweep.json names (the same file, or a copy of its
+    content), else the scene column of its rows."""
+    if not rows:
+        return
+    try:
+        held = json.loads((Path(out) / SWEEP_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        held = None
+    if isinstance(held, dict) and isinstance(held.get("scene"), str):
+        if held["scene"] == str(sweep.scene) or held.get("scene_sha256") == sweep.digest:
+            return
+        other = f"{held['scene']} (its {SWEEP_FILE})"
+    else:
+        names = sorted({r["scene"] for r in rows if r.get("scene")} - {sweep.name})
+        if not names:
+            return
+        other = f"{', '.join(names)} (the scene column of {RESULTS_FILE})"
+    raise OptionError("--out", str(out), f"a folder without {RESULTS_FILE}, or one holding a sweep of {sweep.scene}",
+                      f"holds the sweep of another scene, {other}")
+
+
 def write_description(sweep: Sweep, out: Path):
     """``out/sweep.json``: this sweep, and the units of every column of results.csv, those of an
-    earlier sweep into the same folder (another scene, other parameters) kept beside this one's."""
+    earlier sweep of the same scene into the same folder (other parameters) kept beside this one's."""
     description = sweep.describe()
     description["units"] = {**column_units(out / RESULTS_FILE), **description["units"]}
     (out / SWEEP_FILE).write_text(json.dumps(description, indent=2, default=str))

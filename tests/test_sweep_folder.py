@@ -1,16 +1,20 @@
-"""A sweep's folder (inerter.studies.sweep.run_sweep, ``inerter sweep``): one scene per folder, and
-its lock file gone when the sweep ends.
+"""A sweep's folder (inerter.studies.sweep.run_sweep, ``inerter sweep``): one scene per folder, its
+lock file gone when the sweep ends, and the parameter columns of results.csv in the SI unit
+sweep.json states.
 
 The runs are the workers' own function (:func:`run_one`), called in this process one after another
 instead of on a dask cluster (the dask path is tests/test_sweep.py's): what is checked here is
 what the sweep does with its folder, before, around and after the runs.
 
 Before: a sweep of another scene into the same folder appended its rows to the same results.csv;
-``results.csv.lock`` stayed in the folder after every sweep.
+``results.csv.lock`` stayed in the folder after every sweep; a value given as a table with a unit
+(``y0={value = 1100, unit = "mm"}``) or an expression (``b=2*m``) was written to results.csv as
+typed (``{'value': 1100, 'unit': 'mm'}``), so sweep-plot could not plot that column.
 """
 from __future__ import annotations
 
 import csv
+import json
 import shutil
 
 import pytest
@@ -140,3 +144,32 @@ def test_a_busy_folder_is_refused_and_a_lock_left_by_a_killed_sweep_is_not(tmp_p
         sw.ResultsFile(path).open(["b"])
     again.close()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results.csv"]
+
+
+# -- values with a unit ----------------------------------------------------------------------------
+def test_a_value_with_a_unit_is_written_in_the_si_unit_sweep_json_states(tmp_path, in_process, capsys):
+    """y0 of lumped_mass_2d is in m, b in kg and k in N/m (the scene file's units; --set and --vary
+    read a bare number as SI): 1100 mm is 1.1 m, 2*m is 10 kg (m = 5 kg), 20 kN/m is 20000 N/m."""
+    out = tmp_path / "s"
+    assert sw.main_sweep([str(LUMPED), "--vary", 'y0={value = 1100, unit = "mm"},1.2', "--vary", "b=2*m,50",
+                          "--set", 'k={value = 20, unit = "kN/m"}', *SHORT, "--out", str(out)]) == 0
+    rows = rows_of(out / "results.csv")
+    assert [(r["y0"], r["b"], r["k"]) for r in rows] == [
+        ("1.1", "10.0", "20000.0"), ("1.1", "50", "20000.0"), ("1.2", "10.0", "20000.0"), ("1.2", "50", "20000.0")]
+    units = json.loads((out / "sweep.json").read_text())["units"]
+    assert (units["y0"], units["b"], units["k"]) == ("m", "kg", "N/m")
+    assert sw.main_sweep_plot([str(out / "results.csv"), "--x", "y0", "--y", "fundamental_frequency",
+                               "--hue", "b", "--out", str(out / "f.png")]) == 0
+    assert (out / "f.png").stat().st_size > 0
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots()
+    sw.plot_results(out / "results.csv", "y0", "fundamental_frequency", None, hue="b", ax=ax)
+    assert [list(line.get_xdata()) for line in ax.lines] == [[1.1, 1.2], [1.1, 1.2]]     # (it was NaN, 1.2)
+    assert ax.get_xlabel() == "y0 (m)"
+    plt.close(fig)
+    # the runs are keyed by the values as given: the same command again runs nothing
+    assert sw.main_sweep([str(LUMPED), "--vary", 'y0={value = 1100, unit = "mm"},1.2', "--vary", "b=2*m,50",
+                          "--set", 'k={value = 20, unit = "kN/m"}', *SHORT, "--out", str(out)]) == 0
+    assert "0 run now (0 failed), 4 already in" in capsys.readouterr().out

@@ -12,7 +12,8 @@ LocalCluster of N worker processes with one thread each, or the workers of a run
 estimates the time left.
 
 Results. One row per run is appended to ``DIR/results.csv`` (and flushed) as soon as the run
-finishes: its key, the scene's name, the model, the value of every ``--set`` and ``--vary`` name,
+finishes: its key, the scene's name, the model, the value of every ``--set`` and ``--vary`` name
+(in SI: a table with a unit or an expression as the number the run reads from it, :meth:`Sweep.written`),
 status (``ok`` or ``failed``), the error message of a failed run, the scalar metrics of the scene,
 the run time on the worker (s), the worker and the time it finished. The columns are ordered
 ``key, scene, model, <parameters>, status, error, <metrics>, run_time_s, worker, finished_at``, so
@@ -254,7 +255,7 @@ class Sweep:
         scene gives, after the option that gave it (``--vary y0=0: scene.toml: parameters.y0: ...``)."""
         from inerter.scene.overrides import origin_of
         from inerter.scene.reader import build_scene, read_toml
-        source, data = read_toml(self.scene)
+        source, data = self._toml = read_toml(self.scene)
         for name, values in self.axes:
             seen = set()
             for value in values:
@@ -267,6 +268,27 @@ class Sweep:
                 except SceneError as exc:           # named by its option, by the scene reader or here
                     text = str(exc)
                     raise SweepError(text if text.startswith(origin + ":") else f"{origin}: {text}") from None
+
+    def written(self, overrides: dict) -> dict:
+        """A run's overrides as its row of results.csv holds them: a parameter or experiment setting
+        given as a table with a unit (``y0={value = 1100, unit = "mm"}``) or an expression (``b=2*m``)
+        as the SI number the run reads from it, in the unit sweep.json states for its column (a number
+        is SI as given); the others as given. The run's key is of the values as given."""
+        from inerter.scene.reader import build_scene
+        names = [n for n, v in overrides.items() if isinstance(v, (dict, str)) and not n.startswith("effects.")]
+        if not names:
+            return overrides
+        try:
+            scene = build_scene(*self._toml, overrides)
+        except SceneError:                  # this combination fails its run, which says why
+            return overrides
+        out = dict(overrides)
+        for name in names:
+            value = (getattr(scene.experiment, name[len("experiment."):], None) if name.startswith("experiment.")
+                     else scene.parameters[name].value if name in scene.parameters else None)
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                out[name] = value
+        return out
 
     def _units(self, base) -> dict:
         """The unit of each column of results.csv that has one (sweep.json's ``units``): a parameter's
@@ -364,7 +386,7 @@ def run_one(task: dict) -> dict:
     """Run one combination and return its row. Never raises: a failure is a row with its error."""
     t0 = time.perf_counter()
     row = {"key": task["key"], "scene": task["name"], "model": task["model"]}
-    row.update(task["overrides"])
+    row.update(task.get("written") or task["overrides"])
     metrics: dict[str, Any] = {}
     try:
         scene = _scene_on_worker(task)
@@ -856,7 +878,8 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
                 from inerter.fmu.build import DEFAULT_OUT_DIR, build
                 fmu_path = str(Path(build(sweep.scene, fmu_dir or DEFAULT_OUT_DIR)).resolve())
             from inerter import __version__
-            tasks = [dict(key=r.key, name=sweep.name, model=sweep.model, overrides=r.overrides, version=__version__,
+            tasks = [dict(key=r.key, name=sweep.name, model=sweep.model, overrides=r.overrides,
+                          written=sweep.written(r.overrides), version=__version__,
                           stop_time=sweep.stop_time, step=sweep.step, fmu_path=fmu_path, path=sweep.path,
                           scene_path=str(sweep.scene), scene_digest=sweep.digest, scene_content=sweep.content)
                      for r in todo]
@@ -950,7 +973,8 @@ def _record(future, task, results: ResultsFile, sweep: Sweep, report: SweepRepor
     try:
         row = future.result()
     except Exception as exc:   # the worker died (KilledWorker) or the task was lost
-        row = {"key": task["key"], "scene": task["name"], "model": task["model"], **task["overrides"],
+        row = {"key": task["key"], "scene": task["name"], "model": task["model"],
+               **(task.get("written") or task["overrides"]),
                "status": "failed", "error": f"{type(exc).__name__}: {exc} (run again with --retry-failed)",
                "finished_at": datetime.now(timezone.utc).isoformat(timespec="microseconds")}
     future.release()

@@ -168,6 +168,8 @@ INITIALIZATION = "initialization"  # between enter and exitInitializationMode: t
 STEPPING = "stepping"              # after a successful exitInitializationMode
 FAILED = "failed"                  # initialisation failed, or an unexpected error: steps refused
 TERMINATED = "terminated"
+#: The phases in the order of their index, which the status shim reads (fmu_native.PHASE_VR).
+PHASES = (INSTANTIATED, INITIALIZATION, STEPPING, FAILED, TERMINATED)
 
 #: Communication points closer than this (relative to max(1 s, |t|)) are taken as equal.
 TIME_TOLERANCE = 1e-9
@@ -610,6 +612,8 @@ class InerterSlave(Fmi2Slave):
     def get_integer(self, vrs):
         if len(vrs) == 2 and vrs[0] == fmu_native.LINK_VR and vrs[1] == fmu_native.LINK_VR + 1:
             return self._native.address_words()
+        if len(vrs) == 1 and vrs[0] == fmu_native.PHASE_VR:
+            return [PHASES.index(self._phase)]
         if self._phase == INSTANTIATED and list(vrs) != [self._status_vr]:   # the shim reads that
             self._early("fmi2GetInteger", vrs)
         return self._get(vrs, Integer, int, 0)

@@ -70,6 +70,9 @@ LINK_VR = 0x7FFFFF00
 SYNC_VR = 0x7FFFFF02
 #: Private Real value reference: the slave's time (the shim answers fmi2LastSuccessfulTime with it).
 TIME_VR = SYNC_VR + 1
+#: Private Integer value reference: the slave's phase, an index into the slave's PHASES (the shim
+#: answers the status functions only in the phases FMI 2.0 allows them in).
+PHASE_VR = SYNC_VR + 2
 #: The environment variable that turns the link off ("0").
 SWITCH = "INERTER_FMU_NATIVE"
 

@@ -26,7 +26,11 @@
  *     not answer or that does not apply (fmi2DoStepStatus and fmi2PendingStatus: no doStep is ever
  *     pending, section 2.1.3: "fmi2Discard is returned also if the slave is not able to return the
  *     required status information"); fmi2LastSuccessfulTime is the slave's time (the private Real
- *     NATIVE_SYNC_VR + 1), fmi2Terminated is fmi2False (the slave never asks to end a run).
+ *     NATIVE_SYNC_VR + 1), fmi2Terminated is fmi2False (the slave never asks to end a run);
+ *   - fmi2DeSerializeFMUstate first hands the bytes (in hex) to the slave through the private String
+ *     NATIVE_SYNC_VR + 3, which checks that they are a state of this FMU and logs why not; then it
+ *     returns fmi2Error and makes no state (pythonfmu's binary took any bytes, and only
+ *     fmi2SetFMUstate refused them).
  *
  * The component the importer holds is this library's (struct instance), wrapping the original's:
  * every call is forwarded with the original's component, and the slave's messages reach the
@@ -122,9 +126,10 @@
 #endif
 
 /* The slave's private value references beside NATIVE_SYNC_VR (inerter/fmu/native.py): its time
- * (Real), its phase (Integer). */
+ * (Real), its phase (Integer), the check of serialized bytes (String). */
 #define TIME_VR (NATIVE_SYNC_VR + 1u)
 #define PHASE_VR (NATIVE_SYNC_VR + 2u)
+#define STATE_CHECK_VR (NATIVE_SYNC_VR + 3u)
 
 #define EXPORT __attribute__((visibility("default")))
 
@@ -547,6 +552,41 @@ static fmi2Status unsupported(fmi2Component c, const char *function, const char 
     return fmi2Error;
 }
 
+/* Whether `size` bytes are a serialized state of this FMU: the slave says so through the private
+ * String STATE_CHECK_VR, the bytes in hex (they may hold any byte; a String is UTF-8 text ending
+ * at NUL), and logs why not (then fmi2Error). Nothing changes. */
+static fmi2Status check_serialized(struct instance *w, const fmi2Byte bytes[], size_t size)
+{
+    static const char digits[] = "0123456789abcdef";
+    const fmi2ValueReference vr = STATE_CHECK_VR;
+    unsigned long before = w->errors;
+    fmi2String text;
+    char *hex;
+    size_t i;
+    fmi2Status status;
+
+    if (bytes == NULL && size > 0) {
+        say(w, fmi2Error, "fmi2DeSerializeFMUstate: serializedState is NULL (size %zu); no FMU "
+            "state is made", size);
+        return fmi2Error;
+    }
+    hex = size < ((size_t)-1) / 2 ? malloc(2 * size + 1) : NULL;
+    if (hex == NULL) {
+        say(w, fmi2Error, "fmi2DeSerializeFMUstate: out of memory for %zu bytes; no FMU state is "
+            "made", size);
+        return fmi2Error;
+    }
+    for (i = 0; i < size; i++) {
+        hex[2 * i] = digits[((unsigned char)bytes[i]) >> 4];
+        hex[2 * i + 1] = digits[((unsigned char)bytes[i]) & 15];
+    }
+    hex[2 * size] = '\0';
+    text = hex;
+    status = logged(w, before, original.SetString(w->inner, &vr, 1, &text));
+    free(hex);
+    return status;
+}
+
 /* The fmi2StatusKind names, and the function that answers each (FMI 2.0 section 4.2.3). */
 static const char *const STATUS_KINDS[] = {"fmi2DoStepStatus", "fmi2PendingStatus",
                                            "fmi2LastSuccessfulTime", "fmi2Terminated"};
@@ -894,6 +934,12 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
                                    size_t size, fmi2FMUstate *FMUstate)
 {
     READ
+    if (FMUstate == NULL) {
+        say(c, fmi2Error, "fmi2DeSerializeFMUstate: FMUstate is NULL; no FMU state is made");
+        return fmi2Error;
+    }
+    if (check_serialized(c, serializedState, size) != fmi2OK)
+        return fmi2Error;
     FORWARD_LOGGED(original.DeSerializeFMUstate(INNER(c), serializedState, size, FMUstate))
 }
 

@@ -1,5 +1,5 @@
-"""What the FMU refuses, and how: the functions it does not support, and status inquiries FMI 2.0
-does not allow or that do not apply. Each returns the status
+"""What the FMU refuses, and how: bytes that are no FMU state of it, the functions it does not
+support, and status inquiries FMI 2.0 does not allow or that do not apply. Each returns the status
 FMI 2.0 asks for, with one message naming the scene file as every other error does, and changes
 nothing: the instance steps on as its untouched twin does.
 
@@ -14,6 +14,8 @@ modelDescription.xml. All of it is the status shim's (fmu_src/status_shim.c): ea
 """
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from test_fmu import (FMI_DISCARD, FMI_ERROR, INPUT, ROOT, fmus, input_fmu, instance,  # noqa: F401
@@ -23,6 +25,7 @@ from test_fmu_call_sequences import steps  # noqa: F401
 from inerter.fmu import native as fmu_native
 
 pytestmark = pytest.mark.usefixtures("needs_shim")
+OTHER_SCENE = ROOT / "scenarios" / "lumped_mass_2d.toml"
 # fmi2StatusKind (FMI 2.0 section 4.2.3)
 DO_STEP_STATUS, PENDING_STATUS, LAST_SUCCESSFUL_TIME, TERMINATED = range(4)
 
@@ -37,6 +40,85 @@ def continue_both(inst, clean, t, h, n=3):
             one.fmu.doStep(t + i * h, h)
             rows[id(one)].append(one.get(one.outputs))
     return rows[id(inst)], rows[id(clean)]
+
+
+def edited(blob: bytes, **fields) -> bytes:
+    state = json.loads(blob)
+    state.update(fields)
+    return json.dumps(state).encode()
+
+
+def test_deserializing_bytes_that_are_no_state_of_this_fmu_is_fmi2error(input_fmu, fmus, instance,
+                                                                       steps):
+    """Random bytes, none, a cut state, another scene's, another build's, another format's: each
+    was fmi2OK (pythonfmu's binary took any bytes; only fmi2SetFMUstate refused the state)."""
+    scene, fmu = input_fmu
+    inst, clean, h = stepped_pair(fmu, instance)
+    for one in (inst, clean):
+        one.messages.clear()
+    state = inst.fmu.getFMUstate()
+    blob = bytes(inst.fmu.serializeFMUstate(state))
+    inst.fmu.freeFMUstate(state)
+    other = instance(fmus[OTHER_SCENE], "other", logging=False)
+    other.initialise()
+    other_state = other.fmu.getFMUstate()
+    other_blob = bytes(other.fmu.serializeFMUstate(other_state))
+    other.fmu.freeFMUstate(other_state)
+    outputs = inst.get(inst.outputs)
+    cases = [(bytes(range(256)) * 3, "768 bytes", "not text (UTF-8)"),
+             (b"", "0 bytes", "no bytes"),
+             (blob[:len(blob) // 2], f"{len(blob) // 2} bytes", "not JSON, or cut short"),
+             (b'{"format": "something else"}', "format 'something else'", "expected format"),
+             (edited(blob, format="inerter-fmu-state/1"), "format 'inerter-fmu-state/1'",
+              "(expected format 'inerter-fmu-state/2'"),
+             (other_blob, f"it is a state of {OTHER_SCENE.name}, not of {scene.name}", ""),
+             (edited(blob, scene="0" * 64), f"a state of another version of {scene.name}", ""),
+             (edited(blob, build="0" * 64), "saved by another build of the FMU", "build 000000000000"),
+             (edited(blob, settings={"b": 1.0}), "the state's variables differ from this FMU's", ""),
+             (edited(blob, stepper="a!b"), "its solver state is not base64", ""),
+             (edited(blob, stepper="anVuaw=="), "its solver state cannot be read", "")]
+    for data, reason, detail in cases:
+        inst.messages.clear()
+        raises_status(FMI_ERROR, inst.fmu.deSerializeFMUstate, data)
+        [message] = [m for _, m in inst.messages]
+        assert message.startswith(f"{scene.name}: fmi2DeSerializeFMUstate: ") and reason in message \
+            and detail in message and message.endswith("the instance is unchanged"), message
+        assert inst.get(inst.outputs) == outputs
+    # Nothing changed: the next steps (an input changed between them) equal those of the twin that
+    # never saw the bytes, bit for bit; and its own state still deserializes and restores.
+    inst.messages.clear()
+    mine, theirs = continue_both(inst, clean, h, h)
+    assert mine == theirs
+    restored = inst.fmu.deSerializeFMUstate(blob)
+    inst.fmu.setFMUstate(restored)
+    inst.fmu.freeFMUstate(restored)
+    assert inst.get(inst.outputs) == outputs and inst.errors() == []
+
+
+def test_a_serialized_state_continues_bit_for_bit_in_a_fresh_instance(input_fmu, instance, steps):
+    """A state serialized mid-run, deserialized into an instance that was only instantiated (no
+    setupExperiment, no initialisation) and restored: the same continuation as the run it was
+    taken from, bit for bit, with an input changed on the way (the integration restarts there)."""
+    fmu = input_fmu[1]
+    source = instance(fmu, "source", logging=False)
+    source.fmu.setupExperiment(startTime=0.0, stopTime=0.2)
+    source.fmu.enterInitializationMode()
+    source.fmu.exitInitializationMode()
+    h = 0.01
+    source.set(INPUT, 2.0)
+    for i in range(3):
+        source.fmu.doStep(i * h, h)
+    state = source.fmu.getFMUstate()
+    blob = bytes(source.fmu.serializeFMUstate(state))
+    source.fmu.freeFMUstate(state)
+    fresh = instance(fmu, "fresh", logging=False)
+    restored = fresh.fmu.deSerializeFMUstate(blob)
+    fresh.fmu.setFMUstate(restored)
+    fresh.fmu.freeFMUstate(restored)
+    assert fresh.get(fresh.outputs) == source.get(source.outputs)
+    mine, theirs = continue_both(fresh, source, 3 * h, h, n=5)
+    assert mine == theirs
+    assert fresh.fmu.getRealStatus(LAST_SUCCESSFUL_TIME) == source.fmu.getRealStatus(LAST_SUCCESSFUL_TIME)
 
 
 UNSUPPORTED = [
@@ -152,8 +234,8 @@ def test_status_inquiries_in_the_error_state_are_fmi2error(input_fmu, instance):
 def test_the_private_value_references_are_the_shims():
     """The shim derives them from NATIVE_SYNC_VR (fmu_src/status_shim.c); the slave takes them
     from inerter.fmu.native."""
-    names = ("TIME_VR", "PHASE_VR")
-    assert [getattr(fmu_native, name) for name in names] == [fmu_native.SYNC_VR + k for k in (1, 2)]
+    names = ("TIME_VR", "PHASE_VR", "STATE_CHECK_VR")
+    assert [getattr(fmu_native, name) for name in names] == [fmu_native.SYNC_VR + k for k in (1, 2, 3)]
     source = (ROOT / "fmu_src" / "status_shim.c").read_text()
     for k, name in enumerate(names, start=1):
         assert f"#define {name} (NATIVE_SYNC_VR + {k}u)" in source

@@ -429,7 +429,7 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
             name=name, scene_file=scene_path.name, scene_file_repr=repr(scene_path.name),
             description_repr=repr(fmu_description(scene_path, model, tunable)),
             version_repr=repr(None if version is None else str(version)),
-            tunable_repr=repr(tuple(tunable))), encoding="utf-8")
+            tunable_repr=repr(tuple(tunable)), build_repr=repr(digest)), encoding="utf-8")
         shutil.copy2(FMU_SRC / SLAVE_FILE, stage / SLAVE_FILE)
         write_payload(stage / PAYLOAD_FILE)
         shutil.copy2(scene_path, stage / scene_path.name)

@@ -73,6 +73,10 @@ TIME_VR = SYNC_VR + 1
 #: Private Integer value reference: the slave's phase, an index into the slave's PHASES (the shim
 #: answers the status functions only in the phases FMI 2.0 allows them in).
 PHASE_VR = SYNC_VR + 2
+#: Private String value reference: set to the bytes given to fmi2DeSerializeFMUstate, in hex, the
+#: slave checks that they are a state of this FMU and logs an error where they are not (the shim
+#: then returns fmi2Error without deserializing them). Nothing else changes.
+STATE_CHECK_VR = SYNC_VR + 3
 #: The environment variable that turns the link off ("0").
 SWITCH = "INERTER_FMU_NATIVE"
 

@@ -607,6 +607,8 @@ class InerterSlave(Fmi2Slave):
     def get_real(self, vrs):
         if len(vrs) == 1 and vrs[0] == fmu_native.TIME_VR:
             return [self._time()]
+        if len(vrs) == 1 and vrs[0] == fmu_native.STOP_VR:
+            return [math.nan if self._stop_time is None else float(self._stop_time)]
         if self._phase == INSTANTIATED:
             self._early("fmi2GetReal", vrs)
         if self._stale:

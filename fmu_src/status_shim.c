@@ -126,10 +126,12 @@
 #endif
 
 /* The slave's private value references beside NATIVE_SYNC_VR (inerter/fmu/native.py): its time
- * (Real), its phase (Integer), the check of serialized bytes (String). */
+ * (Real), its phase (Integer), the check of serialized bytes (String), its stop time (Real, NaN:
+ * none). */
 #define TIME_VR (NATIVE_SYNC_VR + 1u)
 #define PHASE_VR (NATIVE_SYNC_VR + 2u)
 #define STATE_CHECK_VR (NATIVE_SYNC_VR + 3u)
+#define STOP_VR (NATIVE_SYNC_VR + 4u)
 
 #define EXPORT __attribute__((visibility("default")))
 
@@ -905,10 +907,22 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     FORWARD_LOGGED(original.GetFMUstate(INNER(c), FMUstate))
 }
 
+/* A restored state brings its stop time (the slave keeps fmi2SetupExperiment's in the state):
+ * native steps stop there too. */
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
+    struct instance *w = c;
+    const fmi2ValueReference vr = STOP_VR;
+    fmi2Real stop = 0.0;
+    fmi2Status status;
+
     ENTER
-    return checked(INNER(c), original.SetFMUstate(INNER(c), FMUstate));
+    status = checked(w->inner, original.SetFMUstate(w->inner, FMUstate));
+    if (status == fmi2OK && original.GetReal(w->inner, &vr, 1, &stop) == fmi2OK) {
+        w->stop_defined = stop == stop; /* not NaN */
+        w->stop_time = stop;
+    }
+    return status;
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)

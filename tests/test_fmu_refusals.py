@@ -119,6 +119,9 @@ def test_a_serialized_state_continues_bit_for_bit_in_a_fresh_instance(input_fmu,
     mine, theirs = continue_both(fresh, source, 3 * h, h, n=5)
     assert mine == theirs
     assert fresh.fmu.getRealStatus(LAST_SUCCESSFUL_TIME) == source.fmu.getRealStatus(LAST_SUCCESSFUL_TIME)
+    raises_status(FMI_ERROR, fresh.fmu.doStep, 8 * h, 0.2)   # the stop time came with the state
+    [message] = fresh.errors()
+    assert "past stopTime = 0.2 s" in message, message
 
 
 UNSUPPORTED = [
@@ -234,8 +237,8 @@ def test_status_inquiries_in_the_error_state_are_fmi2error(input_fmu, instance):
 def test_the_private_value_references_are_the_shims():
     """The shim derives them from NATIVE_SYNC_VR (fmu_src/status_shim.c); the slave takes them
     from inerter.fmu.native."""
-    names = ("TIME_VR", "PHASE_VR", "STATE_CHECK_VR")
-    assert [getattr(fmu_native, name) for name in names] == [fmu_native.SYNC_VR + k for k in (1, 2, 3)]
+    names = ("TIME_VR", "PHASE_VR", "STATE_CHECK_VR", "STOP_VR")
+    assert [getattr(fmu_native, name) for name in names] == [fmu_native.SYNC_VR + k for k in (1, 2, 3, 4)]
     source = (ROOT / "fmu_src" / "status_shim.c").read_text()
     for k, name in enumerate(names, start=1):
         assert f"#define {name} (NATIVE_SYNC_VR + {k}u)" in source

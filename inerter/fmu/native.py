@@ -77,6 +77,10 @@ PHASE_VR = SYNC_VR + 2
 #: slave checks that they are a state of this FMU and logs an error where they are not (the shim
 #: then returns fmi2Error without deserializing them). Nothing else changes.
 STATE_CHECK_VR = SYNC_VR + 3
+#: Private Real value reference: the slave's stop time (fmi2SetupExperiment's, or a restored FMU
+#: state's), NaN where there is none; the shim reads it after fmi2SetFMUstate, so that a native
+#: step never ends past the stop time the slave holds.
+STOP_VR = SYNC_VR + 4
 #: The environment variable that turns the link off ("0").
 SWITCH = "INERTER_FMU_NATIVE"
 

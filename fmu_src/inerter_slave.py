@@ -53,7 +53,10 @@ read after the call that made it (which the shim always does).
 FMU state (fmi2GetFMUstate / SetFMUstate / Serialize / DeSerialize) holds the whole state: the
 parameter settings, the inputs, the outputs and the solver's own state (time, coordinates,
 integrator step size, held inputs), so that a step repeated after a rollback gives bit-identical
-outputs. The serialized form is JSON with the solver state in base64.
+outputs. The serialized form is JSON with the solver state in base64, marked with its format, the
+scene file's name and digest and the FMU's build digest: the status shim hands the bytes given to
+fmi2DeSerializeFMUstate to :meth:`InerterSlave._check_serialized` first, and returns fmi2Error with
+the reason logged for bytes that are no state of this FMU.
 """
 from __future__ import annotations
 
@@ -66,6 +69,7 @@ import json
 import math
 import operator
 import os
+import pickle
 import shutil
 import sys
 import tempfile
@@ -150,7 +154,8 @@ import inerter  # noqa: E402
 from inerter.fmu import native as fmu_native
 from inerter.common.errors import InerterError, SimulationError
 
-STATE_FORMAT = "inerter-fmu-state/1"
+#: The serialized state's format: /2 carries the scene file's name and the FMU's build digest.
+STATE_FORMAT = "inerter-fmu-state/2"
 
 #: The Integer variable that holds the status of the slave's last checked call; the Linux
 #: binary (fmu_src/status_shim.c) reads it and returns it.
@@ -168,6 +173,8 @@ INITIALIZATION = "initialization"  # between enter and exitInitializationMode: t
 STEPPING = "stepping"              # after a successful exitInitializationMode
 FAILED = "failed"                  # initialisation failed, or an unexpected error: steps refused
 TERMINATED = "terminated"
+#: The phases in the order of their index, which the status shim reads (fmu_native.PHASE_VR).
+PHASES = (INSTANTIATED, INITIALIZATION, STEPPING, FAILED, TERMINATED)
 
 #: Communication points closer than this (relative to max(1 s, |t|)) are taken as equal.
 TIME_TOLERANCE = 1e-9
@@ -286,6 +293,9 @@ class InerterSlave(Fmi2Slave):
     #: The parameters the running engine takes between steps (``Model.tunable_parameters()``,
     #: found at build time and set by the generated subclass); the others are fixed.
     tunable: tuple = ()
+    #: The digest of everything the FMU was built from (``inerter.fmu.build.source_hash``, set by
+    #: the generated subclass): a serialized state is taken only by an FMU of the same build.
+    build: str = ""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -597,6 +607,8 @@ class InerterSlave(Fmi2Slave):
     def get_real(self, vrs):
         if len(vrs) == 1 and vrs[0] == fmu_native.TIME_VR:
             return [self._time()]
+        if len(vrs) == 1 and vrs[0] == fmu_native.STOP_VR:
+            return [math.nan if self._stop_time is None else float(self._stop_time)]
         if self._phase == INSTANTIATED:
             self._early("fmi2GetReal", vrs)
         if self._stale:
@@ -610,6 +622,8 @@ class InerterSlave(Fmi2Slave):
     def get_integer(self, vrs):
         if len(vrs) == 2 and vrs[0] == fmu_native.LINK_VR and vrs[1] == fmu_native.LINK_VR + 1:
             return self._native.address_words()
+        if len(vrs) == 1 and vrs[0] == fmu_native.PHASE_VR:
+            return [PHASES.index(self._phase)]
         if self._phase == INSTANTIATED and list(vrs) != [self._status_vr]:   # the shim reads that
             self._early("fmi2GetInteger", vrs)
         return self._get(vrs, Integer, int, 0)
@@ -640,6 +654,9 @@ class InerterSlave(Fmi2Slave):
         self._set(vrs, values, Boolean)
 
     def set_string(self, vrs, values):
+        if len(vrs) == 1 and vrs[0] == fmu_native.STATE_CHECK_VR:
+            self._check_serialized(values[0])
+            return
         self._begin_call()
         self._set(vrs, values, String)
 
@@ -991,7 +1008,9 @@ class InerterSlave(Fmi2Slave):
         try:
             return {
                 "format": STATE_FORMAT,
+                "scene_file": self.scene_file,
                 "scene": self.scene_digest,
+                "build": self.build,
                 "phase": self._phase,
                 "failure": self._failure,
                 "settings": dict(self._settings),
@@ -1017,24 +1036,71 @@ class InerterSlave(Fmi2Slave):
             self.log(f"setFMUstate: the state could not be restored ({exc!r}); the FMU is "
                      f"unchanged", Fmi2Status.error)
 
-    def _restore(self, state):
+    def _check_serialized(self, text: str):
+        """The bytes given to fmi2DeSerializeFMUstate, in hex (the status shim sends them to the
+        private String fmu_native.STATE_CHECK_VR first): log an error where they are not a state this
+        FMU can restore, so that the shim returns fmi2Error; nothing changes."""
+        try:
+            data = bytes.fromhex(text)
+        except (TypeError, ValueError) as exc:       # the shim's encoding: a bug
+            self.log(f"{self.scene_file}: fmi2DeSerializeFMUstate: the bytes did not reach the "
+                     f"FMU's Python ({exc!r}); no FMU state is made", Fmi2Status.error)
+            return
+        try:
+            self._checked(self._fmu_state_from_bytes(data), dry=True)
+        except Exception as exc:
+            why = (f"no {exc.args[0]!r} in it" if isinstance(exc, KeyError) else
+                   str(exc) if isinstance(exc, ValueError) else repr(exc))
+            self.log(f"{self.scene_file}: fmi2DeSerializeFMUstate: {len(data)} bytes that are not a "
+                     f"serialized state of this FMU: {why}; no FMU state is made, the instance is "
+                     f"unchanged", Fmi2Status.error)
+
+    def _checked(self, state, dry: bool = False) -> tuple[dict, object]:
+        """(settings, stepper) of `state` when it is a state of this FMU, the stepper (None where
+        the state has none) restored from it; raises ValueError saying why where it is not.
+        `dry`: the solver state is only read, no stepper is made (stepper None): a new stepper of
+        the numpy path resets the windings of the mechanism it shares with the running one.
+        Nothing of the instance changes."""
         if not isinstance(state, dict) or state.get("format") != STATE_FORMAT:
-            raise ValueError(f"not an FMU state of this FMU (expected format {STATE_FORMAT})"
-                             + (f": {state['error']}" if isinstance(state, dict)
-                                and "error" in state else ""))
-        if state["scene"] != self.scene_digest:
-            raise ValueError(f"the state belongs to another scene than {self.scene_file}")
+            got = state.get("format") if isinstance(state, dict) else None
+            raise ValueError(
+                (state["error"] if isinstance(state, dict) and "error" in state else
+                 f"format {got!r}" if isinstance(got, str) else "no format")
+                + f" (expected format {STATE_FORMAT!r}, of a state serialized by this FMU)")
+        if state.get("scene") != self.scene_digest:
+            other = state.get("scene_file")
+            raise ValueError(f"it is a state of {other}, not of {self.scene_file}"
+                             if other != self.scene_file else
+                             f"it is a state of another version of {self.scene_file} (the scene "
+                             f"file's digest differs)")
+        if state.get("build") != self.build:
+            raise ValueError(f"it was saved by another build of the FMU of {self.scene_file} "
+                             f"(build {str(state.get('build'))[:12]}, this FMU's {self.build[:12]}): "
+                             f"its solver state may not be this one's")
         settings = dict(state["settings"])
         if set(settings) != set(self._defaults) or set(state["inputs"]) != set(self._inputs) \
                 or len(state["outputs"]) != len(self._output_names):
             raise ValueError("the state's variables differ from this FMU's")
+        if state["phase"] not in PHASES:
+            raise ValueError(f"unknown phase {state['phase']!r} (expected one of {PHASES})")
         stepper = None
-        if state["stepper"] is not None:
+        if dry and state["stepper"] is not None:
+            try:
+                solver = pickle.loads(state["stepper"])
+            except Exception as exc:
+                raise ValueError(f"its solver state cannot be read ({exc!r})") from None
+            if not isinstance(solver, tuple):
+                raise ValueError(f"its solver state is a {type(solver).__name__}, not a tuple")
+        elif state["stepper"] is not None:
             effective = dict(settings)
             if "rtol" not in state["explicit"] and state["tolerance"] is not None:
                 effective["rtol"] = state["tolerance"]
             stepper = self._new_stepper(effective)
             stepper.set_state(state["stepper"])
+        return settings, stepper
+
+    def _restore(self, state):
+        settings, stepper = self._checked(state)
         # Everything checked: commit.
         self._native.stale = True
         self._settings = settings
@@ -1063,14 +1129,25 @@ class InerterSlave(Fmi2Slave):
     @staticmethod
     def _fmu_state_from_bytes(data: bytes):
         # pythonfmu calls it on the class: bytes that are no state give a state that
-        # setFMUstate refuses with fmi2Error and the reason
+        # setFMUstate refuses with fmi2Error and the reason (with the status shim,
+        # fmi2DeSerializeFMUstate refuses them first: _check_serialized)
+        data = bytes(data)
+        if not data:
+            return {"format": None, "error": "no bytes"}
         try:
-            state = json.loads(bytes(data).decode("utf-8"))
+            state = json.loads(data.decode("utf-8"))
+        except UnicodeDecodeError as exc:
+            return {"format": None, "error": f"not text (UTF-8): {exc.reason} at byte {exc.start}"}
+        except ValueError as exc:                 # json.JSONDecodeError: truncated, not JSON
+            return {"format": None, "error": f"not JSON, or cut short: {exc}"}
+        if not isinstance(state, dict):
+            return {"format": None, "error": f"JSON {type(state).__name__}, not an object"}
+        try:
             if state.get("stepper") is not None:
-                state["stepper"] = base64.b64decode(state["stepper"])
-            return state
+                state["stepper"] = base64.b64decode(state["stepper"], validate=True)
         except Exception as exc:
-            return {"format": None, "error": f"cannot deserialize: {exc!r}"}
+            return {"format": None, "error": f"its solver state is not base64: {exc}"}
+        return state
 
     # ------------------------------------------------------------------------------------------
     def _warn_if_foreign_package(self):

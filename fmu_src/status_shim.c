@@ -13,8 +13,24 @@
  * A call the slave does not report in fmi_status (a getter, setupExperiment, enterInitializationMode,
  * terminate, the FMU-state calls) returns fmi2Error when the slave logged a message of status
  * fmi2Error or worse during it (filtered_log counts them): an unknown value reference read, a getter
- * before initialization mode, terminate outside a run. fmi2GetRealStatus(fmi2LastSuccessfulTime)
- * is the slave's time, read through a private Real value reference.
+ * before initialization mode, terminate outside a run.
+ *
+ * Calls the shim answers itself, its messages naming the scene file (SCENE_FILE) as the slave's do:
+ *   - the functions this FMU does not support (fmi2GetDirectionalDerivative,
+ *     fmi2SetRealInputDerivatives, fmi2GetRealOutputDerivatives, fmi2CancelStep: the capability
+ *     flags of modelDescription.xml say so) return fmi2Error without entering Python, and change
+ *     nothing (pythonfmu's binary logged a message that named no file);
+ *   - the status functions (FMI 2.0 section 4.2.3): fmi2Error outside the states FMI 2.0 allows
+ *     them in (stepComplete, stepFailed, terminated: section 4.2.4's table; the slave's phase is read
+ *     through the private Integer NATIVE_SYNC_VR + 2), fmi2Discard for a status kind the function does
+ *     not answer or that does not apply (fmi2DoStepStatus and fmi2PendingStatus: no doStep is ever
+ *     pending, section 2.1.3: "fmi2Discard is returned also if the slave is not able to return the
+ *     required status information"); fmi2LastSuccessfulTime is the slave's time (the private Real
+ *     NATIVE_SYNC_VR + 1), fmi2Terminated is fmi2False (the slave never asks to end a run);
+ *   - fmi2DeSerializeFMUstate first hands the bytes (in hex) to the slave through the private String
+ *     NATIVE_SYNC_VR + 3, which checks that they are a state of this FMU and logs why not; then it
+ *     returns fmi2Error and makes no state (pythonfmu's binary took any bytes, and only
+ *     fmi2SetFMUstate refused them).
  *
  * The component the importer holds is this library's (struct instance), wrapping the original's:
  * every call is forwarded with the original's component, and the slave's messages reach the
@@ -85,6 +101,7 @@
 #include <dlfcn.h>
 #include <limits.h>
 #include <pthread.h>
+#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -101,9 +118,20 @@
 #if !defined(NATIVE_LINK_VR) || !defined(NATIVE_SYNC_VR) || !defined(NATIVE_MAGIC)
 #error "compile with -DNATIVE_LINK_VR, -DNATIVE_SYNC_VR and -DNATIVE_MAGIC (inerter/fmu/native.py)"
 #endif
+#ifndef SCENE_FILE
+#error "compile with -DSCENE_FILE='\"<the scene file's name>\"' (the name the messages give)"
+#endif
 #ifndef PATH_MAX
 #define PATH_MAX 4096
 #endif
+
+/* The slave's private value references beside NATIVE_SYNC_VR (inerter/fmu/native.py): its time
+ * (Real), its phase (Integer), the check of serialized bytes (String), its stop time (Real, NaN:
+ * none). */
+#define TIME_VR (NATIVE_SYNC_VR + 1u)
+#define PHASE_VR (NATIVE_SYNC_VR + 2u)
+#define STATE_CHECK_VR (NATIVE_SYNC_VR + 3u)
+#define STOP_VR (NATIVE_SYNC_VR + 4u)
 
 #define EXPORT __attribute__((visibility("default")))
 
@@ -495,6 +523,132 @@ static int past_stop(const struct instance *w, double t, double h)
         return logged(w_, before_, call);                                                        \
     }
 
+/* A message of the shim's own, "SCENE_FILE: " and the text, to the importer's logger as the
+ * slave's reach it (live_log: passed on where `passes` lets it; fmi2Discard and worse always). */
+static void say(const struct instance *w, fmi2Status status, const char *format, ...)
+    __attribute__((format(printf, 3, 4)));
+static void say(const struct instance *w, fmi2Status status, const char *format, ...)
+{
+    char message[1024];
+    int n = snprintf(message, sizeof message, "%s: ", SCENE_FILE);
+    va_list arguments;
+
+    if (n < 0 || (size_t)n >= sizeof message)
+        n = 0;
+    va_start(arguments, format);
+    vsnprintf(message + n, sizeof message - (size_t)n, format, arguments);
+    va_end(arguments);
+    live_log((int64_t)(uintptr_t)w, (int32_t)status,
+             status >= fmi2Error   ? "logStatusError"
+             : status == fmi2Discard ? "logStatusDiscard"
+             : status == fmi2Warning ? "logStatusWarning" : "logAll",
+             message);
+}
+
+/* A function this FMU does not support: fmi2Error, its reason logged, nothing changed. */
+static fmi2Status unsupported(fmi2Component c, const char *function, const char *why)
+{
+    if (handle == NULL || c == NULL)
+        return fmi2Error;
+    say(c, fmi2Error, "%s: not supported by this FMU (%s); nothing changes", function, why);
+    return fmi2Error;
+}
+
+/* Whether `size` bytes are a serialized state of this FMU: the slave says so through the private
+ * String STATE_CHECK_VR, the bytes in hex (they may hold any byte; a String is UTF-8 text ending
+ * at NUL), and logs why not (then fmi2Error). Nothing changes. */
+static fmi2Status check_serialized(struct instance *w, const fmi2Byte bytes[], size_t size)
+{
+    static const char digits[] = "0123456789abcdef";
+    const fmi2ValueReference vr = STATE_CHECK_VR;
+    unsigned long before = w->errors;
+    fmi2String text;
+    char *hex;
+    size_t i;
+    fmi2Status status;
+
+    if (bytes == NULL && size > 0) {
+        say(w, fmi2Error, "fmi2DeSerializeFMUstate: serializedState is NULL (size %zu); no FMU "
+            "state is made", size);
+        return fmi2Error;
+    }
+    hex = size < ((size_t)-1) / 2 ? malloc(2 * size + 1) : NULL;
+    if (hex == NULL) {
+        say(w, fmi2Error, "fmi2DeSerializeFMUstate: out of memory for %zu bytes; no FMU state is "
+            "made", size);
+        return fmi2Error;
+    }
+    for (i = 0; i < size; i++) {
+        hex[2 * i] = digits[((unsigned char)bytes[i]) >> 4];
+        hex[2 * i + 1] = digits[((unsigned char)bytes[i]) & 15];
+    }
+    hex[2 * size] = '\0';
+    text = hex;
+    status = logged(w, before, original.SetString(w->inner, &vr, 1, &text));
+    free(hex);
+    return status;
+}
+
+/* The fmi2StatusKind names, and the function that answers each (FMI 2.0 section 4.2.3). */
+static const char *const STATUS_KINDS[] = {"fmi2DoStepStatus", "fmi2PendingStatus",
+                                           "fmi2LastSuccessfulTime", "fmi2Terminated"};
+static const char *const STATUS_FUNCTIONS[] = {"fmi2GetStatus", "fmi2GetStringStatus",
+                                               "fmi2GetRealStatus", "fmi2GetBooleanStatus"};
+#define N_STATUS_KINDS (sizeof STATUS_KINDS / sizeof STATUS_KINDS[0])
+
+/* The slave's phases, in the order of inerter_slave.PHASES (read through PHASE_VR), and whether
+ * the status functions may be called in each: in FMI 2.0's stepComplete, stepFailed and terminated
+ * states (section 4.2.4), which are the slave's stepping and terminated phases. */
+static const char *const PHASES[] = {"instantiated", "initialization", "stepping", "failed",
+                                     "terminated"};
+static const int STATUS_ALLOWED[] = {0, 0, 1, 0, 1};
+#define N_PHASES (sizeof PHASES / sizeof PHASES[0])
+
+/* fmi2OK when `function` may answer status kind `s` now (`answers`: the kind it gives a value for,
+ * -1 none); else fmi2Error (not allowed in the instance's state, a kind that is none of FMI 2.0's,
+ * no value pointer) or fmi2Discard (a kind it does not answer, or one that does not apply), with
+ * the reason logged. */
+static fmi2Status status_inquiry(struct instance *w, const char *function, fmi2StatusKind s,
+                                 const void *value, int answers)
+{
+    const fmi2ValueReference vr = PHASE_VR;
+    fmi2Integer phase = -1;
+
+    if (original.GetInteger(w->inner, &vr, 1, &phase) != fmi2OK || phase < 0 ||
+        (size_t)phase >= N_PHASES) {
+        say(w, fmi2Error, "%s: the FMU's phase cannot be read (got %d)", function, (int)phase);
+        return fmi2Error;
+    }
+    if (!STATUS_ALLOWED[phase]) {
+        say(w, fmi2Error, "%s: refused in the %s state (expected it after a successful "
+            "fmi2ExitInitializationMode: FMI 2.0 allows the status functions in the "
+            "stepComplete, stepFailed and terminated states only); nothing changes", function,
+            PHASES[phase]);
+        return fmi2Error;
+    }
+    if ((int)s < 0 || (size_t)s >= N_STATUS_KINDS) {
+        say(w, fmi2Error, "%s: %d is not an fmi2StatusKind (expected 0 fmi2DoStepStatus, "
+            "1 fmi2PendingStatus, 2 fmi2LastSuccessfulTime or 3 fmi2Terminated)", function, (int)s);
+        return fmi2Error;
+    }
+    if (value == NULL) {
+        say(w, fmi2Error, "%s(%s): value is NULL", function, STATUS_KINDS[s]);
+        return fmi2Error;
+    }
+    if ((int)s == answers)
+        return fmi2OK;
+    if (strcmp(function, STATUS_FUNCTIONS[s]) != 0)
+        say(w, fmi2Discard, "%s: %s is not a status this function gives (FMI 2.0 section 4.2.3: "
+            "it is asked of %s)%s", function, STATUS_KINDS[s], STATUS_FUNCTIONS[s],
+            answers < 0 && strcmp(function, "fmi2GetIntegerStatus") == 0
+                ? "; FMI 2.0 defines no Integer status" : "");
+    else /* fmi2DoStepStatus, fmi2PendingStatus: only after a doStep returned fmi2Pending */
+        say(w, fmi2Discard, "%s(%s): not applicable: no asynchronous doStep is pending (this FMU "
+            "never returns fmi2Pending: canRunAsynchronuously is false)", function,
+            STATUS_KINDS[s]);
+    return fmi2Discard;
+}
+
 /* ---------------------------------------------------------------------------------------------
  * Common functions
  * ------------------------------------------------------------------------------------------- */
@@ -602,7 +756,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
             snprintf(message, sizeof message, "%s: fmi2SetDebugLogging: unknown log category "
                      "'%.200s' (expected one of the LogCategories of modelDescription.xml: "
                      "logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll); "
-                     "logging unchanged", ORIGINAL_LIBRARY, name != NULL ? name : "(null)");
+                     "logging unchanged", SCENE_FILE, name != NULL ? name : "(null)");
             live_log((int64_t)(uintptr_t)w, (int32_t)fmi2Error, "logStatusError", message);
             return fmi2Error;
         }
@@ -753,10 +907,22 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     FORWARD_LOGGED(original.GetFMUstate(INNER(c), FMUstate))
 }
 
+/* A restored state brings its stop time (the slave keeps fmi2SetupExperiment's in the state):
+ * native steps stop there too. */
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
+    struct instance *w = c;
+    const fmi2ValueReference vr = STOP_VR;
+    fmi2Real stop = 0.0;
+    fmi2Status status;
+
     ENTER
-    return checked(INNER(c), original.SetFMUstate(INNER(c), FMUstate));
+    status = checked(w->inner, original.SetFMUstate(w->inner, FMUstate));
+    if (status == fmi2OK && original.GetReal(w->inner, &vr, 1, &stop) == fmi2OK) {
+        w->stop_defined = stop == stop; /* not NaN */
+        w->stop_time = stop;
+    }
+    return status;
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
@@ -782,6 +948,12 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
                                    size_t size, fmi2FMUstate *FMUstate)
 {
     READ
+    if (FMUstate == NULL) {
+        say(c, fmi2Error, "fmi2DeSerializeFMUstate: FMUstate is NULL; no FMU state is made");
+        return fmi2Error;
+    }
+    if (check_serialized(c, serializedState, size) != fmi2OK)
+        return fmi2Error;
     FORWARD_LOGGED(original.DeSerializeFMUstate(INNER(c), serializedState, size, FMUstate))
 }
 
@@ -790,9 +962,10 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         size_t nKnown, const fmi2Real dvKnown[],
                                         fmi2Real dvUnknown[])
 {
-    READ
-    return original.GetDirectionalDerivative(INNER(c), vUnknown_ref, nUnknown, vKnown_ref,
-                                             nKnown, dvKnown, dvUnknown);
+    (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown,
+        (void)dvUnknown;
+    return unsupported(c, "fmi2GetDirectionalDerivative", "modelDescription.xml: "
+                       "providesDirectionalDerivative is false");
 }
 
 /* ---------------------------------------------------------------------------------------------
@@ -802,15 +975,17 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
                                        size_t nvr, const fmi2Integer order[],
                                        const fmi2Real value[])
 {
-    ENTER
-    return original.SetRealInputDerivatives(INNER(c), vr, nvr, order, value);
+    (void)vr, (void)nvr, (void)order, (void)value;
+    return unsupported(c, "fmi2SetRealInputDerivatives", "modelDescription.xml: "
+                       "canInterpolateInputs is false: an input is held over a communication step");
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
                                         size_t nvr, const fmi2Integer order[], fmi2Real value[])
 {
-    READ
-    return original.GetRealOutputDerivatives(INNER(c), vr, nvr, order, value);
+    (void)vr, (void)nvr, (void)order, (void)value;
+    return unsupported(c, "fmi2GetRealOutputDerivatives", "modelDescription.xml: "
+                       "maxOutputDerivativeOrder is 0");
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
@@ -846,43 +1021,54 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
 
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
-    ENTER
-    return original.CancelStep(INNER(c));
+    return unsupported(c, "fmi2CancelStep", "modelDescription.xml: canRunAsynchronuously is "
+                       "false: no doStep is ever pending, there is none to cancel");
 }
 
+/* The status functions: see status_inquiry. None changes anything. */
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
 {
     READ
-    return original.GetStatus(INNER(c), s, value);
+    return status_inquiry(c, "fmi2GetStatus", s, value, -1);
 }
 
-/* fmi2LastSuccessfulTime is the slave's time, read through the private Real NATIVE_SYNC_VR + 1:
+/* fmi2LastSuccessfulTime is the slave's time, read through the private Real TIME_VR:
  * pythonfmu's binary answers the end of the last doStep it was called for (NaN before the first,
  * the end of a refused step, not the native steps', not a rollback's). */
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
 {
+    fmi2Status status;
+
     READ
-    if (s == fmi2LastSuccessfulTime && value != NULL) {
-        const fmi2ValueReference vr = NATIVE_SYNC_VR + 1u;
+    status = status_inquiry(c, "fmi2GetRealStatus", s, value, fmi2LastSuccessfulTime);
+    if (status == fmi2OK) {
+        const fmi2ValueReference vr = TIME_VR;
         return original.GetReal(INNER(c), &vr, 1, value);
     }
-    return original.GetRealStatus(INNER(c), s, value);
+    return status;
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
 {
     READ
-    return original.GetIntegerStatus(INNER(c), s, value);
+    return status_inquiry(c, "fmi2GetIntegerStatus", s, value, -1);
 }
 
+/* fmi2Terminated: fmi2False. The slave never asks to end a run: a step it cannot complete is
+ * fmi2Discard with the FMU at its last communication point, from where the importer may go on. */
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
 {
+    fmi2Status status;
+
     READ
-    return original.GetBooleanStatus(INNER(c), s, value);
+    status = status_inquiry(c, "fmi2GetBooleanStatus", s, value, fmi2Terminated);
+    if (status == fmi2OK)
+        *value = fmi2False;
+    return status;
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
 {
     READ
-    return original.GetStringStatus(INNER(c), s, value);
+    return status_inquiry(c, "fmi2GetStringStatus", s, value, -1);
 }

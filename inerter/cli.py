@@ -40,10 +40,9 @@ def overrides_of(args) -> dict:
 
 
 def _step_with_fmu(args):
-    """--step is the FMU's communication step: without --model fmu it would be taken and do nothing."""
-    if getattr(args, "step", None) is not None and args.model != "fmu":
-        raise OptionError("--step", args.step, "--model fmu beside it; the solver's samples are set by --set "
-                          "experiment.output_interval=SECONDS", f"the FMU's communication step, without --model fmu")
+    """--step without --model fmu: refused by the check sweeps and studies use (one message)."""
+    from inerter.studies.sweep import check_fmu_step
+    check_fmu_step(getattr(args, "step", None), args.model)
 
 
 def origins_of(args) -> dict:

@@ -146,3 +146,35 @@ def test_the_command_writes_the_table_and_the_figure(tmp_path, capsys):
     assert main(["device-study", "--out", str(out), "--rows", "nonsense", "--no-fmu"]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "--rows" in err and "nonsense" in err and "ideal" in err, err
+
+
+@pytest.mark.parametrize("stop, scenes, fragment", [
+    ("3", [], "expected at least 10 s: two_bar_2d's C_y_peak_to_peak, C_y_mean_offset read the last 10 periods "
+              "of 1 s of its run"),
+    ("9.99", ["--scenes", "two_bar_2d"], "expected at least 10 s"),
+    ("1e9", ["--scenes", "braced_frame_3d"], "the study's samples every 0.01 s"),
+])
+def test_a_stop_time_that_cannot_work_is_refused_before_anything_runs(tmp_path, capsys, monkeypatch, stop, scenes,
+                                                                      fragment):
+    """two_bar_2d's steady-state metrics read its last 10 periods of 1/f = 1 s (the scene file: f = 1 Hz,
+    periods = 10), so a run shorter than 10 s computes none of them. Before, --stop-time 3 ran the
+    first row (its scene written, the solver run for 3 s) and then stopped with 'metrics: not computed'."""
+    from inerter.cli import main
+    monkeypatch.setattr(de, "run_row", lambda *a, **k: pytest.fail("a row was run"))
+    out = tmp_path / "study"
+    assert main(["device-study", "--out", str(out), "--stop-time", stop, "--no-fmu", *scenes]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith("inerter: error: --stop-time: ") and fragment in err, err
+    assert not out.exists()
+    assert main(["device-study", "--out", str(out), "--rows", "nonsense", "--no-fmu"]) == 2
+    assert not out.exists()                                     # (it was made before --rows was read)
+
+
+def test_the_least_stop_time_is_the_steady_state_window():
+    """10 s (10 periods of 1 s) is enough for the two-bar's window; the braced frame's peak metrics
+    read any run, so 3 s is enough for it."""
+    _, cases = de.read_device_data()
+    de.check_stop_time(10.0, [cases["two_bar_2d"]])
+    de.check_stop_time(3.0, [cases["braced_frame_3d"]])
+    with pytest.raises(de.DeviceStudyError, match="too short"):
+        de.check_stop_time(9.999, [cases["two_bar_2d"]])

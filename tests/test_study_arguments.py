@@ -33,7 +33,8 @@ SWEEP = ["sweep", str(LUMPED), "--vary", "y0=1.1,1.2", "--no-progress"]
     (SWEEP + ["--out", "s", "--workers", "0"], ["--workers: out of range (got 0; expected a whole number ≥ 1)"]),
     (SWEEP + ["--out", "s", "--stop-time", "-1"], ["--stop-time: ", "experiment.stop_time: out of range (got -1.0"]),
     (SWEEP + ["--out", "s", "--stop-time", "nan"], ["--stop-time: ", "experiment.stop_time: is not finite"]),
-    (SWEEP + ["--out", "s", "--step", "0.01"], ["--step 0.01: ", "without --model fmu"]),
+    (SWEEP + ["--out", "s", "--step", "0.01"], ["--step: the FMU's communication step, without --model fmu (got "
+                                                 "0.01; expected --model fmu beside it", "experiment.output_interval"]),
     (SWEEP + ["--out", "s", "--scheduler", "nonsense"],
      ["--scheduler: not an address: missing port number in address 'nonsense' (got 'nonsense'"]),
     (["sweep", str(LUMPED), "--vary", "experiment.stop_time=2,6", "--stop-time", "4", "--out", "s"],
@@ -77,3 +78,22 @@ def test_vary_splits_its_values_at_the_commas_between_them(text, values):
     assert got == [parse_set([f"{name}={v}"])[name] for v in
                    ({"y0": ['{value = 1100, unit = "mm"}', "1.2"], "b": ["max(1, m)", "2*m"],
                      "effects.gravity": ["[0, -9.81]", "[0,0]"], "experiment.method": ["RK4", "DOP853"]}[name])]
+
+
+def test_the_step_check_is_one_message_for_run_compare_sweep_and_study(folder, capsys):
+    """--step without --model fmu is refused by one check (inerter.studies.sweep.check_fmu_step),
+    so run, compare, sweep and study say the same thing. Before, run and compare said
+    ``--step: the FMU's communication step, without --model fmu (got '0.1'; expected ...)`` and sweep
+    ``--step 0.1: the FMU's communication step, without --model fmu (expected ...)``."""
+    messages = []
+    for argv in (["run", str(LUMPED), "--step", "0.1", "--out", "o"],
+                 ["compare", str(LUMPED), "--model", "oracle", "--step", "0.1", "--out", "o"],
+                 ["sweep", str(LUMPED), "--vary", "y0=1.1,1.2", "--step", "0.1", "--out", "o"],
+                 ["study", "fig9", "--no-progress", "--step", "0.1", "--out", "o"]):
+        assert main(argv) == 2
+        err = one_line_error(capsys, "inerter: error: --step: the FMU's communication step, without --model fmu "
+                             "(got ", "0.1", "; expected --model fmu beside it; the solver's samples are set by "
+                             "--set experiment.output_interval=SECONDS)")
+        messages.append(err.replace("'", ""))                # the typed text ('0.1') or the number (0.1)
+    assert len(set(messages)) == 1, messages
+    assert sorted(os.listdir(folder)) == ["afile"]

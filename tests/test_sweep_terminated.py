@@ -44,9 +44,11 @@ def test_sigterm_stops_a_sweep_cleanly_and_the_same_command_finishes_it(tmp_path
     assert proc.returncode == 143, err
     assert err.strip() == ("inerter: terminated; the runs that finished are in results.csv: run the same "
                            "command again to go on"), err
+    assert not (out / "results.csv.lock").exists()               # (it stayed, before)
     done_before = rows_of(results)
     assert 0 < len(done_before) < RUNS, "the sweep was not stopped part-way"
     assert main_sweep(args) == 0
     rows = rows_of(results)
     assert len(rows) == RUNS and len({r["key"] for r in rows}) == RUNS          # each run once
     assert rows[:len(done_before)] == done_before                              # nothing finished recomputed
+    assert sorted(p.name for p in out.iterdir()) == ["results.csv", "sweep.json"]

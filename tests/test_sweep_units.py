@@ -52,12 +52,14 @@ def test_sweep_plot_labels_its_axes_with_the_units(sweep, tmp_path):
 
 
 def test_a_second_sweep_into_the_folder_keeps_the_units_of_the_first(sweep, tmp_path):
-    """results.csv keeps the rows of both sweeps (resuming is by run key); sweep.json describes the
-    last, and keeps the units of the columns only the first had (b of two_bar_2d, in kg)."""
-    (tmp_path / "sweep.json").write_text(json.dumps({"units": {"b": "kg", "C_y_peak_to_peak": "m"}}))
+    """A second sweep of the same scene varying other parameters: results.csv keeps the rows of both
+    (resuming is by run key); sweep.json describes the last, and keeps the units of the columns only
+    the first had (b and La of lumped_mass_2d, in kg and m). A sweep of another scene into the folder
+    is refused (tests/test_sweep_folder.py)."""
+    (tmp_path / "sweep.json").write_text(json.dumps({"units": {"b": "kg", "La": "m"}}))
     sw.write_description(sweep, tmp_path)
     units = json.loads((tmp_path / "sweep.json").read_text())["units"]
-    assert units["b"] == "kg" and units["C_y_peak_to_peak"] == "m" and units["y0"] == "m"
+    assert units["b"] == "kg" and units["La"] == "m" and units["y0"] == "m"
     assert json.loads((tmp_path / "sweep.json").read_text())["vary"]["y0"] == [1.1, 1.2]
 
 

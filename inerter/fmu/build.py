@@ -429,7 +429,7 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
             name=name, scene_file=scene_path.name, scene_file_repr=repr(scene_path.name),
             description_repr=repr(fmu_description(scene_path, model, tunable)),
             version_repr=repr(None if version is None else str(version)),
-            tunable_repr=repr(tuple(tunable))), encoding="utf-8")
+            tunable_repr=repr(tuple(tunable)), build_repr=repr(digest)), encoding="utf-8")
         shutil.copy2(FMU_SRC / SLAVE_FILE, stage / SLAVE_FILE)
         write_payload(stage / PAYLOAD_FILE)
         shutil.copy2(scene_path, stage / scene_path.name)
@@ -448,7 +448,7 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
                                 stage / "requirements.txt", *extra])
         final = Path(tmp) / f"{name}.fmu"
         _complete_model_description(built, final, units, digest, Path(tmp) / "shim",
-                                    declarations(model, units))
+                                    declarations(model, units), scene_file=scene_path.name)
         hash_path.unlink(missing_ok=True)
         replace_file(fmu_path, lambda part: shutil.copyfile(final, part))
     replace_file(hash_path, lambda part: part.write_text(digest + "\n"))
@@ -547,12 +547,14 @@ def _declare(root: ET.Element, units: dict[str, str], extra: Declarations | None
 
 
 def _complete_model_description(src: Path, dest: Path, units: dict[str, str], digest: str,
-                                shim_dir: Path | None = None, extra: Declarations | None = None):
+                                shim_dir: Path | None = None, extra: Declarations | None = None,
+                                scene_file: str | None = None):
     """Copy the FMU `src` to `dest` with units and a content-derived GUID in its description,
     and with `extra` (:func:`declarations`) the rest the build declares.
 
     With `shim_dir` (a scratch folder), the status shim is compiled there for the slave's
-    STATUS_VARIABLE and put in front of pythonfmu's Linux binary (see :func:`_compile_shim`).
+    STATUS_VARIABLE and put in front of pythonfmu's Linux binary (see :func:`_compile_shim`); its
+    messages name `scene_file`.
     """
     with zipfile.ZipFile(src) as zin:
         root = ET.fromstring(zin.read("modelDescription.xml"))
@@ -576,7 +578,7 @@ def _complete_model_description(src: Path, dest: Path, units: dict[str, str], di
         linux_binary = f"binaries/linux64/{identifier}.so"
         shim = None
         if shim_dir is not None and linux_binary in zin.namelist():
-            shim = _compile_shim(identifier, status_vr, shim_dir, dest.name)
+            shim = _compile_shim(identifier, status_vr, shim_dir, dest.name, scene_file)
         # Stored, not deflated: importers extract the FMU at every run (fmpy's simulate_fmu
         # does), and inflating it cost 4 ms a run, 8 % of the lumped scene's 20 s at 10 ms steps
         # (docs/fmu_overhead.md); the FMU is 0.88 MB instead of 0.45 MB.
@@ -622,9 +624,18 @@ def _stripped(binary: bytes, work: Path) -> bytes:
     return path.read_bytes() if proc.returncode == 0 else binary
 
 
-def _compile_shim(identifier: str, status_vr: int, work: Path, fmu_name: str) -> bytes | None:
-    """The status shim for `identifier`, compiled from fmu_src/status_shim.c; None (with a
-    FmuBuildWarning) when it cannot be compiled here."""
+def _c_string(text: str) -> str:
+    """`text` as a C string literal: its UTF-8 bytes, each but letters, digits and ``._-+/ `` as a
+    three-digit octal escape (a file name may hold quotes, backslashes or '%')."""
+    safe = set(b"abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._-+/ ")
+    return '"' + "".join(chr(b) if b in safe else f"\\{b:03o}" for b in text.encode("utf-8")) + '"'
+
+
+def _compile_shim(identifier: str, status_vr: int, work: Path, fmu_name: str,
+                  scene_file: str | None = None) -> bytes | None:
+    """The status shim for `identifier`, compiled from fmu_src/status_shim.c, its own messages
+    naming `scene_file` (the FMU's file name without it); None (with a FmuBuildWarning) when it
+    cannot be compiled here."""
     gcc, why = _shim_compiler()
     if gcc is not None:
         work.mkdir(parents=True, exist_ok=True)
@@ -635,6 +646,7 @@ def _compile_shim(identifier: str, status_vr: int, work: Path, fmu_name: str) ->
                    f"-DSTATUS_VR={status_vr}u", f"-DNATIVE_LINK_VR={fmu_native.LINK_VR}u",
                    f"-DNATIVE_SYNC_VR={fmu_native.SYNC_VR}u", f"-DNATIVE_MAGIC={fmu_native.MAGIC}LL",
                    f'-DORIGINAL_LIBRARY="{identifier}{ORIGINAL_SUFFIX}"',
+                   f"-DSCENE_FILE={_c_string(scene_file or fmu_name)}",
                    "-o", str(out), SHIM_FILE, "-ldl"]
         try:
             proc = subprocess.run(command, cwd=FMU_SRC, capture_output=True, text=True,

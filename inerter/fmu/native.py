@@ -70,6 +70,17 @@ LINK_VR = 0x7FFFFF00
 SYNC_VR = 0x7FFFFF02
 #: Private Real value reference: the slave's time (the shim answers fmi2LastSuccessfulTime with it).
 TIME_VR = SYNC_VR + 1
+#: Private Integer value reference: the slave's phase, an index into the slave's PHASES (the shim
+#: answers the status functions only in the phases FMI 2.0 allows them in).
+PHASE_VR = SYNC_VR + 2
+#: Private String value reference: set to the bytes given to fmi2DeSerializeFMUstate, in hex, the
+#: slave checks that they are a state of this FMU and logs an error where they are not (the shim
+#: then returns fmi2Error without deserializing them). Nothing else changes.
+STATE_CHECK_VR = SYNC_VR + 3
+#: Private Real value reference: the slave's stop time (fmi2SetupExperiment's, or a restored FMU
+#: state's), NaN where there is none; the shim reads it after fmi2SetFMUstate, so that a native
+#: step never ends past the stop time the slave holds.
+STOP_VR = SYNC_VR + 4
 #: The environment variable that turns the link off ("0").
 SWITCH = "INERTER_FMU_NATIVE"
 

@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from inerter.common.errors import InerterError, shown
+from inerter.common.errors import InerterError, SceneError, shown
 from inerter.common.locations import devices as shipped_devices
 from inerter.common.options import output_path
 from inerter.common.locations import scenarios as _shipped_scenarios
@@ -354,10 +354,9 @@ class _Sampled:
         return sample_spline(self.time, self._result[name])
 
 
-def device_study(out, scenes=SCENES, rows=tuple(ROWS), stop_time=None, fmu=True, data=None,
-                 progress=None) -> list[RowResult]:
-    """Every (scene, row): write its scene into ``out/scenes``, run it by the solver and (with
-    `fmu`) through its FMU (built into ``out/fmu``). Returns the rows' metrics."""
+def check_study(data=None, scenes=SCENES, rows=tuple(ROWS), stop_time=None) -> tuple[dict, dict]:
+    """The study's data file, scenes, rows and stop time, checked before anything is run or written;
+    returns the data file's (device, cases) (:func:`read_device_data`)."""
     device, cases = read_device_data(data)
     for key in scenes:
         if key not in cases:
@@ -365,6 +364,42 @@ def device_study(out, scenes=SCENES, rows=tuple(ROWS), stop_time=None, fmu=True,
     for row in rows:
         if row not in ROWS:
             raise DeviceStudyError("--rows", "", row, "one of " + ", ".join(ROWS), "unknown row")
+    if stop_time is not None:
+        check_stop_time(stop_time, [cases[key] for key in scenes])
+    return device, cases
+
+
+def check_stop_time(stop_time, cases):
+    """--stop-time read as each scene's runs read it: the experiment's own checks (with the FMU's
+    step, :data:`FMU_STEP`), and long enough for the scene's steady-state metrics of the study,
+    which read the last `periods` periods of the excitation (``two_bar_2d``: 10 periods of 1 s), a
+    shorter run computing none of them (the first row then failed, after its run)."""
+    from inerter.scene.reader import build_scene, read_toml
+    if not (stop_time > 0 and math.isfinite(stop_time)):
+        raise DeviceStudyError("--stop-time", "", stop_time, "a positive number of seconds", "out of range")
+    for case in cases:
+        scene = build_scene(*read_toml(case.scene), {})
+        try:
+            scene.experiment_with({"stop_time": stop_time, "output_interval": FMU_STEP, "communication_step": FMU_STEP})
+        except SceneError as exc:          # (the study samples every FMU_STEP: a long run has too many samples)
+            raise DeviceStudyError("--stop-time", "", stop_time, f"a stop time {case.scene.name} can run to with "
+                                   f"the study's samples every {FMU_STEP:g} s ({exc.field}: {exc.problem}; expected "
+                                   f"{exc.expected})", "refused by the scene's experiment") from None
+        for m in scene.metrics:
+            keys = [f"{m.prefix}_{k}" if m.prefix else k for k in ("peak_to_peak", "mean_offset")]
+            need = m.periods * m.period if m.kind == "steady_state" else 0.0
+            if stop_time < need and set(keys) & set(case.metrics):
+                raise DeviceStudyError("--stop-time", "", stop_time, f"at least {need:g} s: {case.key}'s "
+                                       f"{', '.join(k for k in keys if k in case.metrics)} read the last {m.periods} "
+                                       f"periods of {m.period:g} s of its run", "too short")
+
+
+def device_study(out, scenes=SCENES, rows=tuple(ROWS), stop_time=None, fmu=True, data=None,
+                 progress=None) -> list[RowResult]:
+    """Every (scene, row): write its scene into ``out/scenes``, run it by the solver and (with
+    `fmu`) through its FMU (built into ``out/fmu``). Returns the rows' metrics. Its arguments are
+    checked before anything runs (:func:`check_study`)."""
+    device, cases = check_study(data, scenes, rows, stop_time)
     out = Path(out)
     results = []
     for key in scenes:
@@ -507,7 +542,8 @@ def device_study_parser() -> argparse.ArgumentParser:
     p.add_argument("--rows", nargs="+", default=list(ROWS), metavar="ROW",
                    help="the rows: " + ", ".join(ROWS) + " (default: all; ideal is always run)")
     p.add_argument("--stop-time", type=float, default=None, metavar="SECONDS",
-                   help="a shorter run than the scenes' own (60 s two-bar, 15 s braced frame)")
+                   help="a shorter run than the scenes' own (60 s two-bar, 15 s braced frame); at least "
+                        "the two-bar's steady-state window, 10 s")
     p.add_argument("--no-fmu", action="store_true", help="the solver only")
     p.add_argument("--data", default=None, metavar="TOML",
                    help="the device's values (default: devices/ballscrew_device.toml)")
@@ -516,8 +552,7 @@ def device_study_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     args = device_study_parser().parse_args(argv)
-    if args.stop_time is not None and not (args.stop_time > 0 and math.isfinite(args.stop_time)):
-        raise DeviceStudyError("--stop-time", "", args.stop_time, "a positive number of seconds", "out of range")
+    check_study(args.data, args.scenes, args.rows, args.stop_time)          # before the folder is made
     out = output_path(args.out)
     try:
         out.mkdir(parents=True, exist_ok=True)

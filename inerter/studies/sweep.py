@@ -12,7 +12,8 @@ LocalCluster of N worker processes with one thread each, or the workers of a run
 estimates the time left.
 
 Results. One row per run is appended to ``DIR/results.csv`` (and flushed) as soon as the run
-finishes: its key, the scene's name, the model, the value of every ``--set`` and ``--vary`` name,
+finishes: its key, the scene's name, the model, the value of every ``--set`` and ``--vary`` name
+(in SI: a table with a unit or an expression as the number the run reads from it, :meth:`Sweep.written`),
 status (``ok`` or ``failed``), the error message of a failed run, the scalar metrics of the scene,
 the run time on the worker (s), the worker and the time it finished. The columns are ordered
 ``key, scene, model, <parameters>, status, error, <metrics>, run_time_s, worker, finished_at``, so
@@ -254,7 +255,7 @@ class Sweep:
         scene gives, after the option that gave it (``--vary y0=0: scene.toml: parameters.y0: ...``)."""
         from inerter.scene.overrides import origin_of
         from inerter.scene.reader import build_scene, read_toml
-        source, data = read_toml(self.scene)
+        source, data = self._toml = read_toml(self.scene)
         for name, values in self.axes:
             seen = set()
             for value in values:
@@ -267,6 +268,27 @@ class Sweep:
                 except SceneError as exc:           # named by its option, by the scene reader or here
                     text = str(exc)
                     raise SweepError(text if text.startswith(origin + ":") else f"{origin}: {text}") from None
+
+    def written(self, overrides: dict) -> dict:
+        """A run's overrides as its row of results.csv holds them: a parameter or experiment setting
+        given as a table with a unit (``y0={value = 1100, unit = "mm"}``) or an expression (``b=2*m``)
+        as the SI number the run reads from it, in the unit sweep.json states for its column (a number
+        is SI as given); the others as given. The run's key is of the values as given."""
+        from inerter.scene.reader import build_scene
+        names = [n for n, v in overrides.items() if isinstance(v, (dict, str)) and not n.startswith("effects.")]
+        if not names:
+            return overrides
+        try:
+            scene = build_scene(*self._toml, overrides)
+        except SceneError:                  # this combination fails its run, which says why
+            return overrides
+        out = dict(overrides)
+        for name in names:
+            value = (getattr(scene.experiment, name[len("experiment."):], None) if name.startswith("experiment.")
+                     else scene.parameters[name].value if name in scene.parameters else None)
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                out[name] = value
+        return out
 
     def _units(self, base) -> dict:
         """The unit of each column of results.csv that has one (sweep.json's ``units``): a parameter's
@@ -283,10 +305,7 @@ class Sweep:
     def _check_settings(self, base):
         """--stop-time and --step read as the runs read them (the experiment's own checks), before any
         worker starts: a value every run would refuse is an error of the sweep, not a failed row each."""
-        if self.step is not None and self.model != "fmu":
-            raise SweepError(f"--step {self.step}: the FMU's communication step, without --model fmu (expected "
-                             "--model fmu beside it; the solver's samples are set by --set "
-                             "experiment.output_interval=SECONDS)")
+        check_fmu_step(self.step, self.model)
         given = {k: v for k, v in (("stop_time", self.stop_time), ("communication_step", self.step),
                                    ("output_interval", self.step)) if v is not None}
         varied = [n for n, _ in self.axes]
@@ -367,7 +386,7 @@ def run_one(task: dict) -> dict:
     """Run one combination and return its row. Never raises: a failure is a row with its error."""
     t0 = time.perf_counter()
     row = {"key": task["key"], "scene": task["name"], "model": task["model"]}
-    row.update(task["overrides"])
+    row.update(task.get("written") or task["overrides"])
     metrics: dict[str, Any] = {}
     try:
         scene = _scene_on_worker(task)
@@ -581,13 +600,18 @@ class FmuSlot:
 class ResultsFile:
     """``results.csv``: rows appended and flushed one by one, read back to resume.
 
-    Held under an exclusive lock while a sweep writes it. A row cut short by a killed process
-    (no final newline) is dropped when the file is opened again. A row with a parameter or metric
-    the header lacks rewrites the file with the column added in its place.
+    Held under an exclusive lock while a sweep writes it (``results.csv.lock`` beside it, removed
+    when the file is closed). A row cut short by a killed process (no final newline) is dropped
+    when the file is opened again. A row with a parameter or metric the header lacks rewrites the
+    file with the column added in its place.
     """
+
+    #: Attempts at taking the lock while other sweeps remove their lock files (see _take_lock).
+    LOCK_ATTEMPTS = 10
 
     def __init__(self, path):
         self.path = Path(path)
+        self.lock_path = self.path.with_name(self.path.name + ".lock")
         self.columns: list[str] = []
         self.rows: list[dict] = []
         self._fh = None
@@ -607,23 +631,52 @@ class ResultsFile:
         return list(reader.fieldnames or []), rows
 
     # -- writing ------------------------------------------------------------------------------
-    def open(self, parameters=(), metrics=()) -> "ResultsFile":
+    def open(self, parameters=(), metrics=(), check=None) -> "ResultsFile":
+        """Lock the file, read its rows and add the columns it lacks. `check(rows)`: called on the
+        rows before anything is written (it raises to refuse the file). Whatever fails, the lock is
+        released and its file removed."""
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        if fcntl is not None:
-            self._lock = open(self.path.with_name(self.path.name + ".lock"), "w")
+        self._take_lock()
+        try:
+            return self._load(parameters, metrics, check)
+        except BaseException:
+            self.close()
+            raise
+
+    def _take_lock(self):
+        """The exclusive lock on ``results.csv.lock``. The file a sweep locked may be removed by it
+        as it ends (close) between this sweep's opening it and locking it: then this sweep holds
+        the lock of a file no longer there, and locks the one now at that path instead."""
+        if fcntl is None:
+            return
+        for _ in range(self.LOCK_ATTEMPTS):
+            fh = open(self.lock_path, "a")
             try:
-                fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError:
-                self._lock.close()
-                self._lock = None
-                raise SweepError(f"{self.path}: another sweep is writing this file; wait for it to finish "
-                                 "or use another --out") from None
+                fh.close()
+                break
+            try:
+                here = os.stat(self.lock_path)
+                mine = os.fstat(fh.fileno())
+                if (here.st_dev, here.st_ino) == (mine.st_dev, mine.st_ino):
+                    self._lock = fh
+                    return
+            except FileNotFoundError:
+                pass
+            fh.close()
+        raise SweepError(f"{self.path}: another sweep is writing this file; wait for it to finish "
+                         "or use another --out")
+
+    def _load(self, parameters, metrics, check) -> "ResultsFile":
         if self.path.is_file() and self.path.stat().st_size:
             data = self.path.read_bytes()
             if not data.endswith(b"\n"):                        # a row cut short by a kill
                 with open(self.path, "r+b") as fh:
                     fh.truncate(data.rfind(b"\n") + 1)
             self.columns, self.rows = self.read(self.path)
+        if check is not None:
+            check(self.rows)
         if not self.columns or "key" not in self.columns or "status" not in self.columns:
             if self.rows:
                 raise SweepError(f"{self.path}: not a results file of inerter sweep (no key/status columns)")
@@ -683,7 +736,11 @@ class ResultsFile:
         if self._fh is not None:
             self._fh.close()
             self._fh = None
-        if self._lock is not None:
+        if self._lock is not None:          # removed while held: no other sweep holds it meanwhile
+            try:
+                os.unlink(self.lock_path)
+            except OSError:
+                pass
             self._lock.close()
             self._lock = None
 
@@ -802,8 +859,9 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
     t_start = time.perf_counter()
     out = Path(out)
     runs = sweep.runs()
-    results = ResultsFile(out / RESULTS_FILE).open(sweep.parameter_columns, sweep.metric_columns)
+    results = ResultsFile(out / RESULTS_FILE)
     try:
+        results.open(sweep.parameter_columns, sweep.metric_columns, check=lambda rows: check_scene(sweep, out, rows))
         if retry_failed:
             results.drop({r["key"] for r in results.rows if r.get("status") != "ok"})
         finished = {r["key"] for r in results.rows if r.get("status") in ("ok", "failed")}
@@ -820,7 +878,8 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
                 from inerter.fmu.build import DEFAULT_OUT_DIR, build
                 fmu_path = str(Path(build(sweep.scene, fmu_dir or DEFAULT_OUT_DIR)).resolve())
             from inerter import __version__
-            tasks = [dict(key=r.key, name=sweep.name, model=sweep.model, overrides=r.overrides, version=__version__,
+            tasks = [dict(key=r.key, name=sweep.name, model=sweep.model, overrides=r.overrides,
+                          written=sweep.written(r.overrides), version=__version__,
                           stop_time=sweep.stop_time, step=sweep.step, fmu_path=fmu_path, path=sweep.path,
                           scene_path=str(sweep.scene), scene_digest=sweep.digest, scene_content=sweep.content)
                      for r in todo]
@@ -842,9 +901,33 @@ def run_sweep(sweep: Sweep, out, workers: int | None = None, scheduler: str | No
     return report
 
 
+def check_scene(sweep: Sweep, out: Path, rows: list[dict]):
+    """A folder holds the sweeps of one scene: rows in its results.csv of another scene are refused
+    before any run (its rows would be mixed with this sweep's, its parameters' columns beside these).
+    The scene a folder holds is the one its sweep.json names (the same file, or a copy of its
+    content), else the scene column of its rows."""
+    if not rows:
+        return
+    try:
+        held = json.loads((Path(out) / SWEEP_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        held = None
+    if isinstance(held, dict) and isinstance(held.get("scene"), str):
+        if held["scene"] == str(sweep.scene) or held.get("scene_sha256") == sweep.digest:
+            return
+        other = f"{held['scene']} (its {SWEEP_FILE})"
+    else:
+        names = sorted({r["scene"] for r in rows if r.get("scene")} - {sweep.name})
+        if not names:
+            return
+        other = f"{', '.join(names)} (the scene column of {RESULTS_FILE})"
+    raise OptionError("--out", str(out), f"a folder without {RESULTS_FILE}, or one holding a sweep of {sweep.scene}",
+                      f"holds the sweep of another scene, {other}")
+
+
 def write_description(sweep: Sweep, out: Path):
     """``out/sweep.json``: this sweep, and the units of every column of results.csv, those of an
-    earlier sweep into the same folder (another scene, other parameters) kept beside this one's."""
+    earlier sweep of the same scene into the same folder (other parameters) kept beside this one's."""
     description = sweep.describe()
     description["units"] = {**column_units(out / RESULTS_FILE), **description["units"]}
     (out / SWEEP_FILE).write_text(json.dumps(description, indent=2, default=str))
@@ -890,7 +973,8 @@ def _record(future, task, results: ResultsFile, sweep: Sweep, report: SweepRepor
     try:
         row = future.result()
     except Exception as exc:   # the worker died (KilledWorker) or the task was lost
-        row = {"key": task["key"], "scene": task["name"], "model": task["model"], **task["overrides"],
+        row = {"key": task["key"], "scene": task["name"], "model": task["model"],
+               **(task.get("written") or task["overrides"]),
                "status": "failed", "error": f"{type(exc).__name__}: {exc} (run again with --retry-failed)",
                "finished_at": datetime.now(timezone.utc).isoformat(timespec="microseconds")}
     future.release()
@@ -1018,6 +1102,15 @@ def add_run_arguments(p: argparse.ArgumentParser):
     p.add_argument("--dashboard", nargs="?", const=":8787", default=None, metavar="ADDRESS",
                    help="serve dask's dashboard (needs bokeh) at ADDRESS (default :8787; 127.0.0.1:0: any free "
                         "port) and print its link; with --scheduler, print that scheduler's link")
+
+
+def check_fmu_step(step, model: str):
+    """``--step`` is the FMU's communication step: without ``--model fmu`` it would be taken and do
+    nothing (the solver's samples are its output interval). The one check of run, compare, sweep and
+    study; `step`: as given (the typed text or a number), None when not given."""
+    if step is not None and model != "fmu":
+        raise OptionError("--step", step, "--model fmu beside it; the solver's samples are set by --set "
+                          "experiment.output_interval=SECONDS", "the FMU's communication step, without --model fmu")
 
 
 def check_run_arguments(args):

@@ -1437,15 +1437,13 @@ class RK4Dense:
 
 def _rk4_nodes(t0, t_end, step, kinks) -> np.ndarray:
     """The ends of the steps kernels.integrate_rk4 takes from t0 to t_end (t0 first): the fixed
-    step, the step before each kink and before t_end shortened to end there, the same floating-
-    point operations as its loop's, so the same times."""
+    step, the step before each kink and before t_end shortened to end there: the loop's own rule
+    (kernels.rk4_step_length) run uncompiled, the same floating-point operations, so the same times."""
     nodes, t = [t0], t0
     ik = int(np.searchsorted(kinks, t, side="right"))
     while t < t_end:
-        while ik < len(kinks) and kinks[ik] <= t:
-            ik += 1
-        end = float(kinks[ik]) if ik < len(kinks) and kinks[ik] < t_end else t_end
-        t = t + min(step, abs(end - t))
+        h, ik = _k.rk4_step_length.py_func(t, t_end, step, kinks, ik)
+        t = t + h
         nodes.append(t)
     return np.array(nodes)
 

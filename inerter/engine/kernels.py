@@ -3332,6 +3332,18 @@ def _rk4_to_meeting(t, h, y, f, grid, k, out, inputs, alpha, P, AB, rhs, gen, ac
     return MEETING, k, evals, t
 
 
+@njit(cache=True, inline="always")
+def rk4_step_length(t, t_end, step, kinks, ik):
+    """(the length of the RK4 step from t, the index of the next kink after t): the fixed `step`,
+    shortened to end at the next of the increasing `kinks` (from index ik on) or at t_end. The one
+    rule of :func:`integrate_rk4`'s steps, which compiled._rk4_nodes runs uncompiled to find the
+    same step ends."""
+    while ik < kinks.shape[0] and kinks[ik] <= t:
+        ik += 1
+    end = kinks[ik] if ik < kinks.shape[0] and kinks[ik] < t_end else t_end
+    return min(step, abs(end - t)), ik
+
+
 @njit(cache=True)
 def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work, monitor):
     """:func:`integrate_rk4` from y (overwritten) with the scratch `work` (:func:`work_arrays`, 4 rows
@@ -3350,13 +3362,9 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
     ngrid = grid.shape[0]
     steps = 0
     gaps, z = terminal_gaps(y, P)
-    n_kinks = kinks.shape[0]
     ik = np.searchsorted(kinks, t, side="right")             # the next kink: kinks[ik] > t
     while t < t_end:
-        while ik < n_kinks and kinks[ik] <= t:
-            ik += 1
-        end = kinks[ik] if ik < n_kinks and kinks[ik] < t_end else t_end
-        h = min(step, abs(end - t))
+        h, ik = rk4_step_length(t, t_end, step, kinks, ik)
         st = _rk4_step(t, h, y, f, k2, k3, k4, y_new, f_new, ys, inputs, alpha, P, AB, rhs, gen, acc, before)
         t_new = t + h
         evals += 4

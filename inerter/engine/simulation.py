@@ -56,6 +56,22 @@ class Settings:
         return self.baumgarte if self.constraint == "baumgarte" else 0.0
 
 
+def for_run(mech):
+    """`mech` for one run or stepper: its copy that owns what the run changes as it goes, at its
+    value at t = 0 (``Mechanism.for_run``: the 3D rotational elements' φ_ref, the screw
+    efficiencies' modes, the caches keyed on the state; on the compiled right-hand side, the
+    kernel's tables too), so that the model it came from, and its other runs and steppers, are
+    not changed. A stand-in without ``for_run`` is taken as it is."""
+    copy_for_run = getattr(mech, "for_run", None)
+    return mech if copy_for_run is None else copy_for_run()
+
+
+def numpy_mechanism(mech):
+    """The numpy path's mechanism of `mech` (itself, or the one a kernel's stands for), which the
+    output signals are built on (``Signals.for_run``)."""
+    return getattr(mech, "mechanism", mech)
+
+
 def initial_state(mech) -> np.ndarray:
     """y0 = [q0, v0, z0] (z0: the internal states, empty for most scenes)."""
     return np.concatenate((mech.q0, mech.v0, getattr(mech, "z0", np.zeros(0))))
@@ -389,10 +405,15 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
     (:data:`THROUGH_KINKS`), as the compiled loop does, and take the same steps; the other methods
     restart at a kink too.
 
-    The 3D rotational elements' angles wind on from the initial pose during the run, and are as
-    they were afterwards: a :class:`Stepper` running on the same mechanism winds on from its own."""
+    The run works on its own copy of `mech` (:func:`for_run`): the 3D rotational elements' angles
+    wind on from the initial pose, the screw efficiencies' modes start at +1, and neither `mech`
+    nor another run or :class:`Stepper` of it sees them change. ``run.extra["mechanism"]`` is that
+    copy, as the run left it."""
+    mech = for_run(mech)
     with mech.wound_from_start():           # the angles are measured from the initial pose
-        return _integrate(mech, settings, inputs)
+        run = _integrate(mech, settings, inputs)
+    run.extra["mechanism"] = mech
+    return run
 
 
 def output_grid(stop_time: float, interval: float) -> np.ndarray:
@@ -593,9 +614,10 @@ class Stepper:
     bit."""
 
     def __init__(self, mech, settings: Settings, signals, stop_time=None):
+        mech = for_run(mech)                  # its own run state: another stepper of the model has its own
         self.mech = mech
         self.settings = settings
-        self.signals = signals
+        self.signals = signals.for_run(numpy_mechanism(mech)) if signals is not None else None
         self.time = 0.0
         self.y = initial_state(mech)
         self.inputs = np.zeros(len(mech.input_names))
@@ -629,8 +651,9 @@ class Stepper:
         the stepper unchanged, where `mech` differs in anything else (geometry, masses, ...)."""
         from inerter.engine.tables import check_retune
         check_retune(self.mech.scene, mech.scene)
+        mech = for_run(mech)                  # the other model's mechanism, a copy of its own
         mech.windings = self.mech.windings    # the angles wind on from where they are
-        self.mech, self.signals = mech, signals
+        self.mech, self.signals = mech, signals.for_run(numpy_mechanism(mech))
         self._solver = None
         self._input_moved = True
 

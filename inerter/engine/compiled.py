@@ -950,6 +950,11 @@ class _KernelMechanism:
         (Kernel.for_run)."""
         return _KernelMechanism(self._mech.for_run(), self._kernel.for_run())
 
+    def retuned(self, mech) -> "_KernelMechanism":
+        """`mech` (the same scene read with other parameter values) on its own kernel, a copy
+        owning its run state: a retuned stepper stays on the compiled right-hand side."""
+        return kernel_mechanism(mech).for_run()
+
     @property
     def mechanism(self):
         """The mechanism the kernel was compiled for (the numpy path's evaluation of the same model)."""

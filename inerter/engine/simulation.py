@@ -651,7 +651,8 @@ class Stepper:
         the stepper unchanged, where `mech` differs in anything else (geometry, masses, ...)."""
         from inerter.engine.tables import check_retune
         check_retune(self.mech.scene, mech.scene)
-        mech = for_run(mech)                  # the other model's mechanism, a copy of its own
+        # the other model's mechanism, a copy of its own (on its kernel where this one runs on one)
+        mech = self.mech.retuned(mech) if hasattr(self.mech, "retuned") else for_run(mech)
         mech.windings = self.mech.windings    # the angles wind on from where they are
         self.mech, self.signals = mech, signals.for_run(numpy_mechanism(mech))
         self._solver = None

@@ -54,7 +54,7 @@ import numpy as np
 
 from inerter.common.atomic import replace_file
 from inerter.common.errors import SimulationError
-from inerter.engine.simulation import Run, Stepper, for_run, jumps, output_grid
+from inerter.engine.simulation import Run, Stepper, for_run, jumps, load_state, output_grid
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
@@ -1860,7 +1860,7 @@ class CompiledStepper(Stepper):
 
     def set_state(self, blob: bytes):
         (self.time, y, self.h, inputs, self.steps, self.t_bound, self._rk, self._rk_inputs,
-         self._input_moved, windings) = pickle.loads(blob)
+         self._input_moved, windings) = load_state(blob)
         self.kernel.windings[:] = windings
         self.y = np.array(y)
         self.inputs = np.array(inputs)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import bisect
 import copy
 import functools
+import io
 import pickle
 import time as _time
 import types
@@ -775,7 +776,7 @@ class Stepper:
 
     def set_state(self, blob: bytes):
         (self.time, y, self.h, inputs, self.steps, self.t_bound, self._input_moved, running,
-         self.mech.windings) = pickle.loads(blob)
+         self.mech.windings) = load_state(blob)
         self.y = np.array(y)
         self.inputs = np.array(inputs)
         self._solver = self._dense = None
@@ -784,6 +785,43 @@ class Stepper:
             solver = self._start(state["t"], state["y"], None, end)
             restore_solver_state(solver, state)
             self._segment = (end, switched)
+
+
+#: The globals a stepper's state (:meth:`Stepper.get_state`, ``CompiledStepper.get_state``) holds,
+#: by module, for every method on both paths: numpy's arrays and scalars (their reconstruction
+#: functions, under numpy 2's module names and numpy 1's; ``_frombuffer``: pickle protocol 5's),
+#: the dense output Radau keeps to start its Newton iteration (the numpy path snapshots scipy's
+#: solver objects: :func:`solver_state`), the compiled path's running integration, and builtins a
+#: solver's attributes may hold. Nothing else is looked up (:class:`StateUnpickler`).
+STATE_GLOBALS = {
+    "numpy": {"ndarray", "dtype"},
+    "numpy._core.multiarray": {"_reconstruct", "scalar"},
+    "numpy.core.multiarray": {"_reconstruct", "scalar"},
+    "numpy._core.numeric": {"_frombuffer"},
+    "numpy.core.numeric": {"_frombuffer"},
+    "scipy.integrate._ivp.radau": {"RadauDenseOutput"},
+    "inerter.engine.compiled": {"Running"},
+    "builtins": {"complex", "set", "frozenset", "slice"},
+}
+
+
+class StateUnpickler(pickle.Unpickler):
+    """Unpickles a stepper's state, bytes an importer hands back (fmi2DeSerializeFMUstate), looking
+    up only the globals of :data:`STATE_GLOBALS`: a pickle that names any other (``os.system``, a
+    class whose reconstruction runs code) is refused before anything of it runs."""
+
+    def find_class(self, module, name):
+        if name in STATE_GLOBALS.get(module, ()):
+            return super().find_class(module, name)
+        raise pickle.UnpicklingError(f"it names {module}.{name}, which no stepper state holds (a state holds "
+                                     f"numpy arrays, scipy's Radau dense output, the compiled path's running "
+                                     f"integration and plain values)")
+
+
+def load_state(blob: bytes):
+    """The object of a stepper's state `blob` (:class:`StateUnpickler`); raises pickle.UnpicklingError
+    where it names a global no state holds, and what pickle raises where it is no pickle."""
+    return StateUnpickler(io.BytesIO(bytes(blob))).load()
 
 
 #: Attributes of a scipy solver that are its code, not its state (rebuilt with the solver).

@@ -65,7 +65,7 @@ class Stops:
 #: stiff_1dof_2d reports stiffness only with explicit methods and c = 1e8 N.s/m.
 DESIGNED_TO_STOP = {
     # "reaches O (if v0 >= w L0) at t* = asin(w L0/v0)/w: for the defaults pi*sqrt(2)/4 = 1.1107 s.
-    # There the elements' direction is undefined: the run stops at the last good time, naming the
+    # There the elements' direction is undefined: the run stops at the meeting, naming the
     # elements and the time (the FMU discards the step with that message)."
     "terminals_meet_2d": Stops(at=math.pi * math.sqrt(2.0) / 4.0, stop_time=1.5,
                                names=("spring", "damper", "inerter", "meet")),

@@ -359,6 +359,7 @@ _STATUS_TEXT = {
     8: "a body's Z-X-Z Euler angles reach their singularity (gimbal lock): the angle rates are undefined; "
        "use orientation = \"quaternion\" (the default)",
     9: "a step reaches a pose where the joints' constraint rows lose rank",
+    10: "the terminals of a translational element meet: its direction is undefined",
 }
 
 
@@ -1114,16 +1115,15 @@ def _rk_segment(kernel, settings, tables, y, t0, t1, seg, seg_out, max_steps, in
 
 def _run_failure(kernel, settings, status, h, y_last, t_reached, t_sample) -> str:
     """The message of a whole run's compiled loop that stopped with `status` at `t_reached` (the last
-    sample at `t_sample`; `h` its last step). Terminals meeting: the loop stopped at the start of the
-    step that crosses the meeting (`y_last` the state there), which the message bounds."""
+    sample at `t_sample`; `h` its last step). Terminals meeting: the loop stopped at the meeting
+    located within the step that brings them together (MEETING, `y_last` the state there), or at
+    the last node before a step whose stage finds them meeting (TERMINALS_MEET)."""
     h = h if settings.method != "RK4" else settings.step
-    meet = status == _k.TERMINALS_MEET
+    meet = status in (_k.TERMINALS_MEET, _k.MEETING)
     why = failure_text(kernel, status, settings.method, h, y_last, t_reached if meet else t_sample,
                        int(settings.max_steps))
-    message = f"at t = {t_reached:.6g} s: the {settings.method} integrator failed: {why}"
-    if meet:
-        message += f" (the step to t = {t_reached + h:.6g} s crosses the meeting; the run ends at its start)"
-    return message
+    digits = 9 if status == _k.MEETING else 6
+    return f"at t = {t_reached:.{digits}g} s: the {settings.method} integrator failed: {why}"
 
 
 def integrate_compiled(mech, settings, inputs=None, dense=False):
@@ -1196,7 +1196,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         out[k:k + written] = seg_out[1:1 + written]
         k += written
         if status != 0:
-            stopped = y_reached if status in (_k.CHANGE_POINT, _k.TERMINALS_MEET) else None    # its state there
+            stopped = y_reached if status in (_k.CHANGE_POINT, _k.TERMINALS_MEET, _k.MEETING) else None  # its state
             break
         y, t0 = seg_out[-1, :ny].copy(), t1
     cpu = _time.process_time() - start
@@ -1710,7 +1710,8 @@ class CompiledStepper(Stepper):
             float(s.step), int(s.max_steps), kernel._inputs(self.inputs.copy()), float(s.alpha), kernel.params,
             self._monitor)
         if status:
-            why = failure_text(kernel, status, s.method, s.step, y, t_fail, int(s.max_steps))
+            at = t_reached if status == _k.MEETING else t_fail      # y is the state at the meeting
+            why = failure_text(kernel, status, s.method, s.step, y, at, int(s.max_steps))
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
         self.steps += int(steps)
         if not np.isfinite(y).all():
@@ -1872,7 +1873,8 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
     """What a compiled loop's failure `status` means, in the words of the numpy path: the step size
     `h` it ended with (and the step budget `max_steps` it ran out of); for terminals meeting, the
     element whose terminals were closest in the last good state `y_last` (at `t_last`), the loop
-    having stopped within a step of it; where the solve or the step size failed, what in that state
+    having stopped within a step of it (TERMINALS_MEET), or at the meeting it located there
+    (MEETING, ``Mechanism.meeting_message``); where the solve or the step size failed, what in that state
     may have stalled it (``Mechanism.diagnose``: terminals nearly meeting, a device mount near its
     singularity); where the step size collapsed or the steps read as stiff, the scene's fastest time
     scale (``Mechanism.stiffest``: a device's series mode, the narrowest tanh switch)."""
@@ -1896,6 +1898,8 @@ def _status_text(kernel, status, method, h, y_last, t_last, max_steps):
         return text.format(method=method, h=h, steps=sim.COLLAPSE_STEPS, relative=sim.COLLAPSE_RELATIVE)
     if status == 8:
         return _gimbal_lock_text(kernel, y_last, t_last)
+    if status == 10:
+        return kernel.mech.meeting_message(y_last, t_last)
     names = kernel.flat["el_names"]
     if status == 5 and names:
         q, v, z = (part.copy() for part in kernel.split(y_last))

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK45, DenseOutput, OdeSolver, Radau
 
 
-class _Hermite(DenseOutput):
+class Hermite(DenseOutput):
     """Cubic Hermite interpolation over one step (matches RK4's order 4 only at the nodes)."""
 
     def __init__(self, t_old, t, y_old, y, f_old, f):
@@ -45,18 +45,22 @@ class RK4(OdeSolver):
 
     def _step_impl(self):
         t, y, h = self.t, self.y, min(self.h, abs(self.t_bound - self.t))
-        k1 = self.f
-        k2 = self.fun(t + h / 2, y + h / 2 * k1)
-        k3 = self.fun(t + h / 2, y + h / 2 * k2)
-        k4 = self.fun(t + h, y + h * k3)
-        self.y_old, self.f_old = y, k1
-        self.y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        self.t = t + h
-        self.f = self.fun(self.t, self.y)
+        y_new, f_new = rk4_step(self.fun, t, y, self.f, h)     # the state is left as it was where it raises
+        self.y_old, self.f_old = y, self.f
+        self.y, self.t, self.f = y_new, t + h, f_new
         return True, None
 
     def _dense_output_impl(self):
-        return _Hermite(self.t_old, self.t, self.y_old, self.y, self.f_old, self.f)
+        return Hermite(self.t_old, self.t, self.y_old, self.y, self.f_old, self.f)
+
+
+def rk4_step(fun, t, y, f, h):
+    """One classical RK4 step of length h from (t, y) with derivative f: (y_new, f_new)."""
+    k2 = fun(t + h / 2, y + h / 2 * f)
+    k3 = fun(t + h / 2, y + h / 2 * k2)
+    k4 = fun(t + h, y + h * k3)
+    y_new = y + h / 6 * (f + 2 * k2 + 2 * k3 + k4)
+    return y_new, fun(t + h, y_new)
 
 
 SOLVERS = {"DOP853": DOP853, "RK45": RK45, "Radau": Radau, "BDF": BDF, "LSODA": LSODA, "RK4": RK4}

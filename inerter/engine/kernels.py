@@ -64,9 +64,12 @@ N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND
     EULER_K, EFFICIENT, UNSETTLED, LOOPS = range(15)
 # (LOOPS: the closed loops of the joints, ``Mechanism.closed_loops``; 0: the change-point watch is off.)
 
-# Status codes of the integrators.
+# Status codes of the integrators. TERMINALS_MEET: a state where a translational element's
+# terminals meet, found where it cannot be evaluated (the integrator stays at its last node);
+# MEETING: an accepted step whose chord brings them together (:func:`terminals_meet`), the run
+# stopped at the meeting located within that step (:func:`locate_meeting`, :func:`_rk4_to_meeting`).
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED, GIMBAL_LOCK, \
-    CHANGE_POINT = range(10)
+    CHANGE_POINT, MEETING = range(11)
 # The slots of the integrators' `monitor` (inerter.engine.compiled._monitor): Hairer's stiffness
 # bound, how often it is tested, its firings in a row that stop a run; the collapse's relative step
 # and steps in a row; the trial shrink; the smallest/largest singular value ratio of C_v below which
@@ -1256,6 +1259,28 @@ def terminals_meet(gaps, z, y_new, P):
     return False
 
 
+@njit(cache=True)
+def chord_margin(gaps0, gaps1, P):
+    """The smallest, over the translational elements whose terminals are checked, of the closest
+    approach of the chord from r_b − r_a = `gaps0` to `gaps1` (rows of :func:`terminal_gaps`) over
+    the element's limit (``el_real[e, MEET_LIMIT]``): at most 1 where :func:`terminals_meet` finds
+    the terminals meeting along that chord (the same test, read as a ratio); inf without such
+    elements."""
+    el_real = P[EL_REAL]
+    worst = np.inf
+    for e in range(gaps0.shape[0]):
+        limit = el_real[e, MEET_LIMIT]
+        if limit == 0.0:
+            continue
+        ax, ay, az = gaps0[e, 0], gaps0[e, 1], gaps0[e, 2]
+        dx, dy, dz = gaps1[e, 0] - ax, gaps1[e, 1] - ay, gaps1[e, 2] - az
+        dd = dx * dx + dy * dy + dz * dz
+        s = 1.0 if dd == 0.0 else min(1.0, max(0.0, -(ax * dx + ay * dy + az * dz) / dd))
+        cx, cy, cz = ax + s * dx, ay + s * dy, az + s * dz
+        worst = min(worst, math.sqrt(cx * cx + cy * cy + cz * cz) / limit)
+    return worst
+
+
 #: Positions in work_arrays' tuple (WORK names them, in this order): the first SOLVER_WORK serve every
 #: evaluation and integrator; then the change-point watch's C_v at a step's start and end, its
 #: scratch, its Gram matrix and whether the start's C_v is known (loop_watch).
@@ -2281,6 +2306,64 @@ def _step_back(hdr, y, f, y_prev, f_prev, P, gaps, z):
 
 
 @njit(cache=True)
+def locate_meeting(method, hdr, y, y_prev, dense, Pm, t, P, out):
+    """Where the last step of DOP853 or RK45 (from hdr[RK_T_PREV], y_prev to (t, y), its dense
+    output `dense` computed), whose chord brings a translational element's terminals together
+    (:func:`terminals_meet`), brings them together along its own dense output: bisection to
+    adjacent floats, keeping the half whose chord (r_b − r_a at its ends, :func:`chord_margin`)
+    comes within the element's limit, the earlier half where both do; where neither does (the
+    longer chord cut a corner of the path), the half whose chord comes closer. The test that
+    declares the meeting is the same, on ever shorter chords of the step's own solution, as an
+    event is located on it. Returns the last time before the meeting, its state in out[0]."""
+    lo, hi = hdr[RK_T_PREV], t
+    gaps_lo, z = terminal_gaps(y_prev, P)
+    gaps_hi, _ = terminal_gaps(y, P)
+    gaps_mid = np.zeros_like(gaps_lo)
+    ts = np.empty(1)
+    while True:
+        mid = 0.5 * (lo + hi)
+        if not lo < mid < hi:
+            break
+        ts[0] = mid
+        _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, 0, out)
+        gaps_at(out[0], P, gaps_mid, z)
+        first = chord_margin(gaps_lo, gaps_mid, P)
+        if first <= 1.0 or first <= chord_margin(gaps_mid, gaps_hi, P):
+            hi = mid
+            gaps_hi[:, :] = gaps_mid
+        else:
+            lo = mid
+            gaps_lo[:, :] = gaps_mid
+    ts[0] = lo
+    _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, 0, out)
+    return lo
+
+
+@njit(cache=True)
+def _rk_meeting(method, hdr, y, y_prev, f, dense, Pm, t, ts, k, out, P, work, gaps, z):
+    """After the step :func:`rk_advance` has just accepted (from hdr[RK_T_PREV], y_prev to (t, y),
+    its dense output computed), whose chord brings a translational element's terminals together
+    (:func:`terminals_meet`): the meeting located on the step's dense output
+    (:func:`locate_meeting`), the samples of `ts` up to it written, y becoming the state there, and
+    (MEETING, the time it stops at, the first k not written). Where every time of `ts` lies before
+    the meeting (a co-simulation step's integrator step reaching past its communication point),
+    their samples are written and the step is taken back (:func:`_step_back`): (OK, the time it
+    stays at, k); the caller takes it again when asked further, and meets the terminals again."""
+    ny = y.shape[0]
+    stop = np.empty((1, ny))
+    t_stop = locate_meeting(method, hdr, y, y_prev, dense, Pm, t, P, stop)
+    sampled = k
+    while k < ts.shape[0] and ts[k] <= t_stop:
+        _rk_sample(method, hdr, y, y_prev, dense, Pm, t, ts, k, out)
+        k += 1
+    _record_windings_of(out, sampled, k, ny, ts, t, y, P)
+    if k == ts.shape[0]:
+        return OK, _step_back(hdr, y, f, y_prev, work[W_K][0], P, gaps, z), k
+    y[:] = stop[0]
+    return MEETING, t_stop, k
+
+
+@njit(cache=True)
 def _rms(x):
     s = 0.0
     for i in range(x.shape[0]):
@@ -2761,9 +2844,13 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
     `gaps`, `z`: the terminals' gaps at y (:func:`terminal_gaps`), moved on with every accepted
     step (:func:`terminals_meet`), so that a call resuming the integration need not evaluate them
     again. A mechanism whose joints close a loop (dims[LOOPS] > 0) is watched for change points
-    after each accepted step (:func:`_rk_loop_watch`). Returns (status, the first k not written);
-    on failure y, f and the last step's data are those of the last good node (`gaps` may be the
-    failed step's), except at a change point (CHANGE_POINT), where y is the state it stopped at."""
+    after each accepted step (:func:`_rk_loop_watch`). An accepted step whose chord brings a
+    translational element's terminals together (:func:`terminals_meet`) is valid up to the
+    meeting: it is taken, with its dense output, and the integration stops at the meeting located
+    on it (:func:`_rk_meeting`, MEETING). Returns (status, the first k not written); on failure y, f
+    and the last step's data are those of the last good node (`gaps` may be the failed step's),
+    except at a change point (CHANGE_POINT) or a meeting (MEETING), where y is the state it stopped
+    at, and hdr[RK_T] the time there."""
     work = _unowned(work)
     K, y_new, f_new = work[W_K], work[W_Y_NEW], work[W_F_NEW]
     work[CV_KNOWN][0] = 0.0         # C_v at y is not known yet (loop_watch): y may have been set anew
@@ -2791,8 +2878,9 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         if status != OK:
             break
         hdr[RK_STEPS] += 1
-        if terminals_meet(gaps, z, y_new, P):
-            status = TERMINALS_MEET
+        meets = terminals_meet(gaps, z, y_new, P)       # located below, on the step's dense output
+        if meets:
+            pass
         elif euler_lock_within(y, y_new, P):
             status = GIMBAL_LOCK
         else:
@@ -2803,7 +2891,7 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         # The step is accepted: it becomes the last step, with its dense output where a sample lies
         # inside it (DOP853's extra stages are evaluated only then) or where every step's is kept.
         hdr[RK_DENSE] = 0.0
-        if keeping or (ts[k] <= t_new + 1e-12 * max(1.0, t_new) and ts[k] < t_new):
+        if keeping or meets or (ts[k] <= t_new + 1e-12 * max(1.0, t_new) and ts[k] < t_new):
             status = _rk_dense(method, hdr, t, h, y, inputs, alpha, P, A, C, Dm, Pm, work, before, dense)
             if status != OK:
                 break
@@ -2820,6 +2908,10 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
         t = t_new
         while ik < kinks.shape[0] and kinks[ik] <= t:
             ik += 1
+        if rarely(meets):
+            status, t, k = _rk_meeting(method, hdr, y, y_prev, f, dense, Pm, t, ts, k, out, P, work, gaps, z)
+            h_abs = abs(h)
+            break
         if rarely(P[DIMS][LOOPS] != 0):
             status, t, k = _rk_loop_watch(method, hdr, y, y_prev, f, dense, t, ts, k, out, inputs, alpha, P, A, C,
                                           Dm, Pm, monitor, work, before, gaps, z)
@@ -2847,7 +2939,7 @@ def integrate_rk(method, y0, t0, t_end, grid, out, rtol, atol, first_step, max_s
     appended, the arrays replaced by ones twice as long when full. Returns (status, samples written, steps,
     evaluations, t reached, next step size, keep, the state reached): the step size is the one the
     error control proposes after the last accepted step (scipy's ``h_abs``); the state, where it
-    stopped at a change point (CHANGE_POINT), the one there."""
+    stopped at a change point (CHANGE_POINT) or where terminals meet (MEETING), the one there."""
     P = _unowned(P)                 # entered from Python (_unowned)
     ny = y0.shape[0]
     hdr = np.zeros(RK_HEADER)
@@ -3164,15 +3256,80 @@ def integrate_rk4(y0, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, j
     each of the increasing `kinks` (a ground record's samples, where the right-hand side's slope
     jumps) are shortened to end there, and from a kink the steps go on with the fixed step and the
     last derivative, as from a restart there without its evaluation. A mechanism with closed loops
-    is watched for change points (:func:`loop_watch`, its ratio in `monitor`). Returns (status,
-    samples written, steps, evaluations, t reached, the state reached: where it stopped at a change
-    point, the one there)."""
+    is watched for change points (:func:`loop_watch`, its ratio in `monitor`). A step that brings a
+    translational element's terminals together is taken again in shorter steps up to the meeting
+    (:func:`_rk4_to_meeting`, MEETING). Returns (status, samples written, steps, evaluations, t
+    reached, the state reached: where it stopped at a change point or a meeting, the one there)."""
     P = _unowned(P)                 # entered from Python (_unowned)
     work = work_arrays(P, y0.shape[0], 4)
     y = y0.copy()
     st, k, steps, evals, t = _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, kinks, work,
                                       monitor)
     return st, k, steps, evals, t, y
+
+
+@njit(cache=True, inline="always")
+def _rk4_step(t, h, y, f, k2, k3, k4, y_new, f_new, ys, inputs, alpha, P, AB, rhs, gen, acc, before):
+    """One classical RK4 step of length h from (t, y) with derivative f: its stages into k2, k3,
+    k4 (`ys`: scratch), its solution y_new and the derivative f_new there. Returns the worst
+    status of the right-hand sides (OK: none failed)."""
+    ny = y.shape[0]
+    for i in range(ny):
+        ys[i] = y[i] + h / 2 * f[i]
+    st = _rhs(min(t + h / 2, before), ys, inputs, alpha, P, AB, rhs, gen, acc, k2)
+    for i in range(ny):
+        ys[i] = y[i] + h / 2 * k2[i]
+    st = max(st, _rhs(min(t + h / 2, before), ys, inputs, alpha, P, AB, rhs, gen, acc, k3))
+    for i in range(ny):
+        ys[i] = y[i] + h * k3[i]
+    st = max(st, _rhs(min(t + h, before), ys, inputs, alpha, P, AB, rhs, gen, acc, k4))
+    for i in range(ny):
+        y_new[i] = y[i] + h / 6 * (f[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
+    return max(st, _rhs(min(t + h, before), y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new))
+
+
+@njit(cache=True)
+def _rk4_to_meeting(t, h, y, f, grid, k, out, inputs, alpha, P, AB, rhs, gen, acc, before):
+    """RK4's step of length h from (t, y, f) brings a translational element's terminals together
+    (its chord, :func:`terminals_meet`, or a stage where they meet, TERMINALS_MEET): taken again
+    from its start in ever shorter steps, by bisection of what is left of it down to adjacent
+    floats, each shorter step kept where it keeps them apart and halved where it does not, the
+    grid's samples in the steps kept written from their cubic Hermite. A fixed step has no error
+    control that accepted the crossing step, nor a dense output of its order: only steps that end
+    before the meeting are kept. Returns (MEETING, or the status of a right-hand side that failed
+    otherwise, the first k not written, the evaluations made, the time it stops at); y becomes the
+    state there (f the derivative there). AB, rhs, gen, acc: the scratch of :func:`_rhs`."""
+    ny = y.shape[0]
+    stages = np.empty((6, ny))
+    k2, k3, k4, y_mid, f_mid, ys = stages[0], stages[1], stages[2], stages[3], stages[4], stages[5]
+    gaps, z = terminal_gaps(y, P)
+    gaps_mid = np.zeros_like(gaps)
+    t_hi = t + h
+    evals = 0
+    while True:
+        part = 0.5 * (t_hi - t)
+        mid = t + part
+        if not t < mid < t_hi:
+            break
+        st = _rk4_step(t, part, y, f, k2, k3, k4, y_mid, f_mid, ys, inputs, alpha, P, AB, rhs, gen, acc, before)
+        evals += 4
+        gaps_mid[:, :] = gaps
+        if st == TERMINALS_MEET or (st == OK and terminals_meet(gaps_mid, z, y_mid, P)):
+            t_hi = mid
+            continue
+        if st != OK:
+            return st, k, evals, t
+        sampled = k
+        while k < grid.shape[0] and grid[k] <= mid:
+            _hermite(y, f, y_mid, f_mid, part, (grid[k] - t) / part, out, k)
+            k += 1
+        _wind_step_of(y_mid, y, part, P)
+        _record_windings_of(out, sampled, k, ny, grid, mid, y_mid, P)
+        y[:] = y_mid
+        f[:] = f_mid
+        gaps[:, :] = gaps_mid
+        t = mid
+    return MEETING, k, evals, t
 
 
 @njit(cache=True)
@@ -3200,25 +3357,17 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
             ik += 1
         end = kinks[ik] if ik < n_kinks and kinks[ik] < t_end else t_end
         h = min(step, abs(end - t))
-        for i in range(ny):
-            ys[i] = y[i] + h / 2 * f[i]
-        st = _rhs(min(t + h / 2, before), ys, inputs, alpha, P, AB, rhs, gen, acc, k2)
-        for i in range(ny):
-            ys[i] = y[i] + h / 2 * k2[i]
-        st = max(st, _rhs(min(t + h / 2, before), ys, inputs, alpha, P, AB, rhs, gen, acc, k3))
-        for i in range(ny):
-            ys[i] = y[i] + h * k3[i]
-        st = max(st, _rhs(min(t + h, before), ys, inputs, alpha, P, AB, rhs, gen, acc, k4))
-        for i in range(ny):
-            y_new[i] = y[i] + h / 6 * (f[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
+        st = _rk4_step(t, h, y, f, k2, k3, k4, y_new, f_new, ys, inputs, alpha, P, AB, rhs, gen, acc, before)
         t_new = t + h
-        st = max(st, _rhs(min(t_new, before), y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new))
         evals += 4
+        if st == TERMINALS_MEET or (st == OK and terminals_meet(gaps, z, y_new, P)):
+            steps += 1
+            st, k, more, t = _rk4_to_meeting(t, h, y, f, grid, k, out, inputs, alpha, P, AB, rhs, gen, acc,
+                                             before)
+            return st, k, steps, evals + more, t
         if st != OK:
             return st, k, steps, evals, t
         steps += 1
-        if terminals_meet(gaps, z, y_new, P):
-            return TERMINALS_MEET, k, steps, evals, t
         if euler_lock_within(y, y_new, P):
             return GIMBAL_LOCK, k, steps, evals, t
         _wind_step_of(y_new, y, h, P)
@@ -3251,7 +3400,7 @@ def rk4_cosim_step(y, t0, t_end, jumps, kinks, ts, out, step, max_steps, inputs,
     The increasing `kinks` in (t0 + eps, t_end − eps] end steps, which run on from them
     (:func:`integrate_rk4`). `ts`, `out`: scratch of two samples. Returns (status, steps, the time
     reached, the start of the segment that failed); y is left at that start, or where the step
-    stopped at a change point (CHANGE_POINT), at the state there."""
+    stopped at a change point (CHANGE_POINT) or where terminals meet (MEETING), at the state there."""
     P = _unowned(P)                 # entered from Python (_unowned)
     eps = 1e-12 * max(1.0, abs(t_end))
     steps = 0
@@ -3271,7 +3420,7 @@ def rk4_cosim_step(y, t0, t_end, jumps, kinks, ts, out, step, max_steps, inputs,
                                                                     alpha, P, jump, inside, monitor)
         steps += s_steps
         if st != OK:
-            if st == CHANGE_POINT:
+            if st == CHANGE_POINT or st == MEETING:
                 y[:] = y_reached            # the state it stopped at, for the message
             return st, steps, t_reached, t0
         y[:] = out[1]

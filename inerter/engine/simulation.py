@@ -236,6 +236,7 @@ class StepMonitor:
         self.hits = self.calm = 0
         self.small = 0
         self.loops = mech.closed_loops() > 0         # only a closed loop can reach a change point
+        self.terminals = getattr(mech, "watches_terminals", False)   # terminals that can meet
         self._rows = None                            # (q, C_v(q)) at the last step's end
 
     def after_step(self, solver, y_old):
@@ -246,6 +247,8 @@ class StepMonitor:
             raise SimulationError(
                 f"more than max_steps = {self.max_steps} integrator steps (step size {h:.3g} s): "
                 + max_steps_advice(self.method), t_old)
+        if self.terminals and self.mech.chord_margin(y_old, solver.y) <= 1.0:
+            self.stop_at_meeting(solver, t_old, y_old, getattr(solver, "f_old", None))
         self.mech.check_step(y_old, solver.y, t, t_old)
         if self.loops:
             self._watch_loops(solver, y_old)
@@ -261,6 +264,36 @@ class StepMonitor:
         else:
             self.small = 0
         self.mech.wind(solver.y, y_old, h)
+
+    def stop_at_meeting(self, solver, t_old, y_old, f_old=None, t_new=None):
+        """Terminals meet within the step from (t_old, y_old) to solver.t (or to `t_new`, RK4's step
+        whose stage found them meeting): raise TerminalsMeet at the meeting, located as the
+        compiled loops locate it (``kernels.locate_meeting``, ``kernels._rk4_to_meeting``), its
+        `located` the dense outputs valid up to it, for the samples before it. An adaptive
+        method's step, which its error control accepted, is valid up to the meeting: located by
+        bisection on its dense output, keeping the half whose chord brings the terminals within
+        their limit (:meth:`Mechanism.chord_margin`; the earlier where both do, the closer where
+        neither does). RK4's fixed step is not: taken again from its start in ever shorter steps
+        (:func:`_rk4_to_meeting`), only those that keep the terminals apart kept."""
+        if self.method == "RK4":
+            t_hi = solver.t if t_new is None else t_new
+            lo, y_lo, pieces = _rk4_to_meeting(solver.fun, self.mech, t_old, y_old, f_old, t_hi)
+        else:
+            dense = solver.dense_output()
+            lo, hi, y_lo, y_hi, pieces = t_old, solver.t, y_old, solver.y, [dense]
+            while lo < 0.5 * (lo + hi) < hi:
+                mid = 0.5 * (lo + hi)
+                y_mid = dense(mid)
+                first = self.mech.chord_margin(y_lo, y_mid)
+                if first <= 1.0 or first <= self.mech.chord_margin(y_mid, y_hi):
+                    hi, y_hi = mid, y_mid
+                else:
+                    lo, y_lo = mid, y_mid
+            y_lo = dense(lo) if lo > t_old else y_old
+        self.mech.wind(y_lo, y_old, lo - t_old)
+        exc = TerminalsMeet(self.mech.meeting_message(y_lo, lo), lo)
+        exc.located = pieces
+        raise exc
 
     def _rows_at(self, y):
         """C_v at the state y (the joints' rows; None where they are not finite)."""
@@ -347,7 +380,33 @@ TRIAL_SHRINK = 0.2
 SHRINK_ON_FAILURE = ("DOP853", "RK45", "Radau")
 
 
-def _step(solver, method):
+def _rk4_to_meeting(fun, mech, t, y, f, t_hi):
+    """RK4's step from (t, y, f) to t_hi brings terminals together (:meth:`StepMonitor.stop_at_meeting`):
+    taken again from its start in ever shorter steps, by bisection of what is left of it down to
+    adjacent floats, each kept where it keeps the terminals apart (:meth:`Mechanism.chord_margin`
+    above 1, no stage where they meet) and halved where it does not, as the compiled loop does
+    (``kernels._rk4_to_meeting``). Returns (the time it stops at, the state there, the cubic
+    Hermite of each step kept)."""
+    from inerter.engine.integrators import Hermite, rk4_step
+
+    pieces = []
+    while t < 0.5 * (t_hi - t) + t < t_hi:
+        part = 0.5 * (t_hi - t)
+        mid = t + part
+        try:
+            y_mid, f_mid = rk4_step(fun, t, y, f, part)
+        except TerminalsMeet:
+            t_hi = mid
+            continue
+        if mech.chord_margin(y, y_mid) <= 1.0:
+            t_hi = mid
+            continue
+        pieces.append(Hermite(t, mid, y, y_mid, f, f_mid))
+        t, y, f = mid, y_mid, f_mid
+    return t, y, pieces
+
+
+def _step(solver, method, monitor=None):
     """solver.step(), its failures as SimulationError at the last good time.
 
     DOP853, RK45 and Radau: a stage or a Newton iterate of the trial step that cannot be evaluated
@@ -363,6 +422,9 @@ def _step(solver, method):
                 message = solver.step()
             break
         except SimulationError as exc:
+            if method == "RK4" and monitor is not None and isinstance(exc, TerminalsMeet) and exc.recoverable:
+                # a stage where terminals meet: the meeting lies within this step
+                monitor.stop_at_meeting(solver, t, solver.y, solver.f, t + min(solver.h, abs(solver.t_bound - t)))
             shrinkable = exc.recoverable and hasattr(solver, "h_abs") and method in SHRINK_ON_FAILURE
             if shrinkable and solver.h_abs * TRIAL_SHRINK >= 10 * abs(np.nextafter(t, np.inf) - t):
                 solver.h_abs *= TRIAL_SHRINK
@@ -469,7 +531,7 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
             dense_prev_y = y.copy()
             while solver.status == "running":
                 h_want = getattr(solver, "h_abs", None)
-                _step(solver, settings.method)
+                _step(solver, settings.method, monitor)
                 steps += 1
                 if solver.status == "finished" and solver.t < t_end:        # at a kink
                     i += 1
@@ -494,6 +556,7 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
     except SimulationError as exc:
         status = "failed"
         message = str(exc)
+        k = _samples_before_meeting(exc, grid, k, out, record, ts, interpolants)
         if solver is not None and not isinstance(exc, TerminalsMeet) and "terminals" not in message:
             found = mech.diagnose(solver.y)
             message += found if found not in message else ""    # the monitor's collapse says it already
@@ -509,6 +572,25 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
         dense = OdeSolution(np.array(ts), interpolants)
     return Run(grid[:k].copy(), out[:k].copy(), dense, status, message, steps, evaluations, cpu, max_drift,
                record.extra(k))
+
+
+def _samples_before_meeting(exc, grid, k, out, record, ts, interpolants):
+    """Where the run stopped at a meeting of terminals located within its last step
+    (:meth:`StepMonitor.stop_at_meeting`): out[k:] = the samples of the grid up to it, from the dense
+    outputs valid there (`exc.located`), which join the run's (`ts`, `interpolants`); the first k
+    not written."""
+    pieces = getattr(exc, "located", None)
+    if not pieces:
+        return k
+    for piece in pieces:
+        first, end = k, min(piece.t_max, exc.time)
+        while k < len(grid) and grid[k] <= end:
+            out[k] = piece(grid[k])
+            k += 1
+        ts.append(piece.t_max)
+        interpolants.append(piece)
+        record.step(grid[first:k], out[first:k], end, piece(end))
+    return k
 
 
 def _step_samples(grid, k, solver, dense, out, record):
@@ -633,6 +715,7 @@ class Stepper:
         self._segment = None                  # its (end, ends at a jump)
         self._dense = None                    # the dense output of its last step, once asked for
         self._input_moved = False             # an input changed since the last step
+        self._meeting = None                  # (time, message): terminals meet within its last step
 
     def set_input(self, name, value):
         value = float(value)
@@ -696,6 +779,7 @@ class Stepper:
         self._solver = make_solver(s.method, fun, t0, np.array(y0, dtype=float), first, s.rtol, s.atol, s.step, h)
         self._segment = (end, switch is not None)
         self._dense = None
+        self._meeting = None
         return self._solver
 
     def _next_kink(self, solver, h_want):
@@ -716,6 +800,8 @@ class Stepper:
         if solver is None:
             solver = self._start(self.time, self.y, self.h, bound)
         while True:
+            if self._meeting is not None and t_end > self._meeting[0]:
+                raise TerminalsMeet(self._meeting[1], self._meeting[0])
             covered = solver.t_old is not None and t_end <= solver.t + 1e-12 * max(1.0, solver.t)
             if covered:
                 break
@@ -725,9 +811,14 @@ class Stepper:
                                      max(bound, t_end))
             previous = solver.y.copy()
             h_want = getattr(solver, "h_abs", None)
-            _step(solver, s.method)
+            _step(solver, s.method, monitor)
             self._next_kink(solver, h_want)
-            monitor.after_step(solver, previous)
+            try:
+                monitor.after_step(solver, previous)
+            except TerminalsMeet as exc:      # the states up to the meeting are the crossing step's
+                if getattr(exc, "located", None) is None or t_end > exc.time:
+                    raise
+                self._meeting = (exc.time, exc.message)
             self._dense = None
         if self._dense is None:
             self._dense = solver.dense_output()
@@ -748,7 +839,7 @@ class Stepper:
             solver = make_solver(s.method, fun, t0, y, end, s.rtol, s.atol, s.step, h)
             previous = y
             while solver.status == "running":
-                _step(solver, s.method)
+                _step(solver, s.method, monitor)
                 monitor.after_step(solver, previous)
                 previous = solver.y.copy()
             t0, y, h = solver.t, solver.y, getattr(solver, "h_abs", None)
@@ -772,11 +863,11 @@ class Stepper:
     def get_state(self) -> bytes:
         running = None if self._solver is None else (self._segment, solver_state(self._solver))
         return pickle.dumps((self.time, self.y.copy(), self.h, self.inputs.copy(), self.steps, self.t_bound,
-                             self._input_moved, running, self.mech.windings))
+                             self._input_moved, running, self.mech.windings, self._meeting))
 
     def set_state(self, blob: bytes):
         (self.time, y, self.h, inputs, self.steps, self.t_bound, self._input_moved, running,
-         self.mech.windings) = load_state(blob)
+         self.mech.windings, meeting) = load_state(blob)
         self.y = np.array(y)
         self.inputs = np.array(inputs)
         self._solver = self._dense = None
@@ -785,6 +876,7 @@ class Stepper:
             solver = self._start(state["t"], state["y"], None, end)
             restore_solver_state(solver, state)
             self._segment = (end, switched)
+            self._meeting = meeting           # the running integration's last step meets terminals
 
 
 #: The globals a stepper's state (:meth:`Stepper.get_state`, ``CompiledStepper.get_state``) holds,

@@ -389,12 +389,10 @@ class Mechanism:
         return q
 
     def check_step(self, q_old, q_new, t, t_old=None):
-        """After each accepted step: translational elements' terminals must not meet
-        (:meth:`check_terminals`), and Z-X-Z Euler angles must not pass through their singularity
+        """After each accepted step: Z-X-Z Euler angles must not pass through their singularity
         (sin θ = 0) within a step: the rates there are undefined and the result past it would be
-        garbage."""
-        if self._meet:
-            self.check_terminals(q_old, q_new, t, t_old)
+        garbage. (Terminals that meet within a step: :meth:`chord_margin`, which the integrator's
+        watch reads first, to stop at the meeting, ``simulation.StepMonitor``.)"""
         if self.dim != 3 or self.orientation.kind != "euler_zxz":
             return
         for i, name in enumerate(self.body_names):
@@ -473,28 +471,41 @@ class Mechanism:
                 e.mode = 1.0
         return run
 
-    def check_terminals(self, q_old, q_new, t, t_old=None):
-        """Stop where a translational element's terminals meet within a step: the closest approach
-        of the chord from r(q_old) to r(q_new) (catches a pass through each other between two
-        accepted steps too) below the element's threshold (see MEET_RELATIVE)."""
+    @property
+    def watches_terminals(self) -> bool:
+        """Whether some translational element's terminals can meet (:meth:`chord_margin`)."""
+        return bool(self._meet)
+
+    def chord_margin(self, y0, y1) -> float:
+        """Terminals meet within a step from the state y0 to y1 (or their q) where this is at most
+        1: the smallest, over the pairs of terminals of translational elements, of the closest
+        approach of the chord from r(q0) to r(q1) (which catches a pass through each other between
+        two accepted steps too) over the pair's limit (see MEET_RELATIVE); inf without such pairs.
+        The compiled loops' test is the same (``kernels.terminals_meet``, ``kernels.chord_margin``)."""
         z = np.zeros(self.n)
+        worst = math.inf
         for pair, names, (a, b), limit in self._meet:
-            r0 = pair.evaluate(q_old, z)[0]
-            r1 = pair.evaluate(q_new, z)[0]
-            d = r1 - r0
+            r0 = pair.evaluate(y0[:self.nq], z)[0]
+            d = pair.evaluate(y1[:self.nq], z)[0] - r0
             dd = float(d @ d)
             s = 1.0 if dd == 0.0 else min(1.0, max(0.0, -float(r0 @ d) / dd))
             closest = r0 + s * d
-            dist = math.sqrt(float(closest @ closest))
-            if not dist > limit:
-                label = ", ".join(f"'{n}'" for n in names)
-                where = (f" at about t = {t_old + s * (t - t_old):.6g} s (in the step from t = {t_old:.9g} s to "
-                         f"{t:.9g} s)" if t_old is not None else f" at t = {t:.9g} s")
-                raise el.TerminalsMeet(
-                    f"element{'s' if len(names) > 1 else ''} {label}: terminals {a} and {b} meet{where}: "
-                    f"distance {dist:.3g} m, below {limit:.3g} m ({MEET_RELATIVE:g} of the initial length), so "
-                    f"the direction is undefined; stopped at the last good time",
-                    t_old if t_old is not None else t)
+            worst = min(worst, math.sqrt(float(closest @ closest)) / limit)
+        return worst
+
+    def meeting_message(self, y, t) -> str:
+        """Why a run stops at the state y (or its q), at time t, where an integrator located a
+        meeting of terminals (:meth:`chord_margin`): the elements of the pair nearest its limit
+        there, its terminals, the time, their distance and the limit."""
+        z = np.zeros(self.n)
+        q = np.asarray(y, dtype=float)[:self.nq]
+        pairs = [(math.sqrt(float(r @ r)), entry) for entry in self._meet
+                 for r in (entry[0].evaluate(q, z)[0],)]
+        dist, (_, names, (a, b), limit) = min(pairs, key=lambda p: p[0] / p[1][3])
+        label = ", ".join(f"'{n}'" for n in names)
+        return (f"element{'s' if len(names) > 1 else ''} {label}: terminals {a} and {b} meet at t = {t:.9g} s "
+                f"({dist:.3g} m apart there; their limit is {limit:.3g} m, {MEET_RELATIVE:g} of the initial "
+                f"length), so the direction is undefined; the run stops at the meeting")
 
     def mount_sines(self, q) -> list[tuple[str, float]]:
         """(element, |a₁ × u|) for each inerter device with a Hooke mount, at q."""

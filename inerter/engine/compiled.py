@@ -54,7 +54,7 @@ import numpy as np
 
 from inerter.common.atomic import replace_file
 from inerter.common.errors import SimulationError
-from inerter.engine.simulation import Run, Stepper, for_run, jumps, load_state, output_grid
+from inerter.engine.simulation import Run, Stepper, jumps, load_state, output_grid
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
@@ -1593,6 +1593,9 @@ class CompiledStepper(Stepper):
     The outputs are evaluated in the same compiled call. (time, state, inputs, the integrator's
     own state) is the complete state: a rolled-back step repeats bit for bit."""
 
+    #: Its run state is its kernel's (Kernel.for_run below); the mechanism and signals are read only.
+    owns_mechanism = False
+
     def __init__(self, mech, settings, signals, kernel, stop_time=None):
         super().__init__(mech, settings, signals)
         self.kernel = kernel.for_run()        # its tables (φ_ref from the initial pose, modes) are this run's
@@ -1651,8 +1654,7 @@ class CompiledStepper(Stepper):
             raise ValueError(f"element {', '.join(lacking)}: an inertance that was 0 when the model was "
                              f"compiled cannot become non-zero between steps (its coupling is not in the "
                              f"compiled band); give it a non-zero value before initialisation")
-        self.mech = for_run(mech)
-        self.signals = signals.for_run(self.mech)
+        self.mech, self.signals = mech, signals
         self._rk = None
         self._input_moved = True
         self._values = None

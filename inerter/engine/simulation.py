@@ -696,11 +696,17 @@ class Stepper:
     the running integration's own state) is the complete state: a rolled-back step repeats bit for
     bit."""
 
+    #: Whether the stepper works on its own copy of the mechanism (:func:`for_run`): its run state
+    #: (φ_ref, modes) lives there. CompiledStepper's lives in its kernel's tables (Kernel.for_run).
+    owns_mechanism = True
+
     def __init__(self, mech, settings: Settings, signals, stop_time=None):
-        mech = for_run(mech)                  # its own run state: another stepper of the model has its own
+        if self.owns_mechanism:
+            mech = for_run(mech)              # its own run state: another stepper of the model has its own
+            signals = signals.for_run(numpy_mechanism(mech)) if signals is not None else None
         self.mech = mech
         self.settings = settings
-        self.signals = signals.for_run(numpy_mechanism(mech)) if signals is not None else None
+        self.signals = signals
         self.time = 0.0
         self.y = initial_state(mech)
         self.inputs = np.zeros(len(mech.input_names))
@@ -709,7 +715,8 @@ class Stepper:
         self.steps = 0
         self.path = "numpy"
         self.t_bound = float(stop_time) if stop_time is not None and stop_time > 0 else np.inf
-        mech.reset_windings()                 # the angles are measured from the initial pose
+        if self.owns_mechanism:
+            mech.reset_windings()             # the angles are measured from the initial pose
         self._runs_on = settings.method in RUNS_ON and settings.constraint != "projection"
         self._solver = None                   # the running integration (scipy OdeSolver)
         self._segment = None                  # its (end, ends at a jump)

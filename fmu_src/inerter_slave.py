@@ -69,7 +69,6 @@ import json
 import math
 import operator
 import os
-import pickle
 import shutil
 import sys
 import tempfile
@@ -153,6 +152,7 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability, Fmi2Init
 import inerter  # noqa: E402
 from inerter.fmu import native as fmu_native
 from inerter.common.errors import InerterError, SimulationError
+from inerter.engine.simulation import load_state
 
 #: The serialized state's format: /2 carries the scene file's name and the FMU's build digest.
 STATE_FORMAT = "inerter-fmu-state/2"
@@ -1033,8 +1033,8 @@ class InerterSlave(Fmi2Slave):
             self._restore(state)
         except Exception as exc:
             self._status = ERROR
-            self.log(f"setFMUstate: the state could not be restored ({exc!r}); the FMU is "
-                     f"unchanged", Fmi2Status.error)
+            self.log(f"{self.scene_file}: setFMUstate: the state could not be restored ({exc!r}); the FMU "
+                     f"is unchanged", Fmi2Status.error)
 
     def _check_serialized(self, text: str):
         """The bytes given to fmi2DeSerializeFMUstate, in hex (the status shim sends them to the
@@ -1058,9 +1058,9 @@ class InerterSlave(Fmi2Slave):
     def _checked(self, state, dry: bool = False) -> tuple[dict, object]:
         """(settings, stepper) of `state` when it is a state of this FMU, the stepper (None where
         the state has none) restored from it; raises ValueError saying why where it is not.
-        `dry`: the solver state is only read, no stepper is made (stepper None): a new stepper of
-        the numpy path resets the windings of the mechanism it shares with the running one.
-        Nothing of the instance changes."""
+        `dry`: the solver state is only read (as the stepper reads it: only the globals a state
+        holds are looked up, so crafted bytes run nothing; inerter.engine.simulation.load_state),
+        no stepper is made (stepper None). Nothing of the instance changes."""
         if not isinstance(state, dict) or state.get("format") != STATE_FORMAT:
             got = state.get("format") if isinstance(state, dict) else None
             raise ValueError(
@@ -1086,7 +1086,7 @@ class InerterSlave(Fmi2Slave):
         stepper = None
         if dry and state["stepper"] is not None:
             try:
-                solver = pickle.loads(state["stepper"])
+                solver = load_state(state["stepper"])
             except Exception as exc:
                 raise ValueError(f"its solver state cannot be read ({exc!r})") from None
             if not isinstance(solver, tuple):

@@ -24,7 +24,7 @@ from inerter.engine.outputs import Signals
 from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
 from inerter.scene.units import for_reading
 from inerter.common.errors import InerterError, SceneError, SimulationError
-from inerter.engine.simulation import Settings, Stepper, dense_windings, integrate
+from inerter.engine.simulation import Settings, Stepper, dense_windings, integrate, numpy_mechanism
 
 #: Tolerances at which the oracle is solved (DOP853).
 ORACLE_RTOL = 1e-12
@@ -293,6 +293,18 @@ class Result:
         self._kernel = kernel if getattr(kernel, "compiled", False) else None
         self._values = None                          # every output at every sample, once asked for
         self._columns: dict[str, np.ndarray] = {}    # one output at every sample, once asked for
+        self._own = None                             # (mechanism, signals) of the numpy evaluation
+
+    def _evaluation(self):
+        """(mechanism, signals) the numpy path reads this result's outputs on: the run's own copy of
+        the model's mechanism (a numpy run's, as the run left it; ``integrate``), else a copy of its
+        own (``Mechanism.for_run``); never the model's, whose other runs and steppers would see the
+        angles and modes an evaluation sets."""
+        if self._own is None:
+            mech = self.run.extra.get("mechanism")
+            mech = self.model.mechanism.for_run() if mech is None else numpy_mechanism(mech)
+            self._own = (mech, self.model.signals.for_run(mech))
+        return self._own
 
     def _all_values(self) -> np.ndarray:
         """Every output at every sample (time × signal), in the order of ``names``."""
@@ -315,7 +327,8 @@ class Result:
         where they cannot be evaluated (the run is truncated there, with the message). The 3D
         rotational elements' angles are wound from the angle recorded with each sample
         (:meth:`_windings`; where none was, sample by sample from t = 0)."""
-        run, sig, mech = self.run, self.model.signals, self.model.mechanism
+        run = self.run
+        mech, sig = self._evaluation()
         n, nv = mech.nq, mech.nq + mech.n
         recorded = self._windings()
         rows = []
@@ -432,7 +445,7 @@ class Result:
         """(len(t) × elements) each 3D rotational element's angle at each time t of the dense output,
         from the step that gives it (:func:`inerter.engine.simulation.dense_windings`); None: none
         recorded."""
-        return dense_windings(self.run, t, self.model.mechanism)
+        return dense_windings(self.run, t, self._evaluation()[0])
 
     def dense(self, name):
         """A callable t ↦ signal(t), vectorised over t (a 1-D array of the values), through the
@@ -460,13 +473,13 @@ class Result:
         sol = self.run.dense
         if sol is None:
             return sample_spline(self.time, self[name], name, self.__getitem__)
-        fn = self.model.signals.function(name)
-        n = self.model.mechanism.nq
+        mech, own_signals = self._evaluation()
+        fn = own_signals.function(name)
+        n = mech.nq
         alpha = self.settings.alpha
 
         def numpy_values(t):
             Y = sol(t)
-            mech = self.model.mechanism
             nv = n + mech.n
             values = []
             windings = self._dense_windings(t)

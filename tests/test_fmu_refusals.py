@@ -14,7 +14,10 @@ modelDescription.xml. All of it is the status shim's (fmu_src/status_shim.c): ea
 """
 from __future__ import annotations
 
+import base64
 import json
+import os
+import pickle
 
 import pytest
 
@@ -93,6 +96,48 @@ def test_deserializing_bytes_that_are_no_state_of_this_fmu_is_fmi2error(input_fm
     inst.fmu.setFMUstate(restored)
     inst.fmu.freeFMUstate(restored)
     assert inst.get(inst.outputs) == outputs and inst.errors() == []
+
+
+class _Runs:
+    """A pickle whose loading would call `fn(*args)` (pickle's __reduce__)."""
+
+    def __init__(self, fn, *args):
+        self.fn, self.args = fn, args
+
+    def __reduce__(self):
+        return self.fn, self.args
+
+
+def test_a_state_whose_solver_pickle_would_run_code_is_fmi2error_and_runs_nothing(input_fmu, instance, tmp_path,
+                                                                                  steps):
+    """A state of this FMU (format, scene and build as they are: anyone can copy them) whose solver
+    state is a pickle that would call os.system, or eval, when unpickled: fmi2DeSerializeFMUstate
+    refuses it (fmi2Error, one message naming the scene file and the global), the command never
+    runs (the file it would make is not there), and the instance steps on as its untouched twin.
+    The solver state is unpickled naming only the globals a state holds
+    (inerter.engine.simulation.load_state); before, plain pickle ran it."""
+    scene, fmu = input_fmu
+    inst, clean, h = stepped_pair(fmu, instance)
+    state = inst.fmu.getFMUstate()
+    blob = bytes(inst.fmu.serializeFMUstate(state))
+    inst.fmu.freeFMUstate(state)
+    outputs = inst.get(inst.outputs)
+    marker = tmp_path / "ran"
+    for payload in (_Runs(os.system, f"touch {marker}"), _Runs(eval, f"open({str(marker)!r}, 'w')")):
+        crafted = edited(blob, stepper=base64.b64encode(pickle.dumps((0.0, payload))).decode("ascii"))
+        inst.messages.clear()
+        raises_status(FMI_ERROR, inst.fmu.deSerializeFMUstate, crafted)
+        [message] = [m for _, m in inst.messages]
+        named = f"{payload.fn.__module__}.{payload.fn.__name__}"
+        assert message.startswith(f"{scene.name}: fmi2DeSerializeFMUstate: {len(crafted)} bytes that are not a "
+                                  f"serialized state of this FMU: its solver state cannot be read") \
+            and f"it names {named}, which no stepper state holds" in message \
+            and message.endswith("the instance is unchanged"), message
+        assert not marker.exists()
+        assert inst.get(inst.outputs) == outputs
+    inst.messages.clear()
+    mine, theirs = continue_both(inst, clean, h, h)
+    assert mine == theirs and inst.errors() == []
 
 
 def test_a_serialized_state_continues_bit_for_bit_in_a_fresh_instance(input_fmu, instance, steps):

@@ -54,7 +54,7 @@ import numpy as np
 
 from inerter.common.atomic import replace_file
 from inerter.common.errors import SimulationError
-from inerter.engine.simulation import Run, Stepper, jumps, output_grid
+from inerter.engine.simulation import Run, Stepper, jumps, load_state, output_grid
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
@@ -551,6 +551,13 @@ def ground_arrays(mech):
             np.ascontiguousarray(terms))
 
 
+#: The tables of a kernel that a run or a stepper writes (Kernel.for_run): the elements' rows (their
+#: screw efficiencies' modes; a retune's coefficients, inerter.engine.tables.retune_rows), the
+#: rotational elements' (the 3D ones' φ_ref; a retune's coefficients), the point forces' and the
+#: actuators' (a retune's values).
+_RUN_TABLES = ("el_real", "rot_real", "fa_real", "pd_real")
+
+
 class Kernel:
     """Eq. (33) for one mechanism in compiled code: :meth:`accelerations` matches
     ``Mechanism.accelerations`` to round-off."""
@@ -591,6 +598,31 @@ class Kernel:
         self.input_names = list(getattr(mech, "input_names", []))
         self._layout = self._signal_index = None     # signal_layout and its index, once asked for
         self._read_cache = {}
+
+    def for_run(self) -> "Kernel":
+        """A copy that owns the tables a run or a co-simulation stepper writes, at their values at
+        t = 0: the elements' rows (their screw efficiencies' modes, +1; a retune's coefficients),
+        the 3D rotational elements' (their φ_ref, 0), the point forces' and actuators' (a retune's
+        values), the count of unsettled solves (0), and its work arrays. The layout and the rest
+        of the tables are shared with this kernel, which no run changes, so that two runs or
+        steppers of one model do not change each other's (Mechanism.for_run)."""
+        run = copy.copy(self)
+        run.flat = dict(self.flat)
+        copies = {}
+        for key in _RUN_TABLES:
+            copies[id(self.flat[key])] = run.flat[key] = self.flat[key].copy()
+        dims = self.params[_k.DIMS]
+        copies[id(dims)] = dims.copy()
+        run.params = tuple(copies.get(id(a), a) for a in self.params)
+        run.params[_k.DIMS][_k.UNSETTLED] = 0
+        el_real = run.params[_k.EL_REAL]
+        for row in el_real:
+            if device.mode_solved.py_func(row):
+                row[layout.EFFICIENCY_MODE] = 1.0
+        run.windings[:] = 0.0
+        run._AB, run._rhs, run._gen = self._AB.copy(), np.empty_like(self._rhs), np.empty_like(self._gen)
+        run._read_cache = dict(self._read_cache)
+        return run
 
     @property
     def windings(self) -> np.ndarray:
@@ -914,6 +946,25 @@ class _KernelMechanism:
         self.q0, self.v0, self.z0 = kernel.q0, kernel.v0, kernel.z0
         self.input_names = kernel.input_names
 
+    def for_run(self) -> "_KernelMechanism":
+        """A copy that owns its run state: the mechanism's (Mechanism.for_run) and the kernel's
+        (Kernel.for_run)."""
+        return _KernelMechanism(self._mech.for_run(), self._kernel.for_run())
+
+    def retuned(self, mech) -> "_KernelMechanism":
+        """`mech` (the same scene read with other parameter values) on its own kernel, a copy
+        owning its run state: a retuned stepper stays on the compiled right-hand side."""
+        return kernel_mechanism(mech).for_run()
+
+    @property
+    def mechanism(self):
+        """The mechanism the kernel was compiled for (the numpy path's evaluation of the same model)."""
+        return self._mech
+
+    @property
+    def kernel(self):
+        return self._kernel
+
     def state_derivative(self, inputs, alpha, jump=None):
         """f(t, y) on y = [q, v, z] from the kernels' right-hand side (``simulation.derivative``)."""
         return self._kernel.derivative(inputs, alpha, jump)
@@ -1024,6 +1075,9 @@ def kernel_mechanism(mech):
 
 
 def _kernel_for(mech):
+    """The kernel compiled for the model's mechanism `mech` (once; a run's copy of it,
+    ``Mechanism.for_run``, takes its model's). Runs and steppers work on its copies (Kernel.for_run)."""
+    mech = getattr(mech, "model_mechanism", mech)
     cached = getattr(mech, "_compiled_kernel", None)
     if cached is not None and cached.mech is mech:
         return cached
@@ -1091,11 +1145,11 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         run = integrate(mech, settings, inputs)
         run.extra["path"] = f"numpy ({why})"
         return run
-    kernel = _kernel_for(mech)
-    unsettled = kernel.unsettled
     if settings.method not in COMPILED_METHODS or settings.constraint == "projection":
-        return _kernel_run(integrate(_KernelMechanism(mech, kernel), settings, inputs), kernel,
-                           "scipy integrator, compiled right-hand side", unsettled)
+        run = integrate(_KernelMechanism(mech, _kernel_for(mech)), settings, inputs)   # on copies of both
+        return _kernel_run(run, run.extra["mechanism"].kernel, "scipy integrator, compiled right-hand side", 0)
+    kernel = _kernel_for(mech).for_run()      # this run's tables: its φ_ref and modes are its own
+    unsettled = 0
 
     grid = output_grid(settings.stop_time, settings.output_interval)
     # each sample's row: its state, then the φ_ref of each 3D rotational element the integrator held
@@ -1119,8 +1173,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     tables = None if settings.method == "RK4" else _tables(settings.method)
     keep = _dense_keep(settings.method, tables, len(y0), dense)
     start = _time.process_time()
-    kernel.windings[:] = 0.0                  # the 3D rotational elements' angles: from the initial pose
-    y = y0
+    y = y0                                    # the 3D rotational elements' angles: from the initial pose (for_run)
     for t1 in ends:
         last = int(np.searchsorted(grid, t1, side="right"))      # grid[k:last] lie in (t0, t1]
         seg = np.concatenate(([t0], grid[k:last]))
@@ -1538,12 +1591,13 @@ class CompiledStepper(Stepper):
     The outputs are evaluated in the same compiled call. (time, state, inputs, the integrator's
     own state) is the complete state: a rolled-back step repeats bit for bit."""
 
+    #: Its run state is its kernel's (Kernel.for_run below); the mechanism and signals are read only.
+    owns_mechanism = False
+
     def __init__(self, mech, settings, signals, kernel, stop_time=None):
         super().__init__(mech, settings, signals)
-        self.kernel = kernel
-        if len(kernel.windings):
-            self._own_tables()                # its 3D rotational elements' φ_ref are this run's
-            self.kernel.windings[:] = 0.0     # measured from the initial pose
+        self.kernel = kernel.for_run()        # its tables (φ_ref from the initial pose, modes) are this run's
+        self._coupled = None                  # the elements coupled in the kernel's band, once a retune asks
         self.path = "compiled"
         self.t_bound = float(stop_time) if stop_time is not None and stop_time > 0 else np.inf
         self._order = kernel.signal_order(signals)
@@ -1586,13 +1640,13 @@ class CompiledStepper(Stepper):
     def retune(self, mech, signals):
         """Go on from the current state with the element coefficients and point-force numbers of
         `mech` (the same scene read with other parameter values), written in place into this
-        stepper's tables: a discontinuity, the integration restarts here. The tables are the
-        model's until the first retune, which copies them, so the model and its other steppers keep
-        theirs. Raises ValueError, the stepper unchanged, where `mech` differs in anything else, or
+        stepper's tables: a discontinuity, the integration restarts here. The tables are this
+        stepper's own (Kernel.for_run), so the model and its other steppers keep theirs. Raises ValueError, the stepper unchanged, where `mech` differs in anything else, or
         gives an inertance to an element whose inertance was 0 when the kernel's band was laid out."""
-        from inerter.engine.tables import check_retune, retune_rows
+        from inerter.engine.tables import check_retune, coupled_elements, retune_rows
         check_retune(self.mech.scene, mech.scene)
-        self._own_tables()
+        if self._coupled is None:             # as the band was laid out (before any retune's values)
+            self._coupled = coupled_elements(self.kernel.flat)
         lacking = retune_rows(self.kernel.flat, mech.scene, self._coupled)
         if lacking:
             raise ValueError(f"element {', '.join(lacking)}: an inertance that was 0 when the model was "
@@ -1603,22 +1657,6 @@ class CompiledStepper(Stepper):
         self._input_moved = True
         self._values = None
         self._native = None                   # its table points to the arrays it was made with
-
-    def _own_tables(self):
-        """Copy the kernel's tables that :meth:`retune` writes, once: the kernel is shared with the
-        model it was compiled for."""
-        if getattr(self, "_owns_tables", False):
-            return
-        from inerter.engine.tables import coupled_elements
-        self._coupled = coupled_elements(self.kernel.flat)
-        kernel = copy.copy(self.kernel)
-        kernel.flat = dict(kernel.flat)
-        copies = {}
-        for key in ("el_real", "rot_real", "fa_real", "pd_real"):
-            copies[id(kernel.flat[key])] = kernel.flat[key] = kernel.flat[key].copy()
-        kernel.params = tuple(copies.get(id(a), a) for a in kernel.params)
-        self.kernel = kernel
-        self._owns_tables = True
 
     def step(self, t_end):
         t_end = float(t_end)
@@ -1823,7 +1861,7 @@ class CompiledStepper(Stepper):
 
     def set_state(self, blob: bytes):
         (self.time, y, self.h, inputs, self.steps, self.t_bound, self._rk, self._rk_inputs,
-         self._input_moved, windings) = pickle.loads(blob)
+         self._input_moved, windings) = load_state(blob)
         self.kernel.windings[:] = windings
         self.y = np.array(y)
         self.inputs = np.array(inputs)

@@ -95,6 +95,12 @@ class Signals:
             self.descriptions.append(d.description)
         self.index = {n: i for i, n in enumerate(self.names)}
 
+    def for_run(self, mech) -> "Signals":
+        """These signals on `mech`, a run's copy of the mechanism they were built on
+        (``Mechanism.for_run``), whose run state (the 3D rotational elements' φ_ref, the screw
+        efficiencies' modes) they then read; themselves where `mech` is theirs."""
+        return self if mech is self.mech else Signals(mech)
+
     def _body(self, mech, bname):
         """A 3D body's orientation (unit quaternion, Euler angles) and global angular velocity."""
         frame = mech.frames[bname]

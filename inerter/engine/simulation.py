@@ -12,6 +12,7 @@ from __future__ import annotations
 import bisect
 import copy
 import functools
+import io
 import pickle
 import time as _time
 import types
@@ -54,6 +55,22 @@ class Settings:
     @property
     def alpha(self):
         return self.baumgarte if self.constraint == "baumgarte" else 0.0
+
+
+def for_run(mech):
+    """`mech` for one run or stepper: its copy that owns what the run changes as it goes, at its
+    value at t = 0 (``Mechanism.for_run``: the 3D rotational elements' φ_ref, the screw
+    efficiencies' modes, the caches keyed on the state; on the compiled right-hand side, the
+    kernel's tables too), so that the model it came from, and its other runs and steppers, are
+    not changed. A stand-in without ``for_run`` is taken as it is."""
+    copy_for_run = getattr(mech, "for_run", None)
+    return mech if copy_for_run is None else copy_for_run()
+
+
+def numpy_mechanism(mech):
+    """The numpy path's mechanism of `mech` (itself, or the one a kernel's stands for), which the
+    output signals are built on (``Signals.for_run``)."""
+    return getattr(mech, "mechanism", mech)
 
 
 def initial_state(mech) -> np.ndarray:
@@ -451,10 +468,15 @@ def integrate(mech, settings: Settings, inputs=None) -> Run:
     (:data:`THROUGH_KINKS`), as the compiled loop does, and take the same steps; the other methods
     restart at a kink too.
 
-    The 3D rotational elements' angles wind on from the initial pose during the run, and are as
-    they were afterwards: a :class:`Stepper` running on the same mechanism winds on from its own."""
+    The run works on its own copy of `mech` (:func:`for_run`): the 3D rotational elements' angles
+    wind on from the initial pose, the screw efficiencies' modes start at +1, and neither `mech`
+    nor another run or :class:`Stepper` of it sees them change. ``run.extra["mechanism"]`` is that
+    copy, as the run left it."""
+    mech = for_run(mech)
     with mech.wound_from_start():           # the angles are measured from the initial pose
-        return _integrate(mech, settings, inputs)
+        run = _integrate(mech, settings, inputs)
+    run.extra["mechanism"] = mech
+    return run
 
 
 def output_grid(stop_time: float, interval: float) -> np.ndarray:
@@ -674,7 +696,14 @@ class Stepper:
     the running integration's own state) is the complete state: a rolled-back step repeats bit for
     bit."""
 
+    #: Whether the stepper works on its own copy of the mechanism (:func:`for_run`): its run state
+    #: (φ_ref, modes) lives there. CompiledStepper's lives in its kernel's tables (Kernel.for_run).
+    owns_mechanism = True
+
     def __init__(self, mech, settings: Settings, signals, stop_time=None):
+        if self.owns_mechanism:
+            mech = for_run(mech)              # its own run state: another stepper of the model has its own
+            signals = signals.for_run(numpy_mechanism(mech)) if signals is not None else None
         self.mech = mech
         self.settings = settings
         self.signals = signals
@@ -686,7 +715,8 @@ class Stepper:
         self.steps = 0
         self.path = "numpy"
         self.t_bound = float(stop_time) if stop_time is not None and stop_time > 0 else np.inf
-        mech.reset_windings()                 # the angles are measured from the initial pose
+        if self.owns_mechanism:
+            mech.reset_windings()             # the angles are measured from the initial pose
         self._runs_on = settings.method in RUNS_ON and settings.constraint != "projection"
         self._solver = None                   # the running integration (scipy OdeSolver)
         self._segment = None                  # its (end, ends at a jump)
@@ -712,8 +742,10 @@ class Stepper:
         the stepper unchanged, where `mech` differs in anything else (geometry, masses, ...)."""
         from inerter.engine.tables import check_retune
         check_retune(self.mech.scene, mech.scene)
+        # the other model's mechanism, a copy of its own (on its kernel where this one runs on one)
+        mech = self.mech.retuned(mech) if hasattr(self.mech, "retuned") else for_run(mech)
         mech.windings = self.mech.windings    # the angles wind on from where they are
-        self.mech, self.signals = mech, signals
+        self.mech, self.signals = mech, signals.for_run(numpy_mechanism(mech))
         self._solver = None
         self._input_moved = True
 
@@ -842,7 +874,7 @@ class Stepper:
 
     def set_state(self, blob: bytes):
         (self.time, y, self.h, inputs, self.steps, self.t_bound, self._input_moved, running,
-         self.mech.windings, meeting) = pickle.loads(blob)
+         self.mech.windings, meeting) = load_state(blob)
         self.y = np.array(y)
         self.inputs = np.array(inputs)
         self._solver = self._dense = None
@@ -852,6 +884,43 @@ class Stepper:
             restore_solver_state(solver, state)
             self._segment = (end, switched)
             self._meeting = meeting           # the running integration's last step meets terminals
+
+
+#: The globals a stepper's state (:meth:`Stepper.get_state`, ``CompiledStepper.get_state``) holds,
+#: by module, for every method on both paths: numpy's arrays and scalars (their reconstruction
+#: functions, under numpy 2's module names and numpy 1's; ``_frombuffer``: pickle protocol 5's),
+#: the dense output Radau keeps to start its Newton iteration (the numpy path snapshots scipy's
+#: solver objects: :func:`solver_state`), the compiled path's running integration, and builtins a
+#: solver's attributes may hold. Nothing else is looked up (:class:`StateUnpickler`).
+STATE_GLOBALS = {
+    "numpy": {"ndarray", "dtype"},
+    "numpy._core.multiarray": {"_reconstruct", "scalar"},
+    "numpy.core.multiarray": {"_reconstruct", "scalar"},
+    "numpy._core.numeric": {"_frombuffer"},
+    "numpy.core.numeric": {"_frombuffer"},
+    "scipy.integrate._ivp.radau": {"RadauDenseOutput"},
+    "inerter.engine.compiled": {"Running"},
+    "builtins": {"complex", "set", "frozenset", "slice"},
+}
+
+
+class StateUnpickler(pickle.Unpickler):
+    """Unpickles a stepper's state, bytes an importer hands back (fmi2DeSerializeFMUstate), looking
+    up only the globals of :data:`STATE_GLOBALS`: a pickle that names any other (``os.system``, a
+    class whose reconstruction runs code) is refused before anything of it runs."""
+
+    def find_class(self, module, name):
+        if name in STATE_GLOBALS.get(module, ()):
+            return super().find_class(module, name)
+        raise pickle.UnpicklingError(f"it names {module}.{name}, which no stepper state holds (a state holds "
+                                     f"numpy arrays, scipy's Radau dense output, the compiled path's running "
+                                     f"integration and plain values)")
+
+
+def load_state(blob: bytes):
+    """The object of a stepper's state `blob` (:class:`StateUnpickler`); raises pickle.UnpicklingError
+    where it names a global no state holds, and what pickle raises where it is no pickle."""
+    return StateUnpickler(io.BytesIO(bytes(blob))).load()
 
 
 #: Attributes of a scipy solver that are its code, not its state (rebuilt with the solver).

@@ -16,6 +16,7 @@ q̇ = B(q) v (the identity in 2D; the quaternion or Euler-angle rates in 3D).
 from __future__ import annotations
 
 import contextlib
+import copy
 import math
 
 import numpy as np
@@ -449,6 +450,26 @@ class Mechanism:
         """φ_ref at 0, its value at t = 0 (or at `start`), while a history is evaluated from there
         (:func:`wound_from`)."""
         return wound_from(self, start)
+
+    def for_run(self) -> "Mechanism":
+        """A copy of this mechanism that owns what a run or a co-simulation stepper changes as it
+        goes, at its value at t = 0: the 3D rotational elements' φ_ref (:meth:`wind`: 0), the screw
+        efficiencies' modes (:meth:`accelerations`: +1, as loaded), and the caches keyed on the
+        state (each body's rotation matrix; the oracle's derivatives). The mechanism itself is left
+        as it was, so that two runs or steppers of one model (two FMU instances of one scene in a
+        process) do not change each other's. The scene, its ground motion and the compiled kernel
+        are shared, not copied (``Kernel.for_run`` copies the kernel's own run state)."""
+        shared = (self.scene, self.ground_motion, self.element_factory, getattr(self, "_compiled_kernel", None),
+                  getattr(self, "model_mechanism", None))
+        run = copy.deepcopy(self, {id(x): x for x in shared if x is not None})
+        run.model_mechanism = getattr(self, "model_mechanism", self)
+        run.reset_windings()
+        for e in run.efficient:
+            if getattr(e, "row", None) is not None:
+                e.row[layout.EFFICIENCY_MODE] = 1.0
+            else:                                   # the oracle's element: its own mode
+                e.mode = 1.0
+        return run
 
     @property
     def watches_terminals(self) -> bool:

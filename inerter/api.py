@@ -473,12 +473,12 @@ class Result:
         sol = self.run.dense
         if sol is None:
             return sample_spline(self.time, self[name], name, self.__getitem__)
-        mech, own_signals = self._evaluation()
-        fn = own_signals.function(name)
-        n = mech.nq
         alpha = self.settings.alpha
 
         def numpy_values(t):
+            mech, own_signals = self._evaluation()      # made where the numpy signals are read, not before
+            fn = own_signals.function(name)
+            n = mech.nq
             Y = sol(t)
             nv = n + mech.n
             values = []

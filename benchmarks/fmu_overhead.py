@@ -44,6 +44,7 @@ from __future__ import annotations
 import argparse
 import ctypes
 import os
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -323,7 +324,7 @@ def main(argv=None):
     (ROOT / "docs" / "fmu_overhead.md").write_text(
         "# FMU overhead\n\n"
         f"- **Date:** {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, on a 2-core machine.\n"
-        f"- **Command:** `python benchmarks/fmu_overhead.py {' '.join(argv if argv is not None else sys.argv[1:])}`"
+        f"- **Command:** `python benchmarks/fmu_overhead.py {shlex.join(argv if argv is not None else sys.argv[1:])}`"
         "\n\n" + head + body
         + "\nEach row produces the same outputs at the same communication points. The whole run integrates once "
           "and samples its dense output. On the compiled path the stepper and the FMU keep one integration "

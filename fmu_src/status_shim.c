@@ -26,7 +26,10 @@
  *     not answer or that does not apply (fmi2DoStepStatus and fmi2PendingStatus: no doStep is ever
  *     pending, section 2.1.3: "fmi2Discard is returned also if the slave is not able to return the
  *     required status information"); fmi2LastSuccessfulTime is the slave's time (the private Real
- *     NATIVE_SYNC_VR + 1), fmi2Terminated is fmi2False (the slave never asks to end a run);
+ *     NATIVE_SYNC_VR + 1); fmi2Terminated is fmi2True after a doStep this FMU discarded (the run
+ *     cannot go on from there: the message says why) until a doStep succeeds, a state is restored
+ *     or the instance is reset (section 4.2.3: "Can be called after doStep returned fmi2Discard"; a
+ *     master such as fmpy asks it to decide whether to end the run or retry the step);
  *   - fmi2DeSerializeFMUstate first hands the bytes (in hex) to the slave through the private String
  *     NATIVE_SYNC_VR + 3, which checks that they are a state of this FMU and logs why not; then it
  *     returns fmi2Error and makes no state (pythonfmu's binary took any bytes, and only
@@ -288,6 +291,7 @@ struct instance {
     fmi2Component inner;      /* the original's */
     const int64_t *ctx;       /* the slave's context, or NULL: no native steps */
     int armed;                /* the next doStep may be taken natively */
+    int discarded;            /* the last doStep returned fmi2Discard: fmi2Terminated */
     int dirty;                /* native steps (or a declined one) the slave has not taken over */
     fmi2CallbackLogger logger;            /* the importer's, for live_log and filtered_log */
     fmi2ComponentEnvironment environment;
@@ -818,6 +822,7 @@ fmi2Status fmi2Reset(fmi2Component c)
     ENTER
     w->ctx = NULL; /* the slave object and its context are replaced */
     w->stop_defined = 0;
+    w->discarded = 0;
     status = original.Reset(w->inner);
     link_context(w);
     return status;
@@ -918,6 +923,8 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 
     ENTER
     status = checked(w->inner, original.SetFMUstate(w->inner, FMUstate));
+    if (status == fmi2OK)
+        w->discarded = 0;
     if (status == fmi2OK && original.GetReal(w->inner, &vr, 1, &stop) == fmi2OK) {
         w->stop_defined = stop == stop; /* not NaN */
         w->stop_time = stop;
@@ -1001,8 +1008,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         const int32_t took = step((const int64_t *)(uintptr_t)w->ctx[CTX_TABLE],
                                   currentCommunicationPoint, communicationStepSize);
         w->dirty = 1;
-        if (took == 1)
+        if (took == 1) {
+            w->discarded = 0;
             return fmi2OK;
+        }
         w->armed = 0; /* declined: the slave restores the integration and takes the step */
     }
     if (sync(w) != fmi2OK)
@@ -1013,10 +1022,15 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     /* The slave's do_step returns True (fmi2OK) only with fmi_status fmi2OK, so a step that went
      * well costs no second call into the slave; a refused or failed one (fmi2Discard) says which
      * it was through fmi_status (fmi2Discard or fmi2Error). */
+    if (status == fmi2OK)
+        w->discarded = 0;
     if (status != fmi2Discard)
         return status;
     status = checked(w->inner, fmi2OK);
-    return status == fmi2OK || status == fmi2Warning ? fmi2Discard : status;
+    if (status == fmi2OK || status == fmi2Warning)
+        status = fmi2Discard;
+    w->discarded = status == fmi2Discard;
+    return status;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)
@@ -1063,7 +1077,7 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
     READ
     status = status_inquiry(c, "fmi2GetBooleanStatus", s, value, fmi2Terminated);
     if (status == fmi2OK)
-        *value = fmi2False;
+        *value = ((struct instance *)c)->discarded ? fmi2True : fmi2False;
     return status;
 }
 

@@ -163,6 +163,67 @@ def test_the_fmu_discards_the_step_holding_the_meeting_and_names_it(pass_fmu, so
         inst.fmu.freeInstance()
 
 
+def test_after_the_discarded_step_the_fmu_asks_to_terminate(pass_fmu):
+    """fmi2GetBooleanStatus(fmi2Terminated) is fmi2True after the discarded step (FMI 2.0 section
+    4.2.3: asked after doStep returned fmi2Discard), with fmi2LastSuccessfulTime the last point, so
+    that a master such as fmpy's simulate_fmu ends the run there rather than trying the same step
+    again, forever; fmi2False before it, and again once a state of an earlier point is restored;
+    fmi2True again when the same step is discarded again."""
+    from fmpy.fmi1 import FMICallException
+    from test_fmu import Instance, shim_expected
+
+    if not shim_expected():
+        pytest.skip("the status functions are the status shim's (no C compiler here)")
+    last_successful_time, terminated = 2, 3                    # fmi2StatusKind, FMI 2.0 section 4.2.3
+    inst = Instance(pass_fmu)
+    try:
+        inst.initialise()
+        t, saved = 0.0, None
+        while True:
+            assert inst.fmu.getBooleanStatus(terminated) is False
+            if saved is not None:
+                inst.fmu.freeFMUstate(saved)
+            saved = inst.fmu.getFMUstate()
+            try:
+                inst.fmu.doStep(t, INTERVAL)
+            except FMICallException:
+                break
+            t = round(t + INTERVAL, 12)
+            assert t < 1.0, "no step was discarded"
+        assert inst.fmu.getBooleanStatus(terminated) is True
+        assert inst.fmu.getRealStatus(last_successful_time) == t
+        inst.fmu.setFMUstate(saved)
+        assert inst.fmu.getBooleanStatus(terminated) is False
+        with pytest.raises(FMICallException):
+            inst.fmu.doStep(t, INTERVAL)
+        assert inst.fmu.getBooleanStatus(terminated) is True
+        inst.fmu.freeFMUstate(saved)
+        inst.fmu.terminate()
+    finally:
+        inst.fmu.freeInstance()
+
+
+def test_fmpy_ends_its_run_at_the_meeting(pass_fmu):
+    """fmpy.simulate_fmu, which asks fmi2Terminated after a discarded step, ends at the last
+    point before the meeting (recorded twice, as fmpy does), in a subprocess with a time limit: a
+    master that retried the same step would never end."""
+    import subprocess
+    import sys
+
+    from test_fmu import shim_expected
+
+    if not shim_expected():
+        pytest.skip("fmi2Terminated is the status shim's (no C compiler here)")
+    L0, v, terminals, t_meet, t_stop = _closed_form("terminals_pass_3d")
+    code = ("import sys, fmpy; r = fmpy.simulate_fmu(sys.argv[1], stop_time=1.0, output_interval=0.01); "
+            "print(repr(float(r['time'][-1])), repr(float(r['inerter.s_rel'][-1])))")
+    done = subprocess.run([sys.executable, "-c", code, pass_fmu], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    last, length = (float(x) for x in done.stdout.splitlines()[-1].split())     # after fmpy's log lines
+    assert last <= t_stop < last + INTERVAL
+    assert length == pytest.approx(L0 - v * last, abs=SAMPLE_TOLERANCE)        # the closed form
+
+
 def test_terminals_that_never_meet_run_as_before(tmp_path):
     """The 2D ball aimed 1e-3 m to the side of O (its inerter bends the path near O, which it
     passes at some 7e-4 m, far above the limit 1e-6 m) runs to its stop time on the compiled

@@ -37,6 +37,8 @@ body a, independently.)
 """
 from __future__ import annotations
 
+import math
+
 from inerter.common.errors import MIN_LENGTH
 from inerter.common.rotations import matrix9_apply, matrix9_apply_transposed
 from inerter.elements.base import law, rarely
@@ -81,6 +83,23 @@ def turning_axis(A, ex, ey, ez, rx, ry, rz, wx, wy, wz, rdx, rdy, rdz):
     cx, cy, cz = matrix9_apply_transposed(A, px, py, pz)
     rate = wx * cx + wy * cy + wz * cz
     return cx, cy, cz, rdx + rate * ex, rdy + rate * ey, rdz + rate * ez
+
+
+@law
+def chord_approach(ax, ay, az, bx, by, bz):
+    """The closest approach to 0 of the chord from r = r_b − r_a at a step's start, (ax, ay, az), to
+    r at its end, (bx, by, bz): where it is not above the element's meeting limit, its terminals
+    meet within the step, also where they pass through each other between two accepted steps
+    (the engine then stops the run at the meeting)."""
+    dx = bx - ax
+    dy = by - ay
+    dz = bz - az
+    dd = dx * dx + dy * dy + dz * dz
+    s = 1.0 if dd == 0.0 else min(1.0, max(0.0, -(ax * dx + ay * dy + az * dz) / dd))
+    cx = ax + s * dx
+    cy = ay + s * dy
+    cz = az + s * dz
+    return math.sqrt(cx * cx + cy * cy + cz * cz)
 
 
 @law

@@ -1227,9 +1227,9 @@ def gaps_at(y, P, gaps, z):
 @njit(cache=True)
 def terminals_meet(gaps, z, y_new, P):
     """Whether an accepted step brings a translational element's terminals together, as
-    ``Mechanism.check_terminals`` checks each step of the numpy path: the closest approach of the
+    ``Mechanism.chord_margin`` checks each step of the numpy path: the closest approach of the
     chord from r_b − r_a at the step's start (`gaps`, :func:`terminal_gaps`) to r_b − r_a at y_new
-    is not above the element's limit (``el_real[e, MEET_LIMIT]``, MEET_RELATIVE of its initial length; 0: the
+    (``terminals.chord_approach``) is not above the element's limit (``el_real[e, MEET_LIMIT]``, MEET_RELATIVE of its initial length; 0: the
     pair of terminals is another element's). A fixed step (RK4) would otherwise pass through the
     meeting, where the direction is undefined, and go on with garbage. Otherwise `gaps` moves on
     to y_new."""
@@ -1239,19 +1239,8 @@ def terminals_meet(gaps, z, y_new, P):
         limit = el_real[e, MEET_LIMIT]
         if limit == 0.0:
             continue
-        ax = gaps[e, 0]
-        ay = gaps[e, 1]
-        az = gaps[e, 2]
         bx, by, bz = _gap_of(q1, z, e, P)
-        dx = bx - ax
-        dy = by - ay
-        dz = bz - az
-        dd = dx * dx + dy * dy + dz * dz
-        s = 1.0 if dd == 0.0 else min(1.0, max(0.0, -(ax * dx + ay * dy + az * dz) / dd))
-        cx = ax + s * dx
-        cy = ay + s * dy
-        cz = az + s * dz
-        if not math.sqrt(cx * cx + cy * cy + cz * cz) > limit:
+        if not terminals.chord_approach(gaps[e, 0], gaps[e, 1], gaps[e, 2], bx, by, bz) > limit:
             return True
         gaps[e, 0] = bx
         gaps[e, 1] = by
@@ -1272,12 +1261,9 @@ def chord_margin(gaps0, gaps1, P):
         limit = el_real[e, MEET_LIMIT]
         if limit == 0.0:
             continue
-        ax, ay, az = gaps0[e, 0], gaps0[e, 1], gaps0[e, 2]
-        dx, dy, dz = gaps1[e, 0] - ax, gaps1[e, 1] - ay, gaps1[e, 2] - az
-        dd = dx * dx + dy * dy + dz * dz
-        s = 1.0 if dd == 0.0 else min(1.0, max(0.0, -(ax * dx + ay * dy + az * dz) / dd))
-        cx, cy, cz = ax + s * dx, ay + s * dy, az + s * dz
-        worst = min(worst, math.sqrt(cx * cx + cy * cy + cz * cz) / limit)
+        approach = terminals.chord_approach(gaps0[e, 0], gaps0[e, 1], gaps0[e, 2],
+                                            gaps1[e, 0], gaps1[e, 1], gaps1[e, 2])
+        worst = min(worst, approach / limit)
     return worst
 
 

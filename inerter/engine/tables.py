@@ -85,7 +85,7 @@ def meet_limits(mech, specs) -> dict[str, float]:
     """Column MEET_LIMIT of ``el_real`` by translational element name: the distance below which
     its terminals meet (``Mechanism.meet_limit``), 0.0 for an element whose pair of terminals an
     earlier element shares (kernels.terminals_meet checks each pair once, as
-    Mechanism.check_terminals)."""
+    Mechanism.chord_margin does)."""
     seen, limits = set(), {}
     for e in specs:
         if not elements.translational(e.type):

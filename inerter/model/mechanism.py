@@ -23,7 +23,7 @@ import numpy as np
 
 from inerter.model import evaluators as el
 from inerter import elements
-from inerter.elements import kinematics, layout
+from inerter.elements import kinematics, layout, terminals
 from inerter.elements import winding
 from inerter.elements.device import MODE_SOLVES
 from inerter.common.errors import SceneError, SimulationError
@@ -39,6 +39,12 @@ _pd_magnitude = kinematics.pd_magnitude.py_func
 _frame_force = kinematics.frame_force.py_func
 _planar_body_energy = kinematics.planar_body_energy.py_func
 _spatial_body_energy = kinematics.spatial_body_energy.py_func
+_chord_approach = terminals.chord_approach.py_func
+
+
+def _in_3d(r):
+    """A 2D or 3D vector as three floats (z = 0 in 2D)."""
+    return (float(r[0]), float(r[1]), float(r[2]) if len(r) > 2 else 0.0)
 _carried = winding.carried.py_func
 
 #: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
@@ -485,12 +491,9 @@ class Mechanism:
         z = np.zeros(self.n)
         worst = math.inf
         for pair, names, (a, b), limit in self._meet:
-            r0 = pair.evaluate(y0[:self.nq], z)[0]
-            d = pair.evaluate(y1[:self.nq], z)[0] - r0
-            dd = float(d @ d)
-            s = 1.0 if dd == 0.0 else min(1.0, max(0.0, -float(r0 @ d) / dd))
-            closest = r0 + s * d
-            worst = min(worst, math.sqrt(float(closest @ closest)) / limit)
+            r0 = _in_3d(pair.evaluate(y0[:self.nq], z)[0])
+            r1 = _in_3d(pair.evaluate(y1[:self.nq], z)[0])
+            worst = min(worst, _chord_approach(*r0, *r1) / limit)
         return worst
 
     def meeting_message(self, y, t) -> str:

@@ -325,3 +325,33 @@ def test_series_backlash_and_friction_follow_their_explicit_ode(tmp_path):
         assert np.max(np.abs(r["inerter.e_loss"] - ref.y[5])) < 1e-8
         balance = r["energy"] + r["inerter.e_loss"] - r["energy"][0] - ref.y[4]
         assert np.max(np.abs(balance)) < 1e-8
+
+
+STOPS = """
+[elements.inerter.device.end_stops]
+min = {low}
+max = {high}
+stiffness = 1e5
+"""
+
+
+@pytest.mark.parametrize("low, high, field", [(1.1, 1.2, "min"), (0.5, 0.9, "max"), (1.0, 1.2, None),
+                                              (0.9, 1.1, None)])
+def test_a_device_that_starts_past_its_stop_is_noted(tmp_path, low, high, field):
+    """Reference: the geometry (the terminal distance is 1 m at t = 0). A stop on the wrong side of
+    it presses the device in from the start (a 1e4 N contact force here): allowed (a device may
+    rest on its stop) and run, but `Result.warnings` (printed by `inerter run`, in summary.json)
+    names the stop, by how much and the force; a start at the stop or between them is not noted."""
+    model = _one_dof(tmp_path, f"stops_{field}", STOPS.format(low=low, high=high), b=1.0, stop=0.05)
+    r = model.simulate(metrics=False)
+    assert r.status == "ok"
+    notes = [n for n in r.warnings if "end_stops" in n]
+    if field is None:
+        assert notes == [] and r["inerter.f_stop"][0] == 0.0
+        return
+    [note] = notes
+    force = r["inerter.f_stop"][0]
+    assert abs(force) == pytest.approx(1e5 * 0.1, rel=1e-12)
+    assert note.startswith(f"{model.source}: elements.inerter.device.end_stops.{field}: the device starts past "
+                           "its stop, pressed in by 0.1 m (terminal distance 1 m at t = 0")
+    assert f"contact force {force:.3g} N" in note

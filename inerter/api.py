@@ -390,6 +390,7 @@ class Result:
                 notes.append(f"{self.model.source}: outputs.derived.{d.name}: {missing} "
                              f"(written as NaN): the expression is undefined there")
         notes += long_step_windings(self)
+        notes += stops_at_start(self)
         return notes
 
     def _unreached_record_warnings(self) -> list[str]:
@@ -593,6 +594,38 @@ def long_step_windings(result) -> list[str]:
                          f"{result.time[k]:.6g} s), more than half a turn: within a step its angle is read within "
                          f"half a turn of the step's start, so a spring's torque there may be whole turns off; take "
                          f"experiment.step below pi/max|w_rel| = {np.pi / float(rate[k]):.3g} s")
+    return notes
+
+
+#: A device's terminal distance at t = 0 past an end stop by at most this fraction of it is the
+#: round-off of a pose that starts at the stop, not noted (:func:`stops_at_start`).
+STOP_START_SLACK = 1e-9
+
+
+def stops_at_start(result) -> list[str]:
+    """A note for each inerter device whose terminal distance at t = 0 lies past one of its end stops
+    (inerter.elements.device, "End stops"): it starts pressed into the stop, with the contact's force
+    and elastic energy at t = 0, which the scene may not mean (a stop given on the wrong side of the
+    initial length). A start in contact is allowed (a device resting on its stop), so it is a note,
+    not an error."""
+    notes = []
+    if not len(result.time):
+        return notes
+    for name, spec in result.model.scene.elements.items():
+        device = getattr(spec, "device", None)
+        if device is None or not device.has("end_stops"):
+            continue
+        try:
+            L0, force = float(result[f"{name}.s_rel"][0]), float(result[f"{name}.f_stop"][0])
+        except KeyError:                      # an FMU run that did not record them
+            continue
+        stops, slack = device.values("end_stops"), STOP_START_SLACK * L0
+        for key, past in (("min", lambda s: L0 < s - slack), ("max", lambda s: L0 > s + slack)):
+            stop = stops.get(key)
+            if stop is not None and past(stop):
+                notes.append(f"{result.model.source}: elements.{name}.device.end_stops.{key}: the device starts "
+                             f"past its stop, pressed in by {abs(L0 - stop):.3g} m (terminal distance {L0:.6g} m "
+                             f"at t = 0, {key} = {stop:.6g} m; contact force {force:.3g} N)")
     return notes
 
 

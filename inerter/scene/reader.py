@@ -9,6 +9,7 @@ Errors name the file, the field path (``elements.inerter.b``), the value and wha
 """
 from __future__ import annotations
 
+import difflib
 import math
 
 import numpy as np
@@ -394,8 +395,9 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
         elif key.startswith("effects."):
             name = key[len("effects."):]
             if name not in KNOWN_EFFECTS:
-                raise SceneError(origin_of(key, value, origins), key, value, "an effect: " + ", ".join(f"effects.{e}" for e in KNOWN_EFFECTS),
-                                 "unknown effect")
+                raise SceneError(f"{origin_of(key, value, origins)}: {source}", key, value,
+                                 "an effect: " + ", ".join(f"effects.{e}" for e in KNOWN_EFFECTS)
+                                 + _closest(name, KNOWN_EFFECTS, "effects."), "unknown effect")
             effects[name] = value
         elif key.startswith("experiment."):
             experiment[key[len("experiment."):]] = value
@@ -404,8 +406,15 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
         else:
             raise SceneError(origin_of(key, value, origins), key, value,
                              "a parameter of " + source + ": " + _listing(parameter_names)
-                             + ", or effects.NAME, experiment.NAME, scene.orientation", "unknown name")
+                             + ", or effects.NAME, experiment.NAME, scene.orientation"
+                             + _closest(key, parameter_names), "unknown name")
     return params, effects, experiment
+
+
+def _closest(name: str, known, prefix: str = "") -> str:
+    """``; did you mean 'b'?`` where one of the names `known` is close to the misspelt `name`."""
+    close = difflib.get_close_matches(name, [str(k) for k in known], n=1)
+    return f"; did you mean '{prefix}{close[0]}'?" if close else ""
 
 
 def build_scene(source: str, data: dict, overrides: Mapping[str, Any], origins: Mapping[str, str] | None = None) -> Scene:

@@ -464,6 +464,9 @@ def main(argv=None):
     except InerterError as exc:
         print(f"inerter: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:           # stdout's reader left (inerter describe ... | head): stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # nothing more to flush at exit
+        return 141                    # 128 + SIGPIPE, the status of a tool the signal ended
     except OSError as exc:            # an output file that cannot be written
         print(f"inerter: error: {unwritable(exc)}", file=sys.stderr)
         return 2

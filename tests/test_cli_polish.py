@@ -320,3 +320,18 @@ def test_compare_on_the_oracle_runs_it_once_per_variant(tmp_path, capsys):
     runs = json.loads((out / "summary.json").read_text())["runs"]
     assert runs["oracle"] == runs["corrected"] and runs["max_difference_to_oracle_m"] is None
     assert runs["corrected"]["metrics"] != runs["uncorrected"]["metrics"]
+
+
+def test_a_reader_that_leaves_early_is_no_error(tmp_path):
+    """``inerter describe SCENE | head``: the reader closes the pipe before the description is
+    written; the command stops quietly with 141 (128 + SIGPIPE, as a shell reports a tool the
+    signal ended), not with ``inerter: error: Broken pipe``."""
+    import subprocess
+    import sys
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, "-c", "import sys; from inerter.cli import main; sys.exit(main())",
+                             "describe", str(LUMPED)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    proc.stdout.close()                                     # before the package is even imported
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 141, err
+    assert err == "", err

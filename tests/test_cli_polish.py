@@ -335,3 +335,31 @@ def test_a_reader_that_leaves_early_is_no_error(tmp_path):
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=120) == 141, err
     assert err == "", err
+
+
+def test_a_scene_without_metrics_plots_its_first_moving_point(tmp_path):
+    """run's PNG of a scene without [[metrics]]: the coordinates of its first point on a body (all
+    of them: the 3D mass below moves along Z only), not the first point of the outputs, a ground
+    point whose coordinates never move."""
+    from inerter.studies.plotting import plotted_signals
+    path = scene_with(tmp_path, """
+[scene]
+dimension = 3
+[ground.points]
+O = [0, 0, 0]
+G = [0.3, 0, 1]
+[bodies.mass]
+mass = 1
+inertia = [1, 1, 1]
+position = [0.3, 0, 1]
+points = { P = [0, 0, 0] }
+[joints.slider]
+type = "prismatic"
+between = ["G", "P"]
+axis = [0, 0, 1]
+[elements.spring]
+type = "spring"
+between = ["O", "P"]
+k = 100
+""")
+    assert plotted_signals(inerter.load(path)) == ["P.r[1]", "P.r[2]", "P.r[3]"]

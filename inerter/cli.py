@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from inerter.common.errors import InerterError, SceneError
+from inerter.studies.arguments import Parser as _Parser
 from inerter.common.options import OptionError, output_path, unwritable
 from inerter.scene.overrides import parse_set, read_value, set_origins
 from inerter.scene.reader import METHODS
@@ -357,13 +358,6 @@ DELEGATED = {
     "device-study": ("studies.device_effects", "main_device_study",
                      "each effect of a ball-screw inerter against the ideal one, by the solver and the FMU"),
 }
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse, with a usage error on one line (the command's -h gives the rest)."""
-
-    def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} -h)\n")
 
 
 DESCRIPTION = """\

@@ -273,7 +273,8 @@ class _Reader:
         for key in data:
             if key not in allowed:
                 raise self.error(f"{fld}.{key}" if fld else key, data[key],
-                                 "one of: " + ", ".join(sorted(allowed)), "unknown field")
+                                 "one of: " + ", ".join(sorted(allowed)) + _closest(str(key), allowed),
+                                 "unknown field")
         for key, required in allowed.items():
             if required and key not in data:
                 raise self.error(f"{fld}.{key}" if fld else key, None,
@@ -1096,7 +1097,8 @@ def _read_experiment(r: _Reader, raw, overrides):
     merged = dict(raw)
     for key, value in overrides.items():
         if key not in EXPERIMENT_FIELDS:
-            raise r.error(f"experiment.{key}", value, "one of: " + ", ".join(EXPERIMENT_FIELDS), "unknown field")
+            raise r.error(f"experiment.{key}", value, "one of: " + ", ".join(EXPERIMENT_FIELDS)
+                          + _closest(key, EXPERIMENT_FIELDS), "unknown field")
         merged[key] = value
     fld = "experiment"
     stop = r.number(merged, "stop_time", fld, default=10.0, minimum=0.0, exclusive=True, unit="s")

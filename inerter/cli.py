@@ -324,11 +324,13 @@ def cmd_paper(args):
 
 def cmd_compile(args):
     """Compile the engine's kernels ahead of time into the kernel cache, so that no later run, sweep
-    worker or FMU instance on this machine compiles them (the set-up runs it: Makefile)."""
+    worker or FMU instance on this machine compiles them, and the package's bytecode
+    (:func:`write_bytecode`); the set-up runs it (Makefile)."""
     from inerter.api import warm_up
     from inerter.engine import compiled
     if not compiled.AVAILABLE:
-        print(f"inerter compile: nothing to compile: {compiled.WHY_NOT}")
+        write_bytecode()
+        print(f"inerter compile: no kernels to compile: {compiled.WHY_NOT}")
         return 0
     dims = (2,) if args.planar else (2, 3)
     parallel = (os.cpu_count() or 1) > 1           # 2D and 3D side by side (warm_up)
@@ -346,7 +348,22 @@ def cmd_compile(args):
     print(f"inerter: ... done in {seconds:.0f} s" + ("" if fresh else " (all were in the cache)"), file=sys.stderr)
     print(f"{label} kernels {'compiled' if fresh else 'loaded'} in {seconds:.1f} s; cache: "
           f"{Path(compiled._k.__file__).parent}")
+    if not write_bytecode():
+        print("inerter compile: the package's bytecode could not be written beside its sources "
+              "(each process compiles them when it starts)", file=sys.stderr)
     return 0
+
+
+def write_bytecode(package: Path | None = None) -> bool:
+    """The package's bytecode beside its sources, written even where the import system writes none
+    (``PYTHONDONTWRITEBYTECODE``, set in many containers): a process otherwise compiles every
+    module it imports from source, at each start (``import inerter`` 0.15 s slower, the median of 8
+    side-by-side pairs on 2026-11-28). An installed wheel has it already; an
+    editable installation, as the set-up's, does not. `package`: this package's folder by default.
+    False where some could not be written."""
+    import compileall
+    package = package or Path(__file__).resolve().parent
+    return bool(compileall.compile_dir(str(package), quiet=2))
 
 
 #: Subcommands whose arguments their own module parses.
@@ -436,7 +453,8 @@ def build_parser():
     pp.add_argument("--model", choices=("solver", "fmu"), default="solver",
                     help="run the stand-alone solver (default) or each scene's FMU")
     pp.set_defaults(func=cmd_paper)
-    k = sub.add_parser("compile", help="compile the engine's kernels ahead of time (the set-up does it once)")
+    k = sub.add_parser("compile", help="compile the engine's kernels ahead of time, and the package's bytecode "
+                                       "(the set-up does it once)")
     k.add_argument("--planar", action="store_true", help="only the 2D kernels")
     k.set_defaults(func=cmd_compile)
     return p

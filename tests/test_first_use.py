@@ -3,12 +3,15 @@ ahead-of-time `inerter compile`. Nothing here compiles the engine's kernels: the
 numba's events by hand, or a one-line kernel compiles in a subprocess."""
 from __future__ import annotations
 
+import importlib.util
 import io
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
 import types as pytypes
+from pathlib import Path
 
 import pytest
 
@@ -122,11 +125,34 @@ def test_compile_command(monkeypatch, capsys):
         assert not compiled.NOTICE.enabled and spatial
         return 0.5
     monkeypatch.setattr(inerter.api, "warm_up", fake_warm_up)
+    wrote = []
+    monkeypatch.setattr(cli, "write_bytecode", lambda: wrote.append(True) or True)
     assert cli.main(["compile"]) == 0
+    assert wrote == [True]
     captured = capsys.readouterr()
     assert "compiling the engine's 2D and 3D kernels" in captured.err
     assert "(all were in the cache)" in captured.err and "loaded in 0.5 s" in captured.out
     assert compiled.NOTICE.enabled
+
+
+def test_compile_writes_the_bytecode_where_imports_write_none(tmp_path, monkeypatch):
+    """`inerter compile` writes the package's bytecode (cli.write_bytecode) with
+    PYTHONDONTWRITEBYTECODE set, and a process started with it set then reads the modules from that
+    bytecode instead of compiling their sources (``python -v`` names the code object's origin)."""
+    package = tmp_path / "inerter"
+    shutil.copytree(Path(cli.__file__).parent, package, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(sys, "dont_write_bytecode", True)
+    assert cli.write_bytecode(package)
+    sources = sorted(package.rglob("*.py"))
+    assert sources and all(Path(importlib.util.cache_from_source(str(f))).is_file() for f in sources)
+    env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1", "PYTHONPATH": str(tmp_path)}
+    done = subprocess.run([sys.executable, "-v", "-c", "import inerter.scene.reader"], env=env, cwd=tmp_path,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    origins = [line for line in done.stderr.splitlines() if line.startswith("# code object from") and str(package) in line]
+    reader = importlib.util.cache_from_source(str(package / "scene" / "reader.py"))
+    assert f"# code object from '{reader}'" in origins
+    assert all(".pyc" in line for line in origins), [line for line in origins if ".pyc" not in line]
 
 
 def test_compile_says_so_when_its_scenes_are_missing(monkeypatch, tmp_path, capsys):

@@ -1186,7 +1186,15 @@ def _read_derived(r: _Reader, raw, outputs) -> tuple[Derived, ...]:
             fld_expr = f"{fld}.expression"
         else:
             fld_expr = fld
-        expression = output_expression(text, known, r.names, r.source, fld_expr, r.dims)
+        try:
+            expression = output_expression(text, known, r.names, r.source, fld_expr, r.dims)
+        except SceneError as exc:                   # one declared below it: say so
+            later = next((n for n in table if n not in known and n != name
+                          and exc.problem.startswith(f"unknown name '{n}'")), None)
+            if later is None:
+                raise
+            raise r.error(fld_expr, text, exc.expected, f"unknown name '{later}': a derived output declared "
+                          f"below {name}, which reads only those above it (move {later} up)") from None
         unit = _derived_unit(r, fld, declared, expression, known)
         derived.append(Derived(name, expression, unit, description or f"derived output: {text}"))
         known[name] = unit

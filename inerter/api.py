@@ -5,6 +5,7 @@ the same scene compiled with ``oracle=True`` and solved at tight tolerance.
 """
 from __future__ import annotations
 
+import difflib
 import re
 import subprocess as _subprocess
 import sys as _sys
@@ -23,7 +24,7 @@ from inerter.oracle import OracleMechanism, require_definitions
 from inerter.engine.outputs import Signals
 from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
 from inerter.scene.units import for_reading
-from inerter.common.errors import InerterError, SceneError, SimulationError
+from inerter.common.errors import InerterError, SceneError, SimulationError, shown
 from inerter.engine.simulation import Settings, Stepper, dense_windings, integrate, numpy_mechanism
 
 #: Tolerances at which the oracle is solved (DOP853).
@@ -265,6 +266,23 @@ class Model:
         return Stepper(self.mechanism, s, self.signals, stop_time)
 
 
+class UnknownOutput(InerterError, KeyError):
+    """An output name a result does not have: a KeyError whose message reads as a scene error's
+    (``str`` without the quotes KeyError puts around it)."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+def unknown_output(source, call, name, names) -> UnknownOutput:
+    """The error of asking `call` (``result['C.r[3]']``, ``dense('C.r[3]')``) for `name`, not among
+    the outputs `names` of the scene file `source`: the closest name, if one is close, then all."""
+    close = difflib.get_close_matches(str(name), list(names), n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    return UnknownOutput(f"{source}: {call}: not an output{hint} (got {shown(name)}; expected an output "
+                         "of the scene: " + ", ".join(names) + ")")
+
+
 class Result:
     """A time history: ``result.time``, ``result["C.r[2]"]``, ``result.metrics``.
 
@@ -423,12 +441,12 @@ class Result:
         if self._values is not None:
             self._values = self._values[:i]
 
-    def _check_name(self, name):
+    def _check_name(self, name, call):
         if name not in self.model.signals.index:
-            raise KeyError(f"{name!r} is not an output of {self.model.name}; outputs: " + ", ".join(self.names))
+            raise unknown_output(self.model.source, call, name, self.names)
 
     def __getitem__(self, name) -> np.ndarray:
-        self._check_name(name)
+        self._check_name(name, f"result[{name!r}]")
         if self._values is not None:
             return self._values[:, self.model.signals.index[name]]
         column = self._columns.get(name)
@@ -465,7 +483,7 @@ class Result:
 
     def _dense(self, name):
         """:meth:`dense`'s callable, for a 1-D array of times, none of them NaN."""
-        self._check_name(name)
+        self._check_name(name, f"dense({name!r})")
         signals = self.model.signals
         if signals.is_derived(name):
             # the expression on the dense values of the outputs it reads, not a spline through its samples

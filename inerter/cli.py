@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from inerter.common.errors import InerterError, SceneError
+from inerter.studies.arguments import Parser as _Parser
 from inerter.common.options import OptionError, output_path, unwritable
 from inerter.scene.overrides import parse_set, read_value, set_origins
 from inerter.scene.reader import METHODS
@@ -376,13 +377,6 @@ DELEGATED = {
 }
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse, with a usage error on one line (the command's -h gives the rest)."""
-
-    def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} -h)\n")
-
-
 DESCRIPTION = """\
 Simulate planar and spatial mechanisms with springs, dampers and inerters from TOML scene files,
 with and without the inerter's centripetal term; build FMI 2.0 co-simulation FMUs from the same
@@ -482,6 +476,9 @@ def main(argv=None):
     except InerterError as exc:
         print(f"inerter: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:           # stdout's reader left (inerter describe ... | head): stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # nothing more to flush at exit
+        return 141                    # 128 + SIGPIPE, the status of a tool the signal ended
     except OSError as exc:            # an output file that cannot be written
         print(f"inerter: error: {unwritable(exc)}", file=sys.stderr)
         return 2

@@ -320,3 +320,46 @@ def test_compare_on_the_oracle_runs_it_once_per_variant(tmp_path, capsys):
     runs = json.loads((out / "summary.json").read_text())["runs"]
     assert runs["oracle"] == runs["corrected"] and runs["max_difference_to_oracle_m"] is None
     assert runs["corrected"]["metrics"] != runs["uncorrected"]["metrics"]
+
+
+def test_a_reader_that_leaves_early_is_no_error(tmp_path):
+    """``inerter describe SCENE | head``: the reader closes the pipe before the description is
+    written; the command stops quietly with 141 (128 + SIGPIPE, as a shell reports a tool the
+    signal ended), not with ``inerter: error: Broken pipe``."""
+    import subprocess
+    import sys
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, "-c", "import sys; from inerter.cli import main; sys.exit(main())",
+                             "describe", str(LUMPED)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    proc.stdout.close()                                     # before the package is even imported
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 141, err
+    assert err == "", err
+
+
+def test_a_scene_without_metrics_plots_its_first_moving_point(tmp_path):
+    """run's PNG of a scene without [[metrics]]: the coordinates of its first point on a body (all
+    of them: the 3D mass below moves along Z only), not the first point of the outputs, a ground
+    point whose coordinates never move."""
+    from inerter.studies.plotting import plotted_signals
+    path = scene_with(tmp_path, """
+[scene]
+dimension = 3
+[ground.points]
+O = [0, 0, 0]
+G = [0.3, 0, 1]
+[bodies.mass]
+mass = 1
+inertia = [1, 1, 1]
+position = [0.3, 0, 1]
+points = { P = [0, 0, 0] }
+[joints.slider]
+type = "prismatic"
+between = ["G", "P"]
+axis = [0, 0, 1]
+[elements.spring]
+type = "spring"
+between = ["O", "P"]
+k = 100
+""")
+    assert plotted_signals(inerter.load(path)) == ["P.r[1]", "P.r[2]", "P.r[3]"]

@@ -174,6 +174,9 @@ BAD = [
     ('radius = { expression = "P.r[1]", unit = "mm" }', "outputs.derived.radius.unit", "not an SI unit"),
     ('radius = { expression = "P.r[1]", colour = "red" }', "outputs.derived.radius.colour", "unknown field"),
     ('radius = "ratio * h"\nratio = "P.r[1] / h"', "outputs.derived.radius", "unknown name 'ratio'"),
+    # the same, saying why: an output reads only those declared above it
+    ('radius = "ratio * h"\nratio = "P.r[1] / h"', "outputs.derived.radius",
+     "unknown name 'ratio': a derived output declared below radius, which reads only those above it (move ratio up)"),
 ]
 
 

@@ -91,6 +91,24 @@ def test_a_usage_error_is_one_line(capsys):
     assert "\n" not in one_line and "--model" in one_line and "simulink" in one_line and "-h" in one_line
 
 
+@pytest.mark.parametrize("argv, fragment", [
+    (["study", "fig10"], "invalid choice: 'fig10'"),
+    (["sweep", str(LUMPED), "--vary", "b=1,2"], "required: --out"),
+    (["sweep-plot", "results.csv"], "required: --x, --y"),
+    (["bench", str(LUMPED), "--pathz", "numpy"], "unrecognized arguments: --pathz numpy"),
+    (["device-study", "--rowz", "1"], "unrecognized arguments: --rowz 1"),
+])
+def test_a_usage_error_of_a_study_command_is_one_line_too(capsys, argv, fragment):
+    """The commands handed over to the studies parse their own options: their usage errors read as
+    run's, one line naming the command and its -h (they printed argparse's whole usage first)."""
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith(f"inerter {argv[0]}: error: "), err
+    assert fragment in err and err.endswith(f"(see inerter {argv[0]} -h)"), err
+
+
 # -- magnitudes whose arithmetic overflows -----------------------------------------------------------
 @pytest.mark.parametrize("how, field", [
     (["--set", "y0=1e300"], "parameters.y0"),

@@ -19,7 +19,7 @@ from inerter.common.errors import SceneError
 from inerter.engine.simulation import Settings
 from inerter.fmu.dense import FmuDense, reads_the_fmu
 from inerter.api import (Model, Result, at_times, compute_metrics, csv_header, output_units, sample_spline,
-                         to_dataframe)
+                         to_dataframe, unknown_output)
 
 
 @dataclass
@@ -114,7 +114,7 @@ class FmuResult:
         self._nodes = None                  # _event_nodes', once computed
 
     def __getitem__(self, name):
-        self._check(name)
+        self._check(name, f"result[{name!r}]")
         return np.asarray(self._table[name], dtype=float)
 
     #: The scene's warnings and the derived outputs without value at some samples, as the solver's.
@@ -127,14 +127,14 @@ class FmuResult:
         integration at every communication point, a cubic spline through the samples. Times as
         the solver's :meth:`inerter.api.Result.dense` takes them (:func:`inerter.api.at_times`)."""
         what = f"{self.model.name} (FMU): dense({name!r})"
+        self._check(name, f"dense({name!r})")
         if self.fmu_dense is not None and name in self.fmu_dense.names():
-            self._check(name)
             return at_times(lambda t: self.fmu_dense.values(name, t), self.time, what)
         return at_times(sample_spline(self.time, self[name], name, self.__getitem__), self.time, what)
 
-    def _check(self, name):
+    def _check(self, name, call):
         if name not in self.names:
-            raise KeyError(f"{name!r} is not an output of the FMU of {self.model.name}")
+            raise unknown_output(f"{self.model.source} (FMU)", call, name, self.names)
 
     def events(self):
         """Device events (:meth:`inerter.api.Result.events`), their times refined on :meth:`dense`."""

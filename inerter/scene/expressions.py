@@ -177,6 +177,28 @@ class _UnitProblem(_Problem):
     """Internal: terms whose dimensions do not combine."""
 
 
+#: A number followed by a unit, as "900 mm" or "1.5e3mm": a unit written where a field takes none.
+_NUMBER_AND_UNIT = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z][\w.*/^()]*)\s*")
+
+
+def _unit_problem(text: str) -> _Problem | None:
+    """The problem of `text` where it is a number and a unit (``"900 mm"``), else None."""
+    found = _NUMBER_AND_UNIT.fullmatch(text)
+    if found is None:
+        return None
+    try:
+        units.readings(found[2])
+    except ValueError:                       # not a unit: the parser's own message says more
+        return None
+    return _Problem(f"a unit in a value ({found[2]!r})", _expected_without_unit(found[1], found[2]))
+
+
+def _expected_without_unit(number, unit) -> str:
+    """What a field given a unit expects: SI, or a parameter carrying the unit."""
+    return ("a number in SI units (m, kg, s, N, rad); a unit is given to a parameter, "
+            f'name = {{ value = {number}, unit = "{unit}" }} in [parameters], then "name" here')
+
+
 # --------------------------------------------------------------------------- parsing
 
 
@@ -203,7 +225,7 @@ def _compile(text: str) -> tuple[ast.expr, frozenset[str]]:
         # absurd nesting.  Only the first clause of the parser's message is kept.
         text_of = exc.msg if isinstance(exc, SyntaxError) else str(exc)
         brief = (text_of or "").split(":")[0].strip()[:80] or type(exc).__name__
-        raise _Problem(f"does not parse ({brief})") from None
+        raise _unit_problem(text) or _Problem(f"does not parse ({brief})") from None
     names: set[str] = set()
     try:
         _check(tree.body, names)
@@ -482,6 +504,9 @@ def _number(value, source: str, field: str) -> float:
     """A literal (non-string) field value as a finite float."""
     if isinstance(value, bool):
         raise SceneError(source, field, value, _EXPECTED_VALUE, "a boolean is not a number")
+    if isinstance(value, dict) and "unit" in value:
+        raise SceneError(source, field, value, _expected_without_unit(value.get("value", "..."), value["unit"]),
+                         "a value with a unit outside [parameters]")
     if not isinstance(value, numbers.Real):
         raise SceneError(
             source, field, value, _EXPECTED_VALUE, f"a {type(value).__name__} is not a number"

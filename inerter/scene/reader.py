@@ -9,6 +9,7 @@ Errors name the file, the field path (``elements.inerter.b``), the value and wha
 """
 from __future__ import annotations
 
+import difflib
 import math
 
 import numpy as np
@@ -272,7 +273,8 @@ class _Reader:
         for key in data:
             if key not in allowed:
                 raise self.error(f"{fld}.{key}" if fld else key, data[key],
-                                 "one of: " + ", ".join(sorted(allowed)), "unknown field")
+                                 "one of: " + ", ".join(sorted(allowed)) + _closest(str(key), allowed),
+                                 "unknown field")
         for key, required in allowed.items():
             if required and key not in data:
                 raise self.error(f"{fld}.{key}" if fld else key, None,
@@ -394,8 +396,9 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
         elif key.startswith("effects."):
             name = key[len("effects."):]
             if name not in KNOWN_EFFECTS:
-                raise SceneError(origin_of(key, value, origins), key, value, "an effect: " + ", ".join(f"effects.{e}" for e in KNOWN_EFFECTS),
-                                 "unknown effect")
+                raise SceneError(f"{origin_of(key, value, origins)}: {source}", key, value,
+                                 "an effect: " + ", ".join(f"effects.{e}" for e in KNOWN_EFFECTS)
+                                 + _closest(name, KNOWN_EFFECTS, "effects."), "unknown effect")
             effects[name] = value
         elif key.startswith("experiment."):
             experiment[key[len("experiment."):]] = value
@@ -404,8 +407,15 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
         else:
             raise SceneError(origin_of(key, value, origins), key, value,
                              "a parameter of " + source + ": " + _listing(parameter_names)
-                             + ", or effects.NAME, experiment.NAME, scene.orientation", "unknown name")
+                             + ", or effects.NAME, experiment.NAME, scene.orientation"
+                             + _closest(key, parameter_names), "unknown name")
     return params, effects, experiment
+
+
+def _closest(name: str, known, prefix: str = "") -> str:
+    """``; did you mean 'b'?`` where one of the names `known` is close to the misspelt `name`."""
+    close = difflib.get_close_matches(name, [str(k) for k in known], n=1)
+    return f"; did you mean '{prefix}{close[0]}'?" if close else ""
 
 
 def build_scene(source: str, data: dict, overrides: Mapping[str, Any], origins: Mapping[str, str] | None = None) -> Scene:
@@ -1087,7 +1097,8 @@ def _read_experiment(r: _Reader, raw, overrides):
     merged = dict(raw)
     for key, value in overrides.items():
         if key not in EXPERIMENT_FIELDS:
-            raise r.error(f"experiment.{key}", value, "one of: " + ", ".join(EXPERIMENT_FIELDS), "unknown field")
+            raise r.error(f"experiment.{key}", value, "one of: " + ", ".join(EXPERIMENT_FIELDS)
+                          + _closest(key, EXPERIMENT_FIELDS), "unknown field")
         merged[key] = value
     fld = "experiment"
     stop = r.number(merged, "stop_time", fld, default=10.0, minimum=0.0, exclusive=True, unit="s")
@@ -1175,7 +1186,15 @@ def _read_derived(r: _Reader, raw, outputs) -> tuple[Derived, ...]:
             fld_expr = f"{fld}.expression"
         else:
             fld_expr = fld
-        expression = output_expression(text, known, r.names, r.source, fld_expr, r.dims)
+        try:
+            expression = output_expression(text, known, r.names, r.source, fld_expr, r.dims)
+        except SceneError as exc:                   # one declared below it: say so
+            later = next((n for n in table if n not in known and n != name
+                          and exc.problem.startswith(f"unknown name '{n}'")), None)
+            if later is None:
+                raise
+            raise r.error(fld_expr, text, exc.expected, f"unknown name '{later}': a derived output declared "
+                          f"below {name}, which reads only those above it (move {later} up)") from None
         unit = _derived_unit(r, fld, declared, expression, known)
         derived.append(Derived(name, expression, unit, description or f"derived output: {text}"))
         known[name] = unit

@@ -28,6 +28,7 @@ from typing import Callable
 
 import numpy as np
 
+from inerter.studies.arguments import Parser
 from inerter.common.options import OptionError, output_folder
 
 TARGETS = (1e-3, 1e-6, 1e-9)
@@ -392,7 +393,7 @@ def hard_case_table(rows) -> str:
 
 def bench_parser() -> argparse.ArgumentParser:
     """The options of ``inerter bench``."""
-    p = argparse.ArgumentParser(prog="inerter bench", description="Work-precision diagram of a scene: error "
+    p = Parser(prog="inerter bench", description="Work-precision diagram of a scene: error "
                                 "against the oracle versus CPU time, per method, on the numpy and compiled "
                                 "paths and through the FMU.")
     p.add_argument("scene", help="the scene file (TOML)")

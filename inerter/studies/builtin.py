@@ -23,6 +23,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from inerter.studies.arguments import Parser
 from inerter.studies.sweep import (SweepError, Sweep, _number, add_run_arguments, check_run_arguments, parse_vary,
                                    print_report, read_results, run_sweep, status_code)
 
@@ -166,7 +167,7 @@ def print_table(study: Study, table: dict):
 
 def study_parser() -> argparse.ArgumentParser:
     """The options of ``inerter study``."""
-    p = argparse.ArgumentParser(prog="inerter study", description="Built-in studies: a sweep with and "
+    p = Parser(prog="inerter study", description="Built-in studies: a sweep with and "
                                 "without the centripetal correction, then one figure. " + ", ".join(
                                     f"{s.name}: {s.x} of {s.scene}" for s in STUDIES.values()))
     p.add_argument("study", choices=sorted(STUDIES), help="the study: " + ", ".join(sorted(STUDIES)))

@@ -43,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
+from inerter.studies.arguments import Parser
 from inerter.common.errors import InerterError, SceneError, shown
 from inerter.common.locations import devices as shipped_devices
 from inerter.common.options import output_path
@@ -531,7 +532,7 @@ def plot_changes(rows: list[dict], path: Path) -> Path:
 # The command
 # ------------------------------------------------------------------------------------------------
 def device_study_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="inerter device-study",
+    p = Parser(prog="inerter device-study",
                                 description="Each effect of a ball-screw inerter against the ideal inerter on "
                                             "the paper's two-bar and the braced frame, by the solver and the FMU: "
                                             "a table (.md, .csv) and a bar chart (.png).")

@@ -11,14 +11,17 @@ from inerter.scene.units import for_reading  # noqa: E402
 
 
 def plotted_signals(model) -> list[str]:
-    """The signals a scene's metrics look at (a point coordinate first), or its first point."""
+    """The signals a scene's metrics look at (a point coordinate first), or the coordinates of its
+    first point on a body (a ground point's never move)."""
     names = []
     for m in model.scene.metrics:
         for s in (m.signal, m.period_of):
             if s and s not in names:
                 names.append(s)
     if not names:
-        names = [n for n in model.signals.names if ".r[" in n][:2]
+        moving = [p.name for p in model.scene.points.values() if p.body != "ground"][:1]
+        names = ([f"{p}.r[{i + 1}]" for p in moving for i in range(model.scene.dimension)]
+                 or [n for n in model.signals.names if ".r[" in n][:2])
     names.sort(key=lambda n: 0 if ".r[" in n else 1)
     return names
 

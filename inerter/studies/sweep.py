@@ -59,6 +59,7 @@ from typing import Any
 
 import numpy as np
 
+from inerter.studies.arguments import Parser
 from inerter.common.atomic import replace_file
 from inerter.common.errors import InerterError, SceneError
 from inerter.common.options import OptionError, count, output_folder, unwritable
@@ -1183,7 +1184,7 @@ def status_code(report: SweepReport) -> int:
 
 def sweep_parser() -> argparse.ArgumentParser:
     """The options of ``inerter sweep``."""
-    p = argparse.ArgumentParser(prog="inerter sweep", description="Run every combination of the varied "
+    p = Parser(prog="inerter sweep", description="Run every combination of the varied "
                                 "parameters in parallel on dask; rows go to DIR/results.csv as runs finish.")
     p.add_argument("scene", help="the scene file (TOML)")
     p.add_argument("--vary", action="append", required=True, metavar="NAME=START:STOP:NUM",
@@ -1209,7 +1210,7 @@ def _sweep(argv) -> int:
 
 def sweep_plot_parser() -> argparse.ArgumentParser:
     """The options of ``inerter sweep-plot``."""
-    p = argparse.ArgumentParser(prog="inerter sweep-plot", description="Plot a metric of a sweep against a "
+    p = Parser(prog="inerter sweep-plot", description="Plot a metric of a sweep against a "
                                 "varied parameter.")
     p.add_argument("results", help="results.csv of a sweep")
     p.add_argument("--x", required=True, help="a parameter column (e.g. y0)")

@@ -394,8 +394,8 @@ def hard_case_table(rows) -> str:
 def bench_parser() -> argparse.ArgumentParser:
     """The options of ``inerter bench``."""
     p = Parser(prog="inerter bench", description="Work-precision diagram of a scene: error "
-                                "against the oracle versus CPU time, per method, on the numpy and compiled "
-                                "paths and through the FMU.")
+               "against the oracle versus CPU time, per method, on the numpy and compiled "
+               "paths and through the FMU.")
     p.add_argument("scene", help="the scene file (TOML)")
     p.add_argument("--out", default=None, help="output directory (default out/bench/<scene>)")
     p.add_argument("--stop-time", type=float, default=None, help="stop time of every run (s; default: the scene's)")

@@ -168,8 +168,8 @@ def print_table(study: Study, table: dict):
 def study_parser() -> argparse.ArgumentParser:
     """The options of ``inerter study``."""
     p = Parser(prog="inerter study", description="Built-in studies: a sweep with and "
-                                "without the centripetal correction, then one figure. " + ", ".join(
-                                    f"{s.name}: {s.x} of {s.scene}" for s in STUDIES.values()))
+               "without the centripetal correction, then one figure. " + ", ".join(
+                   f"{s.name}: {s.x} of {s.scene}" for s in STUDIES.values()))
     p.add_argument("study", choices=sorted(STUDIES), help="the study: " + ", ".join(sorted(STUDIES)))
     p.add_argument("--out", default=None, metavar="DIR",
                    help="folder of results.csv and the figure (default out/study/NAME); resumed if present")

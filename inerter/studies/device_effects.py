@@ -533,9 +533,9 @@ def plot_changes(rows: list[dict], path: Path) -> Path:
 # ------------------------------------------------------------------------------------------------
 def device_study_parser() -> argparse.ArgumentParser:
     p = Parser(prog="inerter device-study",
-                                description="Each effect of a ball-screw inerter against the ideal inerter on "
-                                            "the paper's two-bar and the braced frame, by the solver and the FMU: "
-                                            "a table (.md, .csv) and a bar chart (.png).")
+               description="Each effect of a ball-screw inerter against the ideal inerter on "
+                           "the paper's two-bar and the braced frame, by the solver and the FMU: "
+                           "a table (.md, .csv) and a bar chart (.png).")
     p.add_argument("--out", default="out/device_study", metavar="DIR",
                    help="folder of the table, the figure, the row scenes and their FMUs (default: %(default)s)")
     p.add_argument("--scenes", nargs="+", default=list(SCENES), metavar="SCENE",

@@ -1185,7 +1185,7 @@ def status_code(report: SweepReport) -> int:
 def sweep_parser() -> argparse.ArgumentParser:
     """The options of ``inerter sweep``."""
     p = Parser(prog="inerter sweep", description="Run every combination of the varied "
-                                "parameters in parallel on dask; rows go to DIR/results.csv as runs finish.")
+               "parameters in parallel on dask; rows go to DIR/results.csv as runs finish.")
     p.add_argument("scene", help="the scene file (TOML)")
     p.add_argument("--vary", action="append", required=True, metavar="NAME=START:STOP:NUM",
                    help="a parameter, effects.NAME or experiment.NAME and its values: START:STOP:NUM "
@@ -1211,7 +1211,7 @@ def _sweep(argv) -> int:
 def sweep_plot_parser() -> argparse.ArgumentParser:
     """The options of ``inerter sweep-plot``."""
     p = Parser(prog="inerter sweep-plot", description="Plot a metric of a sweep against a "
-                                "varied parameter.")
+               "varied parameter.")
     p.add_argument("results", help="results.csv of a sweep")
     p.add_argument("--x", required=True, help="a parameter column (e.g. y0)")
     p.add_argument("--y", required=True, help="a metric column (e.g. fundamental_frequency)")

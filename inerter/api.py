@@ -25,7 +25,8 @@ from inerter.engine.outputs import Signals
 from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
 from inerter.scene.units import for_reading
 from inerter.common.errors import InerterError, SceneError, SimulationError, shown
-from inerter.engine.simulation import Settings, Stepper, dense_windings, integrate, numpy_mechanism
+from inerter.engine.simulation import (SCIPY_RTOL_FLOOR, Settings, Stepper, dense_windings, integrate,
+                                      numpy_mechanism)
 
 #: Tolerances at which the oracle is solved (DOP853).
 ORACLE_RTOL = 1e-12
@@ -409,7 +410,18 @@ class Result:
                              f"(written as NaN): the expression is undefined there")
         notes += long_step_windings(self)
         notes += stops_at_start(self)
+        notes += self._rtol_raised()
         return notes
+
+    def _rtol_raised(self) -> list[str]:
+        """A run through scipy's integrators (the numpy path, the oracle, Radau, BDF, LSODA, the
+        projection treatment) at an rtol below the smallest they take ran at that one."""
+        s = self.settings
+        if s.method == "RK4" or s.rtol >= SCIPY_RTOL_FLOOR or self.run.extra.get("path") == "compiled":
+            return []
+        return [f"{self.model.source}: experiment.rtol: {s.rtol:g} is below the {SCIPY_RTOL_FLOOR:.3g} "
+                f"(100 ε) scipy's {s.method} takes; it ran at {SCIPY_RTOL_FLOOR:.3g} (the compiled DOP853 "
+                "and RK45 loops take down to 1e-14)"]
 
     def _unreached_record_warnings(self) -> list[str]:
         """The ground record's warnings (its last value is not zero, so the acceleration steps to zero

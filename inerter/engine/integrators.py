@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK45, DenseOutput, OdeSolver, Radau
 
+from inerter.engine.simulation import SCIPY_RTOL_FLOOR
+
 
 class Hermite(DenseOutput):
     """Cubic Hermite interpolation over one step (matches RK4's order 4 only at the nodes)."""
@@ -75,6 +77,7 @@ def make_solver(method, fun, t0, y0, t_bound, rtol, atol, step=1e-3, first_step=
     if cls is RK4:
         return RK4(fun, t0, y0, t_bound, step=step)
     kwargs = {}
+    rtol = max(rtol, SCIPY_RTOL_FLOOR)      # scipy raises it there itself, with a UserWarning per call
     if first_step is not None and first_step > 0.0:
         # A restart (co-simulation step) goes on with the step size the error control proposed,
         # clipped to the interval as the integrator would clip it, rather than a fresh guess.

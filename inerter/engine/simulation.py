@@ -24,6 +24,12 @@ from inerter.common.errors import SimulationError, TerminalsMeet
 from inerter.model.mechanism import rank_kept
 
 
+#: The smallest rtol scipy's integrators take (100 ε; scipy.integrate._ivp.common.validate_tol):
+#: a smaller one runs at this one (``make_solver``; Result.warnings says so); the compiled DOP853 and
+#: RK45 loops take the reader's smallest, 1e-14
+SCIPY_RTOL_FLOOR = 100 * float(np.finfo(float).eps)
+
+
 def make_solver(*args, **kwargs):
     """inerter.engine.integrators.make_solver, imported on first use: the compiled path never needs
     scipy.integrate, whose import costs about 0.15 s of a fresh process's start."""

@@ -2,7 +2,8 @@
 which overflow below about 1e-150): at atol 1e-200 two_bar_2d's DOP853 step size 'collapsed' at
 t = 5e-125 s ('approaching a singularity') and scipy's Radau ended in a traceback (ValueError:
 array must not contain infs or NaNs, inerter run's exit status 1). Now the reader refuses atol
-below 1e-100 in one line.
+below 1e-100 in one line, and a Newton matrix that is not finite ends a Radau or BDF run as a
+failure, its samples kept (exit status 3), not a traceback.
 
 References: the error text the reader gives every out-of-range field; the run at atol 1e-100
 against the tight DOP853 run (rtol 1e-12, atol 1e-14).
@@ -15,7 +16,9 @@ import pytest
 import inerter
 from conftest import TWO_BAR
 from inerter.cli import main as cli_main
-from inerter.common.errors import SceneError
+from inerter.common.errors import SceneError, SimulationError
+from inerter.engine.integrators import make_solver
+from inerter.engine.simulation import _step
 
 
 def test_an_atol_below_1e_100_is_refused_in_one_line(tmp_path, capsys):
@@ -35,3 +38,10 @@ def test_atol_1e_100_runs_to_the_tight_run(method):
     assert r.status == "ok"
     assert np.max(np.abs(r["C.r[2]"] - ref["C.r[2]"])) < 1e-6
 
+
+def test_a_newton_matrix_that_is_not_finite_is_a_run_failure():
+    def overflowing(t, y):
+        return np.full_like(y, np.inf) if t > 0 else -y
+    solver = make_solver("Radau", overflowing, 0.0, np.ones(2), 1.0, 1e-6, 1e-8)
+    with pytest.raises(SimulationError, match="Radau integrator failed: its Newton matrix is not finite"):
+        _step(solver, "Radau")

@@ -440,6 +440,13 @@ def _step(solver, method, monitor=None):
             if exc.time is None:
                 raise type(exc)(exc.message, t) from None
             raise
+        except ValueError as exc:
+            if "infs or NaNs" not in str(exc):
+                raise
+            # scipy's Radau and BDF factorise I/h − J: a step or a Jacobian that overflowed
+            raise SimulationError(f"the {method} integrator failed: its Newton matrix is not finite (step "
+                                  f"{getattr(solver, 'h_abs', float('nan')):.3g} s: the tolerances may be "
+                                  "too small to resolve, or the state overflowed)", t) from None
     if solver.status == "failed":
         if message == SCIPY_COLLAPSE:                 # Radau's and BDF's: said in the project's words
             raise StepCollapse(f"the {method} step size collapsed (the step it asked for, after "

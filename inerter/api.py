@@ -267,6 +267,19 @@ class Model:
         return Stepper(self.mechanism, s, self.signals, stop_time)
 
 
+def rtol_raised(result) -> list[str]:
+    """A solver's run through scipy's integrators (the numpy path, the oracle, Radau, BDF, LSODA, the
+    projection treatment) at an rtol below the smallest they take ran at that one: its note."""
+    s = getattr(result, "settings", None)
+    path = str(result.run.extra.get("path", ""))
+    if not isinstance(s, Settings) or s.method == "RK4" or s.rtol >= SCIPY_RTOL_FLOOR \
+            or path == "compiled" or path.startswith("FMU"):
+        return []
+    return [f"{result.model.source}: experiment.rtol: {s.rtol:g} is below the {SCIPY_RTOL_FLOOR:.3g} "
+            f"(100 ε) scipy's {s.method} takes; it ran at {SCIPY_RTOL_FLOOR:.3g} (the compiled DOP853 "
+            "and RK45 loops take down to 1e-14)"]
+
+
 class UnknownOutput(InerterError, KeyError):
     """An output name a result does not have: a KeyError whose message reads as a scene error's
     (``str`` without the quotes KeyError puts around it)."""
@@ -410,18 +423,8 @@ class Result:
                              f"(written as NaN): the expression is undefined there")
         notes += long_step_windings(self)
         notes += stops_at_start(self)
-        notes += self._rtol_raised()
+        notes += rtol_raised(self)
         return notes
-
-    def _rtol_raised(self) -> list[str]:
-        """A run through scipy's integrators (the numpy path, the oracle, Radau, BDF, LSODA, the
-        projection treatment) at an rtol below the smallest they take ran at that one."""
-        s = self.settings
-        if s.method == "RK4" or s.rtol >= SCIPY_RTOL_FLOOR or self.run.extra.get("path") == "compiled":
-            return []
-        return [f"{self.model.source}: experiment.rtol: {s.rtol:g} is below the {SCIPY_RTOL_FLOOR:.3g} "
-                f"(100 ε) scipy's {s.method} takes; it ran at {SCIPY_RTOL_FLOOR:.3g} (the compiled DOP853 "
-                "and RK45 loops take down to 1e-14)"]
 
     def _unreached_record_warnings(self) -> list[str]:
         """The ground record's warnings (its last value is not zero, so the acceleration steps to zero

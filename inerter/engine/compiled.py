@@ -346,20 +346,20 @@ def _monitor(method) -> np.ndarray:
 _STATE_FAILURES = (_k.SINGULAR, _k.NOT_FINITE, _k.TERMINALS_MEET)
 
 _STATUS_TEXT = {
-    1: "more than max_steps integrator steps: the scene may be stiff; try method = \"Radau\" or \"BDF\"",
-    2: "the step size became too small (below 10 ulp of t)",
-    3: "the mass matrix M + M_I with the joint constraints is singular: some coordinate has no mass "
+    _k.MAX_STEPS: "more than max_steps integrator steps: the scene may be stiff; try method = \"Radau\" or \"BDF\"",
+    _k.STEP_TOO_SMALL: "the step size became too small (below 10 ulp of t)",
+    _k.SINGULAR: "the mass matrix M + M_I with the joint constraints is singular: some coordinate has no mass "
        "(check zero masses/inertias and the inerters)",
-    4: "accelerations are not finite (the system matrix is near-singular or a force is unbounded)",
-    5: "the terminals of a translational element meet: its direction is undefined",
-    6: "the scene is stiff for {method}: its step size ({h:.3g} s) is held at the method's stability limit "
+    _k.NOT_FINITE: "accelerations are not finite (the system matrix is near-singular or a force is unbounded)",
+    _k.TERMINALS_MEET: "the terminals of a translational element meet: its direction is undefined",
+    _k.STIFF: "the scene is stiff for {method}: its step size ({h:.3g} s) is held at the method's stability limit "
        "(Hairer's test fired in {hits} steps in a row); use method = \"Radau\" or \"BDF\" (implicit)",
-    7: "the {method} step size collapsed ({steps} steps in a row below {relative:g}·max(1 s, t), the last "
+    _k.COLLAPSED: "the {method} step size collapsed ({steps} steps in a row below {relative:g}·max(1 s, t), the last "
        "{h:.3g} s): the solution is approaching a singularity",
-    8: "a body's Z-X-Z Euler angles reach their singularity (gimbal lock): the angle rates are undefined; "
+    _k.GIMBAL_LOCK: "a body's Z-X-Z Euler angles reach their singularity (gimbal lock): the angle rates are undefined; "
        "use orientation = \"quaternion\" (the default)",
-    9: "a step reaches a pose where the joints' constraint rows lose rank",
-    10: "the terminals of a translational element meet: its direction is undefined",
+    _k.CHANGE_POINT: "a step reaches a pose where the joints' constraint rows lose rank",
+    _k.MEETING: "the terminals of a translational element meet: its direction is undefined",
 }
 
 
@@ -1147,9 +1147,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         return run
     if settings.method not in COMPILED_METHODS or settings.constraint == "projection":
         run = integrate(_KernelMechanism(mech, _kernel_for(mech)), settings, inputs)   # on copies of both
-        return _kernel_run(run, run.extra["mechanism"].kernel, "scipy integrator, compiled right-hand side", 0)
-    kernel = _kernel_for(mech).for_run()      # this run's tables: its φ_ref and modes are its own
-    unsettled = 0
+        return _kernel_run(run, run.extra["mechanism"].kernel, "scipy integrator, compiled right-hand side")
+    kernel = _kernel_for(mech).for_run()      # this run's tables: its φ_ref, modes and count are its own
 
     grid = output_grid(settings.stop_time, settings.output_interval)
     # each sample's row: its state, then the φ_ref of each 3D rotational element the integrator held
@@ -1215,14 +1214,14 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
                       int(evals), cpu, None)
     if windings.shape[1]:
         run.extra["windings"] = windings
-    return _kernel_run(run, kernel, "compiled", unsettled)
+    return _kernel_run(run, kernel, "compiled")
 
 
-def _kernel_run(run, kernel, path, unsettled):
+def _kernel_run(run, kernel, path):
     """`run`, its extra saying its path, its kernel and how many of its evaluations kept a solve
-    whose screw efficiencies' modes did not settle (the kernel's count, which was `unsettled` at
-    its start)."""
-    run.extra.update(path=path, kernel=kernel, unsettled=kernel.unsettled - unsettled)
+    whose screw efficiencies' modes did not settle (the count of the run's own kernel, which
+    Kernel.for_run starts at 0)."""
+    run.extra.update(path=path, kernel=kernel, unsettled=kernel.unsettled)
     return run
 
 
@@ -1879,9 +1878,10 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
     singularity); where the step size collapsed or the steps read as stiff, the scene's fastest time
     scale (``Mechanism.stiffest``: a device's series mode, the narrowest tanh switch)."""
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)
-    if status in (2, 3, 4, 7, 9) and y_last is not None:         # as the numpy path: what may have stalled it
+    if status in (_k.STEP_TOO_SMALL, _k.SINGULAR, _k.NOT_FINITE, _k.COLLAPSED, _k.CHANGE_POINT) \
+            and y_last is not None:         # as the numpy path: what may have stalled it
         text += kernel.mech.diagnose(y_last)        # it reads the state's q
-    if status in (6, 7):                            # as the numpy path: StiffForMethod, StepCollapse
+    if status in (_k.STIFF, _k.COLLAPSED):          # as the numpy path: StiffForMethod, StepCollapse
         text += kernel.mech.stiffest()
     return text
 
@@ -1889,19 +1889,19 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
 def _status_text(kernel, status, method, h, y_last, t_last, max_steps):
     from inerter.engine import simulation as sim
     text = _STATUS_TEXT[status]
-    if status == 1 and max_steps is not None:
+    if status == _k.MAX_STEPS and max_steps is not None:
         return (f"more than max_steps = {max_steps} integrator steps (step size {h:.3g} s): "
                 + sim.max_steps_advice(method))
-    if status == 6:
+    if status == _k.STIFF:
         return text.format(method=method, h=h, hits=sim.STIFFNESS_HITS)
-    if status == 7:
+    if status == _k.COLLAPSED:
         return text.format(method=method, h=h, steps=sim.COLLAPSE_STEPS, relative=sim.COLLAPSE_RELATIVE)
-    if status == 8:
+    if status == _k.GIMBAL_LOCK:
         return _gimbal_lock_text(kernel, y_last, t_last)
-    if status == 10:
+    if status == _k.MEETING:
         return kernel.mech.meeting_message(y_last, t_last)
     names = kernel.flat["el_names"]
-    if status == 5 and names:
+    if status == _k.TERMINALS_MEET and names:
         q, v, z = (part.copy() for part in kernel.split(y_last))
         layout_names = signal_layout(kernel.flat)
         raw = np.empty(len(layout_names))

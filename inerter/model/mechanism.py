@@ -40,12 +40,13 @@ _frame_force = kinematics.frame_force.py_func
 _planar_body_energy = kinematics.planar_body_energy.py_func
 _spatial_body_energy = kinematics.spatial_body_energy.py_func
 _chord_approach = terminals.chord_approach.py_func
+_carried = winding.carried.py_func
 
 
 def _in_3d(r):
     """A 2D or 3D vector as three floats (z = 0 in 2D)."""
     return (float(r[0]), float(r[1]), float(r[2]) if len(r) > 2 else 0.0)
-_carried = winding.carried.py_func
+
 
 #: How far an initial pose may violate a joint before it is rejected rather than assembled (m or rad).
 ASSEMBLY_TOLERANCE = 1e-6

@@ -5,7 +5,6 @@ the same scene compiled with ``oracle=True`` and solved at tight tolerance.
 """
 from __future__ import annotations
 
-import difflib
 import re
 import subprocess as _subprocess
 import sys as _sys
@@ -22,7 +21,7 @@ from inerter.model.mechanism import Mechanism
 from inerter.elements.device import MODE_SOLVES
 from inerter.oracle import OracleMechanism, require_definitions
 from inerter.engine.outputs import Signals
-from inerter.scene.reader import KNOWN_EFFECTS, METHODS, load_scene
+from inerter.scene.reader import KNOWN_EFFECTS, METHODS, closest_name, load_scene
 from inerter.scene.units import for_reading
 from inerter.common.errors import InerterError, SceneError, SimulationError, shown
 from inerter.engine.simulation import (SCIPY_RTOL_FLOOR, Settings, Stepper, dense_windings, integrate,
@@ -291,8 +290,8 @@ class UnknownOutput(InerterError, KeyError):
 def unknown_output(source, call, name, names) -> UnknownOutput:
     """The error of asking `call` (``result['C.r[3]']``, ``dense('C.r[3]')``) for `name`, not among
     the outputs `names` of the scene file `source`: the closest name, if one is close, then all."""
-    close = difflib.get_close_matches(str(name), list(names), n=1)
-    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    close = closest_name(name, names)
+    hint = f" (did you mean {close!r}?)" if close else ""
     return UnknownOutput(f"{source}: {call}: not an output{hint} (got {shown(name)}; expected an output "
                          "of the scene: " + ", ".join(names) + ")")
 

@@ -416,10 +416,17 @@ def split_overrides(source: str, overrides: Mapping[str, Any], parameter_names, 
     return params, effects, experiment
 
 
+def closest_name(name, known) -> str | None:
+    """The one of the names `known` closest to the misspelt `name`, where one is close (difflib's
+    ratio of at least 0.6), else None: the "did you mean" of the scene's and the results' errors."""
+    close = difflib.get_close_matches(str(name), [str(k) for k in known], n=1)
+    return close[0] if close else None
+
+
 def _closest(name: str, known, prefix: str = "") -> str:
     """``; did you mean 'b'?`` where one of the names `known` is close to the misspelt `name`."""
-    close = difflib.get_close_matches(name, [str(k) for k in known], n=1)
-    return f"; did you mean '{prefix}{close[0]}'?" if close else ""
+    close = closest_name(name, known)
+    return f"; did you mean '{prefix}{close}'?" if close else ""
 
 
 def build_scene(source: str, data: dict, overrides: Mapping[str, Any], origins: Mapping[str, str] | None = None) -> Scene:

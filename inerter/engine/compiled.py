@@ -324,12 +324,17 @@ COMPILED_METHODS = ("DOP853", "RK45", "RK4")
 _RK_CODE = {"DOP853": 0, "RK45": 1}
 _NO_ORDER = np.zeros(0, dtype=np.int64)
 
-def _monitor(method) -> np.ndarray:
+def monitor_slots(method, rk4_watch=True) -> np.ndarray:
     """The constants of :class:`inerter.engine.simulation.StepMonitor` for the compiled loop, and the
     ratio below which the joints' rows count as dependent (``mechanism.DEPENDENT_RATIO``: the
-    kernels' change-point watch, kernels.loop_watch), in the slots kernels.MONITOR_*."""
+    kernels' change-point watch, kernels.loop_watch), in the slots kernels.MONITOR_*; RK4's
+    stability watch (kernels.rk4_watch) on unless `rk4_watch` is false, its running values at 0.
+    The numpy path's StepMonitor keeps RK4's watch in such an array too."""
     from inerter.engine import simulation as sim
     monitor = np.zeros(_k.MONITOR_SIZE)
+    if method == "RK4" and rk4_watch:
+        monitor[_k.MONITOR_RK4_BOUND] = sim.RK4_STABILITY_BOUND
+        monitor[_k.MONITOR_RK4_GROWTH] = sim.RK4_GROWTH
     monitor[_k.MONITOR_STIFF_BOUND] = sim.STIFFNESS_BOUND.get(method, 0.0)
     monitor[_k.MONITOR_STIFF_EVERY] = sim.STIFFNESS_EVERY
     monitor[_k.MONITOR_STIFF_HITS] = sim.STIFFNESS_HITS
@@ -1110,10 +1115,11 @@ def _rk_segment(kernel, settings, tables, y, t0, t1, seg, seg_out, max_steps, in
     A, B, C, E, E3, D, Pm = tables
     return _k.integrate_rk(_RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol),
                            float(settings.atol), 0.0, max_steps, inputs, float(settings.alpha), kernel.params,
-                           A, B, C, E, E3, D, Pm, _monitor(settings.method), t1 if t1 in switches else 0.0, kinks, keep)
+                           A, B, C, E, E3, D, Pm, monitor_slots(settings.method), t1 if t1 in switches else 0.0,
+                           kinks, keep)
 
 
-def _run_failure(kernel, settings, status, h, y_last, t_reached, t_sample) -> str:
+def _run_failure(kernel, settings, status, h, y_last, t_reached, t_sample, monitor=None) -> str:
     """The message of a whole run's compiled loop that stopped with `status` at `t_reached` (the last
     sample at `t_sample`; `h` its last step). Terminals meeting: the loop stopped at the meeting
     located within the step that brings them together (MEETING, `y_last` the state there), or at
@@ -1121,7 +1127,7 @@ def _run_failure(kernel, settings, status, h, y_last, t_reached, t_sample) -> st
     h = h if settings.method != "RK4" else settings.step
     meet = status in (_k.TERMINALS_MEET, _k.MEETING)
     why = failure_text(kernel, status, settings.method, h, y_last, t_reached if meet else t_sample,
-                       int(settings.max_steps))
+                       int(settings.max_steps), monitor)
     digits = 9 if status == _k.MEETING else 6
     return f"at t = {t_reached:.{digits}g} s: the {settings.method} integrator failed: {why}"
 
@@ -1171,6 +1177,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     h, t0, k, status, t_reached, stopped = 0.0, 0.0, 1, 0, 0.0, None
     tables = None if settings.method == "RK4" else _tables(settings.method)
     keep = _dense_keep(settings.method, tables, len(y0), dense)
+    monitor = monitor_slots("RK4") if tables is None else None     # RK4's watch, across segments
     start = _time.process_time()
     y = y0                                    # the 3D rotational elements' angles: from the initial pose (for_run)
     for t1 in ends:
@@ -1184,7 +1191,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         if settings.method == "RK4":
             status, done, s_steps, s_evals, t_reached, y_reached = _k.integrate_rk4(
                 y, t0, t1, seg, seg_out, float(settings.step), int(settings.max_steps) - steps, inp, alpha,
-                kernel.params, t1 if t1 in switches else 0.0, kinks, _monitor("RK4"))
+                kernel.params, t1 if t1 in switches else 0.0, kinks, monitor)
         else:
             status, done, s_steps, s_evals, t_reached, h, keep, y_reached = _rk_segment(
                 kernel, settings, tables, y, t0, t1, seg, seg_out, int(settings.max_steps) - steps, inp, switches,
@@ -1204,7 +1211,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         message = "completed"
     else:
         message = _run_failure(kernel, settings, status, h, states[-1] if stopped is None else stopped,
-                               t_reached, grid[k - 1])
+                               t_reached, grid[k - 1], monitor)
     sol = DenseOutput.of_kept(settings.method, keep, kernel)
     if sol is None and tables is not None and k > 1:
         sol = LocalDense(kernel, settings, inp, grid[:k].copy(), states, switches, kinks, tables, windings)
@@ -1475,7 +1482,8 @@ class RK4Dense:
                     seg_out[0, self.n:] = angles
                 status, done, _, evals, t_reached, _ = _k.integrate_rk4(
                     y, t0, t1, seg, seg_out, float(s.step), int(s.max_steps), self.inputs, float(s.alpha),
-                    kernel.params, t1 if t1 in self.switches else 0.0, self.kinks, _monitor("RK4"))
+                    kernel.params, t1 if t1 in self.switches else 0.0, self.kinks,
+                    monitor_slots("RK4", rk4_watch=False))    # the run these steps repeat passed the watch
                 self.evaluations += int(evals)
                 if status != 0 or done != len(seg):
                     raise SimulationError(f"the dense output between t = {t0:.6g} s and {t_end:.6g} s: the RK4 "
@@ -1604,7 +1612,7 @@ class CompiledStepper(Stepper):
         self._tables = _tables(settings.method) if settings.method in _RK_CODE else None
         self._work = (None if self._tables is None else
                       _k.work_arrays(kernel.params, kernel.ny, _k.rk_stages(self._tables[_TABLEAU_A])))
-        self._monitor = _monitor(settings.method)
+        self._monitor = monitor_slots(settings.method)
         self._jumps = np.array(getattr(mech, "discontinuities", ()), dtype=float)
         self._kinks = np.array(getattr(mech, "kinks", ()), dtype=float)
         self._tol = (float(settings.rtol), float(settings.atol), int(settings.max_steps))
@@ -1710,7 +1718,7 @@ class CompiledStepper(Stepper):
             self._monitor)
         if status:
             at = t_reached if status == _k.MEETING else t_fail      # y is the state at the meeting
-            why = failure_text(kernel, status, s.method, s.step, y, at, int(s.max_steps))
+            why = failure_text(kernel, status, s.method, s.step, y, at, int(s.max_steps), self._monitor)
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
         self.steps += int(steps)
         if not np.isfinite(y).all():
@@ -1856,19 +1864,20 @@ class CompiledStepper(Stepper):
     def get_state(self) -> bytes:
         rk = None if self._rk is None else Running(*(a.copy() for a in self._rk))
         return pickle.dumps((self.time, self.y.copy(), self.h, self.inputs.copy(), self.steps, self.t_bound, rk,
-                             self._rk_inputs, self._input_moved, self.kernel.windings.copy()))
+                             self._rk_inputs, self._input_moved, self.kernel.windings.copy(), self._monitor.copy()))
 
     def set_state(self, blob: bytes):
         (self.time, y, self.h, inputs, self.steps, self.t_bound, self._rk, self._rk_inputs,
-         self._input_moved, windings) = load_state(blob)
+         self._input_moved, windings, monitor) = load_state(blob)
         self.kernel.windings[:] = windings
+        self._monitor[:] = monitor            # in place: a native step's table holds it (RK4's watch)
         self.y = np.array(y)
         self.inputs = np.array(inputs)
         self._values = None
         _gaps_stale(self._scratch)            # the terminals' gaps are those of the state left behind
 
 
-def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> str:
+def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None, monitor=None) -> str:
     """What a compiled loop's failure `status` means, in the words of the numpy path: the step size
     `h` it ended with (and the step budget `max_steps` it ran out of); for terminals meeting, the
     element whose terminals were closest in the last good state `y_last` (at `t_last`), the loop
@@ -1876,7 +1885,11 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None) -> s
     (MEETING, ``Mechanism.meeting_message``); where the solve or the step size failed, what in that state
     may have stalled it (``Mechanism.diagnose``: terminals nearly meeting, a device mount near its
     singularity); where the step size collapsed or the steps read as stiff, the scene's fastest time
-    scale (``Mechanism.stiffest``: a device's series mode, the narrowest tanh switch)."""
+    scale (``Mechanism.stiffest``: a device's series mode, the narrowest tanh switch); where RK4's
+    step was beyond its stability limit, its watch's values in `monitor` (kernels.rk4_watch)."""
+    if status == _k.UNSTABLE:
+        from inerter.engine import simulation as sim
+        return sim.rk4_unstable_text(h, monitor) + kernel.mech.stiffest()
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)
     if status in (_k.STEP_TOO_SMALL, _k.SINGULAR, _k.NOT_FINITE, _k.COLLAPSED, _k.CHANGE_POINT) \
             and y_last is not None:         # as the numpy path: what may have stalled it

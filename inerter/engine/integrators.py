@@ -44,10 +44,11 @@ class RK4(OdeSolver):
         self.h = float(step)
         self.f = self.fun(self.t, self.y)
         self.y_old = self.f_old = None
+        self.midpoints = None       # the last step's stages k2, k3 (RK4's stability watch reads them)
 
     def _step_impl(self):
         t, y, h = self.t, self.y, min(self.h, abs(self.t_bound - self.t))
-        y_new, f_new = rk4_step(self.fun, t, y, self.f, h)     # the state is left as it was where it raises
+        y_new, f_new, self.midpoints = rk4_step(self.fun, t, y, self.f, h)   # left as it was where it raises
         self.y_old, self.f_old = y, self.f
         self.y, self.t, self.f = y_new, t + h, f_new
         return True, None
@@ -57,12 +58,13 @@ class RK4(OdeSolver):
 
 
 def rk4_step(fun, t, y, f, h):
-    """One classical RK4 step of length h from (t, y) with derivative f: (y_new, f_new)."""
+    """One classical RK4 step of length h from (t, y) with derivative f: (y_new, f_new, its
+    midpoint stages (k2, k3))."""
     k2 = fun(t + h / 2, y + h / 2 * f)
     k3 = fun(t + h / 2, y + h / 2 * k2)
     k4 = fun(t + h, y + h * k3)
     y_new = y + h / 6 * (f + 2 * k2 + 2 * k3 + k4)
-    return y_new, fun(t + h, y_new)
+    return y_new, fun(t + h, y_new), (k2, k3)
 
 
 SOLVERS = {"DOP853": DOP853, "RK45": RK45, "Radau": Radau, "BDF": BDF, "LSODA": LSODA, "RK4": RK4}

@@ -67,16 +67,21 @@ N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND
 # Status codes of the integrators. TERMINALS_MEET: a state where a translational element's
 # terminals meet, found where it cannot be evaluated (the integrator stays at its last node);
 # MEETING: an accepted step whose chord brings them together (:func:`terminals_meet`), the run
-# stopped at the meeting located within that step (:func:`locate_meeting`, :func:`_rk4_to_meeting`).
+# stopped at the meeting located within that step (:func:`locate_meeting`, :func:`_rk4_to_meeting`);
+# UNSTABLE: RK4's fixed step beyond the method's stability limit, a mode growing (:func:`rk4_watch`).
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED, GIMBAL_LOCK, \
-    CHANGE_POINT, MEETING = range(11)
-# The slots of the integrators' `monitor` (inerter.engine.compiled._monitor): Hairer's stiffness
+    CHANGE_POINT, MEETING, UNSTABLE = range(12)
+# The slots of the integrators' `monitor` (inerter.engine.compiled.monitor_slots): Hairer's stiffness
 # bound, how often it is tested, its firings in a row that stop a run; the collapse's relative step
 # and steps in a row; the trial shrink; the smallest/largest singular value ratio of C_v below which
-# the joints' rows count as dependent (Mechanism.DEPENDENT_RATIO, :func:`loop_watch`).
+# the joints' rows count as dependent (Mechanism.DEPENDENT_RATIO, :func:`loop_watch`); RK4's
+# stability bound (0: the watch is off) and the growth that confirms it, then the watch's running
+# values (:func:`rk4_watch`), kept here so that they carry across co-simulation steps: its steps in
+# a row beyond the bound, the watched mode's amplitude at the first of them and now, the last estimate.
 MONITOR_STIFF_BOUND, MONITOR_STIFF_EVERY, MONITOR_STIFF_HITS, MONITOR_COLLAPSE_RELATIVE, MONITOR_COLLAPSE_STEPS, \
-    MONITOR_TRIAL_SHRINK, MONITOR_DEPENDENT = range(7)
-MONITOR_SIZE = 7
+    MONITOR_TRIAL_SHRINK, MONITOR_DEPENDENT, MONITOR_RK4_BOUND, MONITOR_RK4_GROWTH, MONITOR_RK4_HITS, \
+    MONITOR_RK4_FIRST, MONITOR_RK4_AMPLITUDE, MONITOR_RK4_ESTIMATE = range(13)
+MONITOR_SIZE = 13             # the watch's running values last: monitor[MONITOR_RK4_HITS:]
 # The arrays of work_arrays, in the order of WORK (their names): the kernels take them by these slots.
 W_AB, W_RHS, W_GEN, W_ACC, W_K, W_Y_NEW, W_F_NEW, W_YS = range(8)
 # The slot of cosim_scratch's fresh[0] (1: the gaps are those at the integration's y), in the order of
@@ -2865,12 +2870,11 @@ def rk_advance(method, hdr, y, f, y_prev, dense, ts, out, k0, t_bound, rtol, ato
             break
         hdr[RK_STEPS] += 1
         meets = terminals_meet(gaps, z, y_new, P)       # located below, on the step's dense output
-        if meets:
-            pass
-        elif euler_lock_within(y, y_new, P):
-            status = GIMBAL_LOCK
-        else:
-            status = _rk_watch(n_stages, hdr, t_new, h, y, y_new, K, A, monitor)
+        if not meets:                                   # a meeting ends the run before these matter
+            if euler_lock_within(y, y_new, P):
+                status = GIMBAL_LOCK
+            else:
+                status = _rk_watch(n_stages, hdr, t_new, h, y, y_new, K, A, monitor)
         if status != OK:
             h_abs = abs(h)
             break
@@ -3274,6 +3278,60 @@ def _rk4_step(t, h, y, f, k2, k3, k4, y_new, f_new, ys, inputs, alpha, P, AB, rh
     return max(st, _rhs(min(t + h, before), y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new))
 
 
+#: The shortest step RK4's stability watch reads, relative to the fixed step (:func:`rk4_watch`).
+RK4_SHORTEST = 1e-3
+
+
+@njit(cache=True, inline="always")
+def rk4_watch(f, k2, k3, h, step, monitor):
+    """RK4's stability watch after a step of length h (the fixed `step`, or shorter to end at a
+    kink or a communication point) from a state with derivative f = k1 and midpoint stages k2, k3
+    (:func:`_rk4_step`). Both stages are taken at t + h/2, so k3 − k2 ≈ (h/2) J (k2 − k1) and
+    k2 − k1 ≈ (h/2) (J f + ∂f/∂t): once one mode dominates the state's change,
+
+    * h·|λ| ≈ 2 √(‖k3 − k2‖/‖f‖) for its eigenvalue λ, real or one of a complex pair alike: J² acts
+      on the mode as λ², whatever the units of positions and velocities, where the ratio of two
+      successive stage differences (Hairer's test) swings between the singular values of J;
+    * its amplitude, free of its phase, is √(‖f‖² + ‖J f‖²/|λ|²), J f ≈ (k2 − k1)·2/h: the mode's
+      quadratic form at two phases a quarter period apart (J/ω turns a pair ±iω by 90°), which
+      sums to the same at every phase, where ‖f‖ alone swings by the ratio of the units' scales.
+
+    The estimate is scaled to the fixed step, the one to judge (a shortened step's is shorter by
+    h/step); a step shorter than RK4_SHORTEST of it (the remainder before a communication point)
+    is left out: its stage differences are too small to read. RK4 is stable for step·|λ| up to
+    2.785 along the negative real axis and 2.828 along the imaginary one; beyond, the fixed step (no error control shortens it) multiplies the mode by |R(hλ)| > 1
+    at every step. Returns UNSTABLE when every step since the first one beyond the bound in
+    `monitor` (MONITOR_RK4_BOUND; 0: the watch is off) was beyond it too and the amplitude has grown
+    MONITOR_RK4_GROWTH times since then: the growth confirms it, as a nonlinearity can bound a mode
+    that the estimate puts beyond (a saturating friction's sticking mode), and a stable pair just
+    beyond 2.785 (up to 2.828) does not grow. Its running values: monitor[MONITOR_RK4_HITS:]."""
+    bound = monitor[MONITOR_RK4_BOUND]
+    if bound <= 0.0 or h < RK4_SHORTEST * step:
+        return OK
+    ff = 0.0
+    d1 = 0.0
+    d2 = 0.0
+    for i in range(f.shape[0]):
+        ff += f[i] * f[i]
+        d1 += (k2[i] - f[i]) ** 2
+        d2 += (k3[i] - k2[i]) ** 2
+    if not (ff > 0.0 and d2 > 0.0):         # at rest, or not finite (the right-hand side says so)
+        monitor[MONITOR_RK4_HITS] = 0.0
+        return OK
+    size_f, size_d2 = math.sqrt(ff), math.sqrt(d2)
+    estimate = 2.0 * math.sqrt(size_d2 / size_f) * (step / h)
+    if not estimate > bound:
+        monitor[MONITOR_RK4_HITS] = 0.0
+        return OK
+    amplitude = math.sqrt(ff + d1 * size_f / size_d2)      # ‖f‖² + ‖(k2 − k1)·2/(h|λ|)‖²
+    if monitor[MONITOR_RK4_HITS] == 0.0:
+        monitor[MONITOR_RK4_FIRST] = amplitude
+    monitor[MONITOR_RK4_HITS] += 1.0
+    monitor[MONITOR_RK4_AMPLITUDE] = amplitude
+    monitor[MONITOR_RK4_ESTIMATE] = estimate
+    return UNSTABLE if amplitude >= monitor[MONITOR_RK4_GROWTH] * monitor[MONITOR_RK4_FIRST] else OK
+
+
 @njit(cache=True)
 def _rk4_to_meeting(t, h, y, f, grid, k, out, inputs, alpha, P, AB, rhs, gen, acc, before):
     """RK4's step of length h from (t, y, f) brings a translational element's terminals together
@@ -3362,6 +3420,8 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
         if st != OK:
             return st, k, steps, evals, t
         steps += 1
+        if rk4_watch(f, k2, k3, h, step, monitor) != OK:
+            return UNSTABLE, k, steps, evals, t
         if euler_lock_within(y, y_new, P):
             return GIMBAL_LOCK, k, steps, evals, t
         _wind_step_of(y_new, y, h, P)
@@ -3662,10 +3722,13 @@ def native_step_on(tab, t, h, P):
             _f2(tab, w + CV_WORK), _f2(tab, w + CV_GRAM), _f1(tab, w + CV_KNOWN))
     raw, order, values = _f1(tab, S_RAW), _i1(tab, S_ORDER), _f1(tab, S_VALUES)
     if tab[TABLE_METHOD] == NATIVE_RK4:
+        monitor = _f1(tab, S_MONITOR)
+        watched = monitor[MONITOR_RK4_HITS:].copy()     # RK4's running watch, as before the step
         st, steps, t_reached, t_fail = rk4_cosim_step(y, now, t_end, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), ts, out,
                                                       clock[CLOCK_STEP], tab[TABLE_MAX_STEPS], inputs, alpha, P,
-                                                      _f1(tab, S_MONITOR))
+                                                      monitor)
         if st != OK:
+            monitor[MONITOR_RK4_HITS:] = watched        # the Python path takes the step again from here
             return 0
         for n in range(y.shape[0]):
             if not math.isfinite(y[n]):

@@ -209,6 +209,11 @@ STIFFNESS_BOUND = {"DOP853": 6.1, "RK45": 3.25}
 #: firings in a row stop the run.
 STIFFNESS_EVERY = 1000
 STIFFNESS_HITS = 15
+#: RK4's fixed step: the size of its stability region along the negative real axis (h·|λ| ≤ 2.785;
+#: 2.828 along the imaginary one), beyond which its watch counts a step, and the growth of the
+#: watched mode over such steps in a row that stops the run (kernels.rk4_watch, which both paths run).
+RK4_STABILITY_BOUND = 2.785
+RK4_GROWTH = 100.0
 #: A step below this (relative to max(1 s, |t|)) is a collapsing step; COLLAPSE_STEPS of them in a row
 #: stop the run (a singularity the integrator is creeping towards).
 COLLAPSE_RELATIVE = 1e-11
@@ -224,6 +229,24 @@ class StiffForMethod(SimulationError):
     """An explicit method's step size is held at its stability limit (Hairer's test): a stiff effect."""
 
 
+def rk4_unstable_text(step, watch) -> str:
+    """Why a run with RK4 stopped at UNSTABLE, from its watch's slots (kernels.rk4_watch): the
+    estimate h·|λ|, the mode's growth over its steps in a row beyond the bound, and a step within
+    the bound."""
+    from inerter.engine import kernels as _k
+    estimate, steps = watch[_k.MONITOR_RK4_ESTIMATE], int(watch[_k.MONITOR_RK4_HITS]) - 1   # from the first's start
+    growth = watch[_k.MONITOR_RK4_AMPLITUDE] / watch[_k.MONITOR_RK4_FIRST]
+    return (f"RK4's step of {step:.3g} s is beyond its stability limit: h·|λ| ≈ {estimate:.3g} for a mode of "
+            f"the scene (RK4 is stable up to {RK4_STABILITY_BOUND:g} along the negative real axis and 2.83 along "
+            f"the imaginary one), which grew {growth:.3g} times over the last {steps} steps; set experiment.step "
+            f"below about {step * RK4_STABILITY_BOUND / estimate:.2g} s, or use an adaptive method "
+            "(DOP853; Radau or BDF for a stiff scene)")
+
+
+class UnstableStep(SimulationError):
+    """RK4's fixed step is beyond the method's stability limit and a mode grows (kernels.rk4_watch)."""
+
+
 #: scipy's words when an implicit method's step size reaches the spacing of floating-point numbers.
 SCIPY_COLLAPSE = "Required step size is less than spacing between numbers."
 
@@ -235,9 +258,12 @@ class StepMonitor:
     SimulationError that names the method and what to do. A step that passes them moves the 3D
     rotational elements' angles on (``mech.wind``: they wind past half a turn from there)."""
 
-    def __init__(self, mech, method, max_steps):
+    def __init__(self, mech, method, max_steps, watch=None):
+        """`watch`: RK4's stability watch to go on with (:func:`rk4_watch_slots`; a co-simulation
+        keeps one across its steps), a fresh one if None."""
         self.mech, self.method, self.max_steps = mech, method, max_steps
         self.bound = STIFFNESS_BOUND.get(method)
+        self.watch = watch if watch is not None or method != "RK4" else rk4_watch_slots()
         self.steps = 0
         self.hits = self.calm = 0
         self.small = 0
@@ -260,6 +286,8 @@ class StepMonitor:
             self._watch_loops(solver, y_old)
         if self.bound is not None and (self.hits or self.steps % STIFFNESS_EVERY == 0):
             self._stiffness(solver, h)
+        if self.watch is not None:
+            self._rk4_stability(solver, h)
         if h < COLLAPSE_RELATIVE * max(1.0, abs(t)):
             self.small += 1
             if self.small >= COLLAPSE_STEPS:
@@ -344,6 +372,14 @@ class StepMonitor:
         raise SimulationError("a step reaches a pose where the joints' constraint rows lose rank"
                               + self.mech.diagnose(q), where)
 
+    def _rk4_stability(self, solver, h):
+        """RK4's stability watch on the step just taken: the kernels' (``kernels.rk4_watch``), run
+        uncompiled."""
+        from inerter.engine import kernels as _k
+        k2, k3 = solver.midpoints
+        if _k.rk4_watch.py_func(solver.f_old, k2, k3, h, solver.h, self.watch) != _k.OK:
+            raise UnstableStep(rk4_unstable_text(solver.h, self.watch), solver.t_old)
+
     def _stiffness(self, solver, h):
         K = getattr(solver, "K", None)
         A = getattr(solver, "A", None)
@@ -369,6 +405,12 @@ class StepMonitor:
             self.calm += 1
             if self.calm >= 6:
                 self.hits = 0
+
+
+def rk4_watch_slots() -> np.ndarray:
+    """A fresh stability watch for RK4 (the kernels' monitor slots, ``compiled.monitor_slots``)."""
+    from inerter.engine.compiled import monitor_slots
+    return monitor_slots("RK4")
 
 
 def _rank_kept(rows) -> bool:
@@ -400,7 +442,7 @@ def _rk4_to_meeting(fun, mech, t, y, f, t_hi):
         part = 0.5 * (t_hi - t)
         mid = t + part
         try:
-            y_mid, f_mid = rk4_step(fun, t, y, f, part)
+            y_mid, f_mid, _ = rk4_step(fun, t, y, f, part)
         except TerminalsMeet:
             t_hi = mid
             continue
@@ -573,7 +615,7 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
         if solver is not None and not isinstance(exc, TerminalsMeet) and "terminals" not in message:
             found = mech.diagnose(solver.y)
             message += found if found not in message else ""    # the monitor's collapse says it already
-        if isinstance(exc, (StepCollapse, StiffForMethod)):
+        if isinstance(exc, (StepCollapse, StiffForMethod, UnstableStep)):
             message += mech.stiffest()
     cpu = _time.process_time() - start
     for i in range(1, k):
@@ -736,6 +778,7 @@ class Stepper:
         self._dense = None                    # the dense output of its last step, once asked for
         self._input_moved = False             # an input changed since the last step
         self._meeting = None                  # (time, message): terminals meet within its last step
+        self._watch = rk4_watch_slots() if settings.method == "RK4" else None   # across its steps
 
     def set_input(self, name, value):
         value = float(value)
@@ -766,7 +809,7 @@ class Stepper:
         t_end = float(t_end)
         if not t_end > self.time:
             raise SimulationError(f"step to t = {t_end!r} is not after the current time", self.time)
-        monitor = StepMonitor(self.mech, self.settings.method, self.settings.max_steps)
+        monitor = StepMonitor(self.mech, self.settings.method, self.settings.max_steps, self._watch)
         try:
             if self._runs_on:
                 y = self._run_on(t_end, monitor)
@@ -883,11 +926,12 @@ class Stepper:
     def get_state(self) -> bytes:
         running = None if self._solver is None else (self._segment, solver_state(self._solver))
         return pickle.dumps((self.time, self.y.copy(), self.h, self.inputs.copy(), self.steps, self.t_bound,
-                             self._input_moved, running, self.mech.windings, self._meeting))
+                             self._input_moved, running, self.mech.windings, self._meeting,
+                             None if self._watch is None else self._watch.copy()))
 
     def set_state(self, blob: bytes):
         (self.time, y, self.h, inputs, self.steps, self.t_bound, self._input_moved, running,
-         self.mech.windings, meeting) = load_state(blob)
+         self.mech.windings, meeting, self._watch) = load_state(blob)
         self.y = np.array(y)
         self.inputs = np.array(inputs)
         self._solver = self._dense = None

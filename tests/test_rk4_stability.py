@@ -1,0 +1,141 @@
+"""RK4's fixed step beyond the method's stability limit stops the run with a message, on both paths,
+through co-simulation and through the FMU. It used to complete with status ok while a mode grew
+without bound: lumped_mass_2d at a 0.5 s step grew its energy 5e25 times in 5 s.
+
+The references are closed forms. stiff_1dof_2d (c = 0) is one linear mode,
+(m + b) x'' + k (x − L0) = 0, ω = √(k/(m + b)). RK4 multiplies it by |R(ihω)| at every step, with
+R(z) = 1 + z + z²/2 + z³/6 + z⁴/24: above 1 beyond hω = 2√2 = 2.828, below 1 short of it. The
+watch (kernels.rk4_watch) estimates h·|λ| = hω exactly for one linear mode, and its amplitude grows
+|R| per step. So with every step beyond the bound 2.785, the run stops at the start of step n,
+where n − 1 is the smallest number of steps with |R|^(n−1) ≥ RK4_GROWTH.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import inerter
+from conftest import LUMPED, ROOT
+from inerter.common.errors import SimulationError
+from inerter.engine.simulation import RK4_GROWTH, RK4_STABILITY_BOUND
+
+STIFF = ROOT / "scenarios" / "hard" / "stiff_1dof_2d.toml"
+STICK_SLIP = ROOT / "scenarios" / "hard" / "stick_slip_device_2d.toml"
+M, B, K, L0 = 1.0e-3, 1.0e3, 1.0e8, 1.0          # stiff_1dof_2d's parameters
+OMEGA = math.sqrt(K / (M + B))
+PATHS = ("numpy", "compiled")
+
+
+def amplification(h_omega: float) -> float:
+    """|R(i hω)|: RK4's factor per step on an undamped mode."""
+    z = 1j * h_omega
+    return abs(1 + z + z ** 2 / 2 + z ** 3 / 6 + z ** 4 / 24)
+
+
+def steps_to_growth(h_omega: float) -> int:
+    """The steps after the first one beyond the bound at which the watch stops the run."""
+    return math.ceil(math.log(RK4_GROWTH) / math.log(amplification(h_omega)))
+
+
+def amplitudes(r) -> np.ndarray:
+    """The mode's amplitude √((x − L0)² + (ẋ/ω)²) at each sample."""
+    return np.hypot(r["P.r[1]"] - L0, r["P.v[1]"] / OMEGA)
+
+
+def stiff_run(h_omega: float, path: str, steps: int = 300):
+    h = h_omega / OMEGA
+    return h, inerter.load(STIFF).simulate(method="RK4", step=h, stop_time=steps * h, output_interval=h,
+                                           path=path, metrics=False)
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("h_omega", [2.9, 3.5])
+def test_a_step_beyond_the_limit_stops_where_the_closed_form_says(path, h_omega):
+    h, r = stiff_run(h_omega, path)
+    n = steps_to_growth(h_omega)
+    assert r.status == "failed"
+    assert "beyond its stability limit" in r.message and f"h·|λ| ≈ {h_omega:.3g}" in r.message, r.message
+    assert f"over the last {n} steps" in r.message, r.message
+    assert f"below about {h * RK4_STABILITY_BOUND / h_omega:.2g} s" in r.message, r.message
+    # the samples up to the start of the step that stopped it are kept, each RK4's own node
+    assert r.time[-1] == pytest.approx(n * h, rel=1e-9)
+    growth = amplitudes(r)[1:] / amplitudes(r)[:-1]
+    np.testing.assert_allclose(growth, amplification(h_omega), rtol=1e-9)
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_a_stable_pair_just_beyond_the_real_axis_bound_runs_on(path):
+    """hω = 2.81: beyond 2.785 at every step, yet inside RK4's region on the imaginary axis: the
+    mode decays and the run completes (the estimate alone does not stop it)."""
+    h_omega = 2.81
+    assert h_omega > RK4_STABILITY_BOUND and amplification(h_omega) < 1.0
+    h, r = stiff_run(h_omega, path)
+    assert r.status == "ok", r.message
+    a = amplitudes(r)
+    assert a[-1] / a[0] == pytest.approx(amplification(h_omega) ** 300, rel=1e-6)
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_a_mode_bounded_by_its_nonlinearity_is_not_refused(path):
+    """stick_slip_device_2d at 4 ms: the friction's tanh switch (v_s = 1 mm/s) puts the sticking
+    mode beyond the bound, and its saturation keeps the run bounded: it completes, close to the
+    DOP853 run at rtol 1e-10 (a check that linearised at t = 0 refused it)."""
+    model = inerter.load(STICK_SLIP)
+    r = model.simulate(method="RK4", step=4e-3, path=path, metrics=False)
+    reference = model.simulate(path=path, metrics=False)
+    assert r.status == "ok", r.message
+    assert np.max(np.abs(r["P.r[1]"] - reference["P.r[1]"])) < 1e-3
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_the_paper_scene_at_a_half_second_step_stops(path):
+    """lumped_mass_2d (ω ≈ 9.6 rad/s) at a 0.5 s step, the reported case; at the step the message
+    suggests it completes, and its motion does not grow: over the last 5 s it stays within the
+    release's 0.5 m of the equilibrium (so coarse a step damps the mode: RK4's |R| < 1 there)."""
+    model = inerter.load(LUMPED)
+    r = model.simulate(method="RK4", step=0.5, stop_time=5.0, path=path, metrics=False)
+    assert r.status == "failed" and "RK4's step of 0.5 s is beyond its stability limit" in r.message, r.message
+    assert np.all(np.isfinite(r["P.r[2]"]))
+    suggested = float(r.message.split("below about ")[1].split(" s")[0])
+    r = model.simulate(method="RK4", step=suggested, stop_time=20.0, path=path, metrics=False)
+    assert r.status == "ok", r.message
+    release = abs(r["P.r[2]"][0] - 1.0)                     # Lb = 1 m: the static equilibrium
+    assert np.all(np.isfinite(r["P.r[2]"]))
+    assert np.max(np.abs(r["P.r[2]"][r.time >= 15.0] - 1.0)) < release
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_cosimulation_keeps_the_watch_across_communication_steps(path):
+    """Two RK4 steps per communication step: the watch's count carries across them, and the
+    stepper stops where the whole run does."""
+    h_omega = 2.9
+    h = h_omega / OMEGA
+    n = steps_to_growth(h_omega)
+    stepper = inerter.load(STIFF, **{"experiment.method": "RK4", "experiment.step": h}).stepper(path=path)
+    with pytest.raises(SimulationError) as caught:
+        for k in range(1, 200):
+            stepper.step(2 * k * h)
+    assert "beyond its stability limit" in str(caught.value) and f"over the last {n} steps" in str(caught.value)
+    assert caught.value.time == pytest.approx(n * h, rel=1e-9)     # the start of the RK4 step that stopped it
+
+
+def test_the_fmu_reports_it_as_fmi2error(tmp_path):
+    """Through fmpy: the FMU's step fails with the same text, the samples before it kept."""
+    from inerter.fmu.build import build
+    from inerter.fmu.run import simulate_fmu
+
+    h_omega = 2.9
+    h = h_omega / OMEGA
+    scene = tmp_path / "stiff_rk4.toml"
+    text = STIFF.read_text()
+    experiment = text.index("[experiment]")
+    scene.write_text(text[:experiment] + f"[experiment]\nstop_time = {300 * h!r}\noutput_interval = {2 * h!r}\n"
+                     f"method = \"RK4\"\nstep = {h!r}\n")
+    r = simulate_fmu(scene, stop_time=300 * h, step=2 * h, fmu_path=build(scene, tmp_path / "fmu"),
+                     metrics=False)
+    assert r.status == "failed"
+    assert "beyond its stability limit" in r.message and f"h·|λ| ≈ {h_omega:.3g}" in r.message, r.message
+    n = steps_to_growth(h_omega)
+    assert r.time[-1] == pytest.approx(2 * (n // 2) * h, rel=1e-9)

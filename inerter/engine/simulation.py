@@ -253,8 +253,9 @@ SCIPY_COLLAPSE = "Required step size is less than spacing between numbers."
 
 class StepMonitor:
     """Watches an integration after every accepted step: the mechanism's own checks (terminals
-    meeting, Euler-angle singularity), the explicit methods' stiffness (Hairer's test), a step size
-    collapsing towards a singularity, and the step budget max_steps. Each stops the run with a
+    meeting, Euler-angle singularity), the explicit methods' stiffness (Hairer's test), RK4's step
+    beyond its stability limit (``kernels.rk4_watch``), a step size collapsing towards a
+    singularity, and the step budget max_steps. Each stops the run with a
     SimulationError that names the method and what to do. A step that passes them moves the 3D
     rotational elements' angles on (``mech.wind``: they wind past half a turn from there)."""
 

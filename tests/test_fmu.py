@@ -344,12 +344,14 @@ def test_the_fmu_ships_the_solver_and_the_scene(fmus, scene):
     name = inerter.load(scene).name
     with zipfile.ZipFile(fmus[scene]) as z:
         files = set(z.namelist())
-        assert z.read("resources/slavemodule.txt").decode().strip() == f"inerter_fmu_{name}"
+        module = z.read("resources/slavemodule.txt").decode().strip()
+        built = (fmus[scene].parent / f"{name}{fmu_build.HASH_SUFFIX}").read_text().strip()
+        assert module == fmu_build.module_name(name, built) and module.startswith(f"inerter_fmu_{name}_")
         assert z.read(f"resources/{scene.name}") == scene.read_bytes()
         requirements = [line for line in z.read("resources/requirements.txt").decode().splitlines()
                         if line and not line.startswith("#")]
     assert [r.split(">=")[0] for r in requirements] == ["numpy", "scipy", "numba"]
-    assert {f"resources/inerter_fmu_{name}.py", "resources/inerter_slave.py",
+    assert {f"resources/{module}.py", "resources/inerter_slave.py",
             f"resources/{fmu_build.PAYLOAD_FILE}", f"binaries/linux64/{name}.so"} <= files
     # The modules the slave can import, in one archive (tests/test_fmu_payload.py checks which).
     with zipfile.ZipFile(fmus[scene]) as z:

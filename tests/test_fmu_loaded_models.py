@@ -84,3 +84,24 @@ def test_a_missing_record_is_the_loads_error(slave, tmp_path):
     (scene.parent / "records" / "synthetic_x.csv").unlink()
     with pytest.raises(inerter.SceneError, match="synthetic_x.csv"):
         _models(slave, scene)
+
+
+def test_two_builds_of_one_scene_run_in_one_process(tmp_path):
+    """An FMU of a copy of a scene under another file name (the same [scene] name, so the same
+    model identifier) after the scene's own FMU, in one process, and the first again: each runs
+    its own scene. Before, pythonfmu's binary was given the first build's module, whose class
+    read its own scene file from the second FMU's resources/: fmi2Instantiate failed with a
+    FileNotFoundError. Reference: each FMU's results against the solver's run of its own scene."""
+    from inerter.fmu.build import build
+    from inerter.fmu.run import simulate_fmu
+
+    scene = ROOT / "scenarios" / "hard" / "stiff_1dof_2d.toml"
+    copy = tmp_path / "stiff_copy.toml"
+    copy.write_text(scene.read_text().replace('d0 = { value = 1.0e-3,', 'd0 = { value = 2.0e-3,'))
+    fmus = {path: build(path, tmp_path / path.stem) for path in (scene, copy)}
+    assert fmus[scene].name == fmus[copy].name                 # one model identifier
+    for path in (scene, copy, scene):
+        fmu = simulate_fmu(path, stop_time=0.01, step=1e-3, fmu_path=fmus[path], metrics=False)
+        solver = inerter.load(path).simulate(stop_time=0.01, output_interval=1e-3, metrics=False)
+        assert fmu.status == "ok", fmu.message
+        np.testing.assert_allclose(fmu["P.r[1]"], solver["P.r[1]"], rtol=0, atol=1e-12)

@@ -1,8 +1,10 @@
 """Build FMI 2.0 co-simulation FMUs from scene files (``build_fmu.py``, ``inerter build-fmu``).
 
-One FMU per scene, named after the scene (``build/fmu/two_bar_2d.fmu``). Its model identifier,
-its model class and its Python module (``inerter_fmu_two_bar_2d``) are unique to the scene, so
-FMUs of several scenes can run in one process. The FMU's ``resources/`` hold
+One FMU per scene, named after the scene (``build/fmu/two_bar_2d.fmu``). Its model identifier
+and its model class are unique to the scene, and its Python module
+(``inerter_fmu_two_bar_2d_<build>``) to the build, so FMUs of several scenes, and several builds
+of one scene (a scene edited and built again, a copy under another file name), run in one process.
+The FMU's ``resources/`` hold
 
 - the generated model module (from ``fmu_src/model_module.py.template``),
 - the generic slave ``fmu_src/inerter_slave.py``, which does the work,
@@ -100,6 +102,8 @@ HASH_SUFFIX = ".fmu.source-hash"
 #: Bump when the layout of a built FMU changes without any shipped source changing.
 BUILD_FORMAT = "inerter-fmu-build/6"
 MODULE_PREFIX = "inerter_fmu_"
+#: The hex digits of the build digest in the module's name (:func:`module_name`).
+BUILD_IN_MODULE = 16
 
 
 class FmuBuildError(InerterError):
@@ -197,9 +201,13 @@ def unit_definitions(units, display=None) -> ET.Element:
 # ----------------------------------------------------------------------------------------------
 # Building
 # ----------------------------------------------------------------------------------------------
-def module_name(model_name: str) -> str:
-    """The FMU's Python module for a scene: unique per scene, so FMUs can share a process."""
-    return MODULE_PREFIX + model_name
+def module_name(model_name: str, build: str) -> str:
+    """The FMU's Python module for a scene's build (`build`: its :func:`source_hash`). pythonfmu's
+    binary imports the module that ``slavemodule.txt`` names, and a process imports a module
+    name once: an FMU of another build under the same name would be given the first one's class,
+    with that one's scene file (an FMU of a copy of the scene failed to instantiate with a
+    FileNotFoundError) and build digest."""
+    return f"{MODULE_PREFIX}{model_name}_{build[:BUILD_IN_MODULE]}"
 
 
 def _requirements_text() -> str:
@@ -422,7 +430,7 @@ def _build(scene_path: Path, out_dir: Path, force: bool) -> tuple[Path, bool]:
     with tempfile.TemporaryDirectory(prefix="inerter_fmu_") as tmp:
         stage = Path(tmp) / "stage"
         stage.mkdir()
-        module = module_name(name)
+        module = module_name(name, digest)
         template = string.Template((FMU_SRC / TEMPLATE_FILE).read_text(encoding="utf-8"))
         version = getattr(inerter, "__version__", None)
         (stage / f"{module}.py").write_text(template.substitute(

@@ -139,3 +139,27 @@ def test_the_fmu_reports_it_as_fmi2error(tmp_path):
     assert "beyond its stability limit" in r.message and f"h·|λ| ≈ {h_omega:.3g}" in r.message, r.message
     n = steps_to_growth(h_omega)
     assert r.time[-1] == pytest.approx(2 * (n // 2) * h, rel=1e-9)
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_steps_a_ground_record_shortens_are_judged_at_their_own_length(path):
+    """shear_building_tmdi_2d's record has a kink every 0.01 s, where RK4's steps end: with
+    experiment.step = 0.2 s every step taken is 0.01 s long (h·|λ| ≤ 0.62 for its fastest mode,
+    62 rad/s), the same steps as at experiment.step = 0.01 s, so the run is that one, sample for
+    sample. The watch used to judge each step at 0.2 s (h·|λ| ≈ 5.3) and stopped it at 0.49 s, the
+    building's response to the record growing from rest."""
+    model = inerter.load(ROOT / "scenarios" / "shear_building_tmdi_2d.toml")
+    taken = model.simulate(method="RK4", step=0.01, path=path, metrics=False)
+    r = model.simulate(method="RK4", step=0.2, path=path, metrics=False)
+    assert r.status == "ok", r.message
+    np.testing.assert_allclose(r["Jd.r[1]"], taken["Jd.r[1]"], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_a_stepper_whose_communication_steps_are_shorter_is_judged_at_them(path):
+    """The same record through a stepper with experiment.step = 0.2 s and communication steps of
+    0.05 s: every step ends at a kink (0.01 s), and the stepper runs to the end."""
+    stepper = inerter.load(ROOT / "scenarios" / "shear_building_tmdi_2d.toml",
+                           **{"experiment.method": "RK4", "experiment.step": 0.2}).stepper(path=path)
+    for k in range(1, 201):
+        stepper.step(0.05 * k)

@@ -3296,8 +3296,12 @@ def rk4_watch(f, k2, k3, h, step, monitor):
       quadratic form at two phases a quarter period apart (J/ω turns a pair ±iω by 90°), which
       sums to the same at every phase, where ‖f‖ alone swings by the ratio of the units' scales.
 
-    The estimate is scaled to the fixed step, the one to judge (a shortened step's is shorter by
-    h/step); a step shorter than RK4_SHORTEST of it (the remainder before a communication point)
+    Each step is judged by its own h·|λ|: RK4 multiplies the mode by |R(hλ)| for the h it takes,
+    and where kinks (a ground record's samples) or communication points closer than the fixed step
+    shorten every step, no step of that length is taken. A shortened step within the bound leaves
+    the count of steps beyond it as it is (the remainder before a communication point, between
+    full steps beyond it); a full step within the bound restarts it. The estimate kept for the
+    message is scaled to the fixed step (h·|λ| for it). A step shorter than RK4_SHORTEST of it
     is left out: its stage differences are too small to read. RK4 is stable for step·|λ| up to
     2.785 along the negative real axis and 2.828 along the imaginary one; beyond, the fixed step (no error control shortens it) multiplies the mode by |R(hλ)| > 1
     at every step. Returns UNSTABLE when every step since the first one beyond the bound in
@@ -3320,8 +3324,9 @@ def rk4_watch(f, k2, k3, h, step, monitor):
         return OK
     size_f, size_d2 = math.sqrt(ff), math.sqrt(d2)
     estimate = 2.0 * math.sqrt(size_d2 / size_f) * (step / h)
-    if not estimate > bound:
-        monitor[MONITOR_RK4_HITS] = 0.0
+    if not estimate * (h / step) > bound:   # the step taken is within the bound
+        if h >= step:                       # a shortened one leaves the count as it is
+            monitor[MONITOR_RK4_HITS] = 0.0
         return OK
     amplitude = math.sqrt(ff + d1 * size_f / size_d2)      # ‖f‖² + ‖(k2 − k1)·2/(h|λ|)‖²
     if monitor[MONITOR_RK4_HITS] == 0.0:

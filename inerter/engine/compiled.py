@@ -333,7 +333,7 @@ def monitor_slots(method, rk4_watch=True) -> np.ndarray:
     from inerter.engine import simulation as sim
     monitor = np.zeros(_k.MONITOR_SIZE)
     if method == "RK4" and rk4_watch:
-        monitor[_k.MONITOR_RK4_BOUND] = sim.RK4_STABILITY_BOUND
+        monitor[_k.MONITOR_RK4_WATCH] = 1.0
         monitor[_k.MONITOR_RK4_GROWTH] = sim.RK4_GROWTH
     monitor[_k.MONITOR_STIFF_BOUND] = sim.STIFFNESS_BOUND.get(method, 0.0)
     monitor[_k.MONITOR_STIFF_EVERY] = sim.STIFFNESS_EVERY
@@ -1896,7 +1896,8 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None, moni
         text += kernel.mech.diagnose(y_last)        # it reads the state's q
     if status in (_k.STIFF, _k.COLLAPSED):          # as the numpy path: StiffForMethod, StepCollapse
         text += kernel.mech.stiffest()
-    return text
+    from inerter.engine import simulation as sim
+    return text + sim.rk4_hint(method, text)
 
 
 def _status_text(kernel, status, method, h, y_last, t_last, max_steps):

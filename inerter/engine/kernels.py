@@ -75,13 +75,14 @@ OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLL
 # bound, how often it is tested, its firings in a row that stop a run; the collapse's relative step
 # and steps in a row; the trial shrink; the smallest/largest singular value ratio of C_v below which
 # the joints' rows count as dependent (Mechanism.DEPENDENT_RATIO, :func:`loop_watch`); RK4's
-# stability bound (0: the watch is off) and the growth that confirms it, then the watch's running
-# values (:func:`rk4_watch`), kept here so that they carry across co-simulation steps: its steps in
-# a row beyond the bound, the watched mode's amplitude at the first of them and now, the last estimate.
+# stability watch (1: on, 0: off) and the growth that confirms it, then the watch's running values
+# (:func:`rk4_watch`), kept here so that they carry across co-simulation steps: its steps in a row
+# beyond RK4's region, the watched mode's amplitude at the first of them and now, its step·λ, and
+# the sum of log |R(hλ)| (less the exact growth) over those steps before the last.
 MONITOR_STIFF_BOUND, MONITOR_STIFF_EVERY, MONITOR_STIFF_HITS, MONITOR_COLLAPSE_RELATIVE, MONITOR_COLLAPSE_STEPS, \
-    MONITOR_TRIAL_SHRINK, MONITOR_DEPENDENT, MONITOR_RK4_BOUND, MONITOR_RK4_GROWTH, MONITOR_RK4_HITS, \
-    MONITOR_RK4_FIRST, MONITOR_RK4_AMPLITUDE, MONITOR_RK4_ESTIMATE = range(13)
-MONITOR_SIZE = 13             # the watch's running values last: monitor[MONITOR_RK4_HITS:]
+    MONITOR_TRIAL_SHRINK, MONITOR_DEPENDENT, MONITOR_RK4_WATCH, MONITOR_RK4_GROWTH, MONITOR_RK4_HITS, \
+    MONITOR_RK4_FIRST, MONITOR_RK4_AMPLITUDE, MONITOR_RK4_RE, MONITOR_RK4_IM, MONITOR_RK4_LOG_FACTORS = range(15)
+MONITOR_SIZE = 15             # the watch's running values last: monitor[MONITOR_RK4_HITS:]
 # The arrays of work_arrays, in the order of WORK (their names): the kernels take them by these slots.
 W_AB, W_RHS, W_GEN, W_ACC, W_K, W_Y_NEW, W_F_NEW, W_YS = range(8)
 # The slot of cosim_scratch's fresh[0] (1: the gaps are those at the integration's y), in the order of
@@ -3278,63 +3279,114 @@ def _rk4_step(t, h, y, f, k2, k3, k4, y_new, f_new, ys, inputs, alpha, P, AB, rh
     return max(st, _rhs(min(t + h, before), y_new, inputs, alpha, P, AB, rhs, gen, acc, f_new))
 
 
-#: The shortest step RK4's stability watch reads, relative to the fixed step (:func:`rk4_watch`).
+#: The shortest step RK4's stability watch reads, relative to the fixed step, and by how much a
+#: step must multiply the mode beyond both 1 and the exact solution's |e^(hλ)| to count
+#: (:func:`rk4_watch`): a forced response fitted as a mode that grows, or round-off, is not a step
+#: outside RK4's region; a mode that grows less than 0.1 % a step would take 4600 steps to grow 100 times.
 RK4_SHORTEST = 1e-3
+RK4_EXCESS = 1e-3
+
+
+@njit(cache=True, inline="always")
+def rk4_amplification(re, im):
+    """|R(z)|, z = re + i·im: what RK4 multiplies a mode of h·λ = z by at every step,
+    R(z) = 1 + z + z²/2 + z³/6 + z⁴/24 (its stability region: |R| ≤ 1)."""
+    z = complex(re, im)
+    return abs(1.0 + z * (1.0 + z * (0.5 + z * (1.0 / 6.0 + z / 24.0))))
+
+
+@njit(cache=True, inline="always")
+def _exact_growth(re):
+    """max(1, |e^(hλ)|) for Re(hλ) = re: what a step may multiply a mode by without growing it
+    faster than the exact solution does, or at all where that decays."""
+    return max(1.0, math.exp(min(re, 700.0)))
+
+
+@njit(cache=True, inline="always")
+def _dominant_mode(uu, pu, pp, wu, wp, h):
+    """(Re λ, Im λ ≥ 0, |λ|) of the mode that dominates f, from the products of u = f, p = J f and
+    w = J² f: the monic quadratic λ² − a λ − b whose J² f ≈ a J f + b f fits best (least squares
+    over the state) has the mode's eigenvalues as roots, a damped pair's (a = 2 Re λ, b = −|λ|²)
+    or two real ones, of which the one RK4 amplifies most beyond the exact solution at the step h.
+    Where J f lies along f, the real λ = f·J f/‖f‖²."""
+    det = pp * uu - pu * pu
+    if det <= 1e-12 * pp * uu:
+        lam = pu / uu
+        return lam, 0.0, abs(lam)
+    a = (wp * uu - wu * pu) / det
+    b = (pp * wu - pu * wp) / det
+    disc = 0.25 * a * a + b
+    if disc < 0.0:
+        return 0.5 * a, math.sqrt(-disc), math.sqrt(-b)
+    r1, r2 = 0.5 * a + math.sqrt(disc), 0.5 * a - math.sqrt(disc)
+    e1 = rk4_amplification(h * r1, 0.0) / _exact_growth(h * r1)
+    e2 = rk4_amplification(h * r2, 0.0) / _exact_growth(h * r2)
+    return (r1 if e1 >= e2 else r2), 0.0, max(abs(r1), abs(r2))
 
 
 @njit(cache=True, inline="always")
 def rk4_watch(f, k2, k3, h, step, monitor):
     """RK4's stability watch after a step of length h (the fixed `step`, or shorter to end at a
     kink or a communication point) from a state with derivative f = k1 and midpoint stages k2, k3
-    (:func:`_rk4_step`). Both stages are taken at t + h/2, so k3 − k2 ≈ (h/2) J (k2 − k1) and
-    k2 − k1 ≈ (h/2) (J f + ∂f/∂t): once one mode dominates the state's change,
+    (:func:`_rk4_step`). Both stages are taken at t + h/2, so J f ≈ (k2 − k1)·2/h (less ∂f/∂t,
+    a forcing's) and J² f ≈ (k3 − k2)·4/h²: the step's own stages give the Krylov vectors f, J f,
+    J² f, whatever the units of positions and velocities, and from them
 
-    * h·|λ| ≈ 2 √(‖k3 − k2‖/‖f‖) for its eigenvalue λ, real or one of a complex pair alike: J² acts
-      on the mode as λ², whatever the units of positions and velocities, where the ratio of two
-      successive stage differences (Hairer's test) swings between the singular values of J;
-    * its amplitude, free of its phase, is √(‖f‖² + ‖J f‖²/|λ|²), J f ≈ (k2 − k1)·2/h: the mode's
-      quadratic form at two phases a quarter period apart (J/ω turns a pair ±iω by 90°), which
-      sums to the same at every phase, where ‖f‖ alone swings by the ratio of the units' scales.
+    * the eigenvalue λ of the mode that dominates f (:func:`_dominant_mode`), real or one of a
+      damped pair, and RK4's factor on it, |R(hλ)| (:func:`rk4_amplification`);
+    * the mode's amplitude √(‖f‖² + ‖J f‖²/|λ|²): the mode's quadratic form at two phases a
+      quarter period apart for an undamped pair, the same at every phase (within a factor
+      ((1 + |cos φ|)/(1 − |cos φ|))^½ for a damped pair at the angle φ of λ), where ‖f‖ alone
+      swings by the ratio of the units' scales.
 
-    Each step is judged by its own h·|λ|: RK4 multiplies the mode by |R(hλ)| for the h it takes,
-    and where kinks (a ground record's samples) or communication points closer than the fixed step
-    shorten every step, no step of that length is taken. A shortened step within the bound leaves
-    the count of steps beyond it as it is (the remainder before a communication point, between
-    full steps beyond it); a full step within the bound restarts it. The estimate kept for the
-    message is scaled to the fixed step (h·|λ| for it). A step shorter than RK4_SHORTEST of it
-    is left out: its stage differences are too small to read. RK4 is stable for step·|λ| up to
-    2.785 along the negative real axis and 2.828 along the imaginary one; beyond, the fixed step (no error control shortens it) multiplies the mode by |R(hλ)| > 1
-    at every step. Returns UNSTABLE when every step since the first one beyond the bound in
-    `monitor` (MONITOR_RK4_BOUND; 0: the watch is off) was beyond it too and the amplitude has grown
-    MONITOR_RK4_GROWTH times since then: the growth confirms it, as a nonlinearity can bound a mode
-    that the estimate puts beyond (a saturating friction's sticking mode), and a stable pair just
-    beyond 2.785 (up to 2.828) does not grow. Its running values: monitor[MONITOR_RK4_HITS:]."""
-    bound = monitor[MONITOR_RK4_BOUND]
-    if bound <= 0.0 or h < RK4_SHORTEST * step:
+    A step counts as beyond the stability region where |R(hλ)| exceeds both 1 and what the exact
+    solution does, |e^(hλ)|, by RK4_EXCESS (a mode that grows physically, an unstable
+    equilibrium's or a forced response fitted as one, is not the integrator's). Each step is judged at the h it takes: where kinks (a ground record's samples)
+    or communication points closer than the fixed step shorten every step, no longer step is
+    taken. A shortened step within the region leaves the count as it is (the remainder before a
+    communication point, between full steps beyond it); a full one restarts it. A step shorter
+    than RK4_SHORTEST of the fixed step is left out: its stage differences are too small to read.
+    Returns UNSTABLE when every step since the first one beyond was beyond too, and both the
+    amplitude and the product of the steps' factors |R(hλ)| (each over the exact growth) have grown
+    MONITOR_RK4_GROWTH times since then. The amplitude confirms it, as a nonlinearity can bound a
+    mode that the estimate puts beyond (a saturating friction's sticking mode); the factors confirm
+    that the growth is the steps', as the amplitude of a nonlinear motion, read through a λ fitted
+    anew at each step, can jump where the factors are barely above 1. Its running
+    values: monitor[MONITOR_RK4_HITS:] (the mode's step·λ for the message); MONITOR_RK4_WATCH 0:
+    the watch is off."""
+    if monitor[MONITOR_RK4_WATCH] == 0.0 or h < RK4_SHORTEST * step:
         return OK
-    ff = 0.0
-    d1 = 0.0
-    d2 = 0.0
+    uu = pu = pp = wu = wp = 0.0
     for i in range(f.shape[0]):
-        ff += f[i] * f[i]
-        d1 += (k2[i] - f[i]) ** 2
-        d2 += (k3[i] - k2[i]) ** 2
-    if not (ff > 0.0 and d2 > 0.0):         # at rest, or not finite (the right-hand side says so)
+        p = (k2[i] - f[i]) * (2.0 / h)
+        w = (k3[i] - k2[i]) * (4.0 / (h * h))
+        uu += f[i] * f[i]
+        pu += p * f[i]
+        pp += p * p
+        wu += w * f[i]
+        wp += w * p
+    if not (uu > 0.0 and pp > 0.0 and math.isfinite(wp)):     # at rest, or not finite (the rhs says so)
         monitor[MONITOR_RK4_HITS] = 0.0
         return OK
-    size_f, size_d2 = math.sqrt(ff), math.sqrt(d2)
-    estimate = 2.0 * math.sqrt(size_d2 / size_f) * (step / h)
-    if not estimate * (h / step) > bound:   # the step taken is within the bound
-        if h >= step:                       # a shortened one leaves the count as it is
-            monitor[MONITOR_RK4_HITS] = 0.0
+    re, im, size = _dominant_mode(uu, pu, pp, wu, wp, h)
+    factor = rk4_amplification(h * re, h * im) / _exact_growth(h * re)
+    if not factor > 1.0 + RK4_EXCESS:
+        if h >= step * (1.0 - 1e-9):        # a shortened step within leaves the count as it is (h:
+            monitor[MONITOR_RK4_HITS] = 0.0     # t_new − t on the numpy path, the fixed step to rounding)
         return OK
-    amplitude = math.sqrt(ff + d1 * size_f / size_d2)      # ‖f‖² + ‖(k2 − k1)·2/(h|λ|)‖²
+    amplitude = math.sqrt(uu + pp / (size * size))
     if monitor[MONITOR_RK4_HITS] == 0.0:
         monitor[MONITOR_RK4_FIRST] = amplitude
+        monitor[MONITOR_RK4_LOG_FACTORS] = 0.0
     monitor[MONITOR_RK4_HITS] += 1.0
     monitor[MONITOR_RK4_AMPLITUDE] = amplitude
-    monitor[MONITOR_RK4_ESTIMATE] = estimate
-    return UNSTABLE if amplitude >= monitor[MONITOR_RK4_GROWTH] * monitor[MONITOR_RK4_FIRST] else OK
+    monitor[MONITOR_RK4_RE] = step * re
+    monitor[MONITOR_RK4_IM] = step * im
+    growth = monitor[MONITOR_RK4_GROWTH]
+    grown = (amplitude >= growth * monitor[MONITOR_RK4_FIRST]
+             and monitor[MONITOR_RK4_LOG_FACTORS] >= math.log(growth))     # the steps before this one's
+    monitor[MONITOR_RK4_LOG_FACTORS] += math.log(factor)
+    return UNSTABLE if grown else OK
 
 
 @njit(cache=True)

@@ -13,6 +13,7 @@ import bisect
 import copy
 import functools
 import io
+import math
 import pickle
 import time as _time
 import types
@@ -209,10 +210,8 @@ STIFFNESS_BOUND = {"DOP853": 6.1, "RK45": 3.25}
 #: firings in a row stop the run.
 STIFFNESS_EVERY = 1000
 STIFFNESS_HITS = 15
-#: RK4's fixed step: the size of its stability region along the negative real axis (h·|λ| ≤ 2.785;
-#: 2.828 along the imaginary one), beyond which its watch counts a step, and the growth of the
-#: watched mode over such steps in a row that stops the run (kernels.rk4_watch, which both paths run).
-RK4_STABILITY_BOUND = 2.785
+#: RK4's fixed step: the growth of a mode over steps in a row beyond RK4's stability region that
+#: stops the run (kernels.rk4_watch, which both paths run).
 RK4_GROWTH = 100.0
 #: A step below this (relative to max(1 s, |t|)) is a collapsing step; COLLAPSE_STEPS of them in a row
 #: stop the run (a singularity the integrator is creeping towards).
@@ -231,16 +230,55 @@ class StiffForMethod(SimulationError):
 
 def rk4_unstable_text(step, watch) -> str:
     """Why a run with RK4 stopped at UNSTABLE, from its watch's slots (kernels.rk4_watch): the
-    estimate h·|λ|, the mode's growth over its steps in a row beyond the bound, and a step within
-    the bound."""
+    mode's h·λ and RK4's factor on it, its growth over its steps in a row beyond RK4's stability
+    region, and the longest step that keeps h·λ inside the region (:func:`rk4_stable_fraction`)."""
     from inerter.engine import kernels as _k
-    estimate, steps = watch[_k.MONITOR_RK4_ESTIMATE], int(watch[_k.MONITOR_RK4_HITS]) - 1   # from the first's start
+    z = complex(watch[_k.MONITOR_RK4_RE], watch[_k.MONITOR_RK4_IM])
+    steps = int(watch[_k.MONITOR_RK4_HITS]) - 1            # from the first one's start
     growth = watch[_k.MONITOR_RK4_AMPLITUDE] / watch[_k.MONITOR_RK4_FIRST]
-    return (f"RK4's step of {step:.3g} s is beyond its stability limit: h·|λ| ≈ {estimate:.3g} for a mode of "
-            f"the scene (RK4 is stable up to {RK4_STABILITY_BOUND:g} along the negative real axis and 2.83 along "
-            f"the imaginary one), which grew {growth:.3g} times over the last {steps} steps; set experiment.step "
-            f"below about {step * RK4_STABILITY_BOUND / estimate:.2g} s, or use an adaptive method "
-            "(DOP853; Radau or BDF for a stiff scene)")
+    re = z.real if abs(z.real) > 1e-9 * abs(z) else 0.0      # an undamped pair's, to round-off
+    mode = f"{re:.3g} ± {z.imag:.3g}i" if z.imag else f"{re:.3g}"
+    fraction = rk4_stable_fraction(z)
+    advice = (f"set experiment.step below about {_two_digits_down(step * fraction):.2g} s" if fraction > 0.0
+              else "set a shorter experiment.step")
+    return (f"RK4's step of {step:.3g} s is beyond its stability limit: h·λ ≈ {mode} (|h·λ| = {abs(z):.3g}) "
+            f"for a mode of the scene lies outside RK4's stability region, where each step multiplies it by "
+            f"|R(h·λ)| = {_k.rk4_amplification.py_func(z.real, z.imag):.3g}, and it grew {growth:.3g} times over "
+            f"the last {steps} steps; {advice}, or use an adaptive method (DOP853; Radau or BDF for a stiff scene)")
+
+
+def _two_digits_down(x: float) -> float:
+    """x > 0 rounded down to two significant digits: a step printed as inside the region is inside."""
+    unit = 10.0 ** (math.floor(math.log10(x)) - 1)
+    return math.floor(x / unit * (1 + 1e-12)) * unit
+
+
+def rk4_stable_fraction(z: complex) -> float:
+    """The largest s ≤ 1 (to 5e-4) with s·z inside RK4's stability region all the way from 0, as
+    the watch counts it (``kernels.rk4_watch``: |R(s z)| within RK4_EXCESS of max(1, |e^(s z)|));
+    0 where there is none."""
+    from inerter.engine import kernels as _k
+    inside = 0.0
+    for s in np.linspace(0.0, 1.0, 2001)[1:]:
+        re, im = s * z.real, s * z.imag
+        if _k.rk4_amplification.py_func(re, im) > (1.0 + _k.RK4_EXCESS) * _k._exact_growth.py_func(re):
+            break
+        inside = float(s)
+    return inside
+
+
+def rk4_hint(method: str, message: str) -> str:
+    """What to add to the message of a run with RK4 that failed otherwise than by its stability
+    watch or its step budget (terminals meeting, accelerations not finite, a singular pose): a step
+    too long for a nonlinear motion, which the watch of linear modes does not see
+    (``kernels.rk4_watch``), can drive the state there. Empty for other methods."""
+    if method != "RK4" or any(words in message for words in ("beyond its stability limit", "max_steps", RK4_HINT)):
+        return ""
+    return f"; {RK4_HINT}, which grows the state until it gets there: a shorter experiment.step, or DOP853, shows " \
+        "whether it does"
+
+
+RK4_HINT = "with RK4's fixed step this can also be a step too long for the motion"
 
 
 class UnstableStep(SimulationError):
@@ -618,6 +656,7 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
             message += found if found not in message else ""    # the monitor's collapse says it already
         if isinstance(exc, (StepCollapse, StiffForMethod, UnstableStep)):
             message += mech.stiffest()
+        message += rk4_hint(settings.method, message)
     cpu = _time.process_time() - start
     for i in range(1, k):
         max_drift = max(max_drift, mech.constraint_residual(out[i, :n]))
@@ -819,8 +858,12 @@ class Stepper:
                 y, h = self._restarted(t_end, monitor)
             if not np.all(np.isfinite(y)):
                 raise SimulationError("the state became non-finite", t_end)
-        except SimulationError:
+        except SimulationError as exc:
             self._solver = None               # the next step restarts at (time, y), left as they were
+            hint = rk4_hint(self.settings.method, str(exc))
+            if hint:
+                exc.message += hint
+                exc.args = (str(exc.args[0]) + hint,)
             raise
         except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
             self._solver = None

@@ -3285,6 +3285,10 @@ def _rk4_step(t, h, y, f, k2, k3, k4, y_new, f_new, ys, inputs, alpha, P, AB, rh
 #: outside RK4's region; a mode that grows less than 0.1 % a step would take 4600 steps to grow 100 times.
 RK4_SHORTEST = 1e-3
 RK4_EXCESS = 1e-3
+#: The fewest steps in a row outside the region that stop a run: a λ fitted to a state barely
+#: moving, or moving mostly under its forcing (a chain's first steps from rest under a sine force:
+#: one spurious h·λ = 715i, then two of a forced response), does not last.
+RK4_MIN_STEPS = 4
 
 
 @njit(cache=True, inline="always")
@@ -3346,7 +3350,7 @@ def rk4_watch(f, k2, k3, h, step, monitor):
     taken. A shortened step within the region leaves the count as it is (the remainder before a
     communication point, between full steps beyond it); a full one restarts it. A step shorter
     than RK4_SHORTEST of the fixed step is left out: its stage differences are too small to read.
-    Returns UNSTABLE when every step since the first one beyond was beyond too, and both the
+    Returns UNSTABLE when at least RK4_MIN_STEPS steps in a row were beyond, and both the
     amplitude and the product of the steps' factors |R(hλ)| (each over the exact growth) have grown
     MONITOR_RK4_GROWTH times since then. The amplitude confirms it, as a nonlinearity can bound a
     mode that the estimate puts beyond (a saturating friction's sticking mode); the factors confirm
@@ -3384,7 +3388,8 @@ def rk4_watch(f, k2, k3, h, step, monitor):
     monitor[MONITOR_RK4_IM] = step * im
     growth = monitor[MONITOR_RK4_GROWTH]
     grown = (amplitude >= growth * monitor[MONITOR_RK4_FIRST]
-             and monitor[MONITOR_RK4_LOG_FACTORS] >= math.log(growth))     # the steps before this one's
+             and monitor[MONITOR_RK4_LOG_FACTORS] >= math.log(growth)     # the steps before this one's
+             and monitor[MONITOR_RK4_HITS] >= RK4_MIN_STEPS)
     monitor[MONITOR_RK4_LOG_FACTORS] += math.log(factor)
     return UNSTABLE if grown else OK
 

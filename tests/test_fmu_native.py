@@ -340,3 +340,29 @@ def test_outputs_and_inputs_read_between_native_steps_are_the_slaves(fmus, pair)
         results.append((mixed, inst.get(inst.outputs)))
     assert results[0] == results[1]
     assert not any(math.isnan(v) for v in results[0][1])
+
+
+def test_an_rk4_step_beyond_its_limit_declined_natively_is_reported_as_the_slave_reports_it(fmus, pair,
+                                                                                              tmp_path_factory):
+    """scenarios/hard/stiff_1dof_2d.toml with RK4 at hω = 2.9 (9.2 ms, beyond the region: RK4's
+    factor |R(2.9i)| = 1.19 per step) and 10 ms communication steps: the stability watch counts its
+    steps across the native steps, and the one where the mode has grown 100 times fails in the
+    native step, which declines; the slave restores the integration and the watch's counters from
+    the backup (kernels.native_step, b_monitor) and takes the step again, which fails as without
+    native steps: the same fmi2 status, message (the same count of steps in a row) and outputs,
+    and again when the importer retries it."""
+    stiff = INPUT_SCENE.parent / "hard" / "stiff_1dof_2d.toml"
+    native_scene(stiff)
+    h = 2.9 / math.sqrt(1.0e8 / (1.0e3 + 1.0e-3))        # the scene's ω = √(k/(m + b))
+    text = stiff.read_text().replace('name = "stiff_1dof_2d"', 'name = "stiff_rk4_native_2d"')
+    experiment = text.index("[experiment]")
+    scene = tmp_path_factory.mktemp("rk4_native") / "stiff_rk4_native_2d.toml"
+    scene.write_text(text[:experiment] + f"[experiment]\nstop_time = 3.0\nmethod = \"RK4\"\nstep = {h!r}\n")
+    native, slave = pair(fmus[scene])
+    a, b = (_until_a_step_fails_then_again(inst, 300) for inst in (native, slave))
+    assert a.entries == b.entries
+    assert a.messages() == b.messages()
+    failed = [label for label, status, _ in a.entries if status]
+    assert len(failed) == 2 and failed[0] == failed[1], failed
+    assert "beyond its stability limit" in a.messages()[-1][1], a.messages()[-1]
+    assert native_steps(native) == round(float(failed[0][len("doStep("):].split(",")[0]) / 0.01)

@@ -100,6 +100,7 @@ def test_a_damped_mode_outside_the_region_stops_with_its_h_lambda(path, zeta, h_
     found = re.search(r"h·λ ≈ (\S+)(?: ± (\S+)i)? \(", r.message)
     assert found, r.message
     assert complex(float(found[1]), float(found[2] or 0.0)) == pytest.approx(z, rel=5e-3)   # 3 digits
+    assert "Baumgarte" not in r.message, r.message          # the slider's h·α is 3e-4 (α = 10 1/s)
     # A damped pair's amplitude measure swings with its phase by up to ((1 + |cos φ|)/(1 − |cos φ|))^½
     # (φ the angle of λ; kernels.rk4_watch), which moves the stop by up to that many steps' growth;
     # a real mode's has no phase.
@@ -237,3 +238,36 @@ def test_runs_inside_the_region_from_rest_under_a_forcing_run_on(path, tmp_path)
     chain = inerter.load(write_chain(tmp_path / "chain32.toml", 32))
     r = chain.simulate(method="RK4", step=1e-3, stop_time=1.0, path=path, metrics=False)
     assert r.status == "ok", r.message
+
+
+#: Where RK4's region meets the negative real axis: the real root of R(x) = 1, x ≠ 0, i.e. of
+#: 1 + x/2 + x²/6 + x³/24 = 0 (closed form by Cardano's rule, to 1e-12).
+REAL_REACH = 2.785293563405282
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_a_baumgarte_correction_beyond_the_region_is_named(path):
+    """two_bar_2d's joints corrected at α = 300 1/s, RK4 at 0.01 s: a violation C of the joints obeys
+    C'' + 2αC' + α²C = 0, λ = −α twice, so h·λ = −3 lies beyond the region's reach along the
+    negative real axis (2.785, the closed form REAL_REACH; |R(−3)| = 1.375), while the bars' own
+    modes stay well inside (at the scene's α = 10 the run completes and names nothing). The
+    violation grows until the watch stops the run, and the message names Baumgarte's correction
+    with an α that scales the fitted h·λ into the region, rounded down; at that α the run
+    completes. (A real mode beyond the region that is not the correction's names none: the
+    overdamped stiff_1dof_2d above, its slider's h·α = 3e-4.)"""
+    scene, h = ROOT / "scenarios" / "two_bar_2d.toml", 0.01
+    assert abs(amplification(REAL_REACH, zeta=1.0) - 1.0) < 1e-12         # R(−2.785…) = 1
+    coarse = inerter.load(scene, **{"experiment.baumgarte": 300.0})
+    r = coarse.simulate(method="RK4", step=h, stop_time=5.0, path=path, metrics=False)
+    assert r.status == "failed" and "beyond its stability limit" in r.message, r.message
+    h_lambda = complex(re.search(r"h·λ ≈ (\S+)", r.message).group(1).replace("−", "-"))
+    # The scene's motion moves the violation's mode as RK4 sees it: −3.11 here against −α·h = −3.
+    assert h_lambda.imag == 0.0 and h_lambda.real == pytest.approx(-3.0, rel=0.05), r.message
+    assert "this mode is the joints' Baumgarte correction" in r.message and "(h·α = 3," in r.message, r.message
+    advised = float(r.message.split("experiment.baumgarte below about ")[1].split(" 1/s")[0])
+    assert 0.9 * 300.0 * REAL_REACH / abs(h_lambda) < advised < 300.0 * REAL_REACH / abs(h_lambda), r.message
+    r = inerter.load(scene, **{"experiment.baumgarte": advised}).simulate(method="RK4", step=h, stop_time=5.0,
+                                                                           path=path, metrics=False)
+    assert r.status == "ok", r.message
+    r = inerter.load(scene).simulate(method="RK4", step=h, stop_time=5.0, path=path, metrics=False)
+    assert r.status == "ok" and r.run.max_drift < 1e-7 and "Baumgarte" not in r.message, r.message

@@ -50,6 +50,11 @@ class SimulationError(InerterError, RuntimeError):
         text = message if time is None else f"t = {time:.9g} s: {message}"
         super().__init__(text)
 
+    def append(self, text: str):
+        """Add `text` to the message: what the caller knows of the cause."""
+        self.message += text
+        self.args = (self.args[0] + text,)
+
 
 #: Terminal distance below which a translational element's direction is undefined (m).
 MIN_LENGTH = 1e-9

@@ -54,13 +54,13 @@ import numpy as np
 
 from inerter.common.atomic import replace_file
 from inerter.common.errors import SimulationError
-from inerter.engine.simulation import Run, Stepper, jumps, load_state, output_grid
+from inerter.engine.simulation import Run, Stepper, jumps, load_state, monitor_slots, output_grid
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
 from inerter.engine.tables import _by_name, adds_mass, element_tables, force_rows, kernel_tables
 from inerter.engine.compiled_spatial import flatten3, joint_row_counts, signal_layout3
-from inerter.model.mechanism import DEPENDENT_RATIO, wound_from
+from inerter.model.mechanism import wound_from
 
 
 
@@ -323,27 +323,6 @@ except ImportError as exc:          # numba missing (or unusable): the numpy pat
 COMPILED_METHODS = ("DOP853", "RK45", "RK4")
 _RK_CODE = {"DOP853": 0, "RK45": 1}
 _NO_ORDER = np.zeros(0, dtype=np.int64)
-
-def monitor_slots(method, rk4_watch=True) -> np.ndarray:
-    """The constants of :class:`inerter.engine.simulation.StepMonitor` for the compiled loop, and the
-    ratio below which the joints' rows count as dependent (``mechanism.DEPENDENT_RATIO``: the
-    kernels' change-point watch, kernels.loop_watch), in the slots kernels.MONITOR_*; RK4's
-    stability watch (kernels.rk4_watch) on unless `rk4_watch` is false, its running values at 0.
-    The numpy path's StepMonitor keeps RK4's watch in such an array too."""
-    from inerter.engine import simulation as sim
-    monitor = np.zeros(_k.MONITOR_SIZE)
-    if method == "RK4" and rk4_watch:
-        monitor[_k.MONITOR_RK4_WATCH] = 1.0
-        monitor[_k.MONITOR_RK4_GROWTH] = sim.RK4_GROWTH
-    monitor[_k.MONITOR_STIFF_BOUND] = sim.STIFFNESS_BOUND.get(method, 0.0)
-    monitor[_k.MONITOR_STIFF_EVERY] = sim.STIFFNESS_EVERY
-    monitor[_k.MONITOR_STIFF_HITS] = sim.STIFFNESS_HITS
-    monitor[_k.MONITOR_COLLAPSE_RELATIVE] = sim.COLLAPSE_RELATIVE
-    monitor[_k.MONITOR_COLLAPSE_STEPS] = sim.COLLAPSE_STEPS
-    monitor[_k.MONITOR_TRIAL_SHRINK] = sim.TRIAL_SHRINK
-    monitor[_k.MONITOR_DEPENDENT] = DEPENDENT_RATIO
-    return monitor
-
 
 #: The statuses of an evaluation at a state where the accelerations cannot be evaluated (a singular
 #: or non-finite solve, terminals that meet): raised inside a trial step, a shorter step may avoid
@@ -1126,7 +1105,7 @@ def _run_failure(kernel, settings, status, h, y_last, t_reached, t_sample, monit
     the last node before a step whose stage finds them meeting (TERMINALS_MEET)."""
     h = h if settings.method != "RK4" else settings.step
     meet = status in (_k.TERMINALS_MEET, _k.MEETING)
-    why = failure_text(kernel, status, settings.method, h, y_last, t_reached if meet else t_sample,
+    why = failure_text(kernel, status, settings, h, y_last, t_reached if meet else t_sample,
                        int(settings.max_steps), monitor)
     digits = 9 if status == _k.MEETING else 6
     return f"at t = {t_reached:.{digits}g} s: the {settings.method} integrator failed: {why}"
@@ -1378,7 +1357,7 @@ class LocalDense:
                 if status != 0:
                     raise SimulationError(f"the dense output between t = {t0:.6g} s and {t_end:.6g} s: the "
                                           f"{s.method} integrator failed on integrating that interval again "
-                                          f"({failure_text(kernel, status, s.method, 0.0, y, t0)})", t0)
+                                          f"({failure_text(kernel, status, s, 0.0, y, t0)})", t0)
                 self.evaluations += int(evals)
                 y, t0 = seg_out[-1].copy(), t1
         return DenseOutput.of_kept(s.method, keep, kernel, self.windings(k))
@@ -1488,7 +1467,7 @@ class RK4Dense:
                 if status != 0 or done != len(seg):
                     raise SimulationError(f"the dense output between t = {t0:.6g} s and {t_end:.6g} s: the RK4 "
                                           f"integrator failed on integrating that interval again "
-                                          f"({failure_text(kernel, status, 'RK4', s.step, y, t_reached)})", t0)
+                                          f"({failure_text(kernel, status, s, s.step, y, t_reached)})", t0)
                 segments.append(_RK4Steps(nodes, seg, rows, seg_out, self.n))
                 y, t0 = seg_out[-1, :self.n].copy(), t1
                 angles = None if angles is None else seg_out[-1, self.n:].copy()
@@ -1696,7 +1675,7 @@ class CompiledStepper(Stepper):
             max_steps, self._rk_inputs, float(s.alpha), kernel.params, self._tables, self._monitor,
             self._work, self._need_acc, self._raw, order, values, self._jumps, self._kinks, self._scratch)
         if status:
-            why = failure_text(kernel, status, s.method, hdr[_k.RK_H], rk.y, hdr[_k.RK_T], int(s.max_steps))
+            why = failure_text(kernel, status, s, hdr[_k.RK_H], rk.y, hdr[_k.RK_T], int(s.max_steps))
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(hdr[_k.RK_T]))
         self._rk = rk
         self._input_moved = False
@@ -1718,7 +1697,7 @@ class CompiledStepper(Stepper):
             self._monitor)
         if status:
             at = t_reached if status == _k.MEETING else t_fail      # y is the state at the meeting
-            why = failure_text(kernel, status, s.method, s.step, y, at, int(s.max_steps), self._monitor)
+            why = failure_text(kernel, status, s, s.step, y, at, int(s.max_steps), self._monitor)
             raise SimulationError(f"the {s.method} integrator failed: {why}", float(t_reached))
         self.steps += int(steps)
         if not np.isfinite(y).all():
@@ -1795,13 +1774,15 @@ class CompiledStepper(Stepper):
         clock[_k.CLOCK_RTOL], clock[_k.CLOCK_ATOL] = float(s.rtol), float(s.atol)
         clock[_k.CLOCK_ALPHA], clock[_k.CLOCK_STEP] = float(s.alpha), float(s.step or 0.0)
         native = dict(rk=rk, inputs=inputs, clock=clock, ts=np.zeros(samples), out=np.empty((samples, ny)),
-                      values=np.empty(len(self._order)), backup=[np.empty_like(a) for a in rk])
+                      values=np.empty(len(self._order)), backup=[np.empty_like(a) for a in rk],
+                      backup_monitor=np.empty_like(self._monitor))
         arrays = {}
         params = kernel.params[:len(_k.PARAMS)]
         for group, values in ((_k.RK_STATE, rk), (_k.PARAMS, params), (_k.TABLEAU, tables), (_k.WORK, work)):
             arrays.update(zip((name for name, _ in group), values, strict=True))
         arrays["spatial"] = kernel.params[-1] if kernel.spatial else np.zeros(0, dtype=np.int64)
         arrays.update(zip(("b_" + name for name, _ in _k.RK_STATE), native["backup"], strict=True))
+        arrays["b_monitor"] = native["backup_monitor"]
         gaps, z, fresh, (nodes, _, kept) = self._scratch
         arrays.update(zip((name for name, _ in _k.COSIM), (gaps, z, fresh, nodes, kept), strict=True))
         arrays.update(ts=native["ts"], out=native["out"], inputs=inputs, monitor=self._monitor,
@@ -1843,6 +1824,7 @@ class CompiledStepper(Stepper):
         if clock[_k.CLOCK_BUSY]:
             for a, backup in zip(native["rk"], native["backup"]):
                 a[...] = backup
+            self._monitor[:] = native["backup_monitor"]     # the step is taken again from here
             clock[_k.CLOCK_BUSY] = 0.0
         taken = int(clock[_k.CLOCK_TAKEN])
         if not taken:
@@ -1877,8 +1859,9 @@ class CompiledStepper(Stepper):
         _gaps_stale(self._scratch)            # the terminals' gaps are those of the state left behind
 
 
-def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None, monitor=None) -> str:
-    """What a compiled loop's failure `status` means, in the words of the numpy path: the step size
+def failure_text(kernel, status, settings, h, y_last, t_last, max_steps=None, monitor=None) -> str:
+    """What a compiled loop's failure `status` in a run with `settings` means, in the words of the
+    numpy path: the step size
     `h` it ended with (and the step budget `max_steps` it ran out of); for terminals meeting, the
     element whose terminals were closest in the last good state `y_last` (at `t_last`), the loop
     having stopped within a step of it (TERMINALS_MEET), or at the meeting it located there
@@ -1886,18 +1869,20 @@ def failure_text(kernel, status, method, h, y_last, t_last, max_steps=None, moni
     may have stalled it (``Mechanism.diagnose``: terminals nearly meeting, a device mount near its
     singularity); where the step size collapsed or the steps read as stiff, the scene's fastest time
     scale (``Mechanism.stiffest``: a device's series mode, the narrowest tanh switch); where RK4's
-    step was beyond its stability limit, its watch's values in `monitor` (kernels.rk4_watch)."""
+    step was beyond its stability limit, its watch's values in `monitor` (kernels.rk4_watch) and
+    whether the constraints' Baumgarte mode is such a mode (``simulation.baumgarte_text``)."""
+    from inerter.engine import simulation as sim
+    method = settings.method
     if status == _k.UNSTABLE:
-        from inerter.engine import simulation as sim
-        return sim.rk4_unstable_text(h, monitor) + kernel.mech.stiffest()
+        return (sim.rk4_unstable_text(h, monitor) + kernel.mech.stiffest()
+                + sim.baumgarte_text(h, settings.alpha, kernel.mech.m, monitor))
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)
     if status in (_k.STEP_TOO_SMALL, _k.SINGULAR, _k.NOT_FINITE, _k.COLLAPSED, _k.CHANGE_POINT) \
             and y_last is not None:         # as the numpy path: what may have stalled it
         text += kernel.mech.diagnose(y_last)        # it reads the state's q
     if status in (_k.STIFF, _k.COLLAPSED):          # as the numpy path: StiffForMethod, StepCollapse
         text += kernel.mech.stiffest()
-    from inerter.engine import simulation as sim
-    return text + sim.rk4_hint(method, text)
+    return text + sim.rk4_hint(method, status == _k.MAX_STEPS)
 
 
 def _status_text(kernel, status, method, h, y_last, t_last, max_steps):

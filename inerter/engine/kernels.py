@@ -71,7 +71,7 @@ N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND
 # UNSTABLE: RK4's fixed step beyond the method's stability limit, a mode growing (:func:`rk4_watch`).
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED, GIMBAL_LOCK, \
     CHANGE_POINT, MEETING, UNSTABLE = range(12)
-# The slots of the integrators' `monitor` (inerter.engine.compiled.monitor_slots): Hairer's stiffness
+# The slots of the integrators' `monitor` (inerter.engine.simulation.monitor_slots): Hairer's stiffness
 # bound, how often it is tested, its firings in a row that stop a run; the collapse's relative step
 # and steps in a row; the trial shrink; the smallest/largest singular value ratio of C_v below which
 # the joints' rows count as dependent (Mechanism.DEPENDENT_RATIO, :func:`loop_watch`); RK4's
@@ -3590,7 +3590,7 @@ assert [name for name, _ in COSIM][SCRATCH_FRESH] == "fresh"
 NATIVE_SLOTS = (RK_STATE + (("ts", "f1"), ("out", "f2"), ("inputs", "f1")) + PARAMS + TABLEAU
                 + (("monitor", "f1"),) + WORK
                 + (("raw", "f1"), ("order", "i1"), ("values", "f1"), ("clock", "f1"))
-                + tuple(("b_" + name, kind) for name, kind in RK_STATE)
+                + tuple(("b_" + name, kind) for name, kind in RK_STATE) + (("b_monitor", "f1"),)
                 + (("jumps", "f1"), ("kinks", "f1"), ("spatial", "i1"))
                 + COSIM)
 CLOCK_TIME, CLOCK_BOUND, CLOCK_RTOL, CLOCK_ATOL, CLOCK_ALPHA, CLOCK_BUSY, CLOCK_TOLERANCE, CLOCK_TAKEN, \
@@ -3607,6 +3607,7 @@ S_RK, S_BACKUP, S_PARAMS, S_TABLEAU, S_WORK, S_COSIM = (_SLOT["hdr"], _SLOT["b_h
 S_TS, S_OUT, S_INPUTS, S_MONITOR, S_RAW, S_ORDER, S_VALUES, S_CLOCK, S_JUMPS, S_KINKS, S_SPATIAL = (
     _SLOT["ts"], _SLOT["out"], _SLOT["inputs"], _SLOT["monitor"], _SLOT["raw"], _SLOT["order"], _SLOT["values"],
     _SLOT["clock"], _SLOT["jumps"], _SLOT["kinks"], _SLOT["spatial"])
+S_BACKUP_MONITOR = _SLOT["b_monitor"]
 
 
 @intrinsic
@@ -3753,8 +3754,8 @@ def native_step_on(tab, t, h, P):
     then the outputs). Returns NATIVE_TOOK_STEP,
     or 0 where it declines and leaves the step to the Python path: a communication point that is
     not the current one, a step size that is not finite and > 0, a failed step or outputs the
-    kernels cannot evaluate. A declined step leaves CLOCK_BUSY set and the integration's state as
-    it was in the backup arrays (b_*), which the Python path restores before it takes the step
+    kernels cannot evaluate. A declined step leaves CLOCK_BUSY set and the integration's state and
+    its monitor as they were in the backup arrays (b_*), which the Python path restores before it takes the step
     itself, so that it gives the messages and the results the Python path always gives; it also
     marks the terminals' gaps (:func:`cosim_scratch`) as not current."""
     clock = _f1(tab, S_CLOCK)
@@ -3775,6 +3776,8 @@ def native_step_on(tab, t, h, P):
     b_f[:] = f
     b_y_prev[:] = y_prev
     b_dense[:, :] = dense
+    monitor = _f1(tab, S_MONITOR)
+    _f1(tab, S_BACKUP_MONITOR)[:] = monitor     # its counters, RK4's watch among them, go back too
     clock[CLOCK_BUSY] = 1.0
     bound = clock[CLOCK_BOUND]
     ts, out, inputs, alpha = _f1(tab, S_TS), _f2(tab, S_OUT), _f1(tab, S_INPUTS), clock[CLOCK_ALPHA]
@@ -3784,13 +3787,10 @@ def native_step_on(tab, t, h, P):
             _f2(tab, w + CV_WORK), _f2(tab, w + CV_GRAM), _f1(tab, w + CV_KNOWN))
     raw, order, values = _f1(tab, S_RAW), _i1(tab, S_ORDER), _f1(tab, S_VALUES)
     if tab[TABLE_METHOD] == NATIVE_RK4:
-        monitor = _f1(tab, S_MONITOR)
-        watched = monitor[MONITOR_RK4_HITS:].copy()     # RK4's running watch, as before the step
         st, steps, t_reached, t_fail = rk4_cosim_step(y, now, t_end, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), ts, out,
                                                       clock[CLOCK_STEP], tab[TABLE_MAX_STEPS], inputs, alpha, P,
                                                       monitor)
         if st != OK:
-            monitor[MONITOR_RK4_HITS:] = watched        # the Python path takes the step again from here
             return 0
         for n in range(y.shape[0]):
             if not math.isfinite(y[n]):
@@ -3808,7 +3808,7 @@ def native_step_on(tab, t, h, P):
                    _f1(tab, S_TABLEAU + 4), _f2(tab, S_TABLEAU + 5), _f2(tab, S_TABLEAU + 6))
         st, sst = _cosim_step_inlined(tab[TABLE_METHOD], hdr, y, f, y_prev, dense, t_end, ts, out, bound,
                                       clock[CLOCK_RTOL], clock[CLOCK_ATOL], tab[TABLE_MAX_STEPS], inputs, alpha, P,
-                                      tableau, _f1(tab, S_MONITOR), work, tab[TABLE_NEED_ACC] != 0, raw, order,
+                                      tableau, monitor, work, tab[TABLE_NEED_ACC] != 0, raw, order,
                                       values, _f1(tab, S_JUMPS), _f1(tab, S_KINKS), scratch)
         if st != OK or sst != OK:
             scratch[SCRATCH_FRESH][0] = 0.0     # the Python path restores y from the backup

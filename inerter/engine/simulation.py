@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from inerter.common.errors import SimulationError, TerminalsMeet
-from inerter.model.mechanism import rank_kept
+from inerter.model.mechanism import DEPENDENT_RATIO, rank_kept
 
 
 #: The smallest rtol scipy's integrators take (100 ε; scipy.integrate._ivp.common.validate_tol):
@@ -228,6 +228,31 @@ class StiffForMethod(SimulationError):
     """An explicit method's step size is held at its stability limit (Hairer's test): a stiff effect."""
 
 
+class StepBudget(SimulationError):
+    """The run took more than max_steps integrator steps."""
+
+
+def monitor_slots(method, rk4_watch=True) -> np.ndarray:
+    """The constants of :class:`StepMonitor` for the compiled loops, and the ratio below which the
+    joints' rows count as dependent (``mechanism.DEPENDENT_RATIO``: the kernels' change-point watch,
+    kernels.loop_watch), in the slots kernels.MONITOR_*; RK4's stability watch (kernels.rk4_watch)
+    on unless `rk4_watch` is false, its running values at 0. The numpy path's StepMonitor keeps
+    RK4's watch in such an array too."""
+    from inerter.engine import kernels as _k
+    monitor = np.zeros(_k.MONITOR_SIZE)
+    if method == "RK4" and rk4_watch:
+        monitor[_k.MONITOR_RK4_WATCH] = 1.0
+        monitor[_k.MONITOR_RK4_GROWTH] = RK4_GROWTH
+    monitor[_k.MONITOR_STIFF_BOUND] = STIFFNESS_BOUND.get(method, 0.0)
+    monitor[_k.MONITOR_STIFF_EVERY] = STIFFNESS_EVERY
+    monitor[_k.MONITOR_STIFF_HITS] = STIFFNESS_HITS
+    monitor[_k.MONITOR_COLLAPSE_RELATIVE] = COLLAPSE_RELATIVE
+    monitor[_k.MONITOR_COLLAPSE_STEPS] = COLLAPSE_STEPS
+    monitor[_k.MONITOR_TRIAL_SHRINK] = TRIAL_SHRINK
+    monitor[_k.MONITOR_DEPENDENT] = DEPENDENT_RATIO
+    return monitor
+
+
 def rk4_unstable_text(step, watch) -> str:
     """Why a run with RK4 stopped at UNSTABLE, from its watch's slots (kernels.rk4_watch): the
     mode's h·λ and RK4's factor on it, its growth over its steps in a row beyond RK4's stability
@@ -267,22 +292,72 @@ def rk4_stable_fraction(z: complex) -> float:
     return inside
 
 
-def rk4_hint(method: str, message: str) -> str:
-    """What to add to the message of a run with RK4 that failed otherwise than by its stability
-    watch or its step budget (terminals meeting, accelerations not finite, a singular pose): a step
-    too long for a nonlinear motion, which the watch of linear modes does not see
-    (``kernels.rk4_watch``), can drive the state there. Empty for other methods."""
-    if method != "RK4" or any(words in message for words in ("beyond its stability limit", "max_steps", RK4_HINT)):
+def failure_context(exc, settings, mech) -> str:
+    """What a run with `settings` on `mech` adds to the message of its failure `exc`: the scene's
+    fastest time scale where the step size collapsed, the steps read as stiff or RK4's step was
+    beyond its stability limit (``Mechanism.stiffest``), whether the constraints' Baumgarte mode is
+    the last's (:func:`baumgarte_text`), and RK4's hint for a failure that does not name its cause
+    (:func:`rk4_hint`). As the compiled loops' ``compiled.failure_text`` adds them."""
+    text = mech.stiffest() if isinstance(exc, (StepCollapse, StiffForMethod, UnstableStep)) else ""
+    if isinstance(exc, UnstableStep):
+        text += baumgarte_text(settings.step, settings.alpha, mech.m, exc.watch)
+    return text + rk4_hint(settings.method, isinstance(exc, NAMES_ITS_CAUSE))
+
+
+def baumgarte_text(step: float, alpha: float, rows: int, watch) -> str:
+    """Whether the mode RK4's watch stopped a run on (its fitted h·λ in `watch`, kernels.rk4_watch)
+    is the joints' Baumgarte correction, and what to set: with `rows` constraint rows corrected at
+    α = `alpha`, a violation C obeys C̈ + 2αĊ + α²C = 0, a real mode λ = −α (twice), which RK4 at
+    the step `step` keeps only while h·α stays inside its region (2.785 along the negative real
+    axis). The scene's motion moves the mode as RK4 sees it (two_bar_2d at 0.01 s: h·λ ≈ −3.11 at
+    h·α = 3, −2.82 at h·α = 2.7, which grows), so a fitted h·λ real and within
+    BAUMGARTE_WINDOW of −h·α counts as that mode; the advice scales α as the step advice scales
+    the step (:func:`rk4_stable_fraction` along the fitted h·λ). Empty for any other mode."""
+    from inerter.engine import kernels as _k
+    if watch is None:
         return ""
-    return f"; {RK4_HINT}, which grows the state until it gets there: a shorter experiment.step, or DOP853, shows " \
-        "whether it does"
+    z = complex(watch[_k.MONITOR_RK4_RE], watch[_k.MONITOR_RK4_IM])
+    own = alpha * step
+    if rows == 0 or own <= 0.0 or abs(z.imag) > BAUMGARTE_WINDOW * abs(z) \
+            or abs(z.real + own) > BAUMGARTE_WINDOW * own:
+        return ""
+    fraction = rk4_stable_fraction(z)
+    advice = (f"set experiment.baumgarte below about {_two_digits_down(alpha * fraction):g} 1/s" if fraction > 0.0
+              else "set a smaller experiment.baumgarte")
+    return (f"; this mode is the joints' Baumgarte correction: experiment.baumgarte = α = {alpha:g} 1/s makes a "
+            f"violation C of the joints obey C'' + 2αC' + α²C = 0, λ = −α twice (h·α = {own:.3g}, where RK4's region "
+            f"reaches 2.785 along the negative real axis; the motion moves it to h·λ ≈ {z.real:.3g}); {advice}, "
+            f"or a shorter step")
 
 
-RK4_HINT = "with RK4's fixed step this can also be a step too long for the motion"
+#: How far (relative) a fitted h·λ may lie from −h·α, and off the real axis, and count as the
+#: Baumgarte correction's mode (:func:`baumgarte_text`): the motion moved it by 4 % on two_bar_2d.
+BAUMGARTE_WINDOW = 0.1
+
+
+def rk4_hint(method: str, names_its_cause: bool) -> str:
+    """What to add to the message of a run with RK4 that failed otherwise than by a check that
+    names its cause, its stability watch or its step budget (`names_its_cause`): where terminals
+    meet, accelerations are not finite or a pose is singular, a step too long for a nonlinear
+    motion, which the watch of linear modes does not see (``kernels.rk4_watch``), can have driven
+    the state there. Empty for other methods."""
+    if method != "RK4" or names_its_cause:
+        return ""
+    return "; with RK4's fixed step this can also be a step too long for the motion, which grows the state " \
+        "until it gets there: a shorter experiment.step, or DOP853, shows whether it does"
 
 
 class UnstableStep(SimulationError):
-    """RK4's fixed step is beyond the method's stability limit and a mode grows (kernels.rk4_watch)."""
+    """RK4's fixed step is beyond the method's stability limit and a mode grows (kernels.rk4_watch):
+    `watch`, the watch's slots when it stopped the run."""
+
+    def __init__(self, message: str, time: float | None = None, watch=None):
+        super().__init__(message, time)
+        self.watch = watch
+
+
+#: The numpy path's failures whose message names their cause: no RK4 hint (:func:`rk4_hint`).
+NAMES_ITS_CAUSE = (UnstableStep, StepBudget)
 
 
 #: scipy's words when an implicit method's step size reaches the spacing of floating-point numbers.
@@ -298,11 +373,11 @@ class StepMonitor:
     rotational elements' angles on (``mech.wind``: they wind past half a turn from there)."""
 
     def __init__(self, mech, method, max_steps, watch=None):
-        """`watch`: RK4's stability watch to go on with (:func:`rk4_watch_slots`; a co-simulation
+        """`watch`: RK4's stability watch to go on with (:func:`monitor_slots`; a co-simulation
         keeps one across its steps), a fresh one if None."""
         self.mech, self.method, self.max_steps = mech, method, max_steps
         self.bound = STIFFNESS_BOUND.get(method)
-        self.watch = watch if watch is not None or method != "RK4" else rk4_watch_slots()
+        self.watch = watch if watch is not None or method != "RK4" else monitor_slots("RK4")
         self.steps = 0
         self.hits = self.calm = 0
         self.small = 0
@@ -315,7 +390,7 @@ class StepMonitor:
         t, t_old = solver.t, solver.t_old
         h = t - t_old
         if self.steps > self.max_steps:
-            raise SimulationError(
+            raise StepBudget(
                 f"more than max_steps = {self.max_steps} integrator steps (step size {h:.3g} s): "
                 + max_steps_advice(self.method), t_old)
         if self.terminals and self.mech.chord_margin(y_old, solver.y) <= 1.0:
@@ -417,7 +492,7 @@ class StepMonitor:
         from inerter.engine import kernels as _k
         k2, k3 = solver.midpoints
         if _k.rk4_watch.py_func(solver.f_old, k2, k3, h, solver.h, self.watch) != _k.OK:
-            raise UnstableStep(rk4_unstable_text(solver.h, self.watch), solver.t_old)
+            raise UnstableStep(rk4_unstable_text(solver.h, self.watch), solver.t_old, watch=self.watch.copy())
 
     def _stiffness(self, solver, h):
         K = getattr(solver, "K", None)
@@ -444,12 +519,6 @@ class StepMonitor:
             self.calm += 1
             if self.calm >= 6:
                 self.hits = 0
-
-
-def rk4_watch_slots() -> np.ndarray:
-    """A fresh stability watch for RK4 (the kernels' monitor slots, ``compiled.monitor_slots``)."""
-    from inerter.engine.compiled import monitor_slots
-    return monitor_slots("RK4")
 
 
 def _rank_kept(rows) -> bool:
@@ -654,9 +723,7 @@ def _integrate(mech, settings: Settings, inputs=None) -> Run:
         if solver is not None and not isinstance(exc, TerminalsMeet) and "terminals" not in message:
             found = mech.diagnose(solver.y)
             message += found if found not in message else ""    # the monitor's collapse says it already
-        if isinstance(exc, (StepCollapse, StiffForMethod, UnstableStep)):
-            message += mech.stiffest()
-        message += rk4_hint(settings.method, message)
+        message += failure_context(exc, settings, mech)
     cpu = _time.process_time() - start
     for i in range(1, k):
         max_drift = max(max_drift, mech.constraint_residual(out[i, :n]))
@@ -818,7 +885,7 @@ class Stepper:
         self._dense = None                    # the dense output of its last step, once asked for
         self._input_moved = False             # an input changed since the last step
         self._meeting = None                  # (time, message): terminals meet within its last step
-        self._watch = rk4_watch_slots() if settings.method == "RK4" else None   # across its steps
+        self._watch = None                    # RK4's stability watch across its steps, from the first on
 
     def set_input(self, name, value):
         value = float(value)
@@ -850,6 +917,7 @@ class Stepper:
         if not t_end > self.time:
             raise SimulationError(f"step to t = {t_end!r} is not after the current time", self.time)
         monitor = StepMonitor(self.mech, self.settings.method, self.settings.max_steps, self._watch)
+        self._watch = monitor.watch
         try:
             if self._runs_on:
                 y = self._run_on(t_end, monitor)
@@ -860,10 +928,7 @@ class Stepper:
                 raise SimulationError("the state became non-finite", t_end)
         except SimulationError as exc:
             self._solver = None               # the next step restarts at (time, y), left as they were
-            hint = rk4_hint(self.settings.method, str(exc))
-            if hint:
-                exc.message += hint
-                exc.args = (str(exc.args[0]) + hint,)
+            exc.append(failure_context(exc, self.settings, self.mech))
             raise
         except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
             self._solver = None

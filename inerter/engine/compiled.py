@@ -1156,7 +1156,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     h, t0, k, status, t_reached, stopped = 0.0, 0.0, 1, 0, 0.0, None
     tables = None if settings.method == "RK4" else _tables(settings.method)
     keep = _dense_keep(settings.method, tables, len(y0), dense)
-    monitor = monitor_slots("RK4") if tables is None else None     # RK4's watch, across segments
+    monitor = (monitor_slots("RK4", conserves_energy=mech.conserves_energy()) if tables is None
+               else None)                   # RK4's watches, across segments
     start = _time.process_time()
     y = y0                                    # the 3D rotational elements' angles: from the initial pose (for_run)
     for t1 in ends:
@@ -1591,7 +1592,7 @@ class CompiledStepper(Stepper):
         self._tables = _tables(settings.method) if settings.method in _RK_CODE else None
         self._work = (None if self._tables is None else
                       _k.work_arrays(kernel.params, kernel.ny, _k.rk_stages(self._tables[_TABLEAU_A])))
-        self._monitor = monitor_slots(settings.method)
+        self._monitor = monitor_slots(settings.method, conserves_energy=mech.conserves_energy())
         self._jumps = np.array(getattr(mech, "discontinuities", ()), dtype=float)
         self._kinks = np.array(getattr(mech, "kinks", ()), dtype=float)
         self._tol = (float(settings.rtol), float(settings.atol), int(settings.max_steps))
@@ -1876,13 +1877,15 @@ def failure_text(kernel, status, settings, h, y_last, t_last, max_steps=None, mo
     if status == _k.UNSTABLE:
         return (sim.rk4_unstable_text(h, monitor) + kernel.mech.stiffest()
                 + sim.baumgarte_text(h, settings.alpha, kernel.mech.m, monitor))
+    if status == _k.ENERGY_JUMP:
+        return sim.energy_jump_text(h, monitor)
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)
     if status in (_k.STEP_TOO_SMALL, _k.SINGULAR, _k.NOT_FINITE, _k.COLLAPSED, _k.CHANGE_POINT) \
             and y_last is not None:         # as the numpy path: what may have stalled it
         text += kernel.mech.diagnose(y_last)        # it reads the state's q
     if status in (_k.STIFF, _k.COLLAPSED):          # as the numpy path: StiffForMethod, StepCollapse
         text += kernel.mech.stiffest()
-    return text + sim.rk4_hint(method, status == _k.MAX_STEPS)
+    return text + sim.rk4_hint(method, status == _k.MAX_STEPS)       # ENERGY_JUMP, UNSTABLE: above
 
 
 def _status_text(kernel, status, method, h, y_last, t_last, max_steps):

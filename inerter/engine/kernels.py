@@ -68,9 +68,11 @@ N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND
 # terminals meet, found where it cannot be evaluated (the integrator stays at its last node);
 # MEETING: an accepted step whose chord brings them together (:func:`terminals_meet`), the run
 # stopped at the meeting located within that step (:func:`locate_meeting`, :func:`_rk4_to_meeting`);
-# UNSTABLE: RK4's fixed step beyond the method's stability limit, a mode growing (:func:`rk4_watch`).
+# UNSTABLE: RK4's fixed step beyond the method's stability limit, a mode growing (:func:`rk4_watch`);
+# ENERGY_JUMP: one RK4 step of a scene that conserves its energy changed it by more than the scene
+# holds (:func:`energy_watch`).
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED, GIMBAL_LOCK, \
-    CHANGE_POINT, MEETING, UNSTABLE = range(12)
+    CHANGE_POINT, MEETING, UNSTABLE, ENERGY_JUMP = range(13)
 # The slots of the integrators' `monitor` (inerter.engine.simulation.monitor_slots): Hairer's stiffness
 # bound, how often it is tested, its firings in a row that stop a run; the collapse's relative step
 # and steps in a row; the trial shrink; the smallest/largest singular value ratio of C_v below which
@@ -78,11 +80,14 @@ OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLL
 # stability watch (1: on, 0: off) and the growth that confirms it, then the watch's running values
 # (:func:`rk4_watch`), kept here so that they carry across co-simulation steps: its steps in a row
 # beyond RK4's region, the watched mode's amplitude at the first of them and now, its step·λ, and
-# the sum of log |R(hλ)| (less the exact growth) over those steps before the last.
+# the sum of log |R(hλ)| (less the exact growth) over those steps before the last; RK4's energy
+# watch (1: on, for a scene that conserves its energy) and its values (:func:`energy_watch`): the
+# energy at the last step's end and what the scene holds there, the energy it jumped to.
 MONITOR_STIFF_BOUND, MONITOR_STIFF_EVERY, MONITOR_STIFF_HITS, MONITOR_COLLAPSE_RELATIVE, MONITOR_COLLAPSE_STEPS, \
-    MONITOR_TRIAL_SHRINK, MONITOR_DEPENDENT, MONITOR_RK4_WATCH, MONITOR_RK4_GROWTH, MONITOR_RK4_HITS, \
-    MONITOR_RK4_FIRST, MONITOR_RK4_AMPLITUDE, MONITOR_RK4_RE, MONITOR_RK4_IM, MONITOR_RK4_LOG_FACTORS = range(15)
-MONITOR_SIZE = 15             # the watch's running values last: monitor[MONITOR_RK4_HITS:]
+    MONITOR_TRIAL_SHRINK, MONITOR_DEPENDENT, MONITOR_RK4_WATCH, MONITOR_RK4_GROWTH, MONITOR_ENERGY_WATCH, \
+    MONITOR_RK4_HITS, MONITOR_RK4_FIRST, MONITOR_RK4_AMPLITUDE, MONITOR_RK4_RE, MONITOR_RK4_IM, \
+    MONITOR_RK4_LOG_FACTORS, MONITOR_ENERGY_LAST, MONITOR_ENERGY_HELD, MONITOR_ENERGY_NOW = range(19)
+MONITOR_SIZE = 19             # the watches' running values last: monitor[MONITOR_RK4_HITS:]
 # The arrays of work_arrays, in the order of WORK (their names): the kernels take them by these slots.
 W_AB, W_RHS, W_GEN, W_ACC, W_K, W_Y_NEW, W_F_NEW, W_YS = range(8)
 # The slot of cosim_scratch's fresh[0] (1: the gaps are those at the integration's y), in the order of
@@ -737,6 +742,20 @@ def signal_values(q, v, z, qdd, P, out):
 
 
 @njit(cache=True, inline="always")
+def _stored_energy(q, v, z, P, e, kind, L, along, width):
+    """The energy translational element e stores at (L, L̇ = `along`): its law's, its internal
+    states', its device block's kinetic and gravitational energy (`width`: velocity coordinates
+    per body, 3 or 6); its ``energy`` output and its share of the scene's (``Mechanism.energy``)."""
+    el_int, el_real = P[EL_INT], P[EL_REAL]
+    stored = law.energy(kind, el_real[e], L, along)
+    if rarely(el_int[e, STATES] != 0):
+        stored += law.state_energy(kind, el_real[e], L, along, _states(z, el_int, e))
+    if rarely(el_real[e, INERTIA] != 0.0):
+        stored += _device_energy(q, v, e, P[PBODY], P[PLOC], el_int, el_real, width)
+    return stored
+
+
+@njit(cache=True, inline="always")
 def _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez, gq, width,
                      energy, out, k):
     """Translational element e's outputs from out[k] on (s_rel, v_rel, the axial force F, the power
@@ -744,18 +763,15 @@ def _element_outputs(q, v, z, P, e, kind, L, distance, rdx, rdy, rdz, anx, any_,
     energy added to `energy`, in 2D (z components 0.0) and 3D, from
     its terminals' geometry (:func:`_element`, :func:`_element3`) and gq = gᵀq̈ at the accelerations
     (`width`: velocity coordinates per body, 3 or 6). Returns (energy, the next k)."""
-    pbody, ploc, el_int, el_real = P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
+    el_int, el_real = P[EL_INT], P[EL_REAL]
     F, b, along = _element_law(kind, el_real[e], L, rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)
     if b != 0.0:
         # r̈·r̂ = gᵀ q̈ + a_n·r̂ (Eqs. 17-19, 25): the inertance part of F = b d²L/dt², Eq. (9) / (8)
         F += b * gq
     x = _states(z, el_int, e)
-    stored = law.energy(kind, el_real[e], L, along)
     if rarely(el_int[e, STATES] != 0):
         F += law.state_force(kind, el_real[e], L, along, x)
-        stored += law.state_energy(kind, el_real[e], L, along, x)
-    if rarely(el_real[e, INERTIA] != 0.0):
-        stored += _device_energy(q, v, e, pbody, ploc, el_int, el_real, width)
+    stored = _stored_energy(q, v, z, P, e, kind, L, along, width)
     out[k] = terminals.reported_distance(el_real[e], L, distance)
     out[k + 1] = along
     out[k + 2] = F
@@ -800,6 +816,40 @@ def element_signals2(q, v, z, qdd, P, e, out):
     return TERMINALS_MEET if meets else OK
 
 
+@njit(cache=True, inline="always")
+def _bodies_energy2(q, v, P):
+    """Σ over a 2D scene's bodies of T + V (kinematics.planar_body_energy; `gravity` is all 0
+    where not declared), and Σ of their magnitudes."""
+    mass, gravity, n = P[MASS], P[GRAVITY], P[DIMS][N_VELOCITY]
+    energy = held = 0.0
+    for i in range(0, n, 3):
+        part = planar_body_energy(mass[i], mass[i + 2], v[i], v[i + 1], v[i + 2], gravity[i], gravity[i + 1],
+                                  q[i], q[i + 1])
+        energy += part
+        held += abs(part)
+    return energy, held
+
+
+@njit(cache=True)
+def scene_energy2(q, v, z, P):
+    """A 2D scene's energy (``Mechanism.energy``: its bodies' T + V, its elements' stored energy)
+    and what it holds, the sum of those parts' magnitudes (:func:`energy_watch`)."""
+    energy, held = _bodies_energy2(q, v, P)
+    el_int, el_real, rot_int, rot_real = P[EL_INT], P[EL_REAL], P[ROT_INT], P[ROT_REAL]
+    for e in range(el_int.shape[0]):
+        kind, _, _, rdx, rdy, anx, any_, _, _, _, _, L, ex, ey, _, _ = _element(q, v, e, el_int, el_real, P[PBODY],
+                                                                             P[PLOC])
+        part = _stored_energy(q, v, z, P, e, kind, L, axial_scalars(rdx, rdy, 0.0, anx, any_, 0.0, ex, ey, 0.0)[0], 3)
+        energy += part
+        held += abs(part)
+    for e in range(rot_int.shape[0]):
+        _, _, phi, w = _rotational2(q, v, e, rot_int)
+        part = law.rotational_energy(rot_int[e, ROT_KIND], rot_real[e], phi, w)
+        energy += part
+        held += abs(part)
+    return energy, held
+
+
 @njit(cache=True)
 def signal_values2(q, v, z, qdd, P, out):
     """Every point's position and velocity (4 per point), every translational element's s_rel,
@@ -807,9 +857,8 @@ def signal_values2(q, v, z, qdd, P, out):
     and its kind's extra outputs (an inerter's device: ``signal_layout``), every
     rotational element's φ_rel, ω_rel, torque, power and energy, the energy (as ``Mechanism.energy``)
     and the largest constraint residual of a 2D scene. Returns a status code."""
-    mass, pbody, ploc, el_int, el_real = P[MASS], P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
-    rot_int, rot_real, jt_int, gravity, dims = P[ROT_INT], P[ROT_REAL], P[JT_INT], P[GRAVITY], P[DIMS]
-    n = dims[N_VELOCITY]
+    pbody, ploc, el_int = P[PBODY], P[PLOC], P[EL_INT]
+    rot_int, rot_real, jt_int = P[ROT_INT], P[ROT_REAL], P[JT_INT]
     status = OK
     k = 0
     for p in range(pbody.shape[0]):
@@ -819,10 +868,7 @@ def signal_values2(q, v, z, qdd, P, out):
         out[k + 2] = vx
         out[k + 3] = vy
         k += 4
-    energy = 0.0
-    for i in range(0, n, 3):        # each body's T + V; `gravity` is all 0 where not declared
-        energy += planar_body_energy(mass[i], mass[i + 2], v[i], v[i + 1], v[i + 2], gravity[i], gravity[i + 1],
-                                     q[i], q[i + 1])
+    energy, _ = _bodies_energy2(q, v, P)
     for e in range(el_int.shape[0]):
         meets, energy, k = _element_signals2(q, v, z, qdd, P, e, energy, out, k)
         if meets:
@@ -998,6 +1044,17 @@ def _signals_by_dimension(q, v, z, qdd, P, out):
     if is_spatial(P):
         return lambda q, v, z, qdd, P, out: signal_values3(q, v, z, qdd, P, out)
     return lambda q, v, z, qdd, P, out: signal_values2(q, v, z, qdd, P, out)
+
+
+def _scene_energy_of(q, v, z, P):
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_scene_energy_of, inline="always")
+def _scene_energy_by_dimension(q, v, z, P):
+    if is_spatial(P):
+        return lambda q, v, z, P: scene_energy3(q, v, z, P)
+    return lambda q, v, z, P: scene_energy2(q, v, z, P)
 
 
 def _element_signals_of(q, v, z, qdd, P, e, out):
@@ -1934,6 +1991,43 @@ def _angle_from3(q, v, rate0, h, e, P):
     return wound(carried(rot_real[e, PHI_REF], h, rate0, rate), phi)
 
 
+@njit(cache=True, inline="always")
+def _bodies_energy3(q, v, P):
+    """Σ over a 3D scene's bodies of T + V (kinematics.spatial_body_energy, M0 = diag(m I, J) per
+    body; `gravity` is all 0 where not declared), and Σ of their magnitudes."""
+    mass, gravity, n = P[MASS], P[GRAVITY], P[DIMS][N_VELOCITY]
+    nqb = _coords_per_body(q, v)
+    energy = held = 0.0
+    for b in range(n // 6):
+        i, c = 6 * b, nqb * b
+        part = spatial_body_energy(mass[i], mass, n + 9 * b, v[i], v[i + 1], v[i + 2], v[i + 3], v[i + 4], v[i + 5],
+                                   gravity[i], gravity[i + 1], gravity[i + 2], q[c], q[c + 1], q[c + 2])
+        energy += part
+        held += abs(part)
+    return energy, held
+
+
+@njit(cache=True)
+def scene_energy3(q, v, z, P):
+    """:func:`scene_energy2` of a 3D scene."""
+    energy, held = _bodies_energy3(q, v, P)
+    el_int, el_real, rot_int, rot_real = P[EL_INT], P[EL_REAL], P[ROT_INT], P[ROT_REAL]
+    ga = carray(_stack(6), 6)
+    gb = carray(_stack(6), 6)
+    for e in range(el_int.shape[0]):
+        kind, _, _, rdx, rdy, rdz, anx, any_, anz, L, ex, ey, ez, _, _ = _element3(q, v, e, el_int, el_real, P[PBODY],
+                                                                                P[PLOC], ga, gb)
+        part = _stored_energy(q, v, z, P, e, kind, L, axial_scalars(rdx, rdy, rdz, anx, any_, anz, ex, ey, ez)[0], 6)
+        energy += part
+        held += abs(part)
+    for e in range(rot_int.shape[0]):
+        _, _, _, _, phi, w, _, _, _ = _rotational3(q, v, e, rot_int, rot_real)
+        part = law.rotational_energy(rot_int[e, ROT_KIND], rot_real[e], phi, w)
+        energy += part
+        held += abs(part)
+    return energy, held
+
+
 @njit(cache=True)
 def signal_values3(q, v, z, qdd, P, out):
     """Every point's position and velocity (6 per point), every translational element's s_rel,
@@ -1942,10 +2036,9 @@ def signal_values3(q, v, z, qdd, P, out):
     φ_rel, ω_rel, torque, power and energy, every body's orientation and angular velocity
     (BODY_OUTPUTS3 each), the energy (as ``Mechanism.energy``) and the largest constraint
     residual. Returns a status code."""
-    mass, pbody, ploc, el_int, el_real = P[MASS], P[PBODY], P[PLOC], P[EL_INT], P[EL_REAL]
-    rot_int, rot_real, jt_int, gravity, dims = P[ROT_INT], P[ROT_REAL], P[JT_INT], P[GRAVITY], P[DIMS]
-    n = dims[N_VELOCITY]
-    nb = n // 6
+    pbody, ploc, el_int = P[PBODY], P[PLOC], P[EL_INT]
+    rot_int, rot_real, jt_int, dims = P[ROT_INT], P[ROT_REAL], P[JT_INT], P[DIMS]
+    nb = dims[N_VELOCITY] // 6
     status = OK
     k = 0
     for p in range(pbody.shape[0]):
@@ -1959,13 +2052,7 @@ def signal_values3(q, v, z, qdd, P, out):
         out[k + 4] = vy
         out[k + 5] = vz
         k += 6
-    # each body's T + V, M0 = diag(m I, J) per body; `gravity` is all 0 where not declared
-    energy = 0.0
-    nqb = _coords_per_body(q, v)
-    for b in range(nb):
-        i, c = 6 * b, nqb * b
-        energy += spatial_body_energy(mass[i], mass, n + 9 * b, v[i], v[i + 1], v[i + 2], v[i + 3], v[i + 4],
-                                      v[i + 5], gravity[i], gravity[i + 1], gravity[i + 2], q[c], q[c + 1], q[c + 2])
+    energy, _ = _bodies_energy3(q, v, P)
     for e in range(el_int.shape[0]):
         meets, energy, k = _element_signals3(q, v, z, qdd, P, e, energy, out, k)
         if meets:
@@ -3394,6 +3481,40 @@ def rk4_watch(f, k2, k3, h, step, monitor):
     return UNSTABLE if grown else OK
 
 
+#: The most one RK4 step may change the energy of a scene that conserves it, relative to what the
+#: scene holds at the step's start (:func:`energy_watch`).
+ENERGY_JUMP_LIMIT = 1.0
+
+
+@njit(cache=True, inline="always")
+def energy_watch(energy, held, monitor):
+    """RK4's energy watch on a scene that conserves its energy (no forcing, no dissipation:
+    ``Mechanism.conserves_energy``; MONITOR_ENERGY_WATCH 1), with the energy and what the scene
+    holds (the sum of its parts' magnitudes, :func:`scene_energy2`) at the end of the step just
+    taken: ENERGY_JUMP where that one step changed the energy by more than ENERGY_JUMP_LIMIT times
+    what the scene held at its start. RK4 changes a conserved energy by O(h⁵) a step; a step across
+    a state where the motion's time scale collapses can multiply it (snap_through_2d at 0.105 s:
+    65 and 6400 times in single steps, while every mode the stages show stays inside RK4's region,
+    :func:`rk4_watch`). Also call it at a run's start, with monitor[MONITOR_ENERGY_HELD] < 0:
+    it takes the start's values. Its values: monitor[MONITOR_ENERGY_LAST:]."""
+    held_before = monitor[MONITOR_ENERGY_HELD]
+    if held_before > 0.0 and abs(energy - monitor[MONITOR_ENERGY_LAST]) > ENERGY_JUMP_LIMIT * held_before:
+        monitor[MONITOR_ENERGY_NOW] = energy
+        return ENERGY_JUMP
+    monitor[MONITOR_ENERGY_LAST] = energy
+    monitor[MONITOR_ENERGY_HELD] = held
+    return OK
+
+
+@njit(cache=True, inline="always")
+def _energy_watch_at(y, P, monitor):
+    """:func:`energy_watch` at the state y = [q, v, z] of the compiled loops."""
+    nq = P[DIMS][N_COORD]
+    nv = nq + P[DIMS][N_VELOCITY]
+    energy, held = _scene_energy_of(y[:nq], y[nq:nv], y[nv:], P)
+    return energy_watch(energy, held, monitor)
+
+
 @njit(cache=True)
 def _rk4_to_meeting(t, h, y, f, grid, k, out, inputs, alpha, P, AB, rhs, gen, acc, before):
     """RK4's step of length h from (t, y, f) brings a translational element's terminals together
@@ -3469,6 +3590,9 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
     steps = 0
     gaps, z = terminal_gaps(y, P)
     ik = np.searchsorted(kinks, t, side="right")             # the next kink: kinks[ik] > t
+    if rarely(monitor[MONITOR_ENERGY_WATCH] != 0.0):
+        monitor[MONITOR_ENERGY_HELD] = -1.0                  # the start's values
+        _energy_watch_at(y, P, monitor)
     while t < t_end:
         h, ik = rk4_step_length(t, t_end, step, kinks, ik)
         st = _rk4_step(t, h, y, f, k2, k3, k4, y_new, f_new, ys, inputs, alpha, P, AB, rhs, gen, acc, before)
@@ -3487,6 +3611,8 @@ def _rk4_run(y, t0, t_end, grid, out, step, max_steps, inputs, alpha, P, jump, k
         if euler_lock_within(y, y_new, P):
             return GIMBAL_LOCK, k, steps, evals, t
         _wind_step_of(y_new, y, h, P)
+        if rarely(monitor[MONITOR_ENERGY_WATCH] != 0.0) and _energy_watch_at(y_new, P, monitor) != OK:
+            return ENERGY_JUMP, k, steps, evals, t          # (after the winding: a 3D angle read wound)
         if rarely(P[DIMS][LOOPS] != 0):
             st, t_stop, k = _rk4_loop_watch(t, y, f, t_new, y_new, f_new, grid, k, out, inputs, alpha, P, work,
                                             monitor)

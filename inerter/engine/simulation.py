@@ -232,17 +232,20 @@ class StepBudget(SimulationError):
     """The run took more than max_steps integrator steps."""
 
 
-def monitor_slots(method, rk4_watch=True) -> np.ndarray:
+def monitor_slots(method, rk4_watch=True, conserves_energy=False) -> np.ndarray:
     """The constants of :class:`StepMonitor` for the compiled loops, and the ratio below which the
     joints' rows count as dependent (``mechanism.DEPENDENT_RATIO``: the kernels' change-point watch,
     kernels.loop_watch), in the slots kernels.MONITOR_*; RK4's stability watch (kernels.rk4_watch)
-    on unless `rk4_watch` is false, its running values at 0. The numpy path's StepMonitor keeps
-    RK4's watch in such an array too."""
+    on unless `rk4_watch` is false, its running values at 0, and its energy watch
+    (kernels.energy_watch) with it for a scene that `conserves_energy`
+    (``Mechanism.conserves_energy``). The numpy path's StepMonitor keeps RK4's watches in such an
+    array too."""
     from inerter.engine import kernels as _k
     monitor = np.zeros(_k.MONITOR_SIZE)
     if method == "RK4" and rk4_watch:
         monitor[_k.MONITOR_RK4_WATCH] = 1.0
         monitor[_k.MONITOR_RK4_GROWTH] = RK4_GROWTH
+        monitor[_k.MONITOR_ENERGY_WATCH] = 1.0 if conserves_energy else 0.0
     monitor[_k.MONITOR_STIFF_BOUND] = STIFFNESS_BOUND.get(method, 0.0)
     monitor[_k.MONITOR_STIFF_EVERY] = STIFFNESS_EVERY
     monitor[_k.MONITOR_STIFF_HITS] = STIFFNESS_HITS
@@ -356,8 +359,24 @@ class UnstableStep(SimulationError):
         self.watch = watch
 
 
+class EnergyJump(SimulationError):
+    """One RK4 step changed the energy of a scene that conserves it by more than it held
+    (kernels.energy_watch)."""
+
+
+def energy_jump_text(step, watch) -> str:
+    """Why a run with RK4 stopped at ENERGY_JUMP, from its watch's slots (kernels.energy_watch)."""
+    from inerter.engine import kernels as _k
+    before, after, held = watch[_k.MONITOR_ENERGY_LAST], watch[_k.MONITOR_ENERGY_NOW], watch[_k.MONITOR_ENERGY_HELD]
+    return (f"an RK4 step (experiment.step = {step:.3g} s) changed the scene's energy from {before:.6g} J to "
+            f"{after:.6g} J, by more "
+            f"than the {held:.3g} J its bodies and elements held (the sum of their T + V): the scene conserves its "
+            f"energy (no forcing, no damping), so the step is too long for the motion there; set a shorter "
+            f"experiment.step, or use an adaptive method (DOP853)")
+
+
 #: The numpy path's failures whose message names their cause: no RK4 hint (:func:`rk4_hint`).
-NAMES_ITS_CAUSE = (UnstableStep, StepBudget)
+NAMES_ITS_CAUSE = (UnstableStep, StepBudget, EnergyJump)
 
 
 #: scipy's words when an implicit method's step size reaches the spacing of floating-point numbers.
@@ -377,7 +396,14 @@ class StepMonitor:
         keeps one across its steps), a fresh one if None."""
         self.mech, self.method, self.max_steps = mech, method, max_steps
         self.bound = STIFFNESS_BOUND.get(method)
-        self.watch = watch if watch is not None or method != "RK4" else monitor_slots("RK4")
+        if watch is None and method == "RK4":
+            watch = monitor_slots("RK4", conserves_energy=mech.conserves_energy())
+        self.watch = watch
+        self.energy_on = False
+        if watch is not None:
+            from inerter.engine import kernels as _k
+            watch[_k.MONITOR_ENERGY_HELD] = -1.0         # the energy watch starts at this call's state
+            self.energy_on = watch[_k.MONITOR_ENERGY_WATCH] != 0.0
         self.steps = 0
         self.hits = self.calm = 0
         self.small = 0
@@ -412,6 +438,8 @@ class StepMonitor:
         else:
             self.small = 0
         self.mech.wind(solver.y, y_old, h)
+        if self.energy_on:
+            self._energy(solver, y_old)
 
     def stop_at_meeting(self, solver, t_old, y_old, f_old=None, t_new=None):
         """Terminals meet within the step from (t_old, y_old) to solver.t (or to `t_new`, RK4's step
@@ -493,6 +521,20 @@ class StepMonitor:
         k2, k3 = solver.midpoints
         if _k.rk4_watch.py_func(solver.f_old, k2, k3, h, solver.h, self.watch) != _k.OK:
             raise UnstableStep(rk4_unstable_text(solver.h, self.watch), solver.t_old, watch=self.watch.copy())
+
+    def _energy(self, solver, y_old):
+        """RK4's energy watch on a scene that conserves its energy: the kernels'
+        (``kernels.energy_watch``), run uncompiled, at the step's end (after the 3D angles wound on,
+        as the compiled loop) and, at the first step of a call, at its start."""
+        from inerter.engine import kernels as _k
+        mech = self.mech
+        nq, n = mech.nq, mech.n
+        if self.watch[_k.MONITOR_ENERGY_HELD] < 0.0:
+            _k.energy_watch.py_func(*mech.energy_held(y_old[:nq], y_old[nq:nq + n], y_old[nq + n:]), self.watch)
+        y = solver.y
+        energy, held = mech.energy_held(y[:nq], y[nq:nq + n], y[nq + n:])
+        if _k.energy_watch.py_func(energy, held, self.watch) != _k.OK:
+            raise EnergyJump(energy_jump_text(solver.t - solver.t_old, self.watch), solver.t_old)
 
     def _stiffness(self, solver, h):
         K = getattr(solver, "K", None)

@@ -906,12 +906,30 @@ class Mechanism:
     def energy(self, q, v, z=None) -> float:
         """T + V: ½vᵀM v + Σ ½bL̇² (inerters) + elastic and gravity potential. Conserved by the
         corrected model without damping and forcing (the inerter adds ½bL̇² to T, Sec. 2.2)."""
-        E = sum(self.body_energy(i, q, v) for i in range(len(self.body_names)))
-        for e in self.elements:
-            E += e.kinetic(q, v) + e.potential(q)
-        for e in self.stateful:                 # a series connection's ½ b u̇² + ½ k_c d²
-            E += e.state_energy(q, v, self.z0 if z is None else z)
-        return float(E)
+        return self.energy_held(q, v, z)[0]
+
+    def energy_held(self, q, v, z=None) -> tuple[float, float]:
+        """(:meth:`energy`, what the scene holds: the sum of its parts' magnitudes, each body's T + V
+        and each element's stored energy; as the kernels' ``scene_energy2``, RK4's energy watch)."""
+        parts = [self.body_energy(i, q, v) for i in range(len(self.body_names))]
+        parts += [e.kinetic(q, v) + e.potential(q) for e in self.elements]
+        z = self.z0 if z is None else z
+        for e in self.stateful:                 # a series connection's ½ b u̇² + ½ k_c d², its element's
+            parts[len(self.body_names) + self.elements.index(e)] += e.state_energy(q, v, z)
+        return float(sum(parts)), float(sum(abs(p) for p in parts))
+
+    def conserves_energy(self) -> bool:
+        """Whether the scene conserves :meth:`energy`: no applied forces or inputs, no ground
+        motion, springs, ideal inerters and rotational springs only (no damper, no device: its
+        friction, efficiency or end stops take energy out), every inerter with its centripetal
+        term (Eq. 9: F = b d²L/dt² stores ½bL̇²; the uncorrected Eq. 8 and the small-displacement
+        law do work of their own, Sec. 2.2). RK4's energy watch runs on such scenes alone."""
+        s = self.scene
+        kinds = {e.type for e in s.elements.values()}
+        return (not s.forces and self.ground_motion is None and not self.input_names
+                and kinds <= {"spring", "inerter", "rotational_spring"}
+                and all(e.device is None for e in s.elements.values())
+                and ("inerter" not in kinds or (s.centripetal and not s.small_displacement)))
 
     def body_energy(self, i, q, v) -> float:
         """Body i's ½ vᵀ M0 v over its block and its weight's potential −m g·R

@@ -266,13 +266,19 @@ def rk4_unstable_text(step, watch) -> str:
     growth = watch[_k.MONITOR_RK4_AMPLITUDE] / watch[_k.MONITOR_RK4_FIRST]
     re = z.real if abs(z.real) > 1e-9 * abs(z) else 0.0      # an undamped pair's, to round-off
     mode = f"{re:.3g} ± {z.imag:.3g}i" if z.imag else f"{re:.3g}"
-    fraction = rk4_stable_fraction(z)
-    advice = (f"set experiment.step below about {_two_digits_down(step * fraction):.2g} s" if fraction > 0.0
-              else "set a shorter experiment.step")
+    advice = _below_about("step", step, "s", rk4_stable_fraction(z))
     return (f"RK4's step of {step:.3g} s is beyond its stability limit: h·λ ≈ {mode} (|h·λ| = {abs(z):.3g}) "
             f"for a mode of the scene lies outside RK4's stability region, where each step multiplies it by "
             f"|R(h·λ)| = {_k.rk4_amplification.py_func(z.real, z.imag):.3g}, and it grew {growth:.3g} times over "
             f"the last {steps} steps; {advice}, or use an adaptive method (DOP853; Radau or BDF for a stiff scene)")
+
+
+def _below_about(field: str, value: float, unit: str, fraction: float) -> str:
+    """The advice to set experiment.`field` below `fraction` of its `value`, rounded down to two
+    digits (RK4's region along a mode's h·λ, :func:`rk4_stable_fraction`)."""
+    if fraction > 0.0:
+        return f"set experiment.{field} below about {_two_digits_down(value * fraction):g} {unit}"
+    return f"set a smaller experiment.{field}"
 
 
 def _two_digits_down(x: float) -> float:
@@ -324,9 +330,7 @@ def baumgarte_text(step: float, alpha: float, rows: int, watch) -> str:
     if rows == 0 or own <= 0.0 or abs(z.imag) > BAUMGARTE_WINDOW * abs(z) \
             or abs(z.real + own) > BAUMGARTE_WINDOW * own:
         return ""
-    fraction = rk4_stable_fraction(z)
-    advice = (f"set experiment.baumgarte below about {_two_digits_down(alpha * fraction):g} 1/s" if fraction > 0.0
-              else "set a smaller experiment.baumgarte")
+    advice = _below_about("baumgarte", alpha, "1/s", rk4_stable_fraction(z))
     return (f"; this mode is the joints' Baumgarte correction: experiment.baumgarte = α = {alpha:g} 1/s makes a "
             f"violation C of the joints obey C'' + 2αC' + α²C = 0, λ = −α twice (h·α = {own:.3g}, where RK4's region "
             f"reaches 2.785 along the negative real axis; the motion moves it to h·λ ≈ {z.real:.3g}); {advice}, "

@@ -80,6 +80,11 @@ MOUNT_NEAR = 0.05
 MEET_RELATIVE = 1e-6
 
 
+#: What a state whose accelerations cannot be evaluated says (the system solve not finite, or the
+#: elements' geometry overflowing to NaN on a huge but finite state), as the kernels' NOT_FINITE.
+_NOT_FINITE = "accelerations are not finite (the system matrix is near-singular or a force is unbounded)"
+
+
 class TimeFunction:
     """A point force's magnitude as a function of time (constant, sine, step) or a held input."""
 
@@ -871,7 +876,12 @@ class Mechanism:
         return self._accelerations(t, q, v, inputs, alpha, z)       # unsettled: the modes last set
 
     def _accelerations(self, t, q, v, inputs, alpha, z):
-        M, Q = self.assemble(t, q, v, inputs, z=z)
+        try:
+            M, Q = self.assemble(t, q, v, inputs, z=z)
+        except (ValueError, OverflowError) as exc:     # a finite state whose geometry overflowed
+            if "NaN" not in str(exc) and "infinity" not in str(exc):
+                raise
+            raise SimulationError(_NOT_FINITE, t, recoverable=True) from None
         if not self.m:
             return self._solve(M, Q, t), np.zeros(0)
         C, Cq, gamma = self.constraints(q, v)
@@ -891,8 +901,7 @@ class Mechanism:
                                   "coordinate has no mass (check zero masses/inertias and the inerters)", t,
                                   recoverable=True)
         if not np.all(np.isfinite(x)):
-            raise SimulationError("accelerations are not finite (the system matrix is near-singular or a "
-                                  "force is unbounded)", t, recoverable=True)
+            raise SimulationError(_NOT_FINITE, t, recoverable=True)
         return x
 
     def state_rates(self, q, v, z, a) -> np.ndarray:

@@ -175,3 +175,43 @@ def test_the_step_a_chain_is_advised_is_inside_the_region(tmp_path):
     r = model.simulate(method="RK4", step=advised, stop_time=2.0, path="compiled", metrics=False)
     tip = np.hypot(r["P32b.r[1]"] - ref["P32b.r[1]"], r["P32b.r[2]"] - ref["P32b.r[2]"])
     assert r.status == "ok" and np.max(tip) < 1e-4, (advised, r.status, np.max(tip))
+
+
+@pytest.mark.xfail(strict=True, reason="several modes in the stages: the fit alternates between them, the count "
+                                       "restarts, and the top mode saturates where stage states flip springs")
+@pytest.mark.parametrize("path", PATHS)
+def test_a_damped_three_mass_chain_beyond_the_region_does_not_end_ok(path, tmp_path):
+    """Three 1 kg masses on sliders, springs of 1e4 N/m between neighbours (the first to the ground)
+    with dampers of 5, 30 and 80 N·s/m beside them (built here, as in line_scene): linear while the
+    springs keep their direction, its eigenvalues (M⁻¹ of the 6×6 first-order system, numpy) are
+    −2.11 ± 44.7i, −32.2 ± 135.3i and −78.2 ± 140.3i; the longest step with all three inside the
+    region is 16.34 ms. At 1.05 times that (17.16 ms) the top mode has h·λ = −1.34 ± 2.41i and
+    |R| = 1.17 a step, and the chain's energy, 8.1 J at the start and only dissipated, must decay.
+    The run ends with status ok after 400 steps on both paths, its energy 2.3e3 J (compiled) and
+    2.6e3 J (numpy), the masses up to 0.7 m off DOP853. The run is linear for its first 0.2 s
+    (doubling the initial displacements doubles the samples) and not after: the top mode grew until
+    something nonlinear bounded it (likely stage states passing springs through zero length, where
+    their direction flips); the watch's count restarted every few steps, its fit alternating
+    between the modes."""
+    masses, springs, dampers = [1.0, 1.0, 1.0], [1e4, 1e4, 1e4], [5.0, 30.0, 80.0]
+    n = 3
+    K, C = np.zeros((n, n)), np.zeros((n, n))
+    for A, values in ((K, springs), (C, dampers)):
+        for i, v in enumerate(values):
+            A[i, i] += v
+            if i > 0:
+                A[i - 1, i - 1] += v
+                A[i - 1, i] -= v
+                A[i, i - 1] -= v
+    J = np.block([[np.zeros((n, n)), np.eye(n)], [-K / masses[0], -C / masses[0]]])
+    top = max(np.linalg.eigvals(J), key=abs)
+    h = 0.01716
+    assert amplification(h * top) == pytest.approx(1.17, abs=0.01)
+    path_toml = line_scene(tmp_path / "line3.toml", masses, springs, d0=[0.01, -0.02, 0.005])
+    text = path_toml.read_text().replace("[experiment]", "".join(
+        f'[elements.c{i}]\ntype = "damper"\nbetween = ["{"O" if i == 0 else f"P{i - 1}"}", "P{i}"]\nc = {c!r}\n\n'
+        for i, c in enumerate(dampers)) + "[experiment]")
+    path_toml.write_text(text)
+    r = inerter.load(path_toml).simulate(method="RK4", step=h, stop_time=400 * h, path=path, metrics=False)
+    energy = np.asarray(r["energy"])
+    assert r.status == "failed" or energy[-1] < energy[0], (r.status, energy[0], energy[-1])

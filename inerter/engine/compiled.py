@@ -1878,14 +1878,16 @@ def failure_text(kernel, status, settings, h, y_last, t_last, max_steps=None, mo
         return (sim.rk4_unstable_text(h, monitor) + kernel.mech.stiffest()
                 + sim.baumgarte_text(h, settings.alpha, kernel.mech.m, monitor))
     if status == _k.ENERGY_JUMP:
-        return sim.energy_jump_text(h, monitor)
+        return sim.energy_jump_text(h, monitor) + sim.watch_so_far(h, monitor)
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)
     if status in (_k.STEP_TOO_SMALL, _k.SINGULAR, _k.NOT_FINITE, _k.COLLAPSED, _k.CHANGE_POINT) \
             and y_last is not None:         # as the numpy path: what may have stalled it
         text += kernel.mech.diagnose(y_last)        # it reads the state's q
     if status in (_k.STIFF, _k.COLLAPSED):          # as the numpy path: StiffForMethod, StepCollapse
         text += kernel.mech.stiffest()
-    return text + sim.rk4_hint(method, status == _k.MAX_STEPS)       # ENERGY_JUMP, UNSTABLE: above
+    if status == _k.MAX_STEPS:
+        return text
+    return text + (sim.watch_so_far(h, monitor) or sim.rk4_hint(method, False))
 
 
 def _status_text(kernel, status, method, h, y_last, t_last, max_steps):

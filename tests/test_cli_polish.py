@@ -238,7 +238,7 @@ def test_the_compiled_loops_stiff_and_collapse_failures_name_the_stiffest_effect
     kernel = compiled._kernel_for(model.mechanism)
     mech = model.mechanism
     y = np.concatenate([mech.q0, mech.v0, mech.z0])       # the state the loop stopped at: t = 0 here
-    text = compiled.failure_text(kernel, status, "DOP853", 1e-9, y, 0.0)
+    text = compiled.failure_text(kernel, status, model.settings(method="DOP853"), 1e-9, y, 0.0)
     assert text.endswith("; the narrowest switch, element 'dev': efficiency.velocity_scale = 1e-06 m/s"), text
     assert "; likely cause: the stiffest effect, element 'dev': series compliance k_c = 1e+09 N/m on b η_b = 0.02 kg " \
            "(η_b = 0.05): its mode √(k_c/(b η_b)) = 2.24e+05 rad/s" in text, text

@@ -1182,7 +1182,8 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         out[k:k + written] = seg_out[1:1 + written]
         k += written
         if status != 0:
-            stopped = y_reached if status in (_k.CHANGE_POINT, _k.TERMINALS_MEET, _k.MEETING) else None  # its state
+            stopped = (y_reached if status in (_k.CHANGE_POINT, _k.TERMINALS_MEET, _k.MEETING, _k.UNSTABLE)
+                       else None)          # its state (UNSTABLE: at the start of the step that stopped it)
             break
         y, t0 = seg_out[-1, :ny].copy(), t1
     cpu = _time.process_time() - start
@@ -1871,12 +1872,14 @@ def failure_text(kernel, status, settings, h, y_last, t_last, max_steps=None, mo
     singularity); where the step size collapsed or the steps read as stiff, the scene's fastest time
     scale (``Mechanism.stiffest``: a device's series mode, the narrowest tanh switch); where RK4's
     step was beyond its stability limit, its watch's values in `monitor` (kernels.rk4_watch) and
-    whether the constraints' Baumgarte mode is such a mode (``simulation.baumgarte_text``)."""
+    what to set, from the scene's linearisation at `y_last` (``simulation.rk4_advice``: the step,
+    the joints' Baumgarte α where their correction sets the limit)."""
     from inerter.engine import simulation as sim
     method = settings.method
     if status == _k.UNSTABLE:
-        return (sim.rk4_unstable_text(h, monitor) + kernel.mech.stiffest()
-                + sim.baumgarte_text(h, settings.alpha, kernel.mech.m, monitor))
+        return (sim.rk4_unstable_text(h, monitor)
+                + sim.rk4_advice(h, settings.alpha, kernel.m, monitor, lambda alpha: kernel.derivative(None, alpha),
+                                 t_last, y_last) + kernel.mech.stiffest())
     if status == _k.ENERGY_JUMP:
         return sim.energy_jump_text(h, monitor) + sim.watch_so_far(h, monitor)
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)

@@ -258,17 +258,83 @@ def monitor_slots(method, rk4_watch=True, conserves_energy=False) -> np.ndarray:
 
 def rk4_unstable_text(step, watch) -> str:
     """Why a run with RK4 stopped at UNSTABLE, from its watch's slots (kernels.rk4_watch): the
-    mode's h·λ and RK4's factor on it, its growth over its steps in a row beyond RK4's stability
-    region, and the longest step that keeps h·λ inside the region (:func:`rk4_stable_fraction`)."""
+    mode's h·λ and RK4's factor on it, and its growth over its steps in a row beyond RK4's
+    stability region. What to set follows (:func:`rk4_advice`)."""
     from inerter.engine import kernels as _k
     z = complex(watch[_k.MONITOR_RK4_RE], watch[_k.MONITOR_RK4_IM])
     steps = int(watch[_k.MONITOR_RK4_HITS]) - 1            # from the first one's start
     growth = watch[_k.MONITOR_RK4_AMPLITUDE] / watch[_k.MONITOR_RK4_FIRST]
-    advice = _below_about("step", step, "s", rk4_stable_fraction(z))
     return (f"RK4's step of {step:.3g} s is beyond its stability limit: h·λ ≈ {_mode_text(z)} (|h·λ| = {abs(z):.3g}) "
             f"for a mode of the scene lies outside RK4's stability region, where each step multiplies it by "
             f"|R(h·λ)| = {_k.rk4_amplification.py_func(z.real, z.imag):.3g}, and it grew {growth:.3g} times over "
-            f"the last {steps} steps; {advice}, or use an adaptive method (DOP853; Radau or BDF for a stiff scene)")
+            f"the last {steps} steps")
+
+
+def rk4_advice(step, alpha, rows, watch, fun_at, t, y) -> str:
+    """What to set after RK4's stability watch stopped a run (UNSTABLE) at the state y at t: the
+    longest step that keeps every mode of the scene's linearisation there inside RK4's region
+    (:func:`linearised_modes`, :func:`limiting_mode`; the watch's fit from the stages reads one
+    mode, or a mixture of several: the 32-link benchmark chain at 17.5 ms read −2.94 where its
+    fastest mode is −0.33 ± 3.37i, and the step it gave, 16 ms, was still outside), or the fit's
+    where no mode of the linearisation is outside (a nonlinear growth) or it cannot be evaluated.
+    `fun_at(α)`: the state derivative f(t, y) with Baumgarte's α. With `rows` constraint rows
+    corrected at `alpha`, the modes at α/2 tell whether the correction sets the limit
+    (:func:`baumgarte_text`). A state of more than LINEARISED_SIZE coordinates keeps the fit's
+    (two dense eigenvalue problems of its size and 4·len(y) evaluations would take seconds)."""
+    from inerter.engine import kernels as _k
+    linearised = y is not None and len(y) <= LINEARISED_SIZE
+    limit = limiting_mode(step, linearised_modes(fun_at(alpha), t, y)) if linearised else None
+    adaptive = ", or use an adaptive method (DOP853; Radau or BDF for a stiff scene)"
+    if limit is None:
+        z = complex(watch[_k.MONITOR_RK4_RE], watch[_k.MONITOR_RK4_IM])
+        return f"; {_below_about('step', step, 's', rk4_stable_fraction(z))}{adaptive}"
+    fraction, z = limit
+    text = (f"; linearised where it stopped, the scene's mode farthest outside the region has h·λ ≈ "
+            f"{_mode_text(z)}: {_below_about('step', step, 's', fraction)}{adaptive}")
+    if rows and alpha > 0.0:
+        text += baumgarte_text(step, alpha, fraction, z, limiting_mode(step, linearised_modes(fun_at(alpha / 2), t, y)))
+    return text
+
+
+#: The largest state RK4's advice linearises (:func:`rk4_advice`): a 64-link chain's 384.
+LINEARISED_SIZE = 500
+
+
+def linearised_modes(fun, t, y):
+    """The eigenvalues of J = ∂f/∂y at (t, y), by central differences (2·len(y) evaluations of `fun`,
+    each coordinate moved by ε^(1/3)·max(1, |y_i|)); None where an evaluation fails."""
+    y = np.array(y, dtype=float)
+    J = np.empty((len(y), len(y)))
+    try:
+        for i in range(len(y)):
+            d = 6e-6 * max(1.0, abs(y[i]))
+            up, down = y.copy(), y.copy()
+            up[i] += d
+            down[i] -= d
+            J[:, i] = (np.asarray(fun(t, up)) - np.asarray(fun(t, down))) / (2.0 * d)
+    except (SimulationError, ArithmeticError, ValueError):
+        return None
+    if not np.isfinite(J).all():
+        return None
+    return np.linalg.eigvals(J)
+
+
+def limiting_mode(step, modes):
+    """(the largest s ≤ 1 with s·step·λ inside RK4's region for every mode, the step·λ that sets
+    it), the modes outside at s = 1 alone judged (:func:`rk4_stable_fraction`); None where none is
+    outside, or `modes` is None."""
+    from inerter.engine import kernels as _k
+    if modes is None:
+        return None
+    worst = None
+    for lam in modes:
+        z = complex(step * lam)
+        if _k.rk4_amplification.py_func(z.real, z.imag) <= (1.0 + _k.RK4_EXCESS) * _k._exact_growth.py_func(z.real):
+            continue
+        fraction = rk4_stable_fraction(z)
+        if worst is None or fraction < worst[0]:
+            worst = (fraction, z)
+    return worst
 
 
 def _mode_text(z: complex) -> str:
@@ -329,9 +395,13 @@ def failure_context(exc, settings, mech, watch=None) -> str:
     the last's (:func:`baumgarte_text`), and RK4's hint for a failure that does not name its cause
     (:func:`rk4_hint`), or what RK4's stability watch (its slots `watch`) had counted before
     (:func:`watch_so_far`). As the compiled loops' ``compiled.failure_text`` adds them."""
-    text = mech.stiffest() if isinstance(exc, (StepCollapse, StiffForMethod, UnstableStep)) else ""
+    text = ""
     if isinstance(exc, UnstableStep):
-        text += baumgarte_text(settings.step, settings.alpha, mech.m, exc.watch)
+        inputs = np.zeros(len(mech.input_names))
+        text += rk4_advice(settings.step, settings.alpha, mech.m, exc.watch,
+                           lambda alpha: derivative(mech, inputs, alpha), exc.time, exc.state)
+    if isinstance(exc, (StepCollapse, StiffForMethod, UnstableStep)):
+        text += mech.stiffest()
     if isinstance(exc, EnergyJump):
         return text + watch_so_far(settings.step, watch)
     if isinstance(exc, NAMES_ITS_CAUSE):
@@ -339,33 +409,26 @@ def failure_context(exc, settings, mech, watch=None) -> str:
     return text + (watch_so_far(settings.step, watch) or rk4_hint(settings.method, False))
 
 
-def baumgarte_text(step: float, alpha: float, rows: int, watch) -> str:
-    """Whether the mode RK4's watch stopped a run on (its fitted h·λ in `watch`, kernels.rk4_watch)
-    is the joints' Baumgarte correction, and what to set: with `rows` constraint rows corrected at
-    α = `alpha`, a violation C obeys C̈ + 2αĊ + α²C = 0, a real mode λ = −α (twice), which RK4 at
-    the step `step` keeps only while h·α stays inside its region (2.785 along the negative real
-    axis). The scene's motion moves the mode as RK4 sees it (two_bar_2d at 0.01 s: h·λ ≈ −3.11 at
-    h·α = 3, −2.82 at h·α = 2.7, which grows), so a fitted h·λ real and within
-    BAUMGARTE_WINDOW of −h·α counts as that mode; the advice scales α as the step advice scales
-    the step (:func:`rk4_stable_fraction` along the fitted h·λ). Empty for any other mode."""
-    from inerter.engine import kernels as _k
-    if watch is None:
+def baumgarte_text(step, alpha, fraction, z, at_half) -> str:
+    """Whether the joints' Baumgarte correction at α = `alpha` sets RK4's step limit, `fraction` of
+    `step` along the mode z = h·λ (:func:`limiting_mode`), given the limit `at_half` with α/2: a
+    violation C obeys C̈ + 2αĊ + α²C = 0, a mode λ = −α (twice) that the scene's motion moves and
+    splits (two_bar_2d at 0.0559 s, α·h = 2.7: its linearisation reaches −2.83, and the watch read
+    −3.46), so α·h < 2.785 alone does not tell. Where halving α lengthens the limit by more than
+    BAUMGARTE_RELAXED, the correction sets it: the advice scales α as the step (the correction's
+    modes scale with α). Empty otherwise."""
+    if at_half is not None and at_half[0] <= BAUMGARTE_RELAXED * fraction:
         return ""
-    z = complex(watch[_k.MONITOR_RK4_RE], watch[_k.MONITOR_RK4_IM])
-    own = alpha * step
-    if rows == 0 or own <= 0.0 or abs(z.imag) > BAUMGARTE_WINDOW * abs(z) \
-            or abs(z.real + own) > BAUMGARTE_WINDOW * own:
-        return ""
-    advice = _below_about("baumgarte", alpha, "1/s", rk4_stable_fraction(z))
-    return (f"; this mode is the joints' Baumgarte correction: experiment.baumgarte = α = {alpha:g} 1/s makes a "
-            f"violation C of the joints obey C'' + 2αC' + α²C = 0, λ = −α twice (h·α = {own:.3g}, where RK4's region "
-            f"reaches 2.785 along the negative real axis; the motion moves it to h·λ ≈ {z.real:.3g}); {advice}, "
-            f"or a shorter step")
+    return (f"; this mode is the joints' Baumgarte correction (with experiment.baumgarte at half its value, "
+            f"no mode sets a shorter limit): α = {alpha:g} 1/s makes a violation C of the joints obey "
+            f"C'' + 2αC' + α²C = 0, λ = −α twice (h·α = {alpha * step:.3g}), which the motion moves to "
+            f"h·λ ≈ {_mode_text(z)}; {_below_about('baumgarte', alpha, '1/s', fraction)} (the limit where it "
+            f"stopped: the motion moves the mode, so leave a margin), or a shorter step")
 
 
-#: How far (relative) a fitted h·λ may lie from −h·α, and off the real axis, and count as the
-#: Baumgarte correction's mode (:func:`baumgarte_text`): the motion moved it by 4 % on two_bar_2d.
-BAUMGARTE_WINDOW = 0.1
+#: How much longer RK4's step limit must get with Baumgarte's α halved for the correction to count
+#: as what sets it (:func:`baumgarte_text`); a mode of the scene's own sets the same limit at α/2.
+BAUMGARTE_RELAXED = 1.2
 
 
 def rk4_hint(method: str, names_its_cause: bool) -> str:
@@ -382,11 +445,11 @@ def rk4_hint(method: str, names_its_cause: bool) -> str:
 
 class UnstableStep(SimulationError):
     """RK4's fixed step is beyond the method's stability limit and a mode grows (kernels.rk4_watch):
-    `watch`, the watch's slots when it stopped the run."""
+    `watch`, the watch's slots when it stopped the run, `state` the state at the start of the step."""
 
-    def __init__(self, message: str, time: float | None = None, watch=None):
+    def __init__(self, message: str, time: float | None = None, watch=None, state=None):
         super().__init__(message, time)
-        self.watch = watch
+        self.watch, self.state = watch, state
 
 
 class EnergyJump(SimulationError):
@@ -457,7 +520,7 @@ class StepMonitor:
         if self.bound is not None and (self.hits or self.steps % STIFFNESS_EVERY == 0):
             self._stiffness(solver, h)
         if self.watch is not None:
-            self._rk4_stability(solver, h)
+            self._rk4_stability(solver, h, y_old)
         if h < COLLAPSE_RELATIVE * max(1.0, abs(t)):
             self.small += 1
             if self.small >= COLLAPSE_STEPS:
@@ -544,13 +607,14 @@ class StepMonitor:
         raise SimulationError("a step reaches a pose where the joints' constraint rows lose rank"
                               + self.mech.diagnose(q), where)
 
-    def _rk4_stability(self, solver, h):
+    def _rk4_stability(self, solver, h, y_old):
         """RK4's stability watch on the step just taken: the kernels' (``kernels.rk4_watch``), run
         uncompiled."""
         from inerter.engine import kernels as _k
         k2, k3 = solver.midpoints
         if _k.rk4_watch.py_func(solver.f_old, k2, k3, h, solver.h, self.watch) != _k.OK:
-            raise UnstableStep(rk4_unstable_text(solver.h, self.watch), solver.t_old, watch=self.watch.copy())
+            raise UnstableStep(rk4_unstable_text(solver.h, self.watch), solver.t_old, watch=self.watch.copy(),
+                               state=np.array(y_old))
 
     def _energy(self, solver, y_old):
         """RK4's energy watch on a scene that conserves its energy: the kernels'

@@ -48,16 +48,23 @@ def line_scene(path, masses, springs, d0, force=None):
     return path
 
 
+def chain_matrix(values) -> np.ndarray:
+    """The stiffness (or damping) matrix of a line of masses joined by elements of `values`, the
+    first to the ground."""
+    n = len(values)
+    A = np.zeros((n, n))
+    for i, v in enumerate(values):
+        A[i, i] += v
+        if i > 0:
+            A[i - 1, i - 1] += v
+            A[i - 1, i] -= v
+            A[i, i - 1] -= v
+    return A
+
+
 def line_omegas(masses, springs) -> np.ndarray:
     """The chain's natural frequencies: √ of the eigenvalues of M⁻¹K."""
-    n = len(masses)
-    K = np.zeros((n, n))
-    for i, k in enumerate(springs):
-        K[i, i] += k
-        if i > 0:
-            K[i - 1, i - 1] += k
-            K[i - 1, i] -= k
-            K[i, i - 1] -= k
+    K = chain_matrix(springs)
     return np.sqrt(np.sort(np.linalg.eigvals(np.diag(1.0 / np.asarray(masses)) @ K).real))
 
 
@@ -205,14 +212,7 @@ def test_a_damped_three_mass_chain_beyond_the_region_does_not_end_ok(path, tmp_p
     between the modes."""
     masses, springs, dampers = [1.0, 1.0, 1.0], [1e4, 1e4, 1e4], [5.0, 30.0, 80.0]
     n = 3
-    K, C = np.zeros((n, n)), np.zeros((n, n))
-    for A, values in ((K, springs), (C, dampers)):
-        for i, v in enumerate(values):
-            A[i, i] += v
-            if i > 0:
-                A[i - 1, i - 1] += v
-                A[i - 1, i] -= v
-                A[i, i - 1] -= v
+    K, C = chain_matrix(springs), chain_matrix(dampers)
     J = np.block([[np.zeros((n, n)), np.eye(n)], [-K / masses[0], -C / masses[0]]])
     top = max(np.linalg.eigvals(J), key=abs)
     h = 0.01716

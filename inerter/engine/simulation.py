@@ -261,13 +261,20 @@ def rk4_unstable_text(step, watch) -> str:
     mode's h·λ and RK4's factor on it, and its growth over its steps in a row beyond RK4's
     stability region. What to set follows (:func:`rk4_advice`)."""
     from inerter.engine import kernels as _k
-    z = complex(watch[_k.MONITOR_RK4_RE], watch[_k.MONITOR_RK4_IM])
+    z, factor, growth = _watched_mode(watch)
     steps = int(watch[_k.MONITOR_RK4_HITS]) - 1            # from the first one's start
-    growth = watch[_k.MONITOR_RK4_AMPLITUDE] / watch[_k.MONITOR_RK4_FIRST]
     return (f"RK4's step of {step:.3g} s is beyond its stability limit: h·λ ≈ {_mode_text(z)} (|h·λ| = {abs(z):.3g}) "
             f"for a mode of the scene lies outside RK4's stability region, where each step multiplies it by "
-            f"|R(h·λ)| = {_k.rk4_amplification.py_func(z.real, z.imag):.3g}, and it grew {growth:.3g} times over "
-            f"the last {steps} steps")
+            f"|R(h·λ)| = {factor:.3g}, and it grew {growth:.3g} times over the last {steps} steps")
+
+
+def _watched_mode(watch) -> tuple[complex, float, float]:
+    """(the mode's step·λ, RK4's factor |R| on it, its growth over the steps counted) from the
+    stability watch's slots `watch` (kernels.rk4_watch)."""
+    from inerter.engine import kernels as _k
+    z = complex(watch[_k.MONITOR_RK4_RE], watch[_k.MONITOR_RK4_IM])
+    return (z, _k.rk4_amplification.py_func(z.real, z.imag),
+            watch[_k.MONITOR_RK4_AMPLITUDE] / watch[_k.MONITOR_RK4_FIRST])
 
 
 def rk4_advice(step, alpha, rows, watch, fun_at, t, y) -> str:
@@ -323,13 +330,12 @@ def limiting_mode(step, modes):
     """(the largest s ≤ 1 with s·step·λ inside RK4's region for every mode, the step·λ that sets
     it), the modes outside at s = 1 alone judged (:func:`rk4_stable_fraction`); None where none is
     outside, or `modes` is None."""
-    from inerter.engine import kernels as _k
     if modes is None:
         return None
     worst = None
     for lam in modes:
         z = complex(step * lam)
-        if _k.rk4_amplification.py_func(z.real, z.imag) <= (1.0 + _k.RK4_EXCESS) * _k._exact_growth.py_func(z.real):
+        if not _outside_region(z):
             continue
         fraction = rk4_stable_fraction(z)
         if worst is None or fraction < worst[0]:
@@ -352,11 +358,10 @@ def watch_so_far(step, watch) -> str:
     from inerter.engine import kernels as _k
     if watch is None or watch[_k.MONITOR_RK4_WATCH] == 0.0 or watch[_k.MONITOR_RK4_HITS] < _k.RK4_MIN_STEPS:
         return ""
-    z = complex(watch[_k.MONITOR_RK4_RE], watch[_k.MONITOR_RK4_IM])
-    growth = watch[_k.MONITOR_RK4_AMPLITUDE] / watch[_k.MONITOR_RK4_FIRST]
+    z, factor, growth = _watched_mode(watch)
     return (f"; before it, RK4's stability watch had counted {int(watch[_k.MONITOR_RK4_HITS])} steps in a row "
             f"beyond the method's stability region (h·λ ≈ {_mode_text(z)}, |R(h·λ)| = "
-            f"{_k.rk4_amplification.py_func(z.real, z.imag):.3g}, grown {growth:.3g} times): RK4's step of "
+            f"{factor:.3g}, grown {growth:.3g} times): RK4's step of "
             f"{step:.3g} s is the likely cause; {_below_about('step', step, 's', rk4_stable_fraction(z))}")
 
 
@@ -378,14 +383,19 @@ def rk4_stable_fraction(z: complex) -> float:
     """The largest s ≤ 1 (to 5e-4) with s·z inside RK4's stability region all the way from 0, as
     the watch counts it (``kernels.rk4_watch``: |R(s z)| within RK4_EXCESS of max(1, |e^(s z)|));
     0 where there is none."""
-    from inerter.engine import kernels as _k
     inside = 0.0
     for s in np.linspace(0.0, 1.0, 2001)[1:]:
-        re, im = s * z.real, s * z.imag
-        if _k.rk4_amplification.py_func(re, im) > (1.0 + _k.RK4_EXCESS) * _k._exact_growth.py_func(re):
+        if _outside_region(s * z):
             break
         inside = float(s)
     return inside
+
+
+def _outside_region(z: complex) -> bool:
+    """Whether RK4's watch counts a step at step·λ = z as beyond its stability region
+    (``kernels.rk4_watch``: |R(z)| more than RK4_EXCESS above max(1, |e^z|))."""
+    from inerter.engine import kernels as _k
+    return _k.rk4_amplification.py_func(z.real, z.imag) > (1.0 + _k.RK4_EXCESS) * _k._exact_growth.py_func(z.real)
 
 
 def failure_context(exc, settings, mech, watch=None) -> str:

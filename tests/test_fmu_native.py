@@ -215,20 +215,27 @@ def _until_a_step_fails_then_again(inst, most, strings=None):
     return tr
 
 
+def _fail_alike(native, slave, most, strings=None):
+    """Both instances stepped until a step fails, then that step again: the same transcript and
+    messages, the same step failing twice. Returns (the first instance's transcript, the failing
+    step's t, its status)."""
+    a, b = (_until_a_step_fails_then_again(inst, most, strings) for inst in (native, slave))
+    assert a.entries == b.entries
+    assert a.messages() == b.messages()
+    failed = [(label, status) for label, status, _ in a.entries if status]
+    assert len(failed) == 2 and failed[0] == failed[1], failed
+    return a, float(failed[0][0][len("doStep("):].split(",")[0]), failed[0][1]
+
+
 def test_a_step_that_fails_natively_is_taken_and_reported_by_the_slave(fmus, pair):
     """A mass driven into the point its elements are attached to (scenarios/hard): the native step
     that reaches it fails half-way and declines; the slave restores the integration from the
     backup and takes the step, which fails the same way: the same fmi2Discard, message and last
     good state as without native steps, and again when the importer retries it."""
     native_scene(TERMINALS_MEET)
-    native, slave = pair(fmus[TERMINALS_MEET])
-    a, b = (_until_a_step_fails_then_again(inst, 200) for inst in (native, slave))
-    assert a.entries == b.entries
-    assert a.messages() == b.messages()
-    failed = [label for label, status, _ in a.entries if status]
-    assert len(failed) == 2 and failed[0] == failed[1], failed
+    a, t_fail, _ = _fail_alike(*pair(fmus[TERMINALS_MEET]), 200)
+    native = a.inst
     # The step that fails is the one holding the closed-form time of impact (the scene's header).
-    t_fail = float(failed[0][len("doStep("):].split(",")[0])
     assert t_fail <= math.pi * math.sqrt(2) / 4 < t_fail + 0.01
     assert "terminals O and P meet" in a.messages()[-1][1]
     assert native_steps(native) == 111                  # every step before the one that fails
@@ -246,17 +253,11 @@ def test_a_step_that_reaches_a_change_point_fails_as_the_slave_reports_it(fmus, 
     the importer retries it; the steps before it are native."""
     native_scene(PARALLELOGRAM)
     t_star = (math.pi / 2) / abs(inerter.load(PARALLELOGRAM).mechanism.v0[2])
-    native, slave = pair(fmus[PARALLELOGRAM])
-    a, b = (_until_a_step_fails_then_again(inst, 300, {"solver": solver} if solver else None)
-            for inst in (native, slave))
-    assert a.entries == b.entries
-    assert a.messages() == b.messages()
-    failed = [(label, status) for label, status, _ in a.entries if status]
-    assert len(failed) == 2 and failed[0] == failed[1] and failed[0][1] == FMI_DISCARD, failed
-    t_fail = float(failed[0][0][len("doStep("):].split(",")[0])
+    a, t_fail, status = _fail_alike(*pair(fmus[PARALLELOGRAM]), 300, {"solver": solver} if solver else None)
+    assert status == FMI_DISCARD
     assert t_fail <= t_star < t_fail + 0.01 + 1e-12
     assert "change point" in a.messages()[-1][1] and "joints a, b, c, d" in a.messages()[-1][1]
-    assert native_steps(native) == round(t_fail / 0.01)   # every step before the one that fails
+    assert native_steps(a.inst) == round(t_fail / 0.01)   # every step before the one that fails
 
 
 def before_first_step(inst, case: str, solver: str | None) -> Transcript:
@@ -358,11 +359,6 @@ def test_an_rk4_step_beyond_its_limit_declined_natively_is_reported_as_the_slave
     experiment = text.index("[experiment]")
     scene = tmp_path_factory.mktemp("rk4_native") / "stiff_rk4_native_2d.toml"
     scene.write_text(text[:experiment] + f"[experiment]\nstop_time = 3.0\nmethod = \"RK4\"\nstep = {h!r}\n")
-    native, slave = pair(fmus[scene])
-    a, b = (_until_a_step_fails_then_again(inst, 300) for inst in (native, slave))
-    assert a.entries == b.entries
-    assert a.messages() == b.messages()
-    failed = [label for label, status, _ in a.entries if status]
-    assert len(failed) == 2 and failed[0] == failed[1], failed
+    a, t_fail, _ = _fail_alike(*pair(fmus[scene]), 300)
     assert "beyond its stability limit" in a.messages()[-1][1], a.messages()[-1]
-    assert native_steps(native) == round(float(failed[0][len("doStep("):].split(",")[0]) / 0.01)
+    assert native_steps(a.inst) == round(t_fail / 0.01)

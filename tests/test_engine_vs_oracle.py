@@ -125,12 +125,14 @@ RUN_TIME_SLOW = {"device_combo_series_3d": 0.5, "device_combo_two_devices_2d": 0
 #: backlash_device_2d-eq8, 1.1e-7 on end_stop_device_2d-eq9), so the integrator, not the laws,
 #: sets that difference. Their laws are held to TOL_ACC and TOL_OUT at the states of `_states`, the
 #: run's samples past many contacts included (the oracle's run goes on to RUN_TIME, or
-#: RUN_TIME_SLOW), and the engine's runs to TOL_RUN over RUN_TIME_IMPACTS = 0.15 s against the
-#: first samples of the oracle's: the first backlash
-#: engagements (0.05 s, device_combo_series_3d 0.03 s) and device_combo_series_3d's first stop
-#: contact (0.13 s), but not end_stop_device_2d's (0.17 s).
-IMPACT_CASES = {"backlash_device_2d", "end_stop_device_2d", "device_combo_series_3d"}
-RUN_TIME_IMPACTS = 0.15
+#: RUN_TIME_SLOW), and the engine's runs to TOL_RUN over the first samples of the oracle's, up to
+#: the time in RUN_TIME_IMPACTS: the first backlash engagements (0.05 s, device_combo_series_3d
+#: 0.03 s), but not end_stop_device_2d's first contact (0.17 s). Where the runs part also moves
+#: with the host's round-off: on an AMD EPYC host (2026-11-28) backlash_device_2d's runs parted by
+#: 2.3e-10 at its second engagement (0.09 s; 9.7e-12 after the first) and device_combo_series_3d's
+#: by 1.7e-9 at its first stop contact (0.15 s; 7.8e-12 before it), which had stayed within TOL_RUN
+#: on the hosts the windows were first measured on (0.15 s for all three).
+RUN_TIME_IMPACTS = {"backlash_device_2d": 0.08, "end_stop_device_2d": 0.15, "device_combo_series_3d": 0.14}
 #: The scenes with a screw efficiency's exact switch (v_s = 0), whose q̈ jumps at each turnaround of
 #: the screw's stroke: there, as at a contact, the error estimate no longer bounds a step's error and
 #: the runs part by more than TOL_RUN (device_combo_two_devices_2d, also with backlash and a stop:
@@ -146,6 +148,14 @@ RUN_TIME_IMPACTS = 0.15
 #: 0.07 and 0.14 s) and before the runs part: measured worst there 6.0e-11, 3.9e-12 and 1.0e-11.
 RUN_TIME_SWITCHES = {"device_combo_two_devices_2d": 0.1, "device_combo_ground_slider_2d": 0.5,
                      "device_combo_efficiency_pair_3d": 0.15}
+#: The case that ends at a singularity: gimbal_lock_3d with Z-X-Z Euler angles, which both runs
+#: cross in one step (the oracle's from 0.125 to 0.645 s), where each stops (``euler_lock_within``,
+#: ``Mechanism.check_step``). Which step crosses is the step-size controller's choice on a motion
+#: whose angle rates grow without bound, and two runs that differ by round-off choose differently:
+#: on an AMD EPYC host (2026-11-28) the engine's crossing step began at 0.094 s and the oracle's at
+#: 0.125 s (on the hosts the suite ran on before, both stopped at the same sample). Their runs are compared up to this time, which
+#: both reach without a stop; the stop itself is tests/test_3d.py's (gimbal lock).
+RUN_TIME_SINGULAR = {"gimbal_lock_3d-euler_zxz": 0.08}
 
 #: Cases that are not shipped scenes as they stand: Z-X-Z Euler angles (gimbal_lock_3d has no
 #: elements, so there the oracle is the numpy Mechanism itself: this case checks the kinematics'
@@ -490,12 +500,16 @@ def test_a_run_equals_the_oracles(reference, case, path):
     ref = reference(case)
     engine = Engine(ref.model, path)
     settings, n = ref.settings, len(ref.run.time)
-    window = RUN_TIME_SWITCHES.get(case.path.stem, RUN_TIME_IMPACTS if case.path.stem in IMPACT_CASES else None)
+    window = RUN_TIME_SWITCHES.get(case.path.stem, RUN_TIME_IMPACTS.get(case.path.stem))
+    window = RUN_TIME_SINGULAR.get(case.id.rsplit("-", 1)[0], window)
+    status = ref.run.status
     if window is not None:          # the runs part at contacts and switches: up to `window`
         settings = ref.model.settings(method="DOP853", stop_time=window, rtol=RTOL, atol=ATOL)
         n = int(np.searchsorted(ref.run.time, window * (1.0 + 1e-12), side="right"))
+        assert ref.run.time[-1] > window, (case.id, ref.run.message)     # the oracle got past it
+        status = "ok"
     run, values = engine.run(settings, ref.inputs)
-    assert run.status == ref.run.status, (run.message, ref.run.message)
+    assert run.status == status, (run.message, ref.run.message)
     assert np.array_equal(run.time, ref.run.time[:n])
     names = ref.model.signals.names
     a, b = values / ref.scale, ref.outputs[:n] / ref.scale

@@ -21,11 +21,12 @@ the same ``resources/`` and exposes it as
 
 Statuses. pythonfmu 0.7.0 turns any Python exception into fmi2Fatal and destroys the instance,
 and its binary returns fmi2OK from every call but doStep, which gives fmi2Discard when
-:meth:`do_step` returns False. So this slave never lets an exception escape: it logs every
+:meth:`do_step` returns False; the Python bridge (``python_bridge.c``, its place on Linux) keeps
+that contract. So this slave never lets an exception escape: it logs every
 problem (status error, or discard for a failed step) and keeps the status of its last
 exitInitializationMode, setXxx, doStep and setFMUstate call in the Integer variable
 ``fmi_status`` (causality local: 0 fmi2OK, 2 fmi2Discard, 3 fmi2Error). On Linux the FMU's
-binary is a shim (``status_shim.c``) in front of pythonfmu's: it reads ``fmi_status`` after each
+binary is a shim (``status_shim.c``) in front of the bridge: it reads ``fmi_status`` after each
 of those calls and returns it when it is worse than fmi2OK. So
 
 - an invalid parameter, effect or solver setting: exitInitializationMode logs the solver's

@@ -1,14 +1,16 @@
-/* The status shim: the FMU's binary on Linux, in front of pythonfmu's own.
+/* The status shim: the FMU's binary on Linux, in front of the one that runs the Python slave.
  *
- * pythonfmu 0.7.0's binary returns fmi2OK from every call but doStep (fmi2Discard when the
- * slave's do_step returns False), and turns a Python exception into fmi2Fatal. This library
- * exports the FMI 2.0 co-simulation API under the FMU's model identifier and forwards every call
- * to pythonfmu's binary, shipped beside it as ORIGINAL_LIBRARY. After the calls that can fail on
- * the importer's values (fmi2ExitInitializationMode, fmi2SetReal/Integer/Boolean/String,
- * fmi2SetFMUstate) have returned fmi2OK from the original, it reads the slave's Integer variable
- * STATUS_VR (fmi_status: the status of the slave's last such call) through the original's
- * fmi2GetInteger and returns that status when it is worse than fmi2OK; after fmi2DoStep, when the
- * original returned fmi2Discard, it returns fmi2Error where the slave says so.
+ * Behind it (ORIGINAL_LIBRARY, "the original" below) is the Python bridge (python_bridge.c), or
+ * pythonfmu 0.7.0's binary where the bridge could not be built. Both keep pythonfmu's contract:
+ * fmi2OK from every call but doStep (fmi2Discard when the slave's do_step returns False), and
+ * fmi2Fatal for a Python exception. This library exports the FMI 2.0 co-simulation API under the
+ * FMU's model identifier and forwards every call to the original, shipped beside it. After the
+ * calls that can fail on the importer's values (fmi2ExitInitializationMode,
+ * fmi2SetReal/Integer/Boolean/String, fmi2SetFMUstate) have returned fmi2OK from the original, it
+ * reads the slave's Integer variable STATUS_VR (fmi_status: the status of the slave's last such
+ * call) through the original's fmi2GetInteger and returns that status when it is worse than
+ * fmi2OK; after fmi2DoStep, when the original returned fmi2Discard, it returns fmi2Error where the
+ * slave says so.
  *
  * A call the slave does not report in fmi_status (a getter, setupExperiment, enterInitializationMode,
  * terminate, the FMU-state calls) returns fmi2Error when the slave logged a message of status
@@ -39,7 +41,7 @@
  * every call is forwarded with the original's component, and the slave's messages reach the
  * importer through the original's logger calls as before.
  *
- * Which messages reach the importer. pythonfmu's binary passes the slave's messages on only while
+ * Which messages reach the importer. the original passes the slave's messages on only while
  * the importer has logging on (fmi2Instantiate's loggingOn, fmi2SetDebugLogging), so with logging
  * off (fmpy's default) an fmi2Error said nothing of its cause. The shim keeps the original's
  * logging always on, with every category, through its own logger (filtered_log, with the instance
@@ -60,7 +62,7 @@
  * NATIVE_SYNC_VR, and the slave takes them over. Every call but fmi2DoStep and the getters disarms
  * it until the next step the slave takes.
  *
- * The live logger. pythonfmu's binary hands the slave's messages to the importer's logger when
+ * The live logger. the original hands the slave's messages to the importer's logger when
  * the call that made them returns. A long call (exitInitializationMode while the kernels compile,
  * about a minute on a machine's first use) would say nothing until its end, so the shim writes the
  * address of live_log and of the instance into the context's CTX_LOG_FUNCTION and CTX_LOG_TARGET:
@@ -70,16 +72,18 @@
  * Build (inerter/fmu/build.py does it, with the value reference from modelDescription.xml):
  *   gcc -shared -fPIC -O2 -fvisibility=hidden -pthread -DSTATUS_VR=<n> \
  *       -DNATIVE_LINK_VR=<n> -DNATIVE_SYNC_VR=<n> -DNATIVE_MAGIC=<n> \
- *       -DORIGINAL_LIBRARY='"<modelIdentifier>.pythonfmu.so"' -o <modelIdentifier>.so \
+ *       -DORIGINAL_LIBRARY='"<modelIdentifier>.bridge.so"' -o <modelIdentifier>.so \
  *       status_shim.c -ldl
  *
  * The original is loaded at the first call (fmi2Instantiate, or fmi2GetVersion /
  * fmi2GetTypesPlatform before it) and unloaded when this library is.
  *
- * The exit of a process that loaded the original. pythonfmu 0.7.0's binary holds its Python state
- * in a global std::shared_ptr (`pyState`), releases it in its exported finalizePythonInterpreter(),
- * and calls that from a destructor function (.fini_array). When the binary is unloaded by dlclose,
- * that runs before the shared_ptr's own C++ destructor, and all is well. When the binary is still
+ * The exit of a process that loaded pythonfmu's binary as the original (the bridge has no such
+ * state: it never finalises Python, and what follows does nothing for it). pythonfmu 0.7.0's
+ * binary holds its Python state in a global std::shared_ptr (`pyState`), releases it in its
+ * exported finalizePythonInterpreter(), and calls that from a destructor function (.fini_array).
+ * When the binary is unloaded by dlclose, that runs before the shared_ptr's own C++ destructor,
+ * and all is well. When the binary is still
  * loaded at exit(), the order is reversed: exit() runs the C++ destructor first (registered with
  * __cxa_atexit when the binary was loaded), which frees the state, and the destructor function
  * afterwards (_dl_fini), whose release finds the pointers the C++ destructor left behind and
@@ -116,7 +120,7 @@
 #error "compile with -DSTATUS_VR=<value reference of the slave's status variable>"
 #endif
 #ifndef ORIGINAL_LIBRARY
-#error "compile with -DORIGINAL_LIBRARY='\"<file name of pythonfmu's binary>\"'"
+#error "compile with -DORIGINAL_LIBRARY='\"<file name of the original>\"'"
 #endif
 #if !defined(NATIVE_LINK_VR) || !defined(NATIVE_SYNC_VR) || !defined(NATIVE_MAGIC)
 #error "compile with -DNATIVE_LINK_VR, -DNATIVE_SYNC_VR and -DNATIVE_MAGIC (inerter/fmu/native.py)"
@@ -224,7 +228,8 @@ static void load_original(void)
         dlclose(lib);
     lib = dlopen(path, RTLD_LOCAL | RTLD_NOW);
     if (lib == NULL) {
-        snprintf(load_error, sizeof load_error, "cannot load pythonfmu's binary %s: %s", path,
+        snprintf(load_error, sizeof load_error,
+                 "cannot load the binary behind the status shim %s: %s", path,
                  dlerror());
         return;
     }
@@ -400,7 +405,7 @@ static const int64_t *native_context(fmi2Component inner)
 }
 
 /* The slave's context, disarmed, with the live logger written into it: after fmi2Instantiate, and
- * after fmi2Reset, where pythonfmu replaces the slave object, and its context with it (the old one
+ * after fmi2Reset, where the original replaces the slave object, and its context with it (the old one
  * may be freed: it must not be read again). */
 static void link_context(struct instance *w)
 {

@@ -363,8 +363,22 @@ def test_the_fmu_ships_the_solver_and_the_scene(fmus, scene):
     assert not any("__pycache__" in f or f.endswith(".pyc") for f in files)
 
 
+def pythonfmus_stripped_binary(tmp_path) -> bytes:
+    """pythonfmu's Linux binary as `strip --strip-all` leaves it (its symbol table dropped, its
+    code and dynamic symbols kept), or as it is where strip is missing."""
+    original = (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
+                / "libpythonfmu-export.so").read_bytes()
+    if not shutil.which("strip"):
+        return original
+    copy = tmp_path / "libpythonfmu-export.so"
+    copy.write_bytes(original)
+    subprocess.run(["strip", "--strip-all", str(copy)], check=True)
+    assert len(copy.read_bytes()) < len(original)
+    return copy.read_bytes()
+
+
 @pytest.mark.parametrize("scene", SCENE_PARAMS)
-def test_the_linux_binary_is_the_status_shim_in_front_of_pythonfmus(fmus, scene, tmp_path):
+def test_the_linux_binary_is_the_status_shim_in_front_of_the_python_bridge(fmus, scene, tmp_path):
     name = inerter.load(scene).name
     pythonfmu_binaries = Path(pythonfmu.__file__).parent / "resources" / "binaries"
     with zipfile.ZipFile(fmus[scene]) as z:
@@ -374,23 +388,42 @@ def test_the_linux_binary_is_the_status_shim_in_front_of_pythonfmus(fmus, scene,
         assert (z.read(f"binaries/win64/{name}.dll")
                 == (pythonfmu_binaries / "win64" / "pythonfmu-export.dll").read_bytes())
         original = (pythonfmu_binaries / "linux64" / "libpythonfmu-export.so").read_bytes()
-        if shim_expected():
+        if not shim_expected():
+            assert linux == original
+            return
+        assert linux != original and linux.startswith(b"\x7fELF")
+        if fmu_build._python_include() is None:       # no Python.h: pythonfmu's binary behind it
             assert binaries == {f"binaries/linux64/{name}.so",
                                 f"binaries/linux64/{name}{fmu_build.ORIGINAL_SUFFIX}",
                                 f"binaries/win64/{name}.dll"}
-            # pythonfmu's binary as `strip --strip-all` leaves it (its symbol table dropped, its
-            # code and dynamic symbols kept), or as it is where strip is missing.
-            expected = original
-            if shutil.which("strip"):
-                copy = tmp_path / "libpythonfmu-export.so"
-                copy.write_bytes(original)
-                subprocess.run(["strip", "--strip-all", str(copy)], check=True)
-                expected = copy.read_bytes()
-                assert len(expected) < len(original)
-            assert z.read(f"binaries/linux64/{name}{fmu_build.ORIGINAL_SUFFIX}") == expected
-            assert linux != original and linux.startswith(b"\x7fELF")
-        else:
-            assert linux == original
+            assert (z.read(f"binaries/linux64/{name}{fmu_build.ORIGINAL_SUFFIX}")
+                    == pythonfmus_stripped_binary(tmp_path))
+            return
+        assert binaries == {f"binaries/linux64/{name}.so",
+                            f"binaries/linux64/{name}{fmu_build.BRIDGE_SUFFIX}",
+                            f"binaries/win64/{name}.dll"}
+        bridge = z.read(f"binaries/linux64/{name}{fmu_build.BRIDGE_SUFFIX}")
+        assert bridge.startswith(b"\x7fELF") and bridge not in (linux, original)
+        # the model module and class it imports are compiled in (fmu_src/python_bridge.c)
+        assert z.read("resources/slavemodule.txt").decode().strip().encode() in bridge
+
+
+def test_the_python_bridge_imports_the_model_module_once(input_fmu, instance, needs_shim):
+    """The bridge takes the model class from the module it imports (once per process), where
+    pythonfmu's binary executed the module's code again for every instance: the template's branch
+    for that second execution (it keeps a reference to the module's namespace) never runs."""
+    if fmu_build._python_include() is None:
+        pytest.skip("no Python.h here: pythonfmu's binary is behind the shim")
+    with zipfile.ZipFile(input_fmu[1]) as z:
+        module = z.read("resources/slavemodule.txt").decode().strip()
+    first = instance(input_fmu[1], "first")
+    loaded = sys.modules[module]
+    second = instance(input_fmu[1], "second")
+    for inst in (first, second):
+        inst.initialise()
+        inst.fmu.doStep(0.0, 0.01)
+    assert sys.modules[module] is loaded and loaded._namespace_references == []
+    assert first.get(first.outputs) == second.get(second.outputs)
 
 
 def test_the_status_shim_exports_the_cosimulation_api(input_fmu, unzipped, needs_shim):
@@ -405,18 +438,19 @@ def test_the_status_shim_exports_the_cosimulation_api(input_fmu, unzipped, needs
         assert exported - {"_init", "_fini"} == set(FMI2_COSIMULATION_FUNCTIONS)
 
 
-def test_without_pythonfmus_binary_the_shim_fails_to_instantiate_with_a_message(
+def test_without_the_binary_behind_it_the_shim_fails_to_instantiate_with_a_message(
         input_fmu, unzipped, tmp_path, needs_shim):
     fmu = input_fmu[1]
     folder = tmp_path / "unzipped"
     shutil.copytree(unzipped(fmu), folder)
-    (folder / "binaries" / "linux64" / f"{fmu.stem}{fmu_build.ORIGINAL_SUFFIX}").unlink()
+    behind = fmu_build.BRIDGE_SUFFIX if fmu_build._python_include() else fmu_build.ORIGINAL_SUFFIX
+    (folder / "binaries" / "linux64" / f"{fmu.stem}{behind}").unlink()
     messages = []
     with pytest.raises(Exception, match="Failed to instantiate"):
         Instance(str(folder), messages=messages)
     assert messages and messages[0][0] == FMI_ERROR
-    assert "cannot load pythonfmu's binary" in messages[0][1]
-    assert f"{fmu.stem}{fmu_build.ORIGINAL_SUFFIX}" in messages[0][1]
+    assert "cannot load the binary behind the status shim" in messages[0][1]
+    assert f"{fmu.stem}{behind}" in messages[0][1]
 
 
 def test_a_current_fmu_is_not_rebuilt(tmp_path, capsys, monkeypatch):
@@ -735,11 +769,15 @@ def test_the_compiled_and_the_numpy_path_of_the_fmu_agree_with_the_oracle(fmus, 
     coefficient (f/k an elongation in m, f/c a rate in m/s, f/b an acceleration in m/s², τ/k in
     rad): round-off in a length carries over to a spring's force multiplied by k, so a stiff
     spring's force can differ by more than 1e-9 N although the lengths agree to 1e-14 m
-    (braced_frame_3d's columns: k = 2e6 N/m, 2e-8 N)."""
+    (braced_frame_3d's columns: k = 2e6 N/m, 2e-8 N). Its power and energy likewise, as power /
+    coefficient and energy / coefficient (½Δ² in m² for a spring): lumped_mass_2d's spring
+    (k = 1e4 N/m, Δ = 0.22 m) held 245 J, and on an AMD EPYC host the two paths' energies were
+    2.8e-7 J apart, 1.2e-9 relative (measured 2026-11-28; an elongation 1.3e-10 m different)."""
     model = inerter.load(scene)
     expected = model.stepper(path="compiled").path
-    scale = {f"{e.name}.{'tau' if e.kind.startswith('rotational') else 'f'}": e.coefficient
-             for e in model.mechanism.elements if e.coefficient > 0}
+    scale = {f"{e.name}.{quantity}": e.coefficient
+             for e in model.mechanism.elements if e.coefficient > 0
+             for quantity in ("tau" if e.kind.startswith("rotational") else "f", "power", "energy")}
     outputs = {}
     for flag in (True, False):
         inst = instance(fmus[scene], f"compiled-{flag}")
@@ -1006,6 +1044,47 @@ def test_a_state_that_cannot_be_restored_gives_fmi2error(input_fmu, instance, ne
     inst.fmu.doStep(h, h)
     clean.fmu.doStep(h, h)
     assert inst.get(inst.outputs) == clean.get(clean.outputs)
+
+
+# ----------------------------------------------------------------------------------------------
+# Without Python's headers at build time: pythonfmu's binary behind the shim
+# ----------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def unbridged_fmu(tmp_path_factory):
+    """An FMU of INPUT_SCENE (under another name) built as if Python.h were missing, with the
+    build's stderr."""
+    folder = tmp_path_factory.mktemp("unbridged")
+    scene = folder / "fmu_test_unbridged.toml"
+    text = INPUT_SCENE.read_text()
+    scene.write_text(text.replace('name = "two_bar_2d"', 'name = "fmu_test_unbridged"', 1))
+    err = io.StringIO()
+    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stderr(err):
+        patch.setattr(fmu_build, "_python_include", lambda: None)
+        assert fmu_build.main([str(scene), "-o", str(folder / "fmu")]) == 0
+    return folder / "fmu" / "fmu_test_unbridged.fmu", err.getvalue()
+
+
+def test_without_pythons_headers_pythonfmus_binary_goes_behind_the_shim(unbridged_fmu, instance,
+                                                                         needs_shim, tmp_path):
+    fmu, err = unbridged_fmu
+    assert "warning: fmu_test_unbridged.fmu: built without the Python bridge" in err
+    assert "Python.h was not found" in err
+    behind = f"binaries/linux64/fmu_test_unbridged{fmu_build.ORIGINAL_SUFFIX}"
+    with zipfile.ZipFile(fmu) as z:
+        assert {f for f in z.namelist() if f.startswith("binaries/linux64/")} == {
+            "binaries/linux64/fmu_test_unbridged.so", behind}
+        assert z.read(behind) == pythonfmus_stripped_binary(tmp_path)
+    assert validate_fmu(str(fmu)) == []
+    # The shim's statuses hold in front of it: an invalid setting is exitInitializationMode's
+    # fmi2Error, with the scene's message; a valid run steps.
+    inst = instance(fmu)
+    raises_status(FMI_ERROR, inst.initialise, {"M1": 0.0})
+    assert "M1 = 0.0" in inst.errors()[-1]
+    inst.fmu.reset()
+    inst.initialise()
+    for k in range(3):
+        inst.fmu.doStep(0.01 * k, 0.01)
+    assert all(math.isfinite(v) for v in inst.get(inst.outputs))
 
 
 # ----------------------------------------------------------------------------------------------

@@ -15,18 +15,21 @@ The FMU's ``resources/`` hold
 - pythonfmu's own runtime, added by pythonfmu.
 
 On Linux, ``binaries/linux64/<model>.so`` is the status shim compiled from
-``fmu_src/status_shim.c`` (with gcc, at build time), and pythonfmu's own binary sits beside it as
-``<model>.pythonfmu.so``. pythonfmu's binary returns fmi2OK from every call but doStep; the shim
-forwards every call to it and returns the slave's status (its variable ``fmi_status``, whose value
+``fmu_src/status_shim.c`` (with gcc, at build time), and behind it, as ``<model>.bridge.so``, the
+Python bridge compiled from ``fmu_src/python_bridge.c``: the FMI functions over the slave, as
+pythonfmu's own binary makes them, without what that binary costs at every instantiation (it
+executed the model module again, and started a thread and loaded a 284 KB C++ library for each run
+of an importer). The shim returns the slave's status (its variable ``fmi_status``, whose value
 reference is compiled in) from exitInitializationMode, setXxx, doStep and setFMUstate. It also
 takes the doSteps of a running compiled integration itself, in compiled code, when the slave arms
 it (``inerter/fmu/native.py``; the private value references are compiled in too). Without
-gcc (or on a host other than Linux x86-64) the FMU is built with pythonfmu's binary alone and the
-build warns (FmuBuildWarning): errors then come as fmi2Discard from the next doStep. The win64
-binary is always pythonfmu's own.
+Python's headers pythonfmu's binary goes behind the shim (``<model>.pythonfmu.so``); without gcc
+(or on a host other than Linux x86-64) the FMU is built with pythonfmu's binary alone; the build
+warns (FmuBuildWarning) in both cases, and in the second errors come as fmi2Discard from the next
+doStep. The win64 binary is always pythonfmu's own, which runs the same slave.
 
-The FMU runs inside the importing process with its Python interpreter (pythonfmu's binary does
-not link libpython), importing numpy, scipy and numba from that environment (``pythonfmu deploy -f
+The FMU runs inside the importing process with its Python interpreter (neither binary links
+libpython), importing numpy, scipy and numba from that environment (``pythonfmu deploy -f
 X.fmu`` installs ``requirements.txt``); its ``description`` says which versions
 (:data:`HOST_REQUIREMENTS`). pythonfmu 0.7.0 writes a model description without units, types or
 dependencies, so it is completed here (:func:`declarations`):
@@ -52,6 +55,7 @@ import re
 import shutil
 import string
 import subprocess
+import sysconfig
 import sys
 import tempfile
 import uuid
@@ -81,9 +85,12 @@ EMBEDDED_PYTHONFMU = "resources/pythonfmu/"
 TEMPLATE_FILE = "model_module.py.template"
 SHIM_FILE = "status_shim.c"
 SHIM_HEADER = "fmi2_types.h"
+BRIDGE_FILE = "python_bridge.c"
 #: The slave's Integer variable that holds its status (fmu_src/inerter_slave.py).
 STATUS_VARIABLE = "fmi_status"
-#: Where pythonfmu's own Linux binary goes when the shim takes its place.
+#: Where the binary behind the shim goes: the Python bridge, or pythonfmu's own Linux binary where
+#: the bridge cannot be compiled (no Python.h).
+BRIDGE_SUFFIX = ".bridge.so"
 ORIGINAL_SUFFIX = ".pythonfmu.so"
 DEFAULT_OUT_DIR = Path("build") / "fmu"
 DEFAULT_SCENES_DIR = locations.scenarios()
@@ -264,10 +271,11 @@ def source_hash(scene_path: Path, data_files=()) -> str:
     add("scene:" + scene_path.name, scene_path.read_bytes())
     for rel in data_files:                                 # records the scene reads (ground motion)
         add("data:" + rel, (scene_path.parent / rel).read_bytes())
-    for name in (SLAVE_FILE, TEMPLATE_FILE, SHIM_FILE, SHIM_HEADER):
+    for name in (SLAVE_FILE, TEMPLATE_FILE, SHIM_FILE, SHIM_HEADER, BRIDGE_FILE):
         add("fmu_src/" + name, (FMU_SRC / name).read_bytes())
-    # An FMU built without the shim is rebuilt once a compiler is there.
+    # An FMU built without the shim or the bridge is rebuilt once a compiler and Python.h are there.
     add("shim", b"compiled" if _shim_compiler()[0] else b"none")
+    add("bridge", b"compiled" if _python_include() else b"none")
     for path in _shipped_package_files():
         add("inerter/" + path.relative_to(PACKAGE_DIR).as_posix(), path.read_bytes())
     for path in _pythonfmu_files():
@@ -584,9 +592,16 @@ def _complete_model_description(src: Path, dest: Path, units: dict[str, str], di
 
         identifier = root.find("CoSimulation").get("modelIdentifier")
         linux_binary = f"binaries/linux64/{identifier}.so"
-        shim = None
+        shim = behind = None
         if shim_dir is not None and linux_binary in zin.namelist():
-            shim = _compile_shim(identifier, status_vr, shim_dir, dest.name, scene_file)
+            module = zin.read("resources/slavemodule.txt").decode("utf-8").strip()
+            bridge = _compile_bridge(identifier, module, shim_dir, dest.name)
+            suffix = BRIDGE_SUFFIX if bridge is not None else ORIGINAL_SUFFIX
+            shim = _compile_shim(identifier, status_vr, shim_dir, dest.name, scene_file, suffix)
+            if shim is not None:
+                behind = (f"binaries/linux64/{identifier}{suffix}",
+                          bridge if bridge is not None
+                          else _stripped(zin.read(linux_binary), shim_dir))
         # Stored, not deflated: importers extract the FMU at every run (fmpy's simulate_fmu
         # does), and inflating it cost 4 ms a run, 8 % of the lumped scene's 20 s at 10 ms steps
         # (docs/fmu_overhead.md); the FMU is 0.88 MB instead of 0.45 MB.
@@ -597,8 +612,7 @@ def _complete_model_description(src: Path, dest: Path, units: dict[str, str], di
                 if info.filename == "modelDescription.xml":
                     zout.writestr(info.filename, xml)
                 elif info.filename == linux_binary and shim is not None:
-                    zout.writestr(f"binaries/linux64/{identifier}{ORIGINAL_SUFFIX}",
-                                  _stripped(zin.read(info), shim_dir))
+                    zout.writestr(*behind)
                     zout.writestr(linux_binary, shim)
                 else:
                     zout.writestr(info.filename, zin.read(info))
@@ -640,10 +654,10 @@ def _c_string(text: str) -> str:
 
 
 def _compile_shim(identifier: str, status_vr: int, work: Path, fmu_name: str,
-                  scene_file: str | None = None) -> bytes | None:
-    """The status shim for `identifier`, compiled from fmu_src/status_shim.c, its own messages
-    naming `scene_file` (the FMU's file name without it); None (with a FmuBuildWarning) when it
-    cannot be compiled here."""
+                  scene_file: str | None = None, behind: str = BRIDGE_SUFFIX) -> bytes | None:
+    """The status shim for `identifier`, compiled from fmu_src/status_shim.c, in front of the
+    binary `identifier + behind` and with its own messages naming `scene_file` (the FMU's file
+    name without it); None (with a FmuBuildWarning) when it cannot be compiled here."""
     gcc, why = _shim_compiler()
     if gcc is not None:
         work.mkdir(parents=True, exist_ok=True)
@@ -653,7 +667,7 @@ def _compile_shim(identifier: str, status_vr: int, work: Path, fmu_name: str,
         command = [gcc, "-shared", "-fPIC", "-O2", "-s", "-fvisibility=hidden", "-pthread",
                    f"-DSTATUS_VR={status_vr}u", f"-DNATIVE_LINK_VR={fmu_native.LINK_VR}u",
                    f"-DNATIVE_SYNC_VR={fmu_native.SYNC_VR}u", f"-DNATIVE_MAGIC={fmu_native.MAGIC}LL",
-                   f'-DORIGINAL_LIBRARY="{identifier}{ORIGINAL_SUFFIX}"',
+                   f'-DORIGINAL_LIBRARY="{identifier}{behind}"',
                    f"-DSCENE_FILE={_c_string(scene_file or fmu_name)}",
                    "-o", str(out), SHIM_FILE, "-ldl"]
         try:
@@ -670,6 +684,44 @@ def _compile_shim(identifier: str, status_vr: int, work: Path, fmu_name: str,
                   f"pythonfmu's alone, which returns fmi2OK from exitInitializationMode and "
                   f"setXxx whatever happens: an error is reported by the message logged and the "
                   f"fmi2Discard of the next doStep", FmuBuildWarning, stacklevel=2)
+    return None
+
+
+def _python_include() -> str | None:
+    """The folder of this Python's C headers, where it holds Python.h; else None."""
+    folder = sysconfig.get_path("include")
+    return folder if folder and (Path(folder) / "Python.h").is_file() else None
+
+
+def _compile_bridge(identifier: str, module: str, work: Path, fmu_name: str) -> bytes | None:
+    """The Python bridge for `identifier` (fmu_src/python_bridge.c: the FMI functions over the
+    slave, the model module `module` and its class `identifier` compiled in), to go behind the
+    shim; None where it cannot be compiled here (no gcc, no Python.h: pythonfmu's binary then
+    goes behind the shim, and the build warns)."""
+    gcc, why = _shim_compiler()
+    include = _python_include()
+    if gcc is not None and include is None:
+        why = f"Python.h was not found in {sysconfig.get_path('include')} (install Python's headers)"
+    if gcc is not None and include is not None:
+        work.mkdir(parents=True, exist_ok=True)
+        out = work / f"{identifier}{BRIDGE_SUFFIX}"
+        command = [gcc, "-shared", "-fPIC", "-O2", "-s", "-fvisibility=hidden", "-pthread",
+                   f"-I{include}", f"-DSLAVE_MODULE={_c_string(module)}",
+                   f"-DSLAVE_CLASS={_c_string(identifier)}", "-o", str(out), BRIDGE_FILE]
+        try:
+            proc = subprocess.run(command, cwd=FMU_SRC, capture_output=True, text=True,
+                                  timeout=300)
+        except (OSError, subprocess.SubprocessError) as exc:
+            why = f"{' '.join(command)} failed: {exc}"
+        else:
+            if proc.returncode == 0 and out.is_file():
+                return out.read_bytes()
+            why = (f"{' '.join(command)} failed (exit status {proc.returncode}): "
+                   f"{(proc.stderr or proc.stdout).strip()[-2000:]}")
+    if gcc is not None:
+        warnings.warn(f"{fmu_name}: built without the Python bridge: {why}. pythonfmu's binary "
+                      f"is behind the status shim instead (each run's first instance then costs "
+                      f"about 1.5 ms more)", FmuBuildWarning, stacklevel=2)
     return None
 
 

@@ -12,7 +12,8 @@
  *     False is fmi2Discard;
  *   - after every call the messages the slave queued (its _get_log_queue(), pythonfmu's LogMsg
  *     objects) go to the importer's logger, where fmi2SetDebugLogging lets them (the shim turns
- *     logging on and filters itself); '%' is doubled, the message being the logger's format;
+ *     logging on and filters itself), those of fmi2Discard or worse always; '%' is doubled, the
+ *     message being the logger's format;
  *   - a Python exception is fmi2Fatal, its repr logged.
  *
  * What it does not do that pythonfmu's binary did, and why this file exists (docs/fmu_overhead.md):
@@ -86,10 +87,14 @@ static void start_python(void)
 /* ---------------------------------------------------------------------------------------------
  * Messages
  * ------------------------------------------------------------------------------------------- */
-/* Whether fmi2SetDebugLogging lets a message of `category` through (pythonfmu's rule). */
-static int selected(const struct slave *s, const char *category)
+/* Whether a message of `status` and `category` reaches the importer: one of a status it must act
+ * on (fmi2Discard or worse) always, the others where fmi2SetDebugLogging lets them through
+ * (pythonfmu's rule: logging on, and the category selected or none named). */
+static int selected(const struct slave *s, fmi2Status status, const char *category)
 {
     size_t i;
+    if (status >= fmi2Discard)
+        return 1;
     if (!s->logging_on)
         return 0;
     if (s->n_categories == 0)
@@ -108,7 +113,7 @@ static void say(const struct slave *s, fmi2Status status, const char *category,
     const char *from;
     char *text, *to;
 
-    if (s->logger == NULL || message == NULL || !selected(s, category))
+    if (s->logger == NULL || message == NULL || !selected(s, status, category))
         return;
     for (from = message; *from != '\0'; from++)
         n += *from == '%' ? 2 : 1;
@@ -339,7 +344,6 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
         return NULL;
     }
     if (fmuType != fmi2CoSimulation) {
-        s->logging_on = 1;
         say(s, fmi2Error, "logStatusError", "fmi2Instantiate: this FMU is for co-simulation "
             "only (fmuType fmi2CoSimulation); no instance is made");
         free_slave(s);

@@ -46,6 +46,7 @@
 #include <string.h>
 
 #include "fmi2_types.h"
+#include "log_format.h"
 
 #if !defined(SLAVE_MODULE) || !defined(SLAVE_CLASS)
 #error "compile with -DSLAVE_MODULE='\"<model module>\"' -DSLAVE_CLASS='\"<model class>\"'"
@@ -105,27 +106,17 @@ static int selected(const struct slave *s, fmi2Status status, const char *catego
     return 0;
 }
 
-/* `message` to the importer's logger as its format: '%' doubled. */
+/* `message` to the importer's logger as its format (as_format: '%' doubled). */
 static void say(const struct slave *s, fmi2Status status, const char *category,
                 const char *message)
 {
-    size_t n = 0;
-    const char *from;
-    char *text, *to;
+    char *text;
 
     if (s->logger == NULL || message == NULL || !selected(s, status, category))
         return;
-    for (from = message; *from != '\0'; from++)
-        n += *from == '%' ? 2 : 1;
-    text = malloc(n + 1);
+    text = as_format(message);
     if (text == NULL)
         return;
-    for (from = message, to = text; *from != '\0'; from++) {
-        if (*from == '%')
-            *to++ = '%';
-        *to++ = *from;
-    }
-    *to = '\0';
     s->logger(s->environment, s->name, status, category, text);
     free(text);
 }
@@ -417,29 +408,26 @@ EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, si
     }
 #define METHOD(c, name, ...) PyObject_CallMethod(((struct slave *)(c))->instance, name, __VA_ARGS__)
 
+/* The slave's setup_experiment(start, stop or None, tolerance or None). With the GIL. */
+static PyObject *setup_experiment(struct slave *s, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                                  fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
+{
+    PyObject *stop, *rtol, *result = NULL;
+
+    stop = stopTimeDefined == fmi2True ? PyFloat_FromDouble(stopTime) : Py_NewRef(Py_None);
+    rtol = toleranceDefined == fmi2True ? PyFloat_FromDouble(tolerance) : Py_NewRef(Py_None);
+    if (stop != NULL && rtol != NULL)
+        result = PyObject_CallMethod(s->instance, "setup_experiment", "dOO", startTime, stop, rtol);
+    Py_XDECREF(stop);
+    Py_XDECREF(rtol);
+    return result;
+}
+
 EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
                                       fmi2Real tolerance, fmi2Real startTime,
                                       fmi2Boolean stopTimeDefined, fmi2Real stopTime)
-{
-    PyObject *stop, *rtol, *result;
-    struct slave *s = c;
-    PyGILState_STATE gil;
-    fmi2Status status;
-
-    if (s == NULL || s->instance == NULL)
-        return fmi2Error;
-    gil = PyGILState_Ensure();
-    stop = stopTimeDefined == fmi2True ? PyFloat_FromDouble(stopTime) : Py_NewRef(Py_None);
-    rtol = toleranceDefined == fmi2True ? PyFloat_FromDouble(tolerance) : Py_NewRef(Py_None);
-    result = stop != NULL && rtol != NULL
-                 ? PyObject_CallMethod(s->instance, "setup_experiment", "dOO", startTime, stop, rtol)
-                 : NULL;
-    Py_XDECREF(stop);
-    Py_XDECREF(rtol);
-    status = done(s, result, "fmi2SetupExperiment");
-    PyGILState_Release(gil);
-    return status;
-}
+    CALL(c, "fmi2SetupExperiment", setup_experiment(c, toleranceDefined, tolerance, startTime,
+                                                    stopTimeDefined, stopTime))
 
 EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c)
     CALL(c, "fmi2EnterInitializationMode", METHOD(c, "enter_initialization_mode", NULL))
@@ -512,12 +500,20 @@ static PyObject *references(const fmi2ValueReference vr[], size_t nvr)
     return list;
 }
 
+/* Whether a getter or setter may enter the slave: an instance, and arrays where nvr > 0. */
+static int callable(const struct slave *s, size_t nvr, const void *vr, const void *values)
+{
+    return s != NULL && s->instance != NULL && (nvr == 0 || (vr != NULL && values != NULL));
+}
+
 /* The getter `method`'s values for vr[0..nvr), each passed to `store` (0: taken, else an
- * exception is set). */
+ * exception is set). With `keep`, the result must be a list, and is kept in slave.strings until
+ * the next such call: the values point into it. */
 typedef int store_fn(PyObject *item, void *values, size_t i);
 
 static fmi2Status get(fmi2Component c, const char *method, const char *call,
-                      const fmi2ValueReference vr[], size_t nvr, void *values, store_fn *store)
+                      const fmi2ValueReference vr[], size_t nvr, void *values, store_fn *store,
+                      int keep)
 {
     struct slave *s = c;
     PyGILState_STATE gil;
@@ -525,17 +521,18 @@ static fmi2Status get(fmi2Component c, const char *method, const char *call,
     fmi2Status status;
     size_t i;
 
-    if (s == NULL || s->instance == NULL || (nvr > 0 && (vr == NULL || values == NULL)))
+    if (!callable(s, nvr, vr, values))
         return fmi2Error;
     gil = PyGILState_Ensure();
     list = references(vr, nvr);
     if (list != NULL)
         result = PyObject_CallMethod(s->instance, method, "O", list);
     Py_XDECREF(list);
-    if (result != NULL && PySequence_Size(result) != (Py_ssize_t)nvr) {
+    if (result != NULL && ((keep && !PyList_Check(result)) ||
+                           PySequence_Size(result) != (Py_ssize_t)nvr)) {
         if (!PyErr_Occurred())
-            PyErr_Format(PyExc_ValueError, "%s returned %zd values for %zu value references",
-                         method, PySequence_Size(result), nvr);
+            PyErr_Format(PyExc_ValueError, "%s did not return a %s of %zu values", method,
+                         keep ? "list" : "sequence", nvr);
         Py_CLEAR(result);
     }
     for (i = 0; result != NULL && i < nvr; i++) {
@@ -543,6 +540,11 @@ static fmi2Status get(fmi2Component c, const char *method, const char *call,
         if (item == NULL || store(item, values, i) != 0)
             Py_CLEAR(result);
         Py_XDECREF(item);
+    }
+    if (result != NULL && keep) {
+        PyObject *previous = s->strings;
+        s->strings = Py_NewRef(result);
+        Py_XDECREF(previous);
     }
     status = done(s, result, call);
     PyGILState_Release(gil);
@@ -569,7 +571,7 @@ static int store_boolean(PyObject *item, void *values, size_t i)
 }
 
 /* A String's value points into the text object, which the result list keeps (slave.strings)
- * until the next fmi2GetString. */
+ * until the next fmi2GetString (the list holds the item beyond its reference here). */
 static int store_string(PyObject *item, void *values, size_t i)
 {
     const char *text = PyUnicode_Check(item) ? PyUnicode_AsUTF8AndSize(item, NULL) : NULL;
@@ -579,56 +581,18 @@ static int store_string(PyObject *item, void *values, size_t i)
     return text == NULL;
 }
 
-EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                              fmi2Real value[])
-{
-    return get(c, "get_real", "fmi2GetReal", vr, nvr, value, store_real);
-}
-
-EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                 fmi2Integer value[])
-{
-    return get(c, "get_integer", "fmi2GetInteger", vr, nvr, value, store_integer);
-}
-
-EXPORT fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                 fmi2Boolean value[])
-{
-    return get(c, "get_boolean", "fmi2GetBoolean", vr, nvr, value, store_boolean);
-}
-
-EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                fmi2String value[])
-{
-    struct slave *s = c;
-    PyGILState_STATE gil;
-    PyObject *list, *result = NULL;
-    fmi2Status status;
-    size_t i;
-
-    if (s == NULL || s->instance == NULL || (nvr > 0 && (vr == NULL || value == NULL)))
-        return fmi2Error;
-    gil = PyGILState_Ensure();
-    list = references(vr, nvr);
-    if (list != NULL)
-        result = PyObject_CallMethod(s->instance, "get_string", "O", list);
-    Py_XDECREF(list);
-    if (result != NULL && (!PyList_Check(result) || PyList_Size(result) != (Py_ssize_t)nvr)) {
-        PyErr_Format(PyExc_ValueError, "get_string did not return a list of %zu values", nvr);
-        Py_CLEAR(result);
+/* fmi2GetReal, fmi2GetInteger, fmi2GetBoolean, fmi2GetString: the slave's get_<type>. */
+#define GETTER(Type, type, keep)                                                                 \
+    EXPORT fmi2Status fmi2Get##Type(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,  \
+                                    fmi2##Type value[])                                          \
+    {                                                                                            \
+        return get(c, "get_" #type, "fmi2Get" #Type, vr, nvr, value, store_##type, keep);        \
     }
-    for (i = 0; result != NULL && i < nvr; i++)
-        if (store_string(PyList_GetItem(result, (Py_ssize_t)i), value, i) != 0)
-            Py_CLEAR(result);
-    if (result != NULL) { /* kept until the next call: the values point into it */
-        PyObject *previous = s->strings;
-        s->strings = Py_NewRef(result);
-        Py_XDECREF(previous);
-    }
-    status = done(s, result, "fmi2GetString");
-    PyGILState_Release(gil);
-    return status;
-}
+GETTER(Real, real, 0)
+GETTER(Integer, integer, 0)
+GETTER(Boolean, boolean, 0)
+GETTER(String, string, 1)
+#undef GETTER
 
 /* The setter `method` with vr[0..nvr) and their values, each made by `make`. */
 typedef PyObject *make_fn(const void *values, size_t i);
@@ -643,7 +607,7 @@ static fmi2Status set(fmi2Component c, const char *method, const char *call,
     fmi2Status status;
     size_t i;
 
-    if (s == NULL || s->instance == NULL || (nvr > 0 && (vr == NULL || values == NULL)))
+    if (!callable(s, nvr, vr, values))
         return fmi2Error;
     gil = PyGILState_Ensure();
     list = references(vr, nvr);
@@ -686,29 +650,18 @@ static PyObject *make_string(const void *values, size_t i)
     return PyUnicode_DecodeUTF8(text, (Py_ssize_t)strlen(text), "replace");
 }
 
-EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                              const fmi2Real value[])
-{
-    return set(c, "set_real", "fmi2SetReal", vr, nvr, value, make_real);
-}
-
-EXPORT fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                 const fmi2Integer value[])
-{
-    return set(c, "set_integer", "fmi2SetInteger", vr, nvr, value, make_integer);
-}
-
-EXPORT fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                 const fmi2Boolean value[])
-{
-    return set(c, "set_boolean", "fmi2SetBoolean", vr, nvr, value, make_boolean);
-}
-
-EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                const fmi2String value[])
-{
-    return set(c, "set_string", "fmi2SetString", vr, nvr, value, make_string);
-}
+/* fmi2SetReal, fmi2SetInteger, fmi2SetBoolean, fmi2SetString: the slave's set_<type>. */
+#define SETTER(Type, type)                                                                       \
+    EXPORT fmi2Status fmi2Set##Type(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,  \
+                                    const fmi2##Type value[])                                    \
+    {                                                                                            \
+        return set(c, "set_" #type, "fmi2Set" #Type, vr, nvr, value, make_##type);               \
+    }
+SETTER(Real, real)
+SETTER(Integer, integer)
+SETTER(Boolean, boolean)
+SETTER(String, string)
+#undef SETTER
 
 /* ---------------------------------------------------------------------------------------------
  * FMU state: the slave's state object, held by reference
@@ -787,50 +740,49 @@ static PyObject *serialized(struct slave *s, fmi2FMUstate state)
     return bytes;
 }
 
-EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
+/* The size of `state`'s bytes into *size, or (size NULL) the bytes into `into`, which holds
+ * `room` bytes. */
+static fmi2Status serialize(fmi2Component c, fmi2FMUstate state, const char *call, size_t *size,
+                            fmi2Byte *into, size_t room)
 {
     struct slave *s = c;
     PyGILState_STATE gil;
     PyObject *bytes;
     fmi2Status status = fmi2OK;
 
-    if (s == NULL || s->instance == NULL || FMUstate == NULL || size == NULL)
+    if (s == NULL || s->instance == NULL || state == NULL || (size == NULL && into == NULL))
         return fmi2Error;
     gil = PyGILState_Ensure();
-    bytes = serialized(s, FMUstate);
-    if (bytes == NULL)
-        status = failed(s, "fmi2SerializedFMUstateSize");
-    else
+    bytes = serialized(s, state);
+    if (bytes == NULL) {
+        status = failed(s, call);
+    } else if (size != NULL) {
         *size = (size_t)PyBytes_Size(bytes);
+    } else if ((size_t)PyBytes_Size(bytes) > room) {
+        say(s, fmi2Error, "logStatusError", "fmi2SerializeFMUstate: the buffer is shorter than "
+            "fmi2SerializedFMUstateSize gave; nothing is written");
+        status = fmi2Error;
+    } else {
+        memcpy(into, PyBytes_AsString(bytes), (size_t)PyBytes_Size(bytes));
+    }
     flush(s);
     PyGILState_Release(gil);
     return status;
 }
 
+EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
+{
+    if (size == NULL)
+        return fmi2Error;
+    return serialize(c, FMUstate, "fmi2SerializedFMUstateSize", size, NULL, 0);
+}
+
 EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
                                         fmi2Byte serializedState[], size_t size)
 {
-    struct slave *s = c;
-    PyGILState_STATE gil;
-    PyObject *bytes;
-    fmi2Status status = fmi2OK;
-
-    if (s == NULL || s->instance == NULL || FMUstate == NULL || serializedState == NULL)
+    if (serializedState == NULL)
         return fmi2Error;
-    gil = PyGILState_Ensure();
-    bytes = serialized(s, FMUstate);
-    if (bytes == NULL) {
-        status = failed(s, "fmi2SerializeFMUstate");
-    } else if ((size_t)PyBytes_Size(bytes) > size) {
-        say(s, fmi2Error, "logStatusError", "fmi2SerializeFMUstate: the buffer is shorter than "
-            "fmi2SerializedFMUstateSize gave; nothing is written");
-        status = fmi2Error;
-    } else {
-        memcpy(serializedState, PyBytes_AsString(bytes), (size_t)PyBytes_Size(bytes));
-    }
-    flush(s);
-    PyGILState_Release(gil);
-    return status;
+    return serialize(c, FMUstate, "fmi2SerializeFMUstate", NULL, serializedState, size);
 }
 
 EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[],

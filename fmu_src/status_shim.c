@@ -115,6 +115,7 @@
 #include <string.h>
 
 #include "fmi2_types.h"
+#include "log_format.h"
 
 #ifndef STATUS_VR
 #error "compile with -DSTATUS_VR=<value reference of the slave's status variable>"
@@ -364,23 +365,13 @@ static void filtered_log(fmi2ComponentEnvironment environment, fmi2String instan
 static void live_log(int64_t target, int32_t status, const char *category, const char *message)
 {
     const struct instance *w = (const struct instance *)(uintptr_t)target;
-    size_t n = 0;
-    const char *from;
-    char *text, *to;
+    char *text;
 
     if (w == NULL || w->logger == NULL || !passes(w, (int)status, category) || message == NULL)
         return;
-    for (from = message; *from != '\0'; from++)
-        n += *from == '%' ? 2 : 1;
-    text = malloc(n + 1);
+    text = as_format(message);
     if (text == NULL)
         return;
-    for (from = message, to = text; *from != '\0'; from++) {
-        if (*from == '%')
-            *to++ = '%';
-        *to++ = *from;
-    }
-    *to = '\0';
     w->logger(w->environment, w->name, (fmi2Status)status, category != NULL ? category : "logAll",
               text);
     free(text);
@@ -682,18 +673,14 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (!loaded()) {
         /* The message is passed as the format, with no argument: some importers (fmpy) show
          * the format as it is. A '%' is doubled for those that format it. */
-        char message[2 * sizeof load_error + 32];
-        const char *from;
-        char *to = message + sprintf(message, "fmi2Instantiate: ");
-        for (from = load_error; *from != '\0'; from++) {
-            if (*from == '%')
-                *to++ = '%';
-            *to++ = *from;
-        }
-        *to = '\0';
-        if (functions != NULL && functions->logger != NULL)
+        char message[sizeof load_error + 32];
+        char *text;
+        snprintf(message, sizeof message, "fmi2Instantiate: %s", load_error);
+        text = as_format(message);
+        if (text != NULL && functions != NULL && functions->logger != NULL)
             functions->logger(functions->componentEnvironment, instanceName, fmi2Error,
-                              "logStatusError", message);
+                              "logStatusError", text);
+        free(text);
         return NULL;
     }
     w = calloc(1, sizeof *w);

@@ -1049,19 +1049,23 @@ def test_a_state_that_cannot_be_restored_gives_fmi2error(input_fmu, instance, ne
 # ----------------------------------------------------------------------------------------------
 # Without Python's headers at build time: pythonfmu's binary behind the shim
 # ----------------------------------------------------------------------------------------------
-@pytest.fixture(scope="module")
-def unbridged_fmu(tmp_path_factory):
-    """An FMU of INPUT_SCENE (under another name) built as if Python.h were missing, with the
-    build's stderr."""
-    folder = tmp_path_factory.mktemp("unbridged")
-    scene = folder / "fmu_test_unbridged.toml"
-    text = INPUT_SCENE.read_text()
-    scene.write_text(text.replace('name = "two_bar_2d"', 'name = "fmu_test_unbridged"', 1))
+def built_as_if(tmp_path_factory, name: str, missing: str, why):
+    """An FMU of INPUT_SCENE, named `name`, built with the build's `missing` (a function) answering
+    `why` as on a machine without it, and the build's stderr."""
+    folder = tmp_path_factory.mktemp(name)
+    scene = folder / f"{name}.toml"
+    scene.write_text(INPUT_SCENE.read_text().replace('name = "two_bar_2d"', f'name = "{name}"', 1))
     err = io.StringIO()
     with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stderr(err):
-        patch.setattr(fmu_build, "_python_include", lambda: None)
+        patch.setattr(fmu_build, missing, lambda: why)
         assert fmu_build.main([str(scene), "-o", str(folder / "fmu")]) == 0
-    return folder / "fmu" / "fmu_test_unbridged.fmu", err.getvalue()
+    return folder / "fmu" / f"{name}.fmu", err.getvalue()
+
+
+@pytest.fixture(scope="module")
+def unbridged_fmu(tmp_path_factory):
+    """An FMU of INPUT_SCENE (under another name) built as if Python.h were missing."""
+    return built_as_if(tmp_path_factory, "fmu_test_unbridged", "_python_include", None)
 
 
 def test_without_pythons_headers_pythonfmus_binary_goes_behind_the_shim(unbridged_fmu, instance,
@@ -1092,17 +1096,9 @@ def test_without_pythons_headers_pythonfmus_binary_goes_behind_the_shim(unbridge
 # ----------------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def unshimmed_fmu(tmp_path_factory):
-    """An FMU of INPUT_SCENE (under another name) built as if gcc were missing, with the
-    build's stderr."""
-    folder = tmp_path_factory.mktemp("unshimmed")
-    scene = folder / "fmu_test_unshimmed.toml"
-    text = INPUT_SCENE.read_text()
-    scene.write_text(text.replace('name = "two_bar_2d"', 'name = "fmu_test_unshimmed"', 1))
-    err = io.StringIO()
-    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stderr(err):
-        patch.setattr(fmu_build, "_shim_compiler", lambda: (None, "gcc was not found on PATH"))
-        assert fmu_build.main([str(scene), "-o", str(folder / "fmu")]) == 0
-    return folder / "fmu" / "fmu_test_unshimmed.fmu", err.getvalue()
+    """An FMU of INPUT_SCENE (under another name) built as if gcc were missing."""
+    return built_as_if(tmp_path_factory, "fmu_test_unshimmed", "_shim_compiler",
+                       (None, "gcc was not found on PATH"))
 
 
 def test_without_a_compiler_the_build_warns_and_ships_pythonfmus_binary(unshimmed_fmu,

@@ -41,7 +41,7 @@
  * every call is forwarded with the original's component, and the slave's messages reach the
  * importer through the original's logger calls as before.
  *
- * Which messages reach the importer. the original passes the slave's messages on only while
+ * Which messages reach the importer. The original passes the slave's messages on only while
  * the importer has logging on (fmi2Instantiate's loggingOn, fmi2SetDebugLogging), so with logging
  * off (fmpy's default) an fmi2Error said nothing of its cause. The shim keeps the original's
  * logging always on, with every category, through its own logger (filtered_log, with the instance
@@ -62,7 +62,7 @@
  * NATIVE_SYNC_VR, and the slave takes them over. Every call but fmi2DoStep and the getters disarms
  * it until the next step the slave takes.
  *
- * The live logger. the original hands the slave's messages to the importer's logger when
+ * The live logger. The original hands the slave's messages to the importer's logger when
  * the call that made them returns. A long call (exitInitializationMode while the kernels compile,
  * about a minute on a machine's first use) would say nothing until its end, so the shim writes the
  * address of live_log and of the instance into the context's CTX_LOG_FUNCTION and CTX_LOG_TARGET:

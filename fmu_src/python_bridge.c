@@ -14,7 +14,8 @@
  *     objects) go to the importer's logger, where fmi2SetDebugLogging lets them (the shim turns
  *     logging on and filters itself), those of fmi2Discard or worse always; '%' is doubled, the
  *     message being the logger's format;
- *   - a Python exception is fmi2Fatal, its repr logged.
+ *   - a Python exception is fmi2Fatal, its repr logged (after the scene file's name, as every
+ *     message of status fmi2Discard or worse).
  *
  * What it does not do that pythonfmu's binary did, and why this file exists (docs/fmu_overhead.md):
  * at every fmi2Instantiate pythonfmu's binary read the model module's file again, compiled and
@@ -34,6 +35,7 @@
  * Build (inerter/fmu/build.py does it):
  *   gcc -shared -fPIC -O2 -s -fvisibility=hidden -I<Python include> \
  *       -DSLAVE_MODULE='"<module>"' -DSLAVE_CLASS='"<model identifier>"' \
+ *       -DSCENE_FILE='"<scene file>"' \
  *       -o <modelIdentifier>.bridge.so python_bridge.c -lpthread
  */
 #define Py_LIMITED_API 0x030A0000
@@ -50,6 +52,9 @@
 
 #if !defined(SLAVE_MODULE) || !defined(SLAVE_CLASS)
 #error "compile with -DSLAVE_MODULE='\"<model module>\"' -DSLAVE_CLASS='\"<model class>\"'"
+#endif
+#ifndef SCENE_FILE
+#error "compile with -DSCENE_FILE='\"<the scene file's name>\"' (the name its messages give)"
 #endif
 
 #define EXPORT __attribute__((visibility("default")))
@@ -175,7 +180,7 @@ static fmi2Status failed(struct slave *s, const char *call)
     if (repr != NULL)
         text = PyUnicode_AsUTF8AndSize(repr, NULL);
     PyErr_Clear();
-    snprintf(message, sizeof message, "%s: the slave raised %s", call,
+    snprintf(message, sizeof message, "%s: %s: the slave raised %s", SCENE_FILE, call,
              text != NULL ? text : "an exception");
     flush(s);
     say(s, fmi2Fatal, "logStatusFatal", message);
@@ -335,8 +340,8 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
         return NULL;
     }
     if (fmuType != fmi2CoSimulation) {
-        say(s, fmi2Error, "logStatusError", "fmi2Instantiate: this FMU is for co-simulation "
-            "only (fmuType fmi2CoSimulation); no instance is made");
+        say(s, fmi2Error, "logStatusError", SCENE_FILE ": fmi2Instantiate: this FMU is for "
+            "co-simulation only (fmuType fmi2CoSimulation); no instance is made");
         free_slave(s);
         return NULL;
     }
@@ -409,8 +414,9 @@ EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, si
 #define METHOD(c, name, ...) PyObject_CallMethod(((struct slave *)(c))->instance, name, __VA_ARGS__)
 
 /* The slave's setup_experiment(start, stop or None, tolerance or None). With the GIL. */
-static PyObject *setup_experiment(struct slave *s, fmi2Boolean toleranceDefined, fmi2Real tolerance,
-                                  fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
+static PyObject *setup_experiment(struct slave *s, fmi2Boolean toleranceDefined,
+                                  fmi2Real tolerance, fmi2Real startTime,
+                                  fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
     PyObject *stop, *rtol, *result = NULL;
 
@@ -759,8 +765,8 @@ static fmi2Status serialize(fmi2Component c, fmi2FMUstate state, const char *cal
     } else if (size != NULL) {
         *size = (size_t)PyBytes_Size(bytes);
     } else if ((size_t)PyBytes_Size(bytes) > room) {
-        say(s, fmi2Error, "logStatusError", "fmi2SerializeFMUstate: the buffer is shorter than "
-            "fmi2SerializedFMUstateSize gave; nothing is written");
+        say(s, fmi2Error, "logStatusError", SCENE_FILE ": fmi2SerializeFMUstate: the buffer is "
+            "shorter than fmi2SerializedFMUstateSize gave; nothing is written");
         status = fmi2Error;
     } else {
         memcpy(into, PyBytes_AsString(bytes), (size_t)PyBytes_Size(bytes));

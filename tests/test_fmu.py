@@ -426,6 +426,53 @@ def test_the_python_bridge_imports_the_model_module_once(input_fmu, instance, ne
     assert first.get(first.outputs) == second.get(second.outputs)
 
 
+BROKEN_MODULE_PROBE = r"""
+import sys, fmpy
+from fmpy import read_model_description
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE,
+                       fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE)
+folder = sys.argv[1]
+md = read_model_description(folder)
+messages = []
+callbacks = fmi2CallbackFunctions()
+callbacks.logger = fmi2CallbackLoggerTYPE(lambda e, i, status, c, m: messages.append((status, m.decode())))
+callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
+callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier,
+                instanceName="broken")
+try:
+    fmu.instantiate(callbacks=callbacks, loggingOn=False)
+    print("instantiated")
+except Exception as exc:
+    print("refused:", exc)
+for status, message in messages:
+    print(status, message)
+"""
+
+
+def test_a_model_module_that_raises_is_a_logged_refusal_to_instantiate(input_fmu, unzipped, tmp_path,
+                                                                        needs_shim):
+    """The bridge turns a Python exception into fmi2Fatal with its repr logged (pythonfmu's contract):
+    a model module that raises at import makes fmi2Instantiate return NULL, with the exception said
+    although the importer turned logging off, and the importer's process goes on. In a new process:
+    this one has the module imported already."""
+    if fmu_build._python_include() is None:
+        pytest.skip("no Python.h here: pythonfmu's binary is behind the shim")
+    folder = tmp_path / "unzipped"
+    shutil.copytree(unzipped(input_fmu[1]), folder)
+    module = (folder / "resources" / "slavemodule.txt").read_text().strip()
+    source = folder / "resources" / f"{module}.py"
+    source.write_text('raise RuntimeError("broken on purpose")\n' + source.read_text())
+    proc = subprocess.run([sys.executable, "-c", BROKEN_MODULE_PROBE, str(folder)], capture_output=True,
+                          text=True, timeout=300, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    lines = proc.stdout.splitlines()
+    assert lines[0].startswith("refused:"), proc.stdout
+    fatal = [line for line in lines[1:] if line.startswith(f"{FMI_FATAL} ")]
+    assert fatal and fatal[0].startswith(f"{FMI_FATAL} {input_fmu[0].name}: "), proc.stdout
+    assert f"import {module}" in fatal[0] and "broken on purpose" in fatal[0], proc.stdout
+
+
 def test_the_status_shim_exports_the_cosimulation_api(input_fmu, unzipped, needs_shim):
     scene, fmu = input_fmu
     folder = Path(unzipped(fmu)) / "binaries" / "linux64"

@@ -596,7 +596,7 @@ def _complete_model_description(src: Path, dest: Path, units: dict[str, str], di
         shim = behind = None
         if shim_dir is not None and linux_binary in zin.namelist():
             module = zin.read("resources/slavemodule.txt").decode("utf-8").strip()
-            bridge = _compile_bridge(identifier, module, shim_dir, dest.name)
+            bridge = _compile_bridge(identifier, module, shim_dir, dest.name, scene_file)
             suffix = BRIDGE_SUFFIX if bridge is not None else ORIGINAL_SUFFIX
             shim = _compile_shim(identifier, status_vr, shim_dir, dest.name, scene_file, suffix)
             if shim is not None:
@@ -701,21 +701,24 @@ def _python_include() -> str | None:
     return folder if folder and (Path(folder) / "Python.h").is_file() else None
 
 
-def _compile_bridge(identifier: str, module: str, work: Path, fmu_name: str) -> bytes | None:
+def _compile_bridge(identifier: str, module: str, work: Path, fmu_name: str,
+                    scene_file: str | None = None) -> bytes | None:
     """The Python bridge for `identifier` (fmu_src/python_bridge.c: the FMI functions over the
-    slave, the model module `module` and its class `identifier` compiled in), to go behind the
-    shim; None where it cannot be compiled here (no gcc, no Python.h: pythonfmu's binary then
-    goes behind the shim, and the build warns)."""
+    slave, the model module `module` and its class `identifier` compiled in, its messages naming
+    `scene_file`), to go behind the shim; None where it cannot be compiled here (no gcc, no
+    Python.h: pythonfmu's binary then goes behind the shim, and the build warns)."""
     gcc, _ = _shim_compiler()
     if gcc is None:
         return None                               # no shim either: _compile_shim warns
     include = _python_include()
     if include is None:
-        why = f"Python.h was not found in {sysconfig.get_path('include')} (install Python's headers)"
+        why = (f"Python.h was not found in {sysconfig.get_path('include')} (install Python's "
+               f"headers)")
     else:
         bridge, why = _gcc_library(gcc, work, f"{identifier}{BRIDGE_SUFFIX}", BRIDGE_FILE, [
             f"-I{include}", f"-DSLAVE_MODULE={_c_string(module)}",
-            f"-DSLAVE_CLASS={_c_string(identifier)}"])
+            f"-DSLAVE_CLASS={_c_string(identifier)}",
+            f"-DSCENE_FILE={_c_string(scene_file or fmu_name)}"])
         if bridge is not None:
             return bridge
     warnings.warn(f"{fmu_name}: built without the Python bridge: {why}. pythonfmu's binary "

@@ -4,7 +4,8 @@
  * as ORIGINAL_LIBRARY and forwards every call to it) and keeps that binary's contract with the
  * slave, so that the same slave (a pythonfmu Fmi2Slave) runs behind either, and behind pythonfmu's
  * win64 binary:
- *   - fmi2Instantiate puts the resources folder at the front of sys.path, imports the model module
+ *   - fmi2Instantiate puts the resources folder at the front of sys.path (where it is not on it
+ *     already), imports the model module
  *     and calls its model class with instance_name, resources and visible; fmi2Reset makes a new
  *     instance the same way;
  *   - every call is the slave's method of the same name (do_step, get_real, set_real, ...,
@@ -17,7 +18,8 @@
  *   - a Python exception is fmi2Fatal, its repr logged (after the scene file's name, as every
  *     message of status fmi2Discard or worse).
  *
- * What it does not do that pythonfmu's binary did, and why this file exists (docs/fmu_overhead.md):
+ * What it does not do that pythonfmu's binary did, and why this file exists (docs/performance.md,
+ * FMU overhead):
  * at every fmi2Instantiate pythonfmu's binary read the model module's file again, compiled and
  * executed it a second time and tested each class it bound with regular expressions, and the
  * first instance of each load of the binary (an importer such as fmpy extracts the FMU into a new

@@ -44,6 +44,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 
+#include <ctype.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -206,6 +207,12 @@ static fmi2Status done(struct slave *s, PyObject *result, const char *call)
 /* ---------------------------------------------------------------------------------------------
  * Instantiation
  * ------------------------------------------------------------------------------------------- */
+/* The value of the hex digit `c`. */
+static int hex_value(char c)
+{
+    return c <= '9' ? c - '0' : (c | 0x20) - 'a' + 10;
+}
+
 /* The folder a file URI names (file:///a%20b/resources -> /a b/resources), or the text as is. */
 static char *uri_path(const char *uri)
 {
@@ -223,13 +230,11 @@ static char *uri_path(const char *uri)
     if (path == NULL)
         return NULL;
     for (to = path; *from != '\0'; from++) {
-        unsigned hex;
-        if (from[0] == '%' && sscanf(from + 1, "%2x", &hex) == 1 && from[1] != '\0' &&
-            from[2] != '\0') {
-            *to++ = (char)hex;
+        if (from[0] == '%' && isxdigit((unsigned char)from[1]) && isxdigit((unsigned char)from[2])) {
+            *to++ = (char)(hex_value(from[1]) * 16 + hex_value(from[2]));
             from += 2;
         } else {
-            *to++ = *from;
+            *to++ = *from;                /* a '%' not followed by two hex digits stays as it is */
         }
     }
     *to = '\0';
@@ -304,14 +309,23 @@ static void free_slave(struct slave *s)
     free(s);
 }
 
+/* The serialized bytes made for `state` dropped (any state's where `state` is NULL): the state is
+ * released, and its address may be another's next. With the GIL. */
+static void forget_serialized(struct slave *s, fmi2FMUstate state)
+{
+    if (state == NULL || state == (fmi2FMUstate)s->serialized_of) {
+        Py_CLEAR(s->serialized);
+        s->serialized_of = NULL;
+    }
+}
+
 /* The references `s` holds, released. With the GIL. */
 static void release(struct slave *s)
 {
     Py_CLEAR(s->instance);
     Py_CLEAR(s->messages);
     Py_CLEAR(s->strings);
-    Py_CLEAR(s->serialized);
-    s->serialized_of = NULL;
+    forget_serialized(s, NULL);
 }
 
 EXPORT const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
@@ -456,8 +470,7 @@ EXPORT fmi2Status fmi2Reset(fmi2Component c)
         return fmi2Error;
     gil = PyGILState_Ensure();
     Py_CLEAR(s->strings);
-    Py_CLEAR(s->serialized);
-    s->serialized_of = NULL;
+    forget_serialized(s, NULL);
     status = make_instance(s);
     PyGILState_Release(gil);
     return status;
@@ -689,10 +702,8 @@ EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
         status = failed(s, "fmi2GetFMUstate");
     } else {
         /* FMI 2.0: a state given back is one this FMU made and may reuse; replaced here */
-        if (*FMUstate != NULL && *FMUstate == (fmi2FMUstate)s->serialized_of) {
-            Py_CLEAR(s->serialized);
-            s->serialized_of = NULL;
-        }
+        if (*FMUstate != NULL)
+            forget_serialized(s, *FMUstate);
         Py_XDECREF((PyObject *)*FMUstate);
         *FMUstate = state;
         flush(s);
@@ -719,10 +730,7 @@ EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     if (*FMUstate == NULL)
         return fmi2OK;
     gil = PyGILState_Ensure();
-    if (*FMUstate == (fmi2FMUstate)s->serialized_of) {
-        Py_CLEAR(s->serialized);
-        s->serialized_of = NULL;
-    }
+    forget_serialized(s, *FMUstate);
     Py_DECREF((PyObject *)*FMUstate);
     *FMUstate = NULL;
     PyGILState_Release(gil);

@@ -55,8 +55,8 @@ import re
 import shutil
 import string
 import subprocess
-import sysconfig
 import sys
+import sysconfig
 import tempfile
 import uuid
 import warnings

@@ -75,6 +75,7 @@ import sys
 import tempfile
 import threading
 import traceback
+import typing
 import zipfile
 from pathlib import Path
 
@@ -229,6 +230,41 @@ def _loaded_models(scene_path: Path, scene_bytes: bytes, scene_digest: str) -> d
     return models
 
 
+class _Variables(typing.NamedTuple):
+    """An FMU's variables as its slave class declares them for one model of its scene."""
+    model: object        # the model they were made for
+    specs: list          # (variable, its getter from an instance, its setter from an instance)
+    status_vr: int       # fmi_status's value reference
+    native_outputs: dict  # value reference -> index in the stepper's outputs (the derived ones left out)
+    native_kinds: dict   # value reference -> the native link's kind, for every variable but the outputs
+
+
+#: The variables of each slave class and scene (by its digest), made once per process: an
+#: instance copies them and binds its getters and setters (InerterSlave._register) instead of
+#: building some forty pythonfmu variables at every instantiation.
+_VARIABLES: dict = {}
+
+
+def _variables(cls, scene_digest: str, model) -> _Variables:
+    """`cls`'s variables for `model` (the scene's own model, shared by the instances of a process:
+    _loaded_models), made at the first call with that model."""
+    known = _VARIABLES.get((cls, scene_digest))
+    if known is not None and known.model is model:
+        return known
+    specs = cls._variable_specs(model)
+    output_index = {o["name"]: i for i, o in enumerate(model.output_info())}
+    kinds = ((Real, fmu_native.REAL), (Integer, fmu_native.INTEGER),
+             (Boolean, fmu_native.BOOLEAN), (String, fmu_native.STRING))
+    known = _VARIABLES[(cls, scene_digest)] = _Variables(
+        model, specs,
+        status_vr=next(var.value_reference for var, _, _ in specs if var.name == STATUS_VARIABLE),
+        native_outputs={var.value_reference: output_index[var.name] for var, _, _ in specs
+                        if var.causality == Fmi2Causality.output and not model.signals.is_derived(var.name)},
+        native_kinds={var.value_reference: next(kind for c, kind in kinds if isinstance(var, c))
+                      for var, _, _ in specs if var.causality != Fmi2Causality.output})
+    return known
+
+
 @functools.cache
 def _foreign_package() -> str:
     """The warning for a process that had imported another ``inerter`` than the one this FMU ships
@@ -359,78 +395,85 @@ class InerterSlave(Fmi2Slave):
         self._preview = None                      # (key, stepper) of initialization mode's outputs
         self._call_thread = None                  # the thread inside an FMI call that may compile
 
-        self._register(model)
-        self._status_vr = next(vr for vr, var in self.vars.items() if var.name == STATUS_VARIABLE)
+        variables = self._register(model)
+        self._status_vr = variables.status_vr
         # The native doStep (inerter/fmu/native.py): the FMU's binary steps in compiled code
         # whenever this slave arms it. The derived outputs are not in its values (the kernels do not
         # evaluate them): a getter that asks for one comes here, after the slave took the steps over.
-        kinds = ((Real, fmu_native.REAL), (Integer, fmu_native.INTEGER),
-                 (Boolean, fmu_native.BOOLEAN), (String, fmu_native.STRING))
         self._native = fmu_native.NativeLink(
-            {vr: self._output_index[var.name] for vr, var in self.vars.items()
-             if var.causality == Fmi2Causality.output and not model.signals.is_derived(var.name)},
-            {vr: (next(kind for cls, kind in kinds if isinstance(var, cls)), var.getter)
-             for vr, var in self.vars.items() if var.causality != Fmi2Causality.output})
+            variables.native_outputs,
+            {vr: (kind, self.vars[vr].getter) for vr, kind in variables.native_kinds.items()})
         self._warn_if_foreign_package()
 
     # ------------------------------------------------------------------------------------------
     # Variables
     # ------------------------------------------------------------------------------------------
     def _register(self, model):
+        """The FMU's variables, bound to this instance: copies of the class's (:func:`_variables`,
+        made once per process for the scene's model), each with this instance's getter and setter."""
+        variables = _variables(type(self), self.scene_digest, model)
+        for proto, make_getter, make_setter in variables.specs:
+            var = object.__new__(type(proto))
+            var.__dict__.update(proto.__dict__)   # value reference, name, causality: the class's
+            var.getter, var.setter = make_getter(self), make_setter(self)
+            self.vars[proto.value_reference] = var
+        return variables
+
+    @classmethod
+    def _variable_specs(cls, model) -> list:
+        """(variable, its getter from an instance, its setter from an instance) for every variable
+        of the FMU, in the order of their value references (0, 1, ...)."""
         fixed = dict(causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed)
         tunable = dict(causality=Fmi2Causality.parameter, variability=Fmi2Variability.tunable)
         methods = ", ".join(f"{i} {m}" for i, m in enumerate(model.methods, start=1))
+        specs = []
+
+        def setting(var, name, kind):
+            specs.append((var, lambda s: s._setting_getter(name), lambda s: s._setting_setter(name, kind)))
+
         for p in model.parameter_info():
-            kind = tunable if p["name"] in self.tunable else fixed
-            note = " (tunable: may change between steps)" if p["name"] in self.tunable else ""
-            self.register_variable(ExactReal(p["name"], description=p["description"] + note, **kind,
-                                        getter=self._setting_getter(p["name"]),
-                                        setter=self._setting_setter(p["name"], float)))
+            kind = tunable if p["name"] in cls.tunable else fixed
+            note = " (tunable: may change between steps)" if p["name"] in cls.tunable else ""
+            setting(ExactReal(p["name"], description=p["description"] + note, **kind), p["name"], float)
         for e in model.effect_info():
-            kind = tunable if e["name"] in self.tunable else fixed
-            note = " (tunable: may change between steps)" if e["name"] in self.tunable else ""
-            self.register_variable(Boolean(e["name"], description=e["description"] + note, **kind,
-                                           getter=self._setting_getter(e["name"]),
-                                           setter=self._setting_setter(e["name"], bool)))
+            kind = tunable if e["name"] in cls.tunable else fixed
+            note = " (tunable: may change between steps)" if e["name"] in cls.tunable else ""
+            setting(Boolean(e["name"], description=e["description"] + note, **kind), e["name"], bool)
         # An Integer here; the build declares it an Enumeration of the methods (pythonfmu 0.7.0
         # has no Enumeration variable), whose items are the integers 1, 2, ... in this order.
-        self.register_variable(Integer(
-            "solver", description=f"integration method: {methods}", **fixed,
-            getter=self._solver_getter, setter=self._setting_setter("solver", self._solver_item)))
-        self.register_variable(ExactReal(
+        specs.append((Integer("solver", description=f"integration method: {methods}", **fixed),
+                      lambda s: s._solver_getter, lambda s: s._setting_setter("solver", s._solver_item)))
+        setting(ExactReal(
             "rtol", description="relative tolerance of the integrator (fmi2SetupExperiment's "
-                                "tolerance is used when rtol is not set)", **fixed,
-            getter=self._setting_getter("rtol"), setter=self._setting_setter("rtol", float)))
-        self.register_variable(ExactReal(
+                                "tolerance is used when rtol is not set)", **fixed), "rtol", float)
+        setting(ExactReal(
             "atol", description="absolute tolerance of the integrator, in the units of each "
-                                "coordinate", **fixed,
-            getter=self._setting_getter("atol"), setter=self._setting_setter("atol", float)))
-        self.register_variable(Boolean(
+                                "coordinate", **fixed), "atol", float)
+        setting(Boolean(
             PATH_SETTING, description="integrate with the numba-compiled kernels and integrator loops "
             "where numba is installed in the importing Python and the scene allows it (planar, no "
             "ground motion, an explicit method, Baumgarte stabilisation, no step force); false: the "
-            "numpy path. Both give the same results to round-off", **fixed,
-            getter=self._setting_getter(PATH_SETTING), setter=self._setting_setter(PATH_SETTING, bool)))
+            "numpy path. Both give the same results to round-off", **fixed), PATH_SETTING, bool)
         for i in model.input_info():
-            self.register_variable(ExactReal(i["name"], description=i["description"],
-                                        causality=Fmi2Causality.input,
-                                        variability=Fmi2Variability.continuous, start=0.0,
-                                        getter=self._input_getter(i["name"]),
-                                        setter=self._input_setter(i["name"])))
+            name = i["name"]
+            specs.append((ExactReal(name, description=i["description"], causality=Fmi2Causality.input,
+                                    variability=Fmi2Variability.continuous, start=0.0),
+                          lambda s, n=name: s._input_getter(n), lambda s, n=name: s._input_setter(n)))
         for o in model.output_info():
-            self.register_variable(ExactReal(o["name"], description=o["description"],
-                                        causality=Fmi2Causality.output,
-                                        variability=Fmi2Variability.continuous,
-                                        initial=Fmi2Initial.calculated,
-                                        getter=self._output_getter(o["name"]),
-                                        setter=self._output_setter(o["name"])))
+            name = o["name"]
+            specs.append((ExactReal(name, description=o["description"], causality=Fmi2Causality.output,
+                                    variability=Fmi2Variability.continuous, initial=Fmi2Initial.calculated),
+                          lambda s, n=name: s._output_getter(n), lambda s, n=name: s._output_setter(n)))
         # Last, so that the value references of the other variables do not depend on it.
-        self.register_variable(Integer(
+        specs.append((Integer(
             STATUS_VARIABLE, description="status of the FMU's last exitInitializationMode, "
             "setXxx, doStep or setFMUstate call (0 fmi2OK, 2 fmi2Discard, 3 fmi2Error), which "
             "the FMU's binary returns on Linux", causality=Fmi2Causality.local,
-            variability=Fmi2Variability.discrete, initial=Fmi2Initial.calculated,
-            getter=self._read_status, setter=self._status_setter))
+            variability=Fmi2Variability.discrete, initial=Fmi2Initial.calculated),
+            lambda s: s._read_status, lambda s: s._status_setter))
+        for vr, (var, _, _) in enumerate(specs):
+            var.value_reference = vr
+        return specs
 
     def _setting_getter(self, name):
         return lambda: self._settings[name]
@@ -852,10 +895,17 @@ class InerterSlave(Fmi2Slave):
         """`message` with the FMU's resources/ folder left out of the file names it holds: the
         scene file and its ground records are named as in the scene (``two_bar_2d.toml``,
         ``records/x.csv``), not by the importer's temporary folder it unzipped the FMU into."""
-        folder = Path(self.resources or ".")
-        for prefix in {str(folder) + os.sep, str(folder.resolve()) + os.sep}:
+        for prefix in self._resource_prefixes():
             message = message.replace(prefix, "")
         return message
+
+    def _resource_prefixes(self) -> tuple:
+        """The resources/ folder as messages may write it (as given, and resolved), found once."""
+        prefixes = self.__dict__.get("_prefixes")
+        if prefixes is None:
+            folder = Path(self.resources or ".")
+            prefixes = self._prefixes = tuple({str(folder) + os.sep, str(folder.resolve()) + os.sep})
+        return prefixes
 
     def _log_now(self, message: str, status: Fmi2Status = Fmi2Status.ok):
         """Log `message` to the importer at once where the status shim gives its logger (on the

@@ -529,10 +529,15 @@ class Result:
         if index is None:
             return lambda t: numpy_values(np.atleast_1d(np.asarray(t, dtype=float)))
 
+        reader = kernel.dense_reader(sol, index, alpha)
+
         def compiled_values(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
-            windings = self._dense_windings(t) if kernel.reads_windings(index) else None
-            values, k = kernel.dense_signal(sol, index, t, None, alpha, windings)
+            if reader is not None:
+                values, k = reader(t)
+            else:
+                windings = self._dense_windings(t) if kernel.reads_windings(index) else None
+                values, k = kernel.dense_signal(sol, index, t, None, alpha, windings)
             if k < len(t):            # not defined at t[k]: the numpy path's values, or its message
                 values = np.concatenate((values, numpy_values(t[k:])))
             return values
@@ -720,10 +725,13 @@ def at_times(values, time, what):
 
     def at(t):
         t = np.asarray(t, dtype=float).reshape(-1)
-        read = ~np.isnan(t)
-        every = bool(read.all())
+        lo, hi = (float(t.min()), float(t.max())) if len(t) else (t0, t1)
+        every = lo == lo and hi == hi          # min and max are NaN where a time is
+        read = None if every else ~np.isnan(t)
         given = t if every else t[read]
-        if len(given) and (given.min() < t0 - slack or given.max() > t1 + slack):
+        if not every and len(given):
+            lo, hi = float(given.min()), float(given.max())
+        if len(given) and (lo < t0 - slack or hi > t1 + slack):
             bad = given[(given < t0 - slack) | (given > t1 + slack)][0]
             raise ValueError(f"{what}: t = {bad:.9g} s is outside the run, {span}; its dense output "
                              "is read only there")

@@ -817,6 +817,28 @@ class Kernel:
                                     int(element), int(slot), need, self.params, np.empty(len(self._layout)), out)
         return out[:k], int(k)
 
+    def dense_reader(self, sol, index, alpha=0.0):
+        """:meth:`dense_signal` of the signal at `index` on `sol` without inputs, as a function of
+        the times alone, or None where :meth:`dense_signal` must go through its own steps (a scene
+        with 3D rotational elements, whose windings it holds; a dense output that is not a
+        :class:`DenseOutput`): what the signal reads found once. A run's metrics read one signal's
+        dense output some ten times, and the compiled call itself takes a few microseconds."""
+        if not isinstance(sol, DenseOutput) or len(self.windings):
+            return None
+        need, comps = self._reads(index)
+        element, slot = self.element_slot(index)
+        fixed = (_NO_WINDINGS, self._no_inputs, float(alpha), int(index), int(element), int(slot), need,
+                 self.params)
+        code, nodes, coeffs, count = sol.method_code, sol.nodes, sol.coeffs, sol.count
+        layout = len(self._layout)
+
+        def read(times):
+            times = np.ascontiguousarray(times, dtype=float).reshape(-1)
+            out = np.empty(len(times))
+            st, k = _k.dense_signal(code, nodes, coeffs, count, times, comps, *fixed, np.empty(layout), out)
+            return out[:k], int(k)
+        return read
+
     def _local_dense_signal(self, sol, index, times, inputs, alpha):
         """:meth:`dense_signal` on a :class:`LocalDense`, one sample interval after the other (each
         interval's steps wound on from the angles recorded with its first sample)."""

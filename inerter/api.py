@@ -34,6 +34,9 @@ ORACLE_ATOL = 1e-14
 #: whole windows: the compiled run keeps its dense output at every step for them. A peak reads it
 #: only around its candidates, which a run's LocalDense integrates again (engine.compiled).
 DENSE_METRICS = ("free_oscillation", "harmonics", "steady_state")
+#: The experiments a Model keeps read, by their overrides (a sweep of tolerances calls simulate with
+#: each again): reading one evaluates the scene's [experiment] expressions (about 0.1 ms).
+EXPERIMENTS_KEPT = 32
 
 
 def load(path, **overrides) -> "Model":
@@ -71,6 +74,7 @@ class Model:
         self._static = None
         self._frequencies = None          # natural_frequencies(), once asked for
         self._static_values = {}          # static_value(signal), once asked for
+        self._experiments = {}            # settings(): the experiment read with each set of overrides
 
     # -- description -------------------------------------------------------------------------
     @property
@@ -197,7 +201,19 @@ class Model:
         """The scene's experiment with `overrides` (None: the scene's value), read and checked by
         the scene reader's function for ``[experiment]`` (errors name the `call` and the field)."""
         given = {k: v for k, v in overrides.items() if v is not None}
-        x = self.scene.experiment_with(given, source=f"{self.source}: {call}") if given else self.scene.experiment
+        if not given:
+            return Settings.from_experiment(self.scene.experiment)
+        try:
+            key = (call, tuple(sorted(given.items())))
+            x = self._experiments.get(key)
+        except TypeError:                 # a value that cannot be a key (read, and refused, below)
+            key = x = None
+        if x is None:
+            x = self.scene.experiment_with(given, source=f"{self.source}: {call}")
+            if key is not None:
+                if len(self._experiments) >= EXPERIMENTS_KEPT:
+                    self._experiments.clear()
+                self._experiments[key] = x
         return Settings.from_experiment(x)
 
     def simulate(self, stop_time=None, output_interval=None, method=None, rtol=None, atol=None,

@@ -8,6 +8,7 @@ from __future__ import annotations
 import re
 import subprocess as _subprocess
 import sys as _sys
+import threading
 import time as _time
 from pathlib import Path
 from typing import Any
@@ -24,8 +25,8 @@ from inerter.engine.outputs import Signals
 from inerter.scene.reader import KNOWN_EFFECTS, METHODS, closest_name, load_scene
 from inerter.scene.units import for_reading
 from inerter.common.errors import InerterError, SceneError, SimulationError, shown
-from inerter.engine.simulation import (SCIPY_RTOL_FLOOR, Settings, Stepper, dense_windings, integrate,
-                                      numpy_mechanism)
+from inerter.engine.simulation import (SCIPY_RTOL_FLOOR, Settings, Stepper, dense_windings, for_run,
+                                      integrate, numpy_mechanism)
 
 #: Tolerances at which the oracle is solved (DOP853).
 ORACLE_RTOL = 1e-12
@@ -34,6 +35,9 @@ ORACLE_ATOL = 1e-14
 #: whole windows: the compiled run keeps its dense output at every step for them. A peak reads it
 #: only around its candidates, which a run's LocalDense integrates again (engine.compiled).
 DENSE_METRICS = ("free_oscillation", "harmonics", "steady_state")
+#: Held while a model's static equilibrium, natural frequencies or static values are worked out
+#: (once per model; re-entered: the frequencies start from the equilibrium).
+_ANALYSES = threading.RLock()
 #: The experiments a Model keeps read, by their overrides (a sweep of tolerances calls simulate with
 #: each again): reading one evaluates the scene's [experiment] expressions (about 0.1 ms).
 EXPERIMENTS_KEPT = 32
@@ -75,6 +79,7 @@ class Model:
         self._frequencies = None          # natural_frequencies(), once asked for
         self._static_values = {}          # static_value(signal), once asked for
         self._experiments = {}            # settings(): the experiment read with each set of overrides
+        self._analysis_mechanism = None   # _analysed()
 
     # -- description -------------------------------------------------------------------------
     @property
@@ -180,21 +185,34 @@ class Model:
         return Model(self.path, self.overrides, oracle=True, origins=self.origins)
 
     # -- analysis ----------------------------------------------------------------------------
+    # The analyses below run once per model, on a copy of its mechanism of their own
+    # (_analysed), one thread at a time: runs of the model in other threads (each on its own copy,
+    # Mechanism.for_run) and their metrics, which ask for them, change nothing of each other's.
     def static_equilibrium(self):
-        if self._static is None:
-            self._static = static_equilibrium(self.mechanism)
-        return self._static
+        with _ANALYSES:
+            if self._static is None:
+                self._static = static_equilibrium(self._analysed())
+            return self._static
 
     def natural_frequencies(self):
-        if self._frequencies is None:
-            self._frequencies = natural_frequencies(self.mechanism, self.static_equilibrium())
-        return self._frequencies
+        with _ANALYSES:
+            if self._frequencies is None:
+                self._frequencies = natural_frequencies(self._analysed(), self.static_equilibrium())
+            return self._frequencies
 
     def static_value(self, signal: str) -> float:
-        if signal not in self._static_values:
-            q = self.static_equilibrium()
-            self._static_values[signal] = self.signals.function(signal)(0.0, q, np.zeros(self.mechanism.n))
-        return self._static_values[signal]
+        with _ANALYSES:
+            if signal not in self._static_values:
+                q = self.static_equilibrium()
+                signals = self.signals.for_run(self._analysed())
+                self._static_values[signal] = signals.function(signal)(0.0, q, np.zeros(self.mechanism.n))
+            return self._static_values[signal]
+
+    def _analysed(self):
+        """The analyses' own copy of the mechanism (made at the first, under _ANALYSES)."""
+        if self._analysis_mechanism is None:
+            self._analysis_mechanism = for_run(self.mechanism)
+        return self._analysis_mechanism
 
     # -- simulation --------------------------------------------------------------------------
     def settings(self, call: str = "simulate()", **overrides) -> Settings:

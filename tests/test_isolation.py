@@ -128,6 +128,27 @@ def test_whole_runs_in_threads_give_the_run_alone(bar):
         assert len(got) == 3 and all(np.array_equal(v, reference) for v in got.values()), kind
 
 
+def test_first_runs_with_metrics_in_threads_give_the_metrics_alone():
+    """Three first simulate() with metrics of one fresh model at once, in threads: their metrics
+    read the model's static equilibrium, natural frequencies and static values, worked out once, on
+    the analyses' own copy of the mechanism (Model._analysed), while the runs go on: each gives the
+    metrics of a run alone on another fresh model, bit for bit. two_bar_2d: a natural frequency and
+    a steady state whose reference is a static value."""
+    scene = Path(__file__).resolve().parents[1] / "scenarios" / "two_bar_2d.toml"
+    run = dict(stop_time=30.0, rtol=1e-8, atol=1e-10)
+    alone = inerter.load(scene).simulate(**run).metrics
+    assert set(alone) >= {"natural_frequency", "C_y_mean_offset"}, alone
+    for _ in range(3):
+        model, got = inerter.load(scene), {}
+        threads = [threading.Thread(target=lambda i=i: got.__setitem__(i, model.simulate(**run).metrics))
+                   for i in range(3)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        assert len(got) == 3 and all(metrics == alone for metrics in got.values()), (alone, got)
+
+
 @pytest.mark.parametrize("solver, compiled_path", [("DOP853", True), ("Radau", True), ("BDF", True),
                                                     ("DOP853", False)])
 def test_two_fmu_instances_of_one_scene_step_as_each_alone(fmus, instance, solver, compiled_path):

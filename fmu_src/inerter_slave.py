@@ -252,6 +252,9 @@ def _variables(cls, scene_digest: str, model) -> _Variables:
     if known is not None and known.model is model:
         return known
     specs = cls._variable_specs(model)
+    _VARIABLES.pop((cls, scene_digest), None)
+    while len(_VARIABLES) >= LOADED_SCENES:       # as _LOADED: the oldest goes, and its model with it
+        del _VARIABLES[next(iter(_VARIABLES))]
     output_index = {o["name"]: i for i, o in enumerate(model.output_info())}
     kinds = ((Real, fmu_native.REAL), (Integer, fmu_native.INTEGER),
              (Boolean, fmu_native.BOOLEAN), (String, fmu_native.STRING))
@@ -414,7 +417,9 @@ class InerterSlave(Fmi2Slave):
         variables = _variables(type(self), self.scene_digest, model)
         for proto, make_getter, make_setter in variables.specs:
             var = object.__new__(type(proto))
-            var.__dict__.update(proto.__dict__)   # value reference, name, causality: the class's
+            # name, value reference, causality...: the class's, in attribute dicts all instances
+            # share (only pythonfmu's build writes to them: the start values, read from the getters)
+            var.__dict__.update(proto.__dict__)
             var.getter, var.setter = make_getter(self), make_setter(self)
             self.vars[proto.value_reference] = var
         return variables

@@ -426,6 +426,29 @@ def test_the_python_bridge_imports_the_model_module_once(input_fmu, instance, ne
     assert first.get(first.outputs) == second.get(second.outputs)
 
 
+def test_instances_of_one_fmu_read_and_set_their_own_variables(input_fmu, instance):
+    """The slave's variables are made once per slave class and copied, with each instance's getters
+    and setters, for every instance (``_variables`` in fmu_src/inerter_slave.py): three instances in
+    one process, one given b = 20 (the scene's is 10) and rtol 1e-9, read their own values (the
+    other two the scene's, from the scene file), and their outputs after 0.5 s are their own runs':
+    the two with the scene's values agree bit for bit, the one with b = 20 differs from them."""
+    scene, fmu = input_fmu
+    defaults = {p["name"]: p["value"] for p in inerter.load(scene).parameter_info()}
+    changed, first, second = (instance(fmu, name) for name in ("changed", "first", "second"))
+    changed.initialise(reals={"b": 20.0, "rtol": 1e-9})
+    for inst in (first, second):
+        inst.initialise()
+    assert changed.get(["b", "rtol"]) == [20.0, 1e-9]
+    scene_rtol = inerter.load(scene).experiment["rtol"]
+    for inst in (first, second):
+        assert inst.get(["b", "rtol"]) == [defaults["b"], scene_rtol]
+    for k in range(50):
+        for inst in (changed, first, second):
+            inst.fmu.doStep(k * 0.01, 0.01)
+    assert first.get(first.outputs) == second.get(second.outputs)
+    assert changed.get(changed.outputs) != first.get(first.outputs)
+
+
 BROKEN_MODULE_PROBE = r"""
 import sys, fmpy
 from fmpy import read_model_description

@@ -222,7 +222,8 @@ class Model:
         if not given:
             return Settings.from_experiment(self.scene.experiment)
         try:
-            key = (call, tuple(sorted(given.items())))
+            # each value with its type: True == 1 as keys, but a bool is refused where 1 is read
+            key = (call, tuple(sorted((k, type(v).__name__, v) for k, v in given.items())))
             x = self._experiments.get(key)
         except TypeError:                 # a value that cannot be a key (read, and refused, below)
             key = x = None

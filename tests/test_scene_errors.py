@@ -133,6 +133,20 @@ def test_a_bad_simulate_argument_names_itself(kwargs, field):
     assert str(info.value).startswith(f"{LUMPED}: simulate(): experiment.{field}: ")
 
 
+def test_a_model_reads_each_set_of_simulate_settings_as_a_fresh_load_would():
+    """The model keeps the experiment read for each set of overrides (Model.settings): asked again,
+    it gives what a fresh model reads; a value equal to a kept one but of another type (True == 1
+    as a key) is read, and refused, for itself; a refused value is refused again."""
+    model = inerter.load(LUMPED)
+    for kwargs in (dict(stop_time=1), dict(stop_time=1.0, rtol=1e-8), dict(stop_time=1)):
+        assert model.settings(**kwargs) == inerter.load(LUMPED).settings(**kwargs)
+    for _ in range(2):
+        with pytest.raises(inerter.SceneError, match="experiment.stop_time: a boolean is not a number"):
+            model.settings(stop_time=True)
+        with pytest.raises(inerter.SceneError, match="experiment.rtol"):
+            model.settings(rtol=0.0)
+
+
 def test_a_harmonics_metric_takes_no_reference(tmp_path):
     """`harmonics` gives the mean and amplitude of its signal over `period_of`'s periods, with no
     reference (docs/scene_format.md, [[metrics]]): a `reference` there would be silently unused, so

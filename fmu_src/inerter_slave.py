@@ -341,7 +341,10 @@ class InerterSlave(Fmi2Slave):
         super().__init__(**kwargs)
         if not self.scene_file:
             raise TypeError(f"{type(self).__name__} does not name its scene file (scene_file)")
-        self.scene_path = Path(self.resources or ".") / self.scene_file
+        folder = Path(self.resources or ".")
+        self.scene_path = folder / self.scene_file
+        # resources/ as messages may write it (as given, and resolved), which _named_files leaves out
+        self._resource_prefixes = tuple({str(folder) + os.sep, str(folder.resolve()) + os.sep})
         scene_bytes = self.scene_path.read_bytes()
         self.scene_digest = hashlib.sha256(scene_bytes).hexdigest()
         # loaded models by their overrides (at most a few), shared with the earlier instances of
@@ -900,17 +903,9 @@ class InerterSlave(Fmi2Slave):
         """`message` with the FMU's resources/ folder left out of the file names it holds: the
         scene file and its ground records are named as in the scene (``two_bar_2d.toml``,
         ``records/x.csv``), not by the importer's temporary folder it unzipped the FMU into."""
-        for prefix in self._resource_prefixes():
+        for prefix in self._resource_prefixes:
             message = message.replace(prefix, "")
         return message
-
-    def _resource_prefixes(self) -> tuple:
-        """The resources/ folder as messages may write it (as given, and resolved), found once."""
-        prefixes = self.__dict__.get("_prefixes")
-        if prefixes is None:
-            folder = Path(self.resources or ".")
-            prefixes = self._prefixes = tuple({str(folder) + os.sep, str(folder.resolve()) + os.sep})
-        return prefixes
 
     def _log_now(self, message: str, status: Fmi2Status = Fmi2Status.ok):
         """Log `message` to the importer at once where the status shim gives its logger (on the

@@ -2,7 +2,10 @@
 damping, every inerter with its centripetal term: ``Mechanism.conserves_energy``), one RK4 step
 that changes the energy by more than the scene holds stops the run, on both paths, in steppers
 and through the FMU. RK4 changes a conserved energy by O(h⁵) a step; the reference is that
-conservation, E(t) = E(0) for the equations of motion.
+conservation, E(t) = E(0) for the equations of motion. In a scene that can only lose it (linear
+dampers too: ``Mechanism.only_loses_energy``), a rise above its lowest by more than the scene held
+there stops it (the damped chain: tests/test_rk4_watch_more.py); the reference is passivity,
+dE/dt = −Σ c L̇² ≤ 0.
 
 The case it was built for: snap_through_2d at a 0.105 s step (hω = 1.0 about its equilibrium)
 completed with status ok, its energy ×3.7e7 and the mass 2 km away. Single steps across y = 0,
@@ -12,6 +15,7 @@ times, while every mode RK4's stability watch read from the stages stayed inside
 from __future__ import annotations
 
 import glob
+import math
 
 import numpy as np
 import pytest
@@ -19,8 +23,11 @@ import pytest
 import inerter
 from conftest import LUMPED, ROOT
 from inerter.common.errors import SimulationError
+from inerter.engine.kernels import ENERGY_LOST, ENERGY_OFF
+from inerter.engine.simulation import energy_watched
 
 SNAP = ROOT / "scenarios" / "hard" / "snap_through_2d.toml"
+STIFF = ROOT / "scenarios" / "hard" / "stiff_1dof_2d.toml"
 PATHS = ("numpy", "compiled")
 SCENES = sorted(glob.glob(str(ROOT / "scenarios" / "*.toml")) + glob.glob(str(ROOT / "scenarios" / "hard" / "*.toml")))
 JUMPED = "changed the scene's energy"
@@ -121,11 +128,36 @@ def test_scenes_said_to_conserve_energy_do():
     assert len(checked) == 5, checked
 
 
-@pytest.mark.parametrize("scene, why", [("two_bar_2d.toml", "a damper"), ("hard/stiff_1dof_2d.toml", "a damper"),
+def test_scenes_said_to_only_lose_energy_do():
+    """Each shipped scene that ``only_loses_energy`` and does not conserve it says so truly: DOP853
+    at rtol 1e-10 over 1 s never raises E(t) above its lowest before by more than 1e-6 of what the
+    scene holds (passivity, dE/dt ≤ 0); RK4 at 1 ms runs through, its watch on."""
+    checked = []
+    for scene in SCENES:
+        model = inerter.load(scene)
+        mech = model.mechanism
+        if mech.conserves_energy() or not mech.only_loses_energy():
+            continue
+        assert energy_watched(mech) == ENERGY_LOST, scene
+        r = model.simulate(stop_time=1.0, rtol=1e-10, atol=1e-12, metrics=False)
+        energy = np.asarray(r["energy"])
+        held = mech.energy_held(mech.q0, mech.v0)[1]
+        assert np.max(energy - np.minimum.accumulate(energy)) < 1e-6 * held, scene
+        assert energy[-1] < energy[0], scene
+        r = model.simulate(method="RK4", step=1e-3, stop_time=1.0, metrics=False)
+        assert r.status == "ok", (scene, r.message)
+        checked.append(scene.split("/")[-1])
+    assert checked, "no shipped scene only loses energy"
+
+
+@pytest.mark.parametrize("scene, why", [("two_bar_2d.toml", "a force"), ("hard/stiff_1dof_2d.toml", "a damper"),
                                         ("hard/step_force_1dof_2d.toml", "a force"),
                                         ("shear_building_tmdi_2d.toml", "ground motion")])
-def test_scenes_with_forcing_or_damping_are_not_watched(scene, why):
-    assert not inerter.load(ROOT / "scenarios" / scene).mechanism.conserves_energy(), why
+def test_scenes_with_forcing_or_damping_do_not_conserve_energy(scene, why):
+    mech = inerter.load(ROOT / "scenarios" / scene).mechanism
+    assert not mech.conserves_energy(), why
+    assert mech.only_loses_energy() == (why == "a damper"), why
+    assert energy_watched(mech) == (ENERGY_LOST if why == "a damper" else ENERGY_OFF), why
 
 
 def test_an_inerter_without_its_centripetal_term_is_not_watched():
@@ -135,3 +167,28 @@ def test_an_inerter_without_its_centripetal_term_is_not_watched():
     assert not model.mechanism.conserves_energy()
     r = model.simulate(stop_time=5.0, rtol=1e-10, atol=1e-12, metrics=False)
     assert kept_energy_error(r) > 1e-3
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_a_retune_that_raises_the_energy_is_not_taken_for_a_rise(path):
+    """stiff_1dof_2d (a damper at c = 0: it can only lose energy) stepped with RK4 at 1e-4 s (hω =
+    0.03), retuned at its turning point (the spring stretched, all its energy in it) from k = 1e8
+    to 4e8 N/m: the energy jumps to 4 times what it was, which the watch would read as a rise of 3
+    times what the scene held at its lowest. A retune starts the lowest again (the energy changed
+    between steps, not in them), so the stepper runs on, and from there conserves the new energy
+    (c = 0) to RK4's error."""
+    model = inerter.load(STIFF, **{"experiment.method": "RK4", "experiment.step": 1e-4})
+    tuned = inerter.load(STIFF, k=4e8, **{"experiment.method": "RK4", "experiment.step": 1e-4})
+    mech = model.mechanism
+    half_period = math.pi * math.sqrt((1e-3 + 1e3) / 1e8)
+    st = model.stepper(path=path)
+    st.step(half_period)                        # at the other turning point
+    before = mech.energy(st.y[:mech.nq], st.y[mech.nq:mech.nq + mech.n])
+    st.retune(tuned.mechanism, tuned.signals)
+    after = tuned.mechanism.energy(st.y[:mech.nq], st.y[mech.nq:mech.nq + mech.n])
+    assert after == pytest.approx(4 * before, rel=1e-3)
+    energies = []
+    for k in range(1, 21):
+        st.step(half_period * (1 + 0.1 * k))
+        energies.append(tuned.mechanism.energy(st.y[:mech.nq], st.y[mech.nq:mech.nq + mech.n]))
+    assert np.max(np.abs(np.array(energies) - after)) < 1e-6 * after

@@ -54,7 +54,8 @@ import numpy as np
 
 from inerter.common.atomic import replace_file
 from inerter.common.errors import SimulationError
-from inerter.engine.simulation import Run, Stepper, jumps, load_state, monitor_slots, output_grid
+from inerter.engine.simulation import (Run, Stepper, energy_watched, jumps, load_state, monitor_slots, output_grid,
+                                       restart_lowest_energy)
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
 from inerter.common.rotations import EULER_SEQUENCES
 from inerter.elements import FORCE_OUTPUTS, ROTATIONAL, TRANSLATIONAL, device, layout, output_suffixes
@@ -1133,6 +1134,11 @@ def _run_failure(kernel, settings, status, h, y_last, t_reached, t_sample, monit
     return f"at t = {t_reached:.{digits}g} s: the {settings.method} integrator failed: {why}"
 
 
+#: The statuses whose message reads the state the loop stopped at (UNSTABLE, ENERGY_JUMP: at the
+#: start of the step that stopped it; the linearisation's advice).
+_STOPS_AT_ITS_STATE = (_k.CHANGE_POINT, _k.TERMINALS_MEET, _k.MEETING, _k.UNSTABLE, _k.ENERGY_JUMP)
+
+
 def integrate_compiled(mech, settings, inputs=None, dense=False):
     """Integrate like :func:`inerter.engine.simulation.integrate`, in one compiled loop for DOP853, RK45
     and RK4 with Baumgarte stabilisation; other methods and ``projection`` use scipy's integrators
@@ -1178,7 +1184,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
     h, t0, k, status, t_reached, stopped = 0.0, 0.0, 1, 0, 0.0, None
     tables = None if settings.method == "RK4" else _tables(settings.method)
     keep = _dense_keep(settings.method, tables, len(y0), dense)
-    monitor = (monitor_slots("RK4", conserves_energy=mech.conserves_energy()) if tables is None
+    monitor = (monitor_slots("RK4", energy=energy_watched(mech)) if tables is None
                else None)                   # RK4's watches, across segments
     start = _time.process_time()
     y = y0                                    # the 3D rotational elements' angles: from the initial pose (for_run)
@@ -1204,8 +1210,7 @@ def integrate_compiled(mech, settings, inputs=None, dense=False):
         out[k:k + written] = seg_out[1:1 + written]
         k += written
         if status != 0:
-            stopped = (y_reached if status in (_k.CHANGE_POINT, _k.TERMINALS_MEET, _k.MEETING, _k.UNSTABLE)
-                       else None)          # its state (UNSTABLE: at the start of the step that stopped it)
+            stopped = y_reached if status in _STOPS_AT_ITS_STATE else None
             break
         y, t0 = seg_out[-1, :ny].copy(), t1
     cpu = _time.process_time() - start
@@ -1615,7 +1620,7 @@ class CompiledStepper(Stepper):
         self._tables = _tables(settings.method) if settings.method in _RK_CODE else None
         self._work = (None if self._tables is None else
                       _k.work_arrays(kernel.params, kernel.ny, _k.rk_stages(self._tables[_TABLEAU_A])))
-        self._monitor = monitor_slots(settings.method, conserves_energy=mech.conserves_energy())
+        self._monitor = monitor_slots(settings.method, energy=energy_watched(mech))
         self._jumps = np.array(getattr(mech, "discontinuities", ()), dtype=float)
         self._kinks = np.array(getattr(mech, "kinks", ()), dtype=float)
         self._tol = (float(settings.rtol), float(settings.atol), int(settings.max_steps))
@@ -1667,6 +1672,7 @@ class CompiledStepper(Stepper):
         self._input_moved = True
         self._values = None
         self._native = None                   # its table points to the arrays it was made with
+        restart_lowest_energy(self._monitor)
 
     def step(self, t_end):
         t_end = float(t_end)
@@ -1902,6 +1908,10 @@ def failure_text(kernel, status, settings, h, y_last, t_last, max_steps=None, mo
         return (sim.rk4_unstable_text(h, monitor)
                 + sim.rk4_advice(h, settings.alpha, kernel.m, monitor, lambda alpha: kernel.derivative(None, alpha),
                                  t_last, y_last) + kernel.mech.stiffest())
+    if status == _k.ENERGY_JUMP and sim.energy_rose(monitor):
+        return (sim.energy_jump_text(h, monitor)
+                + sim.rk4_advice(h, settings.alpha, kernel.m, None, lambda alpha: kernel.derivative(None, alpha),
+                                 t_last, y_last))
     if status == _k.ENERGY_JUMP:
         return sim.energy_jump_text(h, monitor) + sim.watch_so_far(h, monitor)
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)

@@ -70,7 +70,8 @@ N_VELOCITY, N_ROWS, KL, KU, HAS_GRAVITY, DIMENSION, N_COORD, GROUND_MODE, GROUND
 # stopped at the meeting located within that step (:func:`locate_meeting`, :func:`_rk4_to_meeting`);
 # UNSTABLE: RK4's fixed step beyond the method's stability limit, a mode growing (:func:`rk4_watch`);
 # ENERGY_JUMP: one RK4 step of a scene that conserves its energy changed it by more than the scene
-# holds (:func:`energy_watch`).
+# holds, or the energy of one that can only lose it rose above its lowest by more than that
+# (:func:`energy_watch`).
 OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLLAPSED, GIMBAL_LOCK, \
     CHANGE_POINT, MEETING, UNSTABLE, ENERGY_JUMP = range(13)
 # The slots of the integrators' `monitor` (inerter.engine.simulation.monitor_slots): Hairer's stiffness
@@ -82,13 +83,20 @@ OK, MAX_STEPS, STEP_TOO_SMALL, SINGULAR, NOT_FINITE, TERMINALS_MEET, STIFF, COLL
 # beyond RK4's region, the watched mode's amplitude at the first of them and now, its step·λ, and
 # the sum of log |R(hλ)| (less the exact growth) over those steps before the last, the full steps
 # inside the region since the last beyond it (:data:`RK4_PATIENCE`); RK4's energy
-# watch (1: on, for a scene that conserves its energy) and its values (:func:`energy_watch`): the
-# energy at the last step's end and what the scene holds there, the energy it jumped to.
+# watch (ENERGY_OFF, ENERGY_CONSERVED or ENERGY_LOST: what the scene's energy may do) and its values
+# (:func:`energy_watch`): the energy at the last step's end and what the scene holds there, the
+# energy it jumped or rose to, the lowest energy so far and what the scene held there (held < 0:
+# none yet).
 MONITOR_STIFF_BOUND, MONITOR_STIFF_EVERY, MONITOR_STIFF_HITS, MONITOR_COLLAPSE_RELATIVE, MONITOR_COLLAPSE_STEPS, \
     MONITOR_TRIAL_SHRINK, MONITOR_DEPENDENT, MONITOR_RK4_WATCH, MONITOR_RK4_GROWTH, MONITOR_ENERGY_WATCH, \
     MONITOR_RK4_HITS, MONITOR_RK4_FIRST, MONITOR_RK4_AMPLITUDE, MONITOR_RK4_RE, MONITOR_RK4_IM, \
-    MONITOR_RK4_LOG_FACTORS, MONITOR_RK4_CALM, MONITOR_ENERGY_LAST, MONITOR_ENERGY_HELD, MONITOR_ENERGY_NOW = range(20)
-MONITOR_SIZE = 20             # the watches' running values last: monitor[MONITOR_RK4_HITS:]
+    MONITOR_RK4_LOG_FACTORS, MONITOR_RK4_CALM, MONITOR_ENERGY_LAST, MONITOR_ENERGY_HELD, MONITOR_ENERGY_NOW, \
+    MONITOR_ENERGY_LOWEST, MONITOR_ENERGY_LOWEST_HELD = range(22)
+MONITOR_SIZE = 22             # the watches' running values last: monitor[MONITOR_RK4_HITS:]
+# The values of monitor[MONITOR_ENERGY_WATCH] (:func:`energy_watch`): no watch; a scene that
+# conserves its energy (``Mechanism.conserves_energy``); one that can only lose it
+# (``Mechanism.only_loses_energy``: dampers too).
+ENERGY_OFF, ENERGY_CONSERVED, ENERGY_LOST = 0.0, 1.0, 2.0
 # The arrays of work_arrays, in the order of WORK (their names): the kernels take them by these slots.
 W_AB, W_RHS, W_GEN, W_ACC, W_K, W_Y_NEW, W_F_NEW, W_YS = range(8)
 # The slot of cosim_scratch's fresh[0] (1: the gaps are those at the integration's y), in the order of
@@ -3498,28 +3506,62 @@ RK4_PATIENCE = 3
 
 
 #: The most one RK4 step may change the energy of a scene that conserves it, relative to what the
-#: scene holds at the step's start (:func:`energy_watch`).
+#: scene holds at the step's start; and the most the energy of a scene that can only lose it may
+#: rise above its lowest, relative to what the scene held there (:func:`energy_watch`).
 ENERGY_JUMP_LIMIT = 1.0
 
 
 @njit(cache=True, inline="always")
 def energy_watch(energy, held, monitor):
-    """RK4's energy watch on a scene that conserves its energy (no forcing, no dissipation:
-    ``Mechanism.conserves_energy``; MONITOR_ENERGY_WATCH 1), with the energy and what the scene
-    holds (the sum of its parts' magnitudes, :func:`scene_energy2`) at the end of the step just
-    taken: ENERGY_JUMP where that one step changed the energy by more than ENERGY_JUMP_LIMIT times
-    what the scene held at its start. RK4 changes a conserved energy by O(h⁵) a step; a step across
-    a state where the motion's time scale collapses can multiply it (snap_through_2d at 0.105 s:
-    65 and 6400 times in single steps, while every mode the stages show stays inside RK4's region,
-    :func:`rk4_watch`). Also call it at a run's start, with monitor[MONITOR_ENERGY_HELD] < 0:
-    it takes the start's values. Its values: monitor[MONITOR_ENERGY_LAST:]."""
-    held_before = monitor[MONITOR_ENERGY_HELD]
-    if held_before > 0.0 and abs(energy - monitor[MONITOR_ENERGY_LAST]) > ENERGY_JUMP_LIMIT * held_before:
+    """RK4's energy watch, with the energy and what the scene holds (the sum of its parts'
+    magnitudes, :func:`scene_energy2`) at the end of the step just taken. ENERGY_JUMP:
+
+    * in a scene that conserves its energy (no forcing, no dissipation: MONITOR_ENERGY_WATCH
+      ENERGY_CONSERVED), where that one step changed the energy by more than ENERGY_JUMP_LIMIT
+      times what the scene held at its start. RK4 changes a conserved energy by O(h⁵) a step; a
+      step across a state where the motion's time scale collapses can multiply it
+      (snap_through_2d at 0.105 s: 65 and 6400 times in single steps, while every mode the stages
+      show stays inside RK4's region, :func:`rk4_watch`);
+    * in a scene that can only lose its energy (dampers too: ENERGY_LOST), where the energy rose
+      above the lowest it had by more than ENERGY_JUMP_LIMIT times what the scene held there,
+      while the stability watch follows no mode (monitor[MONITOR_RK4_HITS] 0: where it does, it
+      decides, with the mode and the step that keeps it inside). The motion's energy cannot rise,
+      and RK4 raises it by O(h⁵) a step inside its region; beyond it, where the modes of the
+      stages alternate, the stability watch's count restarts and a nonlinearity bounds the mode
+      it reads (a damped three-mass chain at 1.05 times its limit ended with status ok, its
+      energy from 8.1 J to 2.3e3 J).
+
+    Also call it at a call's start, with monitor[MONITOR_ENERGY_HELD] < 0: it takes the start's
+    values. The lowest so far carries over from call to call (a run's segments, a co-simulation's
+    steps) until monitor[MONITOR_ENERGY_LOWEST_HELD] < 0 (none yet: a run's start, or a stepper
+    retuned, its energy changed between steps). Its values: monitor[MONITOR_ENERGY_LAST:]."""
+    if monitor[MONITOR_ENERGY_HELD] >= 0.0 and (_energy_jumped(energy, monitor) or _energy_rose(energy, monitor)):
         monitor[MONITOR_ENERGY_NOW] = energy
         return ENERGY_JUMP
+    if monitor[MONITOR_ENERGY_LOWEST_HELD] < 0.0 or energy < monitor[MONITOR_ENERGY_LOWEST]:
+        monitor[MONITOR_ENERGY_LOWEST] = energy
+        monitor[MONITOR_ENERGY_LOWEST_HELD] = held
     monitor[MONITOR_ENERGY_LAST] = energy
     monitor[MONITOR_ENERGY_HELD] = held
     return OK
+
+
+@njit(cache=True, inline="always")
+def _energy_jumped(energy, monitor):
+    """Whether one step of a scene that conserves its energy changed it by more than the scene held
+    at the step's start (:func:`energy_watch`)."""
+    held_before = monitor[MONITOR_ENERGY_HELD]
+    return (monitor[MONITOR_ENERGY_WATCH] == ENERGY_CONSERVED and held_before > 0.0
+            and abs(energy - monitor[MONITOR_ENERGY_LAST]) > ENERGY_JUMP_LIMIT * held_before)
+
+
+@njit(cache=True, inline="always")
+def _energy_rose(energy, monitor):
+    """Whether the energy of a scene that can only lose it rose above its lowest by more than the
+    scene held there, the stability watch following no mode (:func:`energy_watch`)."""
+    held_lowest = monitor[MONITOR_ENERGY_LOWEST_HELD]
+    return (monitor[MONITOR_ENERGY_WATCH] == ENERGY_LOST and monitor[MONITOR_RK4_HITS] == 0.0
+            and held_lowest > 0.0 and energy - monitor[MONITOR_ENERGY_LOWEST] > ENERGY_JUMP_LIMIT * held_lowest)
 
 
 @njit(cache=True, inline="always")

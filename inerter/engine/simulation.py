@@ -232,20 +232,21 @@ class StepBudget(SimulationError):
     """The run took more than max_steps integrator steps."""
 
 
-def monitor_slots(method, rk4_watch=True, conserves_energy=False) -> np.ndarray:
+def monitor_slots(method, rk4_watch=True, energy=0.0) -> np.ndarray:
     """The constants of :class:`StepMonitor` for the compiled loops, and the ratio below which the
     joints' rows count as dependent (``mechanism.DEPENDENT_RATIO``: the kernels' change-point watch,
     kernels.loop_watch), in the slots kernels.MONITOR_*; RK4's stability watch (kernels.rk4_watch)
     on unless `rk4_watch` is false, its running values at 0, and its energy watch
-    (kernels.energy_watch) with it for a scene that `conserves_energy`
-    (``Mechanism.conserves_energy``). The numpy path's StepMonitor keeps RK4's watches in such an
-    array too."""
+    (kernels.energy_watch) with it, `energy` saying what the scene's energy may do
+    (:func:`energy_watched`). The numpy path's StepMonitor keeps RK4's watches in such an array
+    too."""
     from inerter.engine import kernels as _k
     monitor = np.zeros(_k.MONITOR_SIZE)
     if method == "RK4" and rk4_watch:
         monitor[_k.MONITOR_RK4_WATCH] = 1.0
         monitor[_k.MONITOR_RK4_GROWTH] = RK4_GROWTH
-        monitor[_k.MONITOR_ENERGY_WATCH] = 1.0 if conserves_energy else 0.0
+        monitor[_k.MONITOR_ENERGY_WATCH] = energy
+        monitor[_k.MONITOR_ENERGY_LOWEST_HELD] = -1.0           # no lowest energy yet
     monitor[_k.MONITOR_STIFF_BOUND] = STIFFNESS_BOUND.get(method, 0.0)
     monitor[_k.MONITOR_STIFF_EVERY] = STIFFNESS_EVERY
     monitor[_k.MONITOR_STIFF_HITS] = STIFFNESS_HITS
@@ -254,6 +255,24 @@ def monitor_slots(method, rk4_watch=True, conserves_energy=False) -> np.ndarray:
     monitor[_k.MONITOR_TRIAL_SHRINK] = TRIAL_SHRINK
     monitor[_k.MONITOR_DEPENDENT] = DEPENDENT_RATIO
     return monitor
+
+
+def energy_watched(mech) -> float:
+    """What RK4's energy watch holds the scene `mech` to (kernels.MONITOR_ENERGY_WATCH): its
+    energy conserved (``Mechanism.conserves_energy``), only lost (``Mechanism.only_loses_energy``),
+    or nothing (forcing, ground motion, inputs, devices)."""
+    from inerter.engine import kernels as _k
+    if mech.conserves_energy():
+        return _k.ENERGY_CONSERVED
+    return _k.ENERGY_LOST if mech.only_loses_energy() else _k.ENERGY_OFF
+
+
+def restart_lowest_energy(watch) -> None:
+    """RK4's energy watch (its slots `watch`, or None) compares a scene's energy with its lowest
+    from now on (kernels.energy_watch): a retune between steps changes the energy."""
+    from inerter.engine import kernels as _k
+    if watch is not None:
+        watch[_k.MONITOR_ENERGY_LOWEST_HELD] = -1.0
 
 
 def rk4_unstable_text(step, watch) -> str:
@@ -278,20 +297,24 @@ def _watched_mode(watch) -> tuple[complex, float, float]:
 
 
 def rk4_advice(step, alpha, rows, watch, fun_at, t, y) -> str:
-    """What to set after RK4's stability watch stopped a run (UNSTABLE) at the state y at t: the
+    """What to set after RK4's stability watch stopped a run (UNSTABLE), or its energy watch one
+    whose energy can only fall (kernels.energy_watch), at the state y at t: the
     longest step that keeps every mode of the scene's linearisation there inside RK4's region
     (:func:`linearised_modes`, :func:`limiting_mode`; the watch's fit from the stages reads one
     mode, or a mixture of several: the 32-link benchmark chain at 17.5 ms read −2.94 where its
     fastest mode is −0.33 ± 3.37i, and the step it gave, 16 ms, was still outside), or the fit's
-    where no mode of the linearisation is outside (a nonlinear growth) or it cannot be evaluated.
+    where no mode of the linearisation is outside (a nonlinear growth) or it cannot be evaluated
+    (`watch` None, no fit: a shorter step, and the fastest mode, :func:`fastest_mode_text`).
     `fun_at(α)`: the state derivative f(t, y) with Baumgarte's α. With `rows` constraint rows
     corrected at `alpha`, the modes at α/2 tell whether the correction sets the limit
     (:func:`baumgarte_text`). A state of more than LINEARISED_SIZE coordinates keeps the fit's
     (two dense eigenvalue problems of its size and 4·len(y) evaluations would take seconds)."""
     from inerter.engine import kernels as _k
-    linearised = y is not None and len(y) <= LINEARISED_SIZE
-    limit = limiting_mode(step, linearised_modes(fun_at(alpha), t, y)) if linearised else None
+    modes = linearised_modes(fun_at(alpha), t, y) if y is not None and len(y) <= LINEARISED_SIZE else None
+    limit = limiting_mode(step, modes)
     adaptive = ", or use an adaptive method (DOP853; Radau or BDF for a stiff scene)"
+    if limit is None and watch is None:
+        return f"{fastest_mode_text(step, modes)}; set a shorter experiment.step{adaptive}"
     if limit is None:
         z = complex(watch[_k.MONITOR_RK4_RE], watch[_k.MONITOR_RK4_IM])
         return f"; {_below_about('step', step, 's', rk4_stable_fraction(z))}{adaptive}"
@@ -301,6 +324,21 @@ def rk4_advice(step, alpha, rows, watch, fun_at, t, y) -> str:
     if rows and alpha > 0.0:
         text += baumgarte_text(step, alpha, fraction, z, limiting_mode(step, linearised_modes(fun_at(alpha / 2), t, y)))
     return text
+
+
+def fastest_mode_text(step, modes) -> str:
+    """Where every mode of the linearisation is inside RK4's region (a run whose energy rose while
+    it can only fall): the fastest one's h·λ, RK4's factor on it and the motion's own, |e^(h·λ)|.
+    Inside the region, but far from the motion (a damped chain at 98 % of its limit: 0.99 a step
+    against 0.29), RK4 keeps the mode alive, and the energy can rise. Empty without modes."""
+    from inerter.engine import kernels as _k
+    if modes is None or not len(modes):
+        return ""
+    z = complex(step * max(modes, key=abs))
+    return (f"; linearised where it stopped, every mode of the scene is inside RK4's region, the fastest at "
+            f"h·λ ≈ {_mode_text(z)}, where each step multiplies it by |R(h·λ)| = "
+            f"{_k.rk4_amplification.py_func(z.real, z.imag):.3g} and the motion by |e^(h·λ)| = "
+            f"{math.exp(z.real):.3g}")
 
 
 #: The largest state RK4's advice linearises (:func:`rk4_advice`): a 64-link chain's 384.
@@ -398,6 +436,12 @@ def _outside_region(z: complex) -> bool:
     return _k.rk4_amplification.py_func(z.real, z.imag) > (1.0 + _k.RK4_EXCESS) * _k._exact_growth.py_func(z.real)
 
 
+def energy_rose(watch) -> bool:
+    """Whether RK4's energy watch (its slots `watch`) stopped a run whose energy can only fall."""
+    from inerter.engine import kernels as _k
+    return watch is not None and watch[_k.MONITOR_ENERGY_WATCH] == _k.ENERGY_LOST
+
+
 def failure_context(exc, settings, mech, watch=None) -> str:
     """What a run with `settings` on `mech` adds to the message of its failure `exc`: the scene's
     fastest time scale where the step size collapsed, the steps read as stiff or RK4's step was
@@ -406,12 +450,15 @@ def failure_context(exc, settings, mech, watch=None) -> str:
     (:func:`rk4_hint`), or what RK4's stability watch (its slots `watch`) had counted before
     (:func:`watch_so_far`). As the compiled loops' ``compiled.failure_text`` adds them."""
     text = ""
+    inputs = np.zeros(len(mech.input_names))
     if isinstance(exc, UnstableStep):
-        inputs = np.zeros(len(mech.input_names))
         text += rk4_advice(settings.step, settings.alpha, mech.m, exc.watch,
                            lambda alpha: derivative(mech, inputs, alpha), exc.time, exc.state)
     if isinstance(exc, (StepCollapse, StiffForMethod, UnstableStep)):
         text += mech.stiffest()
+    if isinstance(exc, EnergyJump) and energy_rose(exc.watch):
+        return text + rk4_advice(settings.step, settings.alpha, mech.m, None,
+                                 lambda alpha: derivative(mech, inputs, alpha), exc.time, exc.state)
     if isinstance(exc, EnergyJump):
         return text + watch_so_far(settings.step, watch)
     if isinstance(exc, NAMES_ITS_CAUSE):
@@ -463,19 +510,38 @@ class UnstableStep(SimulationError):
 
 
 class EnergyJump(SimulationError):
-    """One RK4 step changed the energy of a scene that conserves it by more than it held
-    (kernels.energy_watch)."""
+    """One RK4 step changed the energy of a scene that conserves it by more than it held, or the
+    energy of one that can only lose it rose above its lowest by more than that
+    (kernels.energy_watch): `watch`, the watch's slots when it stopped the run, `state` the state
+    at the start of the step."""
+
+    def __init__(self, message: str, time: float | None = None, watch=None, state=None):
+        super().__init__(message, time)
+        self.watch, self.state = watch, state
 
 
 def energy_jump_text(step, watch) -> str:
-    """Why a run with RK4 stopped at ENERGY_JUMP, from its watch's slots (kernels.energy_watch)."""
+    """Why a run with RK4 stopped at ENERGY_JUMP, from its watch's slots (kernels.energy_watch).
+    A scene that can only lose its energy: what to set follows (:func:`rk4_advice`)."""
     from inerter.engine import kernels as _k
+    if watch[_k.MONITOR_ENERGY_WATCH] == _k.ENERGY_LOST:
+        return _energy_rise_text(step, watch)
     before, after, held = watch[_k.MONITOR_ENERGY_LAST], watch[_k.MONITOR_ENERGY_NOW], watch[_k.MONITOR_ENERGY_HELD]
     return (f"an RK4 step (experiment.step = {step:.3g} s) changed the scene's energy from {before:.6g} J to "
             f"{after:.6g} J, by more "
             f"than the {held:.3g} J its bodies and elements held (the sum of their T + V): the scene conserves its "
             f"energy (no forcing, no damping), so the step is too long for the motion there; set a shorter "
             f"experiment.step, or use an adaptive method (DOP853)")
+
+
+def _energy_rise_text(step, watch) -> str:
+    from inerter.engine import kernels as _k
+    lowest, now = watch[_k.MONITOR_ENERGY_LOWEST], watch[_k.MONITOR_ENERGY_NOW]
+    held = watch[_k.MONITOR_ENERGY_LOWEST_HELD]
+    return (f"RK4's steps (experiment.step = {step:.3g} s) raised the scene's energy from its lowest, "
+            f"{lowest:.6g} J, to {now:.6g} J, by more than the {held:.3g} J its bodies and elements held "
+            f"there (the sum of their T + V): the scene can only lose energy (dampers, no forcing), so the "
+            f"steps are too long for its motion")
 
 
 #: The numpy path's failures whose message names their cause: no RK4 hint (:func:`rk4_hint`).
@@ -500,7 +566,7 @@ class StepMonitor:
         self.mech, self.method, self.max_steps = mech, method, max_steps
         self.bound = STIFFNESS_BOUND.get(method)
         if watch is None and method == "RK4":
-            watch = monitor_slots("RK4", conserves_energy=mech.conserves_energy())
+            watch = monitor_slots("RK4", energy=energy_watched(mech))
         self.watch = watch
         self.energy_on = False
         if watch is not None:
@@ -627,7 +693,7 @@ class StepMonitor:
                                state=np.array(y_old))
 
     def _energy(self, solver, y_old):
-        """RK4's energy watch on a scene that conserves its energy: the kernels'
+        """RK4's energy watch on a scene that conserves its energy or can only lose it: the kernels'
         (``kernels.energy_watch``), run uncompiled, at the step's end (after the 3D angles wound on,
         as the compiled loop) and, at the first step of a call, at its start."""
         from inerter.engine import kernels as _k
@@ -638,7 +704,8 @@ class StepMonitor:
         y = solver.y
         energy, held = mech.energy_held(y[:nq], y[nq:nq + n], y[nq + n:])
         if _k.energy_watch.py_func(energy, held, self.watch) != _k.OK:
-            raise EnergyJump(energy_jump_text(solver.t - solver.t_old, self.watch), solver.t_old)
+            raise EnergyJump(energy_jump_text(solver.t - solver.t_old, self.watch), solver.t_old,
+                             watch=self.watch.copy(), state=np.array(y_old))
 
     def _stiffness(self, solver, h):
         K = getattr(solver, "K", None)
@@ -1057,6 +1124,7 @@ class Stepper:
         self.mech, self.signals = mech, signals.for_run(numpy_mechanism(mech))
         self._solver = None
         self._input_moved = True
+        restart_lowest_energy(self._watch)
 
     def step(self, t_end):
         t_end = float(t_end)

@@ -927,18 +927,35 @@ class Mechanism:
             parts[len(self.body_names) + self.elements.index(e)] += e.state_energy(q, v, z)
         return float(sum(parts)), float(sum(abs(p) for p in parts))
 
+    #: The element kinds that store energy and give it back, and those that only take it out (linear
+    #: dampers, c ≥ 0 and d ≥ 0: their power c L̇², d ω_rel² leaves the motion).
+    STORING_KINDS = frozenset({"spring", "inerter", "rotational_spring"})
+    DISSIPATING_KINDS = frozenset({"damper", "rotational_damper"})
+
     def conserves_energy(self) -> bool:
         """Whether the scene conserves :meth:`energy`: no applied forces or inputs, no ground
         motion, springs, ideal inerters and rotational springs only (no damper, no device: its
         friction, efficiency or end stops take energy out), every inerter with its centripetal
         term (Eq. 9: F = b d²L/dt² stores ½bL̇²; the uncorrected Eq. 8 and the small-displacement
-        law do work of their own, Sec. 2.2). RK4's energy watch runs on such scenes alone."""
+        law do work of their own, Sec. 2.2). RK4's energy watch holds such a scene to it."""
+        return self._energy_only_through(self.STORING_KINDS)
+
+    def only_loses_energy(self) -> bool:
+        """Whether :meth:`energy` can only fall: as :meth:`conserves_energy`, with linear dampers
+        and rotational dampers too, dE/dt = −Σ c L̇² − Σ d ω_rel² ≤ 0. RK4's energy watch holds
+        such a scene to it (a device stays out: that its model's energy, with its friction,
+        efficiency, compliance and end stops, can only fall is not shown here)."""
+        return self._energy_only_through(self.STORING_KINDS | self.DISSIPATING_KINDS)
+
+    def _energy_only_through(self, kinds) -> bool:
+        """No forcing, ground motion, input or device, elements of `kinds` only, every inerter with
+        its centripetal term."""
         s = self.scene
-        kinds = {e.type for e in s.elements.values()}
+        present = {e.type for e in s.elements.values()}
         return (not s.forces and self.ground_motion is None and not self.input_names
-                and kinds <= {"spring", "inerter", "rotational_spring"}
+                and present <= kinds
                 and all(e.device is None for e in s.elements.values())
-                and ("inerter" not in kinds or (s.centripetal and not s.small_displacement)))
+                and ("inerter" not in present or (s.centripetal and not s.small_displacement)))
 
     def body_energy(self, i, q, v) -> float:
         """Body i's ½ vᵀ M0 v over its block and its weight's potential −m g·R

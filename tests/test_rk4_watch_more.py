@@ -218,7 +218,8 @@ def damped_chain_modes() -> np.ndarray:
     while its springs keep their direction: −2.11 ± 44.7i, −32.2 ± 135.3i, −78.2 ± 140.3i."""
     c = DAMPED_CHAIN
     K, C, n = chain_matrix(c["springs"]), chain_matrix(c["dampers"]), len(c["masses"])
-    return np.linalg.eigvals(np.block([[np.zeros((n, n)), np.eye(n)], [-K / c["masses"][0], -C / c["masses"][0]]]))
+    M_inv = np.diag(1.0 / np.array(c["masses"]))
+    return np.linalg.eigvals(np.block([[np.zeros((n, n)), np.eye(n)], [-M_inv @ K, -M_inv @ C]]))
 
 
 def longest_step_inside(modes) -> float:

@@ -809,14 +809,8 @@ class Kernel:
             return self.signal_column(index, times, np.asarray(sol(times)).T, inputs, alpha, windings)
         if windings is None and self.reads_windings(index):
             windings = sol.windings_at(times)
-        need, comps = self._reads(index)
-        element, slot = self.element_slot(index)
-        out = np.empty(len(times))
         with self.wound_from_start():
-            st, k = _k.dense_signal(sol.method_code, sol.nodes, sol.coeffs, sol.count, times, comps,
-                                    _windings_arg(windings), self._inputs(inputs), float(alpha), int(index),
-                                    int(element), int(slot), need, self.params, np.empty(len(self._layout)), out)
-        return out[:k], int(k)
+            return self._dense_read(sol, index, inputs, alpha)(times, _windings_arg(windings))
 
     def dense_reader(self, sol, index, alpha=0.0):
         """:meth:`dense_signal` of the signal at `index` on `sol` without inputs, as a function of
@@ -826,17 +820,23 @@ class Kernel:
         dense output some ten times, and the compiled call itself takes a few microseconds."""
         if not isinstance(sol, DenseOutput) or len(self.windings):
             return None
+        read = self._dense_read(sol, index, None, alpha)
+        return lambda times: read(np.ascontiguousarray(times, dtype=float).reshape(-1))
+
+    def _dense_read(self, sol, index, inputs, alpha):
+        """read(times, windings) → (values, k): :func:`~inerter.engine.kernels.dense_signal` of the
+        signal at `index` on the :class:`DenseOutput` `sol`, with what the signal reads found once
+        (:meth:`dense_signal`, :meth:`dense_reader`); `times` contiguous floats, `windings` the
+        kernels' (_windings_arg)."""
         need, comps = self._reads(index)
         element, slot = self.element_slot(index)
-        fixed = (_NO_WINDINGS, self._no_inputs, float(alpha), int(index), int(element), int(slot), need,
-                 self.params)
+        fixed = (self._inputs(inputs), float(alpha), int(index), int(element), int(slot), need, self.params)
         code, nodes, coeffs, count = sol.method_code, sol.nodes, sol.coeffs, sol.count
         layout = len(self._layout)
 
-        def read(times):
-            times = np.ascontiguousarray(times, dtype=float).reshape(-1)
+        def read(times, windings=_NO_WINDINGS):
             out = np.empty(len(times))
-            st, k = _k.dense_signal(code, nodes, coeffs, count, times, comps, *fixed, np.empty(layout), out)
+            st, k = _k.dense_signal(code, nodes, coeffs, count, times, comps, windings, *fixed, np.empty(layout), out)
             return out[:k], int(k)
         return read
 
@@ -1908,12 +1908,10 @@ def failure_text(kernel, status, settings, h, y_last, t_last, max_steps=None, mo
         return (sim.rk4_unstable_text(h, monitor)
                 + sim.rk4_advice(h, settings.alpha, kernel.m, monitor, lambda alpha: kernel.derivative(None, alpha),
                                  t_last, y_last) + kernel.mech.stiffest())
-    if status == _k.ENERGY_JUMP and sim.energy_rose(monitor):
-        return (sim.energy_jump_text(h, monitor)
-                + sim.rk4_advice(h, settings.alpha, kernel.m, None, lambda alpha: kernel.derivative(None, alpha),
-                                 t_last, y_last))
     if status == _k.ENERGY_JUMP:
-        return sim.energy_jump_text(h, monitor) + sim.watch_so_far(h, monitor)
+        return (sim.energy_jump_text(h, monitor)
+                + sim.energy_jump_advice(h, settings.alpha, kernel.m, monitor,
+                                         lambda alpha: kernel.derivative(None, alpha), t_last, y_last))
     text = _status_text(kernel, status, method, h, y_last, t_last, max_steps)
     if status in (_k.STEP_TOO_SMALL, _k.SINGULAR, _k.NOT_FINITE, _k.COLLAPSED, _k.CHANGE_POINT) \
             and y_last is not None:         # as the numpy path: what may have stalled it

@@ -436,10 +436,15 @@ def _outside_region(z: complex) -> bool:
     return _k.rk4_amplification.py_func(z.real, z.imag) > (1.0 + _k.RK4_EXCESS) * _k._exact_growth.py_func(z.real)
 
 
-def energy_rose(watch) -> bool:
-    """Whether RK4's energy watch (its slots `watch`) stopped a run whose energy can only fall."""
+def energy_jump_advice(step, alpha, rows, watch, fun_at, t, y) -> str:
+    """What follows the message of a run RK4's energy watch stopped (its slots `watch`) at the
+    state y at t: for a scene that can only lose its energy, the step from its linearisation there
+    (:func:`rk4_advice`, no fit); for one that conserves it, what the stability watch had counted
+    (:func:`watch_so_far`). `fun_at`, `rows`, `alpha`: as rk4_advice's."""
     from inerter.engine import kernels as _k
-    return watch is not None and watch[_k.MONITOR_ENERGY_WATCH] == _k.ENERGY_LOST
+    if watch[_k.MONITOR_ENERGY_WATCH] == _k.ENERGY_LOST:
+        return rk4_advice(step, alpha, rows, None, fun_at, t, y)
+    return watch_so_far(step, watch)
 
 
 def failure_context(exc, settings, mech, watch=None) -> str:
@@ -456,11 +461,9 @@ def failure_context(exc, settings, mech, watch=None) -> str:
                            lambda alpha: derivative(mech, inputs, alpha), exc.time, exc.state)
     if isinstance(exc, (StepCollapse, StiffForMethod, UnstableStep)):
         text += mech.stiffest()
-    if isinstance(exc, EnergyJump) and energy_rose(exc.watch):
-        return text + rk4_advice(settings.step, settings.alpha, mech.m, None,
-                                 lambda alpha: derivative(mech, inputs, alpha), exc.time, exc.state)
     if isinstance(exc, EnergyJump):
-        return text + watch_so_far(settings.step, watch)
+        return text + energy_jump_advice(settings.step, settings.alpha, mech.m, exc.watch,
+                                         lambda alpha: derivative(mech, inputs, alpha), exc.time, exc.state)
     if isinstance(exc, NAMES_ITS_CAUSE):
         return text
     return text + (watch_so_far(settings.step, watch) or rk4_hint(settings.method, False))

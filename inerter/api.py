@@ -955,6 +955,41 @@ WARM_UP_SCENES = {2: "two_bar_2d.toml", 3: "two_bar_2d_as_3d.toml"}
 _WARM_UP_3D = ("from inerter.api import warm_up; from inerter.engine import compiled; warm_up(dims=(3,)); "
                "print(compiled.NOTICE.seconds if compiled.NOTICE is not None else 0.0)")
 
+#: A process building one dimension's entry kernels ahead of time (:func:`build_ahead`).
+_BUILD_AHEAD = "import sys; from inerter.api import _build_ahead_here; _build_ahead_here(int(sys.argv[1]))"
+
+
+def build_ahead(dims=(2, 3), parallel: bool = True) -> dict:
+    """Build the kernels a run enters from Python ahead of time for each of `dims` where this
+    machine lacks the build (:mod:`inerter.engine.ahead`), each dimension in a process of its own,
+    side by side where `parallel`. Returns {dimension: None (built, or there already), or the
+    reason it could not be built}; a dimension without its build still runs, its kernels loaded
+    from numba's cache."""
+    from inerter.engine import ahead, compiled
+
+    outcome = {}
+    wanted = [d for d in dims if not ahead.built(compiled._k, d)]
+    outcome.update({d: None for d in dims if d not in wanted})
+    groups = [wanted] if parallel else [[d] for d in wanted]
+    for group in groups:
+        started = {d: _subprocess.Popen([_sys.executable, "-c", _BUILD_AHEAD, str(d)], stdout=_subprocess.PIPE,
+                                        stderr=_subprocess.PIPE, text=True) for d in group}
+        for d, process in started.items():
+            _, err = process.communicate()
+            last = (err.strip().splitlines() or ["no message"])[-1]
+            outcome[d] = None if process.returncode == 0 and ahead.built(compiled._k, d) else last
+    return outcome
+
+
+def _build_ahead_here(dimension: int):
+    """:func:`build_ahead`'s process for `dimension`: its warm-up through numba's dispatchers (from
+    the cache ``inerter compile`` filled first), then the build."""
+    from inerter.engine import ahead, compiled
+
+    compiled.NOTICE.enabled = False             # numba.pycc compiles through numba: not the kernels' first use
+    _warm_up_dimensions((dimension,))
+    print(ahead.build(compiled._k, dimension) or "")
+
 
 def warm_up(spatial: bool = False, parallel: bool = False, dims=None):
     """Compile (or load from numba's cache) every kernel once for 2D scenes (`spatial`: for 3D
@@ -991,9 +1026,18 @@ def warm_up(spatial: bool = False, parallel: bool = False, dims=None):
 
 def _warm_up_dimensions(dims):
     """Every kernel called for the shipped scenes of `dims` (:data:`WARM_UP_SCENES`), compiled or
-    loaded: whole runs of each compiled method with and without the dense output, their outputs and
-    metrics, the accelerations, scipy's methods on the kernels, the co-simulation steps and the
-    FMU's native step."""
+    loaded through numba's dispatchers (not the builds ahead of time: the cache is what this fills,
+    and the builds are made for the signatures it compiles): whole runs of each compiled method with
+    and without the dense output, their outputs and metrics, the accelerations, scipy's methods on
+    the kernels, the co-simulation steps and the FMU's native step."""
+    from inerter.engine import compiled
+
+    with compiled.ENTRIES.dispatchers_only():
+        _warm_up_scenes(dims)
+
+
+def _warm_up_scenes(dims):
+    """:func:`_warm_up_dimensions`' calls."""
     from inerter.engine import compiled
 
     from inerter.common.locations import scenarios

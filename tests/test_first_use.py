@@ -22,6 +22,7 @@ if not compiled.AVAILABLE:                                   # pragma: no cover
 from numba.core import types  # noqa: E402
 
 from inerter import cli  # noqa: E402
+from inerter.engine import ahead  # noqa: E402
 
 KERNELS = compiled._k
 
@@ -127,12 +128,36 @@ def test_compile_command(monkeypatch, capsys):
     monkeypatch.setattr(inerter.api, "warm_up", fake_warm_up)
     wrote = []
     monkeypatch.setattr(cli, "write_bytecode", lambda: wrote.append(True) or True)
+    monkeypatch.setattr(ahead, "built", lambda kernels, dimension: True)
     assert cli.main(["compile"]) == 0
     assert wrote == [True]
     captured = capsys.readouterr()
     assert "compiling the engine's 2D and 3D kernels" in captured.err
     assert "(all were in the cache)" in captured.err and "loaded in 0.5 s" in captured.out
+    assert "building" not in captured.err                   # both dimensions' builds are there
     assert compiled.NOTICE.enabled
+
+
+def test_compile_builds_the_entry_kernels_and_says_what_it_could_not(monkeypatch, capsys):
+    """`inerter compile` then builds the kernels a run enters ahead of time (inerter.api.build_ahead)
+    where this machine lacks them, saying so with its expected time; a dimension that cannot be built
+    is named with the reason, and the command still succeeds (its kernels load from numba's cache)."""
+    import inerter.api
+    monkeypatch.setattr(inerter.api, "warm_up", lambda spatial=False, parallel=False: 0.5)
+    monkeypatch.setattr(cli, "write_bytecode", lambda: True)
+    monkeypatch.setattr(ahead, "built", lambda kernels, dimension: False)
+    asked = []
+
+    def fake_build_ahead(dims, parallel):
+        asked.append(tuple(dims))
+        return {2: None, 3: "error: command 'gcc' failed: No such file or directory"}
+    monkeypatch.setattr(inerter.api, "build_ahead", fake_build_ahead)
+    assert cli.main(["compile"]) == 0
+    err = capsys.readouterr().err
+    assert asked == [(2, 3)]
+    assert "building the kernels a run enters from Python" in err and f"about {ahead.BUILD_SECONDS} s" in err
+    assert "the 3D kernels could not be built ahead of time (error: command 'gcc' failed" in err
+    assert "2D kernels could not" not in err
 
 
 def test_compile_writes_the_bytecode_where_imports_write_none(tmp_path, monkeypatch):
@@ -221,6 +246,7 @@ names = set()
 for path in [*root.rglob("*.py"), *root.parent.glob("fmu_src/*.py")]:
     text = path.read_text()
     names |= {n for n in re.findall(r"\b_k\.(\w+)", text) if not re.search(rf"_k\.{n}\.py_func", text)}
+    names |= set(re.findall(r"\bENTRIES\.(\w+)\(", text))     # through their builds, else these
 found = {}
 for name in sorted(names):
     kernel = getattr(compiled._k, name, None)
@@ -232,7 +258,7 @@ print(json.dumps(found))
 
 
 def test_the_ahead_of_time_compilation_covers_every_kernel_called_from_python():
-    """Every kernel the package calls from Python (`_k.NAME` in its sources, the FMU's slave too) is
+    """Every kernel the package calls from Python (`_k.NAME` and `ENTRIES.NAME` in its sources, the FMU's slave too) is
     compiled or loaded by `inerter compile`'s warm-up, for 2D and 3D where it takes a scene's tables
     P: else a fresh installation compiles it in the middle of a run (an FMU's initialisation, a failed
     run's message, an RK4 co-simulation step, scipy's methods on the kernels). In a fresh process,

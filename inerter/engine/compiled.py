@@ -53,6 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from inerter.common.atomic import replace_file
+from inerter.engine import ahead
 from inerter.common.errors import SimulationError
 from inerter.engine.simulation import (Run, Stepper, energy_watched, jumps, load_state, monitor_slots, output_grid,
                                        restart_lowest_energy)
@@ -312,11 +313,14 @@ try:
     import numba  # noqa: F401
     _blas_check_without_scipy_linalg()
     _k = _import_kernels()
+    #: The kernels a run enters from Python, through their builds ahead of time where this machine
+    #: has them (:mod:`inerter.engine.ahead`), else numba's dispatchers.
+    ENTRIES = ahead.Entries(_k)
     AVAILABLE = True
     WHY_NOT = ""
     _install_notice()
 except ImportError as exc:          # numba missing (or unusable): the numpy path is used
-    _k = None
+    _k = ENTRIES = None
     AVAILABLE = False
     WHY_NOT = f"numba is not available ({exc}); the numpy path is used"
 
@@ -787,7 +791,7 @@ class Kernel:
         states = np.ascontiguousarray(states, dtype=float)
         out = np.empty(len(times))
         with self.wound_from_start():
-            st, k = _k.signal_column(np.ascontiguousarray(times, dtype=float), states,
+            st, k = ENTRIES.signal_column(np.ascontiguousarray(times, dtype=float), states,
                                      np.arange(states.shape[1]), _windings_arg(windings),
                                      self._inputs(inputs), float(alpha), int(index), int(element), int(slot), need,
                                      self.params, np.empty(len(self._layout)), out)
@@ -836,7 +840,7 @@ class Kernel:
 
         def read(times, windings=_NO_WINDINGS):
             out = np.empty(len(times))
-            st, k = _k.dense_signal(code, nodes, coeffs, count, times, comps, windings, *fixed, np.empty(layout), out)
+            st, k = ENTRIES.dense_signal(code, nodes, coeffs, count, times, comps, windings, *fixed, np.empty(layout), out)
             return out[:k], int(k)
         return read
 
@@ -888,7 +892,7 @@ class Kernel:
         states = np.ascontiguousarray(states, dtype=float)
         raw = np.empty((len(states), len(order)))
         with self.wound_from_start():
-            st, k = _k.signal_history(np.ascontiguousarray(times, dtype=float), states, _windings_arg(windings),
+            st, k = ENTRIES.signal_history(np.ascontiguousarray(times, dtype=float), states, _windings_arg(windings),
                                       self._inputs(inputs), float(alpha), bool(signals.needs_accelerations),
                                       self.params, raw)
         return signals.complete(raw[:k][:, order]), int(k)
@@ -1115,7 +1119,7 @@ def _rk_segment(kernel, settings, tables, y, t0, t1, seg, seg_out, max_steps, in
     step, through the `kinks`, ending before the jump at t1 where t1 is one of the `switches`;
     sampled at `seg`, steps kept in `keep`. Returns what integrate_rk returns."""
     A, B, C, E, E3, D, Pm = tables
-    return _k.integrate_rk(_RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol),
+    return ENTRIES.integrate_rk(_RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol),
                            float(settings.atol), 0.0, max_steps, inputs, float(settings.alpha), kernel.params,
                            A, B, C, E, E3, D, Pm, monitor_slots(settings.method), t1 if t1 in switches else 0.0,
                            kinks, keep)
@@ -1249,7 +1253,7 @@ class CompiledRun(Run):
     def max_drift(self) -> float:
         if self._max_drift is None:
             kernel = self.extra["kernel"]
-            self._max_drift = float(_k.max_residual(self.states, kernel.params)) if kernel.m else 0.0
+            self._max_drift = float(ENTRIES.max_residual(self.states, kernel.params)) if kernel.m else 0.0
         return self._max_drift
 
     @max_drift.setter

@@ -17,7 +17,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e .
-	$(VENV)/bin/inerter compile    # the engine's kernels, once for this machine (about 10 min on 2 cores)
+	$(VENV)/bin/inerter compile    # the engine's kernels, once for this machine, then the builds of those a run enters (about 11 min on 2 cores)
 	touch $(STAMP)
 
 $(TEST_STAMP): $(STAMP)

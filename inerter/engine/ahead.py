@@ -20,6 +20,7 @@ no build exists or it cannot be loaded, goes to numba's dispatcher, as before.
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import importlib.util
 import os
@@ -43,6 +44,7 @@ BUILD_SECONDS = 90
 _OFF = "INERTER_AHEAD"
 
 
+@functools.lru_cache(maxsize=None)
 def platform_tag() -> str:
     """What a build depends on besides the kernels' source: the interpreter's ABI, numpy's and
     numba's versions, this machine's CPU and its features (a cache folder shared between machines

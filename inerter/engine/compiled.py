@@ -53,8 +53,8 @@ from pathlib import Path
 import numpy as np
 
 from inerter.common.atomic import replace_file
-from inerter.engine import ahead
 from inerter.common.errors import SimulationError
+from inerter.engine import ahead
 from inerter.engine.simulation import (Run, Stepper, energy_watched, jumps, load_state, monitor_slots, output_grid,
                                        restart_lowest_energy)
 from inerter.scene.ground_motion import TERM_AMPLITUDE, TERM_COLUMNS
@@ -792,9 +792,9 @@ class Kernel:
         out = np.empty(len(times))
         with self.wound_from_start():
             st, k = ENTRIES.signal_column(np.ascontiguousarray(times, dtype=float), states,
-                                     np.arange(states.shape[1]), _windings_arg(windings),
-                                     self._inputs(inputs), float(alpha), int(index), int(element), int(slot), need,
-                                     self.params, np.empty(len(self._layout)), out)
+                                          np.arange(states.shape[1]), _windings_arg(windings),
+                                          self._inputs(inputs), float(alpha), int(index), int(element), int(slot), need,
+                                          self.params, np.empty(len(self._layout)), out)
         return out[:k], int(k)
 
     def dense_signal(self, sol, index, times, inputs=None, alpha=0.0, windings=None):
@@ -840,7 +840,8 @@ class Kernel:
 
         def read(times, windings=_NO_WINDINGS):
             out = np.empty(len(times))
-            st, k = ENTRIES.dense_signal(code, nodes, coeffs, count, times, comps, windings, *fixed, np.empty(layout), out)
+            st, k = ENTRIES.dense_signal(code, nodes, coeffs, count, times, comps, windings, *fixed,
+                                         np.empty(layout), out)
             return out[:k], int(k)
         return read
 
@@ -893,8 +894,8 @@ class Kernel:
         raw = np.empty((len(states), len(order)))
         with self.wound_from_start():
             st, k = ENTRIES.signal_history(np.ascontiguousarray(times, dtype=float), states, _windings_arg(windings),
-                                      self._inputs(inputs), float(alpha), bool(signals.needs_accelerations),
-                                      self.params, raw)
+                                           self._inputs(inputs), float(alpha), bool(signals.needs_accelerations),
+                                           self.params, raw)
         return signals.complete(raw[:k][:, order]), int(k)
 
     def point_positions(self, states) -> dict:
@@ -1120,9 +1121,9 @@ def _rk_segment(kernel, settings, tables, y, t0, t1, seg, seg_out, max_steps, in
     sampled at `seg`, steps kept in `keep`. Returns what integrate_rk returns."""
     A, B, C, E, E3, D, Pm = tables
     return ENTRIES.integrate_rk(_RK_CODE[settings.method], y, t0, t1, seg, seg_out, float(settings.rtol),
-                           float(settings.atol), 0.0, max_steps, inputs, float(settings.alpha), kernel.params,
-                           A, B, C, E, E3, D, Pm, monitor_slots(settings.method), t1 if t1 in switches else 0.0,
-                           kinks, keep)
+                                float(settings.atol), 0.0, max_steps, inputs, float(settings.alpha), kernel.params,
+                                A, B, C, E, E3, D, Pm, monitor_slots(settings.method), t1 if t1 in switches else 0.0,
+                                kinks, keep)
 
 
 def _run_failure(kernel, settings, status, h, y_last, t_reached, t_sample, monitor=None) -> str:

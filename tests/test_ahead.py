@@ -52,6 +52,8 @@ def test_a_run_through_the_builds_equals_the_dispatchers_bit_for_bit(scene):
     loop = compiled.ENTRIES.integrate_rk
     with compiled.ENTRIES.dispatchers_only():
         jit, jit_values = _run(model, stop_time)
+        if model.settings().method in compiled._RK_CODE:        # no build: the dispatcher itself, no choice per call
+            assert compiled.ENTRIES.integrate_rk is compiled._k.integrate_rk
     assert (built.status, built.message) == (jit.status, jit.message)
     assert np.array_equal(built.time, jit.time)
     assert np.array_equal(built.run.states, jit.run.states)
@@ -115,7 +117,8 @@ def test_a_build_serves_the_types_it_was_made_for_and_the_dispatcher_the_others(
 
 
 def test_no_build_where_its_table_is_unreadable_or_they_are_turned_off(toy, monkeypatch):
-    """A damaged table of exports, or INERTER_AHEAD=0: no builds, every call to the dispatcher."""
+    """A damaged table of exports, one naming an export its module lacks, or INERTER_AHEAD=0: no
+    builds, every call to the dispatcher."""
     module_path, table = ahead._paths(toy, 2)
     monkeypatch.setenv("INERTER_AHEAD", "0")
     assert ahead.load_builds(toy) == {}
@@ -125,6 +128,9 @@ def test_no_build_where_its_table_is_unreadable_or_they_are_turned_off(toy, monk
         table.write_bytes(good[: len(good) // 2])
         assert ahead.load_builds(toy) == {}
         assert ahead.Entry(toy.total, {})(np.arange(3.0), 1.0) == 6.0
+        exports = pickle.loads(good)
+        table.write_bytes(pickle.dumps({"total": [(argtypes, "absent") for argtypes, _ in exports["total"]]}))
+        assert ahead.load_builds(toy) == {}              # a table naming what its module lacks
     finally:
         table.write_bytes(good)
     assert pickle.loads(table.read_bytes()).keys() == {"total"}

@@ -130,11 +130,12 @@ def load_builds(kernels) -> dict:
             spec = importlib.util.spec_from_file_location(module_name(kernels, dimension), module_path)
             module = importlib.util.module_from_spec(spec)
             spec.loader.exec_module(module)
+            found = {(name, argtypes): getattr(module, exported)
+                     for name, signatures in exports.items() for argtypes, exported in signatures}
         except Exception:               # noqa: BLE001 (any failure: numba's dispatchers serve)
-            continue
-        for name, signatures in exports.items():
-            for argtypes, exported in signatures:
-                builds.setdefault(name, {})[argtypes] = getattr(module, exported)
+            continue                    # (a table naming what its module lacks too)
+        for (name, argtypes), function in found.items():
+            builds.setdefault(name, {})[argtypes] = function
     return builds
 
 
@@ -170,7 +171,8 @@ class Entry:
 
 
 class Entries:
-    """The kernels of :data:`ENTRY_KERNELS` as attributes (:class:`Entry`), the builds loaded at
+    """The kernels of :data:`ENTRY_KERNELS` as attributes (:class:`Entry`, or the dispatcher where
+    there is no build), the builds loaded at
     the first call of any. :meth:`dispatchers_only` enters them through numba's dispatchers (the
     warm-up, whose compiled signatures the builds are made for)."""
 
@@ -191,13 +193,16 @@ class Entries:
             return self._entry(name)(*args)
         return first_call
 
-    def _entry(self, name) -> Entry:
+    def _entry(self, name):
+        """`name`'s :class:`Entry`, or its dispatcher itself where it has no build (no choice to
+        make at each call)."""
         builds = {}
         if self._with_builds:
             if self._builds is None:
                 self._builds = load_builds(self._kernels)
             builds = self._builds.get(name, {})
-        entry = self._made[name, self._with_builds] = Entry(getattr(self._kernels, name), builds)
+        dispatcher = getattr(self._kernels, name)
+        entry = self._made[name, self._with_builds] = Entry(dispatcher, builds) if builds else dispatcher
         setattr(self, name, entry)
         return entry
 
